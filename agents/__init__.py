@@ -1,0 +1,1 @@
+"""Baseline agents: scripted swarm behaviours and stable-baselines3 RL."""

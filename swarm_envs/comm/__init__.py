@@ -1,0 +1,1 @@
+"""swarm_envs.comm"""
