@@ -1,0 +1,36 @@
+"""Validation command line: reproduce the source papers' published figures and print ours beside theirs.
+
+Usage: ``python -m swarm_envs.validate {range-bearing,swarmcom,scale-free,centroid} [--json] [options]``.
+Each experiment lives in its own module with a ``main(argv) -> int`` function.
+"""
+
+from __future__ import annotations
+
+import importlib
+import sys
+
+EXPERIMENTS = {
+    "range-bearing": ("swarm_envs.validate.range_bearing", "Droplet range & bearing error sweep [F14 Figs. 5-7]"),
+    "swarmcom": ("swarm_envs.validate.swarmcom", "SwarmCom range, channels, flooding, coding [T20 Figs. 12, 13, 16, 20, 21]"),
+    "scale-free": ("swarm_envs.validate.scale_free", "rigidity vs degree and 2-hop edge error [L Figs. 5.1, 6.2]"),
+    "centroid": ("swarm_envs.validate.centroid", "static-anchor centroid seeking [L Sec. 6.2.2]"),
+}
+
+
+def main(argv: list[str] | None = None) -> int:
+    argv = list(sys.argv[1:] if argv is None else argv)
+    if not argv or argv[0] in ("-h", "--help") or argv[0] not in EXPERIMENTS:
+        print(__doc__.strip())
+        print("\nexperiments:")
+        for name, (_, what) in EXPERIMENTS.items():
+            print(f"  {name:14s} {what}")
+        if argv and argv[0] not in ("-h", "--help"):
+            print(f"\nerror: unknown experiment {argv[0]!r}; allowed: {', '.join(EXPERIMENTS)}", file=sys.stderr)
+            return 2
+        return 0
+    module = importlib.import_module(EXPERIMENTS[argv[0]][0])
+    return int(module.main(argv[1:]) or 0)
+
+
+if __name__ == "__main__":
+    sys.exit(main())
