@@ -1,0 +1,510 @@
+"""Scale-free neighbour coordinates from bearing-only measurements [L Ch. 4-5].
+
+A robot u measures only bearings ``theta_u(w)`` (angle of ``p_w - p_u`` in u's body frame, radians,
+counter-clockwise, SPEC section 0). After the two-step exchange of [L Sec. 5.2.2] it also knows, for each
+neighbour v, the bearings ``theta_v(w)`` that v measured. From these it computes *scale-free*
+coordinates: its neighbours' positions in its own frame up to one unknown positive scale
+``f_u(w) = a_u ||p_u - p_w||`` [L Sec. 4.2]. We fix the scale so that the mean neighbour distance is 1.
+
+Two algorithms:
+
+* **Null-space k-hop method** [L Sec. 5.3, Eq. (5.1)] (:func:`coordinates` with ``method="null_space"``).
+  The labelled k-neighbourhood ``G_u^k`` is the subgraph induced by the robots within k hops of u, with
+  both bearings of every edge (k + 1 communication steps, [L Sec. 5.2.1]). Each directed cycle C gives
+  ``sum_{(w,v) in C} f(w,v) cos(phi_w(v)) = 0`` and the sine twin, where ``phi`` is the edge direction in
+  one common frame. [L Eq. (5.1)] is written with raw bearings ``theta_w(v)``; those live in different
+  body frames, so we first rotate every frame into u's frame with the reciprocal bearings along a BFS
+  spanning tree: ``h_c = h_p + theta_p(c) + pi - theta_c(p)`` (exact for noiseless bearings, where every
+  cycle of frame rotations closes). The cycle basis is the fundamental cycle basis of that spanning tree
+  (one cycle per non-tree edge, m - n + 1 cycles). ``A`` is ``2(m - n + 1) x m``; its null space comes from
+  an SVD. u is *rigid* iff the null space restricted to u's own edges (``N'``) has dimension 1.
+
+  Numerical tolerances: a singular value of A counts as zero when it is below
+  ``NULL_RTOL * max(1, s_max)`` (``NULL_RTOL = 1e-9``; entries of A are O(1) unit-vector components, and
+  noiseless float64 bearings give residuals ~1e-14). ``N'`` has orthonormal-basis rows of size O(1); its
+  rank counts singular values above ``RESTRICT_TOL = 1e-6``. The method is meant for exact bearings (the
+  rigidity study of [L Fig. 5.1]); with quantised bearings A generically has full column rank and u is
+  reported non-rigid.
+
+* **2-hop algorithm** [L Algs. 1-4] (``method="two_hop"``, and the batched :func:`coordinates_all`).
+  Only triangles (u, z, w) with z, w in N(u) and z-w an edge. Inner angles
+  ``psi_u = |theta_u(z) - theta_u(w)|``, ``psi_z = |theta_z(u) - theta_z(w)|``,
+  ``psi_w = |theta_w(z) - theta_w(u)|`` (each wrapped to [0, pi]). ``SINELAW(u, z, w) = f_z sin(psi_z) /
+  sin(psi_w)`` (law of sines: ``|uw| / sin(psi_z) = |uz| / sin(psi_w)``). Lengths propagate from a root
+  with ``f_root = 1`` over the *neighbour graph* (vertices N(u), an edge z-w for each usable triangle).
+  Computable iff that graph is connected [L Sec. 5.5.1].
+
+  - ANGLEBALANCE [L Alg. 2]: each triangle's three inner angles get ``(pi - (psi_u + psi_z + psi_w)) / 3``.
+  - Noise sensitivity [L Alg. 3, SINCOS; garbled in the PDF]. Our reading: the triangle's ratio is
+    ``g = sin(psi_v) / sin(psi_w)`` (``SinVW``); its gradient w.r.t. (psi_v, psi_w) is
+    ``(cos psi_v / sin psi_w, -sin psi_v cos psi_w / sin^2 psi_w)``, whose squared norm is the PDF's
+    ``CosSinVW = (cos psi_v / sin psi_w)^2 + (sin psi_v cos psi_w / sin^2 psi_w)^2``. The relative
+    sensitivity (gradient norm over value, squared) is ``CosSinVW / SinVW^2 = cot^2 psi_v + cot^2 psi_w``.
+    It is symmetric in v and w, so it weights the undirected neighbour-graph edge. A minimum spanning tree
+    is invariant under any strictly increasing transform of the weights, so whether Alg. 3 squares the
+    ratio or not does not change the tree; we use ``1 + cot^2 psi_v + cot^2 psi_w`` (the 1 keeps weights
+    strictly positive). Lengths propagate only along the MST (Prim's algorithm from the root) [L Alg. 4].
+  - Degenerate triangles (``min(psi, pi - psi) < DEGENERATE_ANGLE`` at z or w after balancing) are
+    skipped: they never produce a length, so no NaN or inf reaches an observation.
+  - Root and visiting order: neighbours are ordered counter-clockwise by bearing in [0, 2 pi) from u's
+    x-axis (ties by id), following [L Fig. 4.3] ("the first neighbour encountered counter-clockwise from
+    the x-axis" gets coefficient 1). Without noise sensitivity the traversal is exactly the BFS queue of
+    [L Alg. 1]: the root is the first neighbour in that order, a node's parent is the first dequeued node
+    adjacent to it, and white neighbours are enqueued in that order. If the neighbour graph is
+    disconnected, u is not rigid; we still return the lengths of the largest component (ties: the one
+    holding the earliest neighbour) with the others NaN, since ratios across components are unknown.
+
+Output (both methods): neighbour positions ``xy = f_w (cos theta_u(w), sin theta_u(w))`` with the mean of
+the valid ``f_w`` equal to 1, NaN for non-neighbours and uncomputable neighbours, and the rigid flag
+(a robot with exactly one neighbour is rigid; a robot with none is not).
+"""
+
+from __future__ import annotations
+
+from collections import deque
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = [
+    "coordinates",
+    "coordinates_all",
+    "NeighbourKnowledge",
+    "ScaleFreeResult",
+    "knowledge_from_matrix",
+    "null_space_lengths",
+    "triangle_sensitivity",
+    "DEGENERATE_ANGLE",
+    "NULL_RTOL",
+    "RESTRICT_TOL",
+]
+
+DEGENERATE_ANGLE = 1e-6  # rad: a triangle whose angle at z or w is this close to 0 or pi is skipped
+NULL_RTOL = 1e-9  # relative singular-value tolerance for the null space of A
+RESTRICT_TOL = 1e-6  # singular-value tolerance for the rank of N' (rows of an orthonormal basis)
+
+
+def _wrap(a: np.ndarray) -> np.ndarray:
+    """Wrap angles to (-pi, pi]."""
+    return np.pi - np.mod(np.pi - a, 2.0 * np.pi)
+
+
+# --------------------------------------------------------------------------------------------------
+# Batched 2-hop algorithm
+# --------------------------------------------------------------------------------------------------
+
+
+@dataclass
+class NeighbourKnowledge:
+    """What each robot knows after an exchange round [L Sec. 5.2.2] (slot layout, K slots per robot).
+
+    Attributes:
+        ids: (N, K) int, neighbour ids of each robot (-1 = empty slot).
+        bearings: (N, K) float, own bearing ``theta_u(ids[u, i])`` (rad).
+        row_ids: (N, K, K2) int, the neighbour list reported by neighbour ``ids[u, i]`` (-1 = empty, and all
+            -1 if nothing was received from that neighbour).
+        row_bearings: (N, K, K2) float, the bearings ``theta_z(row_ids[u, i, j])`` it reported (rad).
+        row_age: (N, K) int, steps since the row was received (0 = fresh, -1 = never received).
+        robot_ids: (N,) int, the id of each row's robot (default ``arange(N)``); lets a single robot be
+            evaluated with N = 1.
+    """
+
+    ids: np.ndarray
+    bearings: np.ndarray
+    row_ids: np.ndarray
+    row_bearings: np.ndarray
+    row_age: np.ndarray | None = None
+    robot_ids: np.ndarray | None = None
+
+    @property
+    def n_robots(self) -> int:
+        return int(self.ids.shape[0])
+
+
+@dataclass
+class ScaleFreeResult:
+    """Batched scale-free coordinates.
+
+    Attributes:
+        xy: (N, K, 2) neighbour positions in each robot's frame, mean valid distance 1 (NaN where invalid).
+        valid: (N, K) bool, length computed.
+        rigid: (N,) bool, every neighbour's length computable [L Sec. 5.5.1].
+        ids: (N, K) int, neighbour ids (-1 = empty slot), same slots as the input.
+        length: (N, K) scale-free length ``f_w`` (NaN where invalid).
+    """
+
+    xy: np.ndarray
+    valid: np.ndarray
+    rigid: np.ndarray
+    ids: np.ndarray
+    length: np.ndarray
+
+
+def triangle_sensitivity(psi_v: np.ndarray, psi_w: np.ndarray) -> np.ndarray:
+    """Relative noise sensitivity of ``sin(psi_v) / sin(psi_w)`` [L Alg. 3, our reading].
+
+    ``|grad g|^2 / g^2 = cot^2 psi_v + cot^2 psi_w`` (angles in rad); returned as ``1 + that`` so that a
+    minimum spanning tree (invariant under increasing transforms) never sees a zero weight.
+    """
+    sv, sw = np.sin(psi_v), np.sin(psi_w)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return 1.0 + (np.cos(psi_v) / sv) ** 2 + (np.cos(psi_w) / sw) ** 2
+
+
+def coordinates_all(
+    knowledge: NeighbourKnowledge,
+    noise_sensitivity: bool = True,
+    angle_balance: bool = True,
+) -> ScaleFreeResult:
+    """2-hop scale-free coordinates for every robot at once [L Algs. 1-4].
+
+    Vectorised numpy over robots: the per-robot graph work (connectivity, BFS queue order, Prim's MST)
+    runs in lock-step over all robots with K iterations of (N, K, K) array operations, no Python loop over
+    robots. Cost is O(N K^3) element operations (the matching of reported ids) plus O(N K^3) for the MST.
+
+    Args:
+        knowledge: see :class:`NeighbourKnowledge`.
+        noise_sensitivity: propagate along the minimum spanning tree of triangle sensitivities [L Alg. 4]
+            instead of the plain BFS tree [L Alg. 1].
+        angle_balance: apply ANGLEBALANCE [L Alg. 2] before the law of sines.
+
+    Returns:
+        :class:`ScaleFreeResult`.
+    """
+    ids_in = np.asarray(knowledge.ids, dtype=np.int64)
+    th_in = np.asarray(knowledge.bearings, dtype=float)
+    rid_in = np.asarray(knowledge.row_ids, dtype=np.int64)
+    rth_in = np.asarray(knowledge.row_bearings, dtype=float)
+    n, k = ids_in.shape
+    self_ids = (
+        np.arange(n, dtype=np.int64) if knowledge.robot_ids is None else np.asarray(knowledge.robot_ids, np.int64)
+    )
+    slot_ok_in = (ids_in >= 0) & np.isfinite(th_in)
+
+    # Order slots counter-clockwise by bearing in [0, 2pi) then id; empty slots last [L Fig. 4.3].
+    key_b = np.where(slot_ok_in, np.mod(th_in, 2.0 * np.pi), np.inf)
+    key_id = np.where(slot_ok_in, ids_in, np.iinfo(np.int64).max)
+    order = np.lexsort((key_id, key_b), axis=-1) if n else np.zeros((0, k), np.int64)
+    rows = np.arange(n)[:, None]
+    ids = ids_in[rows, order]
+    th = th_in[rows, order]
+    ok = slot_ok_in[rows, order]
+    rid = rid_in[rows, order]
+    rth = rth_in[rows, order]
+    rok = (rid >= 0) & np.isfinite(rth)
+
+    # theta_z(u) for each neighbour slot z, and theta_z(w) for each pair of slots (z, w).
+    m_zu = rok & (rid == self_ids[:, None, None])  # (N, K, K2)
+    has_zu = m_zu.any(-1) & ok
+    tzu = np.where(has_zu, rth[rows, np.arange(k)[None, :], np.argmax(m_zu, -1)], 0.0)
+    m_zw = rok[:, :, None, :] & (rid[:, :, None, :] == ids[:, None, :, None])  # (N, K, K, K2)
+    has_zw = m_zw.any(-1)
+    idx_zw = np.argmax(m_zw, -1)  # (N, K, K)
+    tzw = np.take_along_axis(rth, idx_zw, axis=-1)  # rth[u, z, idx_zw[u, z, w]]
+    eye = np.eye(k, dtype=bool)[None]
+    tri = has_zw & np.swapaxes(has_zw, 1, 2) & has_zu[:, :, None] & has_zu[:, None, :] & ~eye
+    tri &= ok[:, :, None] & ok[:, None, :]
+
+    # Inner angles: P[u, i, j] = angle at neighbour i in triangle (u, i, j); psi_u symmetric.
+    P = np.abs(_wrap(tzu[:, :, None] - tzw))
+    psi_u = np.abs(_wrap(th[:, :, None] - th[:, None, :]))
+    if angle_balance:
+        corr = (np.pi - (psi_u + P + np.swapaxes(P, 1, 2))) / 3.0
+        P = P + corr
+    PT = np.swapaxes(P, 1, 2)
+    deg_ok = (
+        (np.minimum(P, np.pi - P) > DEGENERATE_ANGLE)
+        & (np.minimum(PT, np.pi - PT) > DEGENERATE_ANGLE)
+        & (P < np.pi)
+        & (PT < np.pi)
+    )
+    E = tri & deg_ok
+    E &= np.swapaxes(E, 1, 2)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        logratio = np.where(E, np.log(np.abs(np.sin(P))) - np.log(np.abs(np.sin(PT))), 0.0)  # f_j/f_i, i->j
+
+    # Connected components of the neighbour graph by repeated boolean squaring.
+    R = (E | eye) & ok[:, :, None] & ok[:, None, :]
+    for _ in range(max(1, int(np.ceil(np.log2(max(k, 2)))))):
+        R = np.matmul(R.astype(np.uint8), R.astype(np.uint8)) > 0
+    comp_size = R.sum(-1)  # (N, K) size of the component of each slot (0 for empty)
+    big = comp_size.max(-1) if k else np.zeros(n, np.int64)
+    # root: first slot (in bearing order) whose component is largest
+    root = np.argmax(comp_size == big[:, None], axis=-1)
+    deg = ok.sum(-1)
+    rigid = (deg >= 1) & (big == deg)
+
+    known = np.zeros((n, k), dtype=bool)
+    has_root = deg > 0
+    known[np.arange(n), root] = has_root
+    logf = np.zeros((n, k))
+    if noise_sensitivity:
+        with np.errstate(divide="ignore", invalid="ignore"):
+            W = np.where(E, triangle_sensitivity(P, PT), np.inf)
+        for _ in range(k - 1):
+            cand = np.where(known[:, :, None] & ~known[:, None, :], W, np.inf)
+            flat = np.argmin(cand.reshape(n, -1), axis=-1)
+            best = cand.reshape(n, -1)[np.arange(n), flat]
+            go = np.isfinite(best)
+            if not go.any():
+                break
+            i, j = np.divmod(flat, k)
+            r = np.nonzero(go)[0]
+            logf[r, j[r]] = logf[r, i[r]] + logratio[r, i[r], j[r]]
+            known[r, j[r]] = True
+    else:
+        # BFS of [L Alg. 1] in lock-step: discovery rank `disc`; parent = adjacent node dequeued first.
+        big_i = np.iinfo(np.int64).max
+        disc = np.where(known, 0, big_i)
+        cnt = has_root.astype(np.int64)
+        for _ in range(k - 1):
+            adj = E & known[:, :, None] & ~known[:, None, :]  # parent i known, child j new
+            new = adj.any(1)
+            if not new.any():
+                break
+            pd = np.where(adj, disc[:, :, None], big_i)
+            parent = np.argmin(pd, axis=1)  # (N, K)
+            pdisc = np.take_along_axis(disc, parent, axis=1)
+            key = np.where(new, pdisc * k + np.arange(k)[None, :], big_i)
+            rank = np.argsort(np.argsort(key, axis=1, kind="stable"), axis=1, kind="stable")
+            disc = np.where(new, cnt[:, None] + rank, disc)
+            cnt = cnt + new.sum(1)
+            lr = logratio[rows, parent, np.arange(k)[None, :]]
+            logf = np.where(new, np.take_along_axis(logf, parent, axis=1) + lr, logf)
+            known |= new
+
+    valid = known & ok
+    f = np.where(valid, np.exp(logf), np.nan)
+    nv = valid.sum(-1)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        mean_f = np.nansum(np.where(valid, f, 0.0), -1) / np.maximum(nv, 1)
+    f = f / np.where(nv > 0, mean_f, 1.0)[:, None]
+    xy = np.stack([f * np.cos(th), f * np.sin(th)], -1)
+
+    # undo the slot permutation
+    inv = np.argsort(order, axis=-1) if n else order
+    return ScaleFreeResult(
+        xy=xy[rows, inv],
+        valid=valid[rows, inv],
+        rigid=rigid,
+        ids=ids_in.copy(),
+        length=f[rows, inv],
+    )
+
+
+def knowledge_from_matrix(bearings: np.ndarray, robots: np.ndarray | None = None) -> NeighbourKnowledge:
+    """Build :class:`NeighbourKnowledge` from a full bearing matrix (ideal, lossless exchange).
+
+    ``bearings[a, b] = theta_a(b)`` (rad), NaN where a does not see b. Each robot in ``robots`` (default
+    all) gets its own row and the rows of the robots it sees, as after [L Sec. 5.2.2].
+    """
+    B = np.asarray(bearings, dtype=float)
+    n = B.shape[0]
+    robots = np.arange(n) if robots is None else np.asarray(robots, dtype=np.int64).reshape(-1)
+    seen = ~np.isnan(B)
+    np.fill_diagonal(seen, False)
+    kmax = max(1, int(seen.sum(1).max())) if n else 1
+    # slot layout of every robot's own row: ids sorted ascending
+    order = np.argsort(~seen, axis=1, kind="stable")[:, :kmax]
+    all_ids = np.where(np.take_along_axis(seen, order, 1), order, -1)
+    all_b = np.where(all_ids >= 0, np.take_along_axis(B, np.maximum(order, 0), 1), np.nan)
+    ids = all_ids[robots]
+    th = all_b[robots]
+    safe = np.maximum(ids, 0)
+    row_ids = np.where((ids >= 0)[:, :, None], all_ids[safe], -1)
+    row_b = np.where((ids >= 0)[:, :, None], all_b[safe], np.nan)
+    return NeighbourKnowledge(
+        ids=ids,
+        bearings=th,
+        row_ids=row_ids,
+        row_bearings=row_b,
+        row_age=np.where(ids >= 0, 0, -1),
+        robot_ids=robots,
+    )
+
+
+# --------------------------------------------------------------------------------------------------
+# Null-space k-hop method [L Sec. 5.3]
+# --------------------------------------------------------------------------------------------------
+
+
+def _khop(sym: np.ndarray, u: int, k: int) -> np.ndarray:
+    """Vertices within k hops of u over the symmetric edge set (u first)."""
+    dist = {u: 0}
+    q = deque([u])
+    out = [u]
+    while q:
+        a = q.popleft()
+        if dist[a] == k:
+            continue
+        for b in np.nonzero(sym[a])[0]:
+            b = int(b)
+            if b not in dist:
+                dist[b] = dist[a] + 1
+                out.append(b)
+                q.append(b)
+    return np.asarray(out, dtype=np.int64)
+
+
+def _null_space_basis(B: np.ndarray, verts: np.ndarray, sym: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Edges (m, 2) of the subgraph induced by ``verts`` and a basis (m, d) of the null space of A.
+
+    Frames are rotated into verts[0]'s frame along a BFS spanning tree; fundamental cycle basis of that
+    tree; A stacks the cos and sin rows of [L Eq. (5.1)] for each cycle.
+    """
+    nv = len(verts)
+    sub = sym[np.ix_(verts, verts)]
+    ea, eb = np.nonzero(np.triu(sub, 1))
+    m = len(ea)
+    if m == 0:
+        return np.zeros((0, 2), np.int64), np.zeros((0, 0))
+    eid = -np.ones((nv, nv), dtype=np.int64)
+    eid[ea, eb] = np.arange(m)
+    eid[eb, ea] = np.arange(m)
+    Bs = B[np.ix_(verts, verts)]
+    # BFS spanning tree from local vertex 0 with frame offsets h (rad, relative to vertex 0's frame)
+    h = np.full(nv, np.nan)
+    h[0] = 0.0
+    parent = -np.ones(nv, dtype=np.int64)
+    tree_edge = np.zeros(m, dtype=bool)
+    q = deque([0])
+    order = [0]
+    while q:
+        a = q.popleft()
+        for b in np.nonzero(sub[a])[0]:
+            if np.isnan(h[b]):
+                h[b] = h[a] + Bs[a, b] + np.pi - Bs[b, a]
+                parent[b] = a
+                tree_edge[eid[a, b]] = True
+                q.append(b)
+                order.append(int(b))
+    # edge directions a->b (a < b) in the common frame: circular mean of the two reciprocal readings
+    d1 = h[ea] + Bs[ea, eb]
+    d2 = h[eb] + Bs[eb, ea] + np.pi
+    D = np.stack([np.cos(d1) + np.cos(d2), np.sin(d1) + np.sin(d2)], -1)
+    D /= np.linalg.norm(D, axis=-1, keepdims=True)
+    # position of each vertex as a linear function of tree-edge lengths: Px, Py (nv, m)
+    Pxy = np.zeros((nv, 2, m))
+    for b in order[1:]:
+        a = parent[b]
+        e = eid[a, b]
+        s = 1.0 if a < b else -1.0  # traversal a->b vs stored orientation (min, max)
+        Pxy[b] = Pxy[a]
+        Pxy[b, :, e] += s * D[e]
+    nt = np.nonzero(~tree_edge)[0]
+    if len(nt) == 0:
+        return np.stack([verts[ea], verts[eb]], -1), np.eye(m)
+    # cycle for non-tree edge e=(a,b): f_e D_e - (p_b - p_a) = 0, x and y rows
+    A = -(Pxy[eb[nt]] - Pxy[ea[nt]])  # (c, 2, m)
+    A[np.arange(len(nt)), :, nt] += D[nt]
+    A = A.reshape(-1, m)
+    _, s, vt = np.linalg.svd(A, full_matrices=True)
+    rank = int(np.sum(s > NULL_RTOL * max(1.0, s[0] if len(s) else 0.0)))
+    return np.stack([verts[ea], verts[eb]], -1), vt[rank:].T
+
+
+def null_space_lengths(
+    bearings: np.ndarray, u: int, k: int = 1, cache: dict | None = None
+) -> tuple[np.ndarray, np.ndarray, bool]:
+    """Null-space k-hop method [L Sec. 5.3, Eq. (5.1)] for robot u.
+
+    Args:
+        bearings: (n, n) ``theta_a(b)`` (rad), NaN where there is no edge. Edges need both bearings.
+        u: robot index.
+        k: communication depth (hops); the labelled k-neighbourhood is induced by the robots within k hops.
+        cache: optional dict reused across robots of one graph; the null space only depends on the vertex
+            set (a rotation of the common frame does not change it), so robots with the same
+            k-neighbourhood share one SVD.
+
+    Returns:
+        ``(nbrs, lengths, rigid)``: u's neighbours over symmetric edges, their scale-free lengths (mean 1;
+        NaN where not determined), and the rigid flag (``dim N' == 1``). If u is not rigid, the largest
+        group of u's edges whose ratios are still determined (parallel rows of ``N'``) gets lengths.
+    """
+    B = np.asarray(bearings, dtype=float)
+    sym = ~np.isnan(B) & ~np.isnan(B.T)
+    np.fill_diagonal(sym, False)
+    nbrs = np.nonzero(sym[u])[0]
+    if len(nbrs) == 0:
+        return nbrs, np.zeros(0), False
+    verts = _khop(sym, u, k)
+    key = tuple(sorted(verts.tolist()))
+    if cache is not None and key in cache:
+        edges, N = cache[key]
+    else:
+        verts_c = np.asarray(key, dtype=np.int64)
+        edges, N = _null_space_basis(B, verts_c, sym)
+        if cache is not None:
+            cache[key] = (edges, N)
+    # rows of u's edges, in the order of nbrs
+    lo, hi = np.minimum(u, nbrs), np.maximum(u, nbrs)
+    lut = {(int(a), int(b)): i for i, (a, b) in enumerate(edges)}
+    rows = np.array([lut[(int(a), int(b))] for a, b in zip(lo, hi)])
+    Np = N[rows]
+    if Np.shape[1] == 0:  # no realisation at all (inconsistent bearings)
+        return nbrs, np.full(len(nbrs), np.nan), False
+    uu, s, _ = np.linalg.svd(Np, full_matrices=False)
+    dim = int(np.sum(s > RESTRICT_TOL))
+    lengths = np.full(len(nbrs), np.nan)
+    if dim == 1:
+        v = uu[:, 0] * s[0]
+        lengths = np.abs(v)
+        rigid = True
+    else:
+        rigid = False
+        norms = np.linalg.norm(Np, axis=1)
+        unit = Np / np.maximum(norms, 1e-300)[:, None]
+        par = (np.abs(unit @ unit.T) > 1.0 - 1e-9) & (norms[:, None] > RESTRICT_TOL) & (norms[None] > RESTRICT_TOL)
+        sizes = par.sum(1)
+        best = int(np.argmax(sizes))
+        if sizes[best] >= 1 and norms[best] > RESTRICT_TOL:
+            g = par[best]
+            lengths[g] = np.abs(Np[g] @ unit[best])
+    good = np.isfinite(lengths)
+    if good.any():
+        lengths = lengths / lengths[good].mean()
+    return nbrs, lengths, rigid
+
+
+# --------------------------------------------------------------------------------------------------
+# Single-robot entry point (SPEC section 8)
+# --------------------------------------------------------------------------------------------------
+
+
+def coordinates(
+    bearings: np.ndarray,
+    u: int,
+    method: str = "two_hop",
+    k: int = 1,
+    noise_sensitivity: bool = True,
+    angle_balance: bool = True,
+) -> tuple[np.ndarray, bool]:
+    """Scale-free coordinates of robot u's neighbours in u's frame [L Ch. 5].
+
+    Args:
+        bearings: (n, n) array, ``bearings[a, b] = theta_a(b)`` (rad, b's bearing in a's body frame), NaN
+            where there is no edge.
+        u: the robot.
+        method: ``"two_hop"`` [L Algs. 1-4] or ``"null_space"`` [L Sec. 5.3] (uses ``k``).
+        k: communication depth of the null-space method (the 2-hop algorithm is k = 1 by construction).
+        noise_sensitivity, angle_balance: 2-hop options [L Algs. 2-4].
+
+    Returns:
+        ``(xy, rigid)``: xy (n, 2) neighbour positions scaled so the mean neighbour distance is 1 (NaN for
+        non-neighbours and for neighbours whose length is not computable), and the rigid flag.
+    """
+    B = np.asarray(bearings, dtype=float)
+    n = B.shape[0]
+    xy = np.full((n, 2), np.nan)
+    if method == "two_hop":
+        kn = knowledge_from_matrix(B, robots=np.array([u]))
+        res = coordinates_all(kn, noise_sensitivity=noise_sensitivity, angle_balance=angle_balance)
+        sel = res.ids[0] >= 0
+        xy[res.ids[0, sel]] = res.xy[0, sel]
+        return xy, bool(res.rigid[0])
+    if method == "null_space":
+        nbrs, lengths, rigid = null_space_lengths(B, u, k)
+        th = B[u, nbrs]
+        xy[nbrs] = np.stack([lengths * np.cos(th), lengths * np.sin(th)], -1)
+        return xy, rigid
+    raise ValueError(f"unknown method {method!r}; allowed: 'two_hop', 'null_space'")
