@@ -1,0 +1,162 @@
+"""Observation layout (SPEC 7) and the vectorised packing of per-link readings into fixed slots.
+
+Every robot observes a ``Dict``:
+
+- ``range_bearing`` (K, 7): ``[valid, range (m), cos bearing, sin bearing, cos heading, sin heading, age (steps)]``
+  for the K neighbours nearest by *estimated* range;
+- ``messages`` (M, 2 + b): ``[valid, sender bearing / pi, payload bit 0 .. b-1]`` for messages decoded since
+  the last step (nearest senders first when more than M arrived);
+- ``scale_free`` (K, 3): ``[valid, x, y]`` neighbour positions in the robot's frame, scaled so the mean
+  neighbour distance is 1 (clipped to +-``SCALE_FREE_CLIP``), nearest first;
+- ``rigid`` (1,): 1 when the robot's scale-free coordinates are determined (rigid neighbourhood);
+- ``proprio`` (8 + 2 + b): ``[bump sector 0..7, last action]``.
+
+``flatten=True`` concatenates them (``gymnasium.spaces.flatten``, keys in sorted order) into one ``Box``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from gymnasium import spaces
+
+from swarm_envs.world import N_BUMP_SECTORS
+
+__all__ = [
+    "ObservationLayout",
+    "pack_nearest",
+    "RB_FIELDS",
+    "SCALE_FREE_CLIP",
+    "relative_pose",
+]
+
+RB_FIELDS = ("valid", "range", "cos_bearing", "sin_bearing", "cos_heading", "sin_heading", "age")
+SCALE_FREE_CLIP = 10.0
+
+
+def relative_pose(
+    positions: np.ndarray, headings: np.ndarray, rx: np.ndarray, tx: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Exact pose of robot ``tx`` seen by ``rx``: (distance (P,) m, bearing (P,) rad, heading (P,) rad).
+
+    Bearing = angle of (p_tx - p_rx) in rx's body frame; heading = tx's forward direction in rx's frame.
+    """
+    delta = positions[tx] - positions[rx]
+    distance = np.hypot(delta[:, 0], delta[:, 1])
+    bearing = np.arctan2(delta[:, 1], delta[:, 0]) - headings[rx]
+    heading = headings[tx] - headings[rx]
+    wrap = lambda a: np.mod(a + np.pi, 2 * np.pi) - np.pi  # noqa: E731
+    return distance, wrap(bearing), wrap(heading)
+
+
+def pack_nearest(
+    n_rows: int, row: np.ndarray, key: np.ndarray, values: np.ndarray, k: int
+) -> tuple[np.ndarray, np.ndarray]:
+    """Scatter per-link ``values`` (P, F) into ``(n_rows, k, F)`` slots, the ``k`` smallest ``key`` per row.
+
+    Returns ``(packed, order)``: ``packed`` zero-filled where a row has fewer than k entries, and
+    ``order`` (n_rows, k) with the link index in each slot (-1 where empty). Fully vectorised.
+    """
+    values = np.asarray(values, dtype=np.float64).reshape(len(row), -1)
+    packed = np.zeros((n_rows, k, values.shape[1]))
+    order = np.full((n_rows, k), -1, dtype=np.int64)
+    if len(row) == 0 or k == 0:
+        return packed, order
+    idx = np.lexsort((key, row))
+    sorted_rows = row[idx]
+    starts = np.searchsorted(sorted_rows, sorted_rows, side="left")
+    rank = np.arange(len(idx)) - starts
+    keep = rank < k
+    packed[sorted_rows[keep], rank[keep]] = values[idx[keep]]
+    order[sorted_rows[keep], rank[keep]] = idx[keep]
+    return packed, order
+
+
+@dataclass
+class ObservationLayout:
+    """Sizes and bounds of one robot's observation; builds the gymnasium spaces."""
+
+    n_neighbours: int = 8
+    n_messages: int = 8
+    message_bits: int = 0
+    max_range: float = 1.0
+    max_age: int = 10
+    flatten: bool = False
+    _dict_space: spaces.Dict | None = field(default=None, init=False, repr=False)
+
+    @property
+    def action_size(self) -> int:
+        return 2 + self.message_bits
+
+    @property
+    def proprio_size(self) -> int:
+        return N_BUMP_SECTORS + self.action_size
+
+    def dict_space(self) -> spaces.Dict:
+        if self._dict_space is None:
+            k, m, b = self.n_neighbours, self.n_messages, self.message_bits
+            rb_low = np.tile(np.array([0, 0, -1, -1, -1, -1, 0], np.float32), (k, 1))
+            rb_high = np.tile(np.array([1, self.max_range, 1, 1, 1, 1, self.max_age], np.float32), (k, 1))
+            msg_low = np.tile(np.array([0, -1] + [0] * b, np.float32), (m, 1))
+            msg_high = np.ones((m, 2 + b), np.float32)
+            sf_low = np.tile(np.array([0, -SCALE_FREE_CLIP, -SCALE_FREE_CLIP], np.float32), (k, 1))
+            sf_high = np.tile(np.array([1, SCALE_FREE_CLIP, SCALE_FREE_CLIP], np.float32), (k, 1))
+            pro_low = np.concatenate([np.zeros(N_BUMP_SECTORS), -np.ones(self.action_size)]).astype(np.float32)
+            pro_high = np.ones(self.proprio_size, np.float32)
+            self._dict_space = spaces.Dict(
+                {
+                    "range_bearing": spaces.Box(rb_low, rb_high, dtype=np.float32),
+                    "messages": spaces.Box(msg_low, msg_high, dtype=np.float32),
+                    "scale_free": spaces.Box(sf_low, sf_high, dtype=np.float32),
+                    "rigid": spaces.Box(0.0, 1.0, (1,), dtype=np.float32),
+                    "proprio": spaces.Box(pro_low, pro_high, dtype=np.float32),
+                }
+            )
+        return self._dict_space
+
+    def space(self) -> spaces.Space:
+        """The per-agent observation space (Dict, or its flattened Box)."""
+        return spaces.flatten_space(self.dict_space()) if self.flatten else self.dict_space()
+
+    def action_space(self) -> spaces.Box:
+        return spaces.Box(-1.0, 1.0, (self.action_size,), dtype=np.float32)
+
+    def build(
+        self,
+        range_bearing: np.ndarray,
+        messages: np.ndarray,
+        scale_free: np.ndarray,
+        rigid: np.ndarray,
+        proprio: np.ndarray,
+    ) -> dict[str, np.ndarray]:
+        """Clip batched parts (leading robot axis) into the space bounds, as float32 arrays."""
+        parts = {
+            "range_bearing": range_bearing,
+            "messages": messages,
+            "scale_free": scale_free,
+            "rigid": rigid.reshape(-1, 1),
+            "proprio": proprio,
+        }
+        out = {}
+        for name, box in self.dict_space().spaces.items():
+            out[name] = np.clip(np.asarray(parts[name], np.float32), box.low, box.high)
+        return out
+
+    def per_robot(self, batched: dict[str, np.ndarray], i: int) -> np.ndarray | dict[str, np.ndarray]:
+        """One robot's observation from the batched dict (flattened if ``flatten``)."""
+        obs = {name: batched[name][i] for name in batched}
+        if self.flatten:
+            return spaces.flatten(self.dict_space(), obs).astype(np.float32)
+        return obs
+
+    def unflatten(self, flat: np.ndarray) -> dict[str, np.ndarray]:
+        """Inverse of the flattening: a (..., D) array back to named parts (leading axes kept)."""
+        flat = np.asarray(flat)
+        lead = flat.shape[:-1]
+        out, start = {}, 0
+        for name, box in self.dict_space().spaces.items():
+            size = int(np.prod(box.shape))
+            out[name] = flat[..., start : start + size].reshape(*lead, *box.shape)
+            start += size
+        return out

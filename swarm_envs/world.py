@@ -1,0 +1,309 @@
+"""Physics: disc robots with velocity-controlled differential drive in a walled arena (pymunk).
+
+One :class:`pymunk.Space` per world, robots as dynamic circles, arena walls as static segments.
+Each control step (``dt`` = 0.1 s) is split into physics sub-steps. Every robot is dragged by a
+kinematic *control body* (pymunk's top-down "tank" pattern): a pivot joint and a gear joint with zero
+bias and bounded force make the body's velocity track the commanded (v, w) as motors would, so a free
+robot follows the differential-drive arc (heading taken at the middle of each sub-step) with one
+sub-step (12.5 ms at the default 8 sub-steps) of motor latency, while contacts,
+which have unbounded force, win over the motors: robots push each other but never overlap and walls
+hold; bump sensing comes from pymunk's post-solve collision callbacks (SPEC 1).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import pymunk
+from scipy.spatial import cKDTree
+
+from swarm_envs.platforms import Platform
+
+__all__ = ["Arena", "World", "spawn_positions", "wrap_angle", "N_BUMP_SECTORS"]
+
+N_BUMP_SECTORS = 8  # bump sensor: one flag per 45-degree sector of the body (sector 0 centred ahead)
+_ROBOT, _WALL = 1, 2
+MOTOR_ACCELERATION = 50.0  # m/s^2: bounded motor force / mass; full speed within one physics sub-step
+MOTOR_ANGULAR_ACCELERATION = 2000.0  # rad/s^2
+
+
+def wrap_angle(angle: np.ndarray | float) -> np.ndarray:
+    """Wrap angles (rad) to (-pi, pi]."""
+    wrapped = np.mod(np.asarray(angle, dtype=float) + np.pi, 2.0 * np.pi) - np.pi
+    return np.where(wrapped == -np.pi, np.pi, wrapped)
+
+
+@dataclass(frozen=True)
+class Arena:
+    """A walled arena centred on the origin.
+
+    Attributes:
+        shape: ``"square"`` (side ``size``) or ``"circle"`` (diameter ``size``).
+        size: side length or diameter (m).
+    """
+
+    shape: str
+    size: float
+
+    SHAPES = ("square", "circle")
+
+    def __post_init__(self) -> None:
+        if self.shape not in self.SHAPES:
+            raise ValueError(f"unknown arena shape {self.shape!r}; allowed values: {list(self.SHAPES)}")
+        if not np.isfinite(self.size) or self.size <= 0:
+            raise ValueError(f"arena size must be a positive number of metres, got {self.size!r}")
+
+    @property
+    def half(self) -> float:
+        return 0.5 * self.size
+
+    @property
+    def area(self) -> float:
+        return self.size**2 if self.shape == "square" else np.pi * self.half**2
+
+    def contains(self, points: np.ndarray, margin: float = 0.0) -> np.ndarray:
+        """True where a disc of radius ``margin`` at ``points`` (..., 2) lies inside the walls."""
+        points = np.asarray(points, dtype=float)
+        if self.shape == "square":
+            return np.all(np.abs(points) <= self.half - margin + 1e-12, axis=-1)
+        return np.linalg.norm(points, axis=-1) <= self.half - margin + 1e-12
+
+    def wall_segments(self, n_circle_segments: int = 64) -> np.ndarray:
+        """Wall segments (S, 2, 2) in metres; a circle is a regular polygon circumscribing it."""
+        if self.shape == "square":
+            h = self.half
+            corners = np.array([[-h, -h], [h, -h], [h, h], [-h, h]])
+        else:
+            # circumscribed polygon: its inscribed circle is the arena, so discs never leave it
+            rad = self.half / np.cos(np.pi / n_circle_segments)
+            ang = 2 * np.pi * np.arange(n_circle_segments) / n_circle_segments
+            corners = rad * np.stack([np.cos(ang), np.sin(ang)], -1)
+        return np.stack([corners, np.roll(corners, -1, axis=0)], axis=1)
+
+    def sample(self, rng: np.random.Generator, n: int, margin: float) -> np.ndarray:
+        """Uniform random points (n, 2) whose discs of radius ``margin`` lie inside."""
+        inner = self.half - margin
+        if self.shape == "square":
+            return rng.uniform(-inner, inner, size=(n, 2))
+        r = inner * np.sqrt(rng.uniform(0, 1, n))
+        a = rng.uniform(-np.pi, np.pi, n)
+        return np.stack([r * np.cos(a), r * np.sin(a)], -1)
+
+
+def _lattice_points(arena: Arena, radius: float, gap: float, shift: np.ndarray) -> np.ndarray:
+    """Points of a shifted hexagonal lattice (pitch 2 radius + gap) whose discs fit in the arena."""
+    pitch = 2 * radius + gap
+    n_side = int(np.ceil(arena.size / pitch)) + 2
+    i, j = np.meshgrid(np.arange(-n_side, n_side + 1), np.arange(-n_side, n_side + 1))
+    pts = np.stack([(i + 0.5 * (j % 2)) * pitch, j * pitch * np.sqrt(3) / 2], -1).reshape(-1, 2) + shift
+    return pts[arena.contains(pts, radius + 0.5 * gap)]
+
+
+def _best_lattice(arena: Arena, radius: float, gap: float) -> np.ndarray:
+    """The hexagonal lattice placement (over a grid of shifts) that fits the most discs."""
+    pitch = 2 * radius + gap
+    shifts = np.stack(np.meshgrid(np.linspace(0, pitch, 6, endpoint=False), np.linspace(0, pitch * np.sqrt(3), 10, endpoint=False)), -1).reshape(-1, 2)
+    return max((_lattice_points(arena, radius, gap, s) for s in shifts), key=len)
+
+
+def spawn_positions(
+    rng: np.random.Generator,
+    n: int,
+    radius: float,
+    arena: Arena,
+    region: Arena | None = None,
+    gap: float | None = None,
+    max_tries: int = 200,
+) -> np.ndarray:
+    """Seeded non-overlapping disc positions (n, 2) in metres inside ``region`` (default: the arena).
+
+    Random sequential placement (batched candidates, KD-tree checks); for densities where that stalls,
+    a randomly shifted hexagonal lattice subset. Raises ``ValueError`` when ``n`` discs of ``radius``
+    (plus ``gap``) cannot fit at all.
+    """
+    region = region or arena
+    gap = 0.1 * radius if gap is None else gap
+    min_dist = 2 * radius + gap
+    lattice = _best_lattice(region, radius, gap)
+    if n > len(lattice):
+        raise ValueError(
+            f"cannot place {n} robots of diameter {2 * radius:.3f} m in a {region.shape} region of size "
+            f"{region.size:.3f} m: at most {len(lattice)} fit (hexagonal packing with a {gap * 1e3:.1f} mm gap); "
+            "use fewer robots or a larger arena_size"
+        )
+    placed = np.empty((0, 2))
+    for _ in range(max_tries):
+        need = n - len(placed)
+        if need == 0:
+            return placed
+        cand = region.sample(rng, 4 * need + 8, radius + 0.5 * gap)
+        if len(placed):
+            d, _ = cKDTree(placed).query(cand, k=1)
+            cand = cand[d >= min_dist]
+        # greedy accept among the candidates themselves, in random order
+        keep: list[int] = []
+        if len(cand):
+            close = cKDTree(cand).query_pairs(min_dist, output_type="ndarray")
+            blocked = np.zeros(len(cand), dtype=bool)
+            neighbours: list[list[int]] = [[] for _ in range(len(cand))]
+            for a, b in close:
+                neighbours[a].append(b)
+                neighbours[b].append(a)
+            for idx in range(len(cand)):
+                if not blocked[idx]:
+                    keep.append(idx)
+                    blocked[neighbours[idx]] = True
+                    if len(keep) == need:
+                        break
+        placed = np.concatenate([placed, cand[keep]], axis=0)
+    # dense: random subset of a randomly shifted lattice that still fits
+    for _ in range(50):
+        pts = _lattice_points(region, radius, gap, rng.uniform(0, 2 * radius + gap, 2))
+        if len(pts) >= n:
+            return pts[rng.choice(len(pts), n, replace=False)]
+    return lattice[rng.choice(len(lattice), n, replace=False)]
+
+
+class World:
+    """The physical swarm: ``n`` robots of one platform in one arena, stepped by pymunk.
+
+    State arrays (world frame, SI): ``positions (n, 2)``, ``headings (n,)``, ``velocities (n, 2)``,
+    ``angular_velocities (n,)``, and ``bumps (n, N_BUMP_SECTORS)`` for the last control step.
+    """
+
+    def __init__(self, platform: Platform, n_robots: int, arena: Arena, substeps: int = 8) -> None:
+        if substeps < 1:
+            raise ValueError(f"physics substeps must be >= 1, got {substeps}")
+        self.platform = platform
+        self.n = int(n_robots)
+        self.arena = arena
+        self.substeps = int(substeps)
+        self.space = pymunk.Space()
+        self.space.gravity = (0.0, 0.0)
+        self.space.collision_slop = 1e-4  # m: allowed interpenetration before the solver pushes apart
+        self.space.iterations = 20
+        self.bodies: list[pymunk.Body] = []
+        self.controls: list[pymunk.Body] = []
+        moment = pymunk.moment_for_circle(platform.mass, 0.0, platform.radius)
+        for _ in range(self.n):
+            body = pymunk.Body(platform.mass, moment)
+            shape = pymunk.Circle(body, platform.radius)
+            shape.friction = 0.0
+            shape.elasticity = 0.0
+            shape.collision_type = _ROBOT
+            control = pymunk.Body(body_type=pymunk.Body.KINEMATIC)
+            pivot = pymunk.PivotJoint(control, body, (0, 0), (0, 0))
+            pivot.max_bias = 0.0  # correct velocity only, never position
+            pivot.max_force = platform.mass * MOTOR_ACCELERATION
+            gear = pymunk.GearJoint(control, body, 0.0, 1.0)
+            gear.max_bias = 0.0
+            gear.max_force = moment * MOTOR_ANGULAR_ACCELERATION
+            self.space.add(body, shape, control, pivot, gear)
+            self.bodies.append(body)
+            self.controls.append(control)
+        for a, b in arena.wall_segments():
+            wall = pymunk.Segment(self.space.static_body, tuple(a), tuple(b), 0.0)
+            wall.friction = 0.0
+            wall.elasticity = 0.0
+            wall.collision_type = _WALL
+            self.space.add(wall)
+        self._index = {body: i for i, body in enumerate(self.bodies)}
+        self.space.on_collision(_ROBOT, _ROBOT, post_solve=self._on_contact)
+        self.space.on_collision(_ROBOT, _WALL, post_solve=self._on_contact)
+        self.positions = np.zeros((self.n, 2))
+        self.headings = np.zeros(self.n)
+        self.velocities = np.zeros((self.n, 2))
+        self.angular_velocities = np.zeros(self.n)
+        self.bumps = np.zeros((self.n, N_BUMP_SECTORS), dtype=bool)
+        self._contacts: list[tuple[int, float, float]] = []
+
+    # -- state -----------------------------------------------------------------------------------
+    def place(self, positions: np.ndarray, headings: np.ndarray) -> None:
+        """Put robots exactly at ``positions`` (n, 2) m with ``headings`` (n,) rad, at rest."""
+        positions = np.asarray(positions, dtype=float)
+        headings = np.asarray(headings, dtype=float)
+        if positions.shape != (self.n, 2) or headings.shape != (self.n,):
+            raise ValueError(
+                f"positions must have shape ({self.n}, 2) and headings ({self.n},); "
+                f"got {positions.shape} and {headings.shape}"
+            )
+        if not (np.all(np.isfinite(positions)) and np.all(np.isfinite(headings))):
+            raise ValueError("positions and headings must be finite")
+        outside = np.flatnonzero(~self.arena.contains(positions, self.platform.radius))
+        if len(outside):
+            raise ValueError(
+                f"robots {outside.tolist()} are (partly) outside the {self.arena.shape} arena of size "
+                f"{self.arena.size} m (robot radius {self.platform.radius} m)"
+            )
+        overlap = cKDTree(positions).query_pairs(2 * self.platform.radius - 1e-9, output_type="ndarray")
+        if len(overlap):
+            raise ValueError(f"robots overlap: pairs {overlap[:5].tolist()} are closer than one diameter")
+        for body, control, p, h in zip(self.bodies, self.controls, positions, headings):
+            body.position = control.position = (float(p[0]), float(p[1]))
+            body.angle = control.angle = float(h)
+            body.velocity = control.velocity = (0.0, 0.0)
+            body.angular_velocity = control.angular_velocity = 0.0
+        for body in self.bodies:
+            self.space.reindex_shapes_for_body(body)
+        self.positions = positions.copy()
+        self.headings = wrap_angle(headings)
+        self.velocities[:] = 0.0
+        self.angular_velocities[:] = 0.0
+        self.bumps[:] = False
+
+    def _read_state(self) -> None:
+        self.positions = np.array([b.position for b in self.bodies], dtype=float).reshape(self.n, 2)
+        self.headings = wrap_angle(np.array([b.angle for b in self.bodies], dtype=float))
+
+    # -- dynamics --------------------------------------------------------------------------------
+    def wheel_limited(self, linear: np.ndarray, angular: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Clip commanded (v m/s, w rad/s) so neither wheel exceeds the platform's max speed."""
+        half_base = 0.5 * self.platform.wheel_base
+        vmax = self.platform.max_speed
+        left = np.clip(linear - angular * half_base, -vmax, vmax)
+        right = np.clip(linear + angular * half_base, -vmax, vmax)
+        return 0.5 * (left + right), (right - left) / (2 * half_base)
+
+    def step(self, linear: np.ndarray, angular: np.ndarray, dt: float) -> None:
+        """Advance ``dt`` seconds with commanded linear (m/s) and angular (rad/s) velocities (n,)."""
+        linear, angular = self.wheel_limited(np.asarray(linear, float), np.asarray(angular, float))
+        h = dt / self.substeps
+        self._contacts.clear()
+        lin = linear.tolist()
+        ang = angular.tolist()
+        for _ in range(self.substeps):
+            for body, control, v, w in zip(self.bodies, self.controls, lin, ang):
+                # pymunk moves bodies with the velocity solved in the previous sub-step, so the new
+                # velocity acts over [angle + omega h, angle + omega h + w h]: aim at its middle
+                mid = body.angle + (body.angular_velocity + 0.5 * w) * h
+                control.velocity = (v * math.cos(mid), v * math.sin(mid))
+                control.angular_velocity = w
+            self.space.step(h)
+        before_pos, before_heading = self.positions, self.headings
+        self._read_state()
+        # velocity = motion actually achieved over the control step (pushes and walls included)
+        self.velocities = (self.positions - before_pos) / dt
+        self.angular_velocities = wrap_angle(self.headings - before_heading) / dt
+        self._update_bumps()
+
+    def _on_contact(self, arbiter: pymunk.Arbiter, space: pymunk.Space, data: object) -> None:
+        shapes = arbiter.shapes
+        normal = arbiter.normal  # points from shape a to shape b
+        for k, shape in enumerate(shapes):
+            idx = self._index.get(shape.body)
+            if idx is not None:
+                sign = 1.0 if k == 0 else -1.0
+                self._contacts.append((idx, sign * normal.x, sign * normal.y))
+
+    def _update_bumps(self) -> None:
+        self.bumps[:] = False
+        if not self._contacts:
+            return
+        contacts = np.array(self._contacts)
+        idx = contacts[:, 0].astype(int)
+        world_angle = np.arctan2(contacts[:, 2], contacts[:, 1])
+        body_angle = wrap_angle(world_angle - self.headings[idx])
+        sector = np.floor((body_angle + np.pi / N_BUMP_SECTORS) / (2 * np.pi / N_BUMP_SECTORS)).astype(int)
+        self.bumps[idx, sector % N_BUMP_SECTORS] = True

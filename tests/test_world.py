@@ -1,0 +1,106 @@
+"""Physics: kinematics, contacts, walls, spawn, bump sensing."""
+
+import numpy as np
+import pytest
+
+from swarm_envs.platforms import PLATFORMS
+from swarm_envs.world import Arena, World, spawn_positions, wrap_angle
+
+
+@pytest.mark.parametrize("platform", sorted(PLATFORMS))
+@pytest.mark.parametrize("v_frac,w_frac", [(0.5, 0.3), (0.4, -0.5), (1.0, 0.0), (0.0, 0.8)])
+def test_free_robot_follows_analytic_arc(platform, v_frac, w_frac):
+    p = PLATFORMS[platform]
+    world = World(p, 1, Arena("square", 4.0))
+    world.place(np.array([[0.1, -0.2]]), np.array([0.7]))
+    v, w = v_frac * p.max_speed, w_frac * p.max_angular_speed
+    v, w = (x.item() for x in world.wheel_limited(np.array([v]), np.array([w])))
+    for _ in range(10):  # 1 s
+        world.step(np.array([v]), np.array([w]), 0.1)
+    # pymunk integrates positions before it solves the motor joints, so motion starts one physics
+    # sub-step late (motor latency); otherwise the robot follows the arc exactly.
+    t, h0 = 1.0 - 0.1 / world.substeps, 0.7
+    if abs(w) > 1e-12:
+        expected = np.array([0.1, -0.2]) + v / w * np.array([np.sin(h0 + w * t) - np.sin(h0), -np.cos(h0 + w * t) + np.cos(h0)])
+    else:
+        expected = np.array([0.1, -0.2]) + v * t * np.array([np.cos(h0), np.sin(h0)])
+    np.testing.assert_allclose(world.positions[0], expected, atol=1e-4)
+    assert wrap_angle(world.headings[0] - (h0 + w * t)) == pytest.approx(0.0, abs=1e-6)
+
+
+def test_wheel_limits_clip_combined_commands():
+    p = PLATFORMS["epuck"]
+    world = World(p, 1, Arena("square", 1.0))
+    v, w = world.wheel_limited(np.array([p.max_speed]), np.array([p.max_angular_speed]))
+    left, right = v - w * p.wheel_base / 2, v + w * p.wheel_base / 2
+    assert max(abs(left[0]), abs(right[0])) <= p.max_speed + 1e-12
+
+
+def test_zero_action_keeps_robots_still():
+    p = PLATFORMS["epuck"]
+    rng = np.random.default_rng(0)
+    arena = Arena("square", 1.5)
+    world = World(p, 20, arena)
+    pos = spawn_positions(rng, 20, p.radius, arena)
+    world.place(pos, rng.uniform(-np.pi, np.pi, 20))
+    for _ in range(20):
+        world.step(np.zeros(20), np.zeros(20), 0.1)
+    np.testing.assert_allclose(world.positions, pos, atol=1e-12)
+
+
+@pytest.mark.parametrize("shape", ["square", "circle"])
+def test_dense_collisions_never_overlap_and_walls_hold(shape):
+    p = PLATFORMS["epuck"]
+    rng = np.random.default_rng(1)
+    arena = Arena(shape, 0.8)
+    n = 40
+    world = World(p, n, arena)
+    world.place(spawn_positions(rng, n, p.radius, arena), rng.uniform(-np.pi, np.pi, n))
+    min_gap = np.inf
+    for _ in range(150):
+        # everyone drives at full speed towards the centre: a crush
+        to_centre = np.arctan2(-world.positions[:, 1], -world.positions[:, 0]) - world.headings
+        world.step(np.full(n, p.max_speed), 3 * wrap_angle(to_centre), 0.1)
+        d = np.linalg.norm(world.positions[:, None] - world.positions[None], axis=-1)
+        d[np.diag_indices(n)] = np.inf
+        min_gap = min(min_gap, d.min() - 2 * p.radius)
+        assert np.all(arena.contains(world.positions, p.radius - 2e-3)), "a robot went through a wall"
+    # pymunk contacts are soft (iterative solver): allow 5% of a diameter under a full-force crush
+    assert min_gap > -0.05 * p.diameter, f"robots overlapped by {-min_gap * 1e3:.2f} mm"
+    assert world.bumps.any(), "a crush must trigger bump sensors"
+
+
+def test_bump_sector_faces_the_contact():
+    p = PLATFORMS["epuck"]
+    world = World(p, 2, Arena("square", 1.0))
+    # robot 0 faces +x towards robot 1; robot 1 faces +y, so robot 0 touches its left side (+90 deg)
+    world.place(np.array([[0.0, 0.0], [2 * p.radius + 0.002, 0.0]]), np.array([0.0, np.pi / 2]))
+    for _ in range(3):
+        world.step(np.array([p.max_speed, 0.0]), np.zeros(2), 0.1)
+    assert world.bumps[0, 0] and world.bumps[0].sum() == 1
+    assert world.bumps[1, 2] and world.bumps[1].sum() == 1  # sector k is centred on k * 45 deg
+    assert world.positions[1, 0] > 2 * p.radius + 0.002, "the pushed robot must move"
+
+
+def test_spawn_is_seeded_and_feasible_or_clear_error():
+    p = PLATFORMS["droplet"]
+    arena = Arena("circle", 0.4)
+    a = spawn_positions(np.random.default_rng(3), 50, p.radius, arena)
+    b = spawn_positions(np.random.default_rng(3), 50, p.radius, arena)
+    np.testing.assert_array_equal(a, b)
+    d = np.linalg.norm(a[:, None] - a[None], axis=-1) + np.eye(50)
+    assert d.min() >= 2 * p.radius
+    assert np.all(arena.contains(a, p.radius))
+    dense = spawn_positions(np.random.default_rng(3), 200, p.radius, Arena("square", 0.75))  # ~70% packing
+    assert len(dense) == 200
+    with pytest.raises(ValueError, match="cannot place 1000 robots"):
+        spawn_positions(np.random.default_rng(3), 1000, p.radius, arena)
+
+
+def test_place_rejects_overlap_and_outside():
+    p = PLATFORMS["epuck"]
+    world = World(p, 2, Arena("square", 1.0))
+    with pytest.raises(ValueError, match="overlap"):
+        world.place(np.array([[0.0, 0.0], [0.03, 0.0]]), np.zeros(2))
+    with pytest.raises(ValueError, match="outside"):
+        world.place(np.array([[0.0, 0.0], [0.49, 0.0]]), np.zeros(2))
