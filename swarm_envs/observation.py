@@ -58,7 +58,9 @@ def pack_nearest(
     Returns ``(packed, order)``: ``packed`` zero-filled where a row has fewer than k entries, and
     ``order`` (n_rows, k) with the link index in each slot (-1 where empty). Fully vectorised.
     """
-    values = np.asarray(values, dtype=np.float64).reshape(len(row), -1)
+    values = np.asarray(values, dtype=np.float64)
+    if values.ndim == 1:
+        values = values[:, None]
     packed = np.zeros((n_rows, k, values.shape[1]))
     order = np.full((n_rows, k), -1, dtype=np.int64)
     if len(row) == 0 or k == 0:

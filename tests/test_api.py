@@ -1,0 +1,75 @@
+"""PettingZoo API conformance of every registered environment, via the registry."""
+
+import numpy as np
+import pettingzoo
+import pytest
+from pettingzoo.test import api_test, parallel_api_test
+
+import swarm_envs
+
+SENSING = ["ideal"]
+
+
+@pytest.mark.parametrize("env_id", swarm_envs.list_envs())
+@pytest.mark.parametrize("platform", sorted(swarm_envs.PLATFORMS))
+@pytest.mark.parametrize("sensing", SENSING)
+def test_parallel_api(env_id, platform, sensing):
+    for n in (1, 4):
+        env = pettingzoo.make("parallel", env_id, n_robots=n, platform=platform, sensing=sensing, max_cycles=30)
+        parallel_api_test(env, num_cycles=40)
+
+
+@pytest.mark.parametrize("env_id", swarm_envs.list_envs())
+@pytest.mark.parametrize("sensing", SENSING)
+def test_aec_api(env_id, sensing):
+    env = pettingzoo.make("aec", env_id, n_robots=3, sensing=sensing, max_cycles=20)
+    api_test(env, num_cycles=30)
+
+
+@pytest.mark.parametrize("env_id", swarm_envs.list_envs())
+def test_flatten_and_messages_layout(env_id):
+    env = swarm_envs.make(env_id, n_robots=3, sensing="ideal", flatten=True, message_bits=4, max_cycles=10)
+    parallel_api_test(env, num_cycles=15)
+    obs, _ = env.reset(seed=0)
+    agent = env.agents[0]
+    space = env.observation_space(agent)
+    assert space.shape == obs[agent].shape and space.contains(obs[agent])
+    parts = env.layout.unflatten(obs[agent])
+    assert parts["messages"].shape == (8, 2 + 4)
+    assert parts["proprio"].shape == (8 + 2 + 4,)
+    assert env.action_space(agent).shape == (6,)
+
+
+def test_registry_entry_points_and_make():
+    for env_id in swarm_envs.list_envs():
+        assert env_id in pettingzoo.parallel_registry
+        assert env_id in pettingzoo.aec_registry
+    assert swarm_envs.list_envs() == ["swarm_envs/Aggregation-v0", "swarm_envs/Flocking-v0", "swarm_envs/CentroidSeeking-v0"]
+    for module in (swarm_envs.aggregation_v0, swarm_envs.flocking_v0, swarm_envs.centroid_seeking_v0):
+        assert isinstance(module.parallel_env(sensing="ideal"), module.raw_env)
+        aec = module.env(sensing="ideal")
+        assert isinstance(aec, pettingzoo.AECEnv)
+
+
+@pytest.mark.parametrize("env_id", swarm_envs.list_envs())
+def test_rgb_array_render_headless(env_id):
+    env = swarm_envs.make(env_id, n_robots=5, sensing="ideal", render_mode="rgb_array")
+    env.reset(seed=1)
+    frame = env.render()
+    assert frame.dtype == np.uint8 and frame.shape == (480, 480, 3)
+    # robots are drawn: the frame is not a blank background
+    assert len(np.unique(frame.reshape(-1, 3), axis=0)) > 3
+    env.step({a: np.array([1.0, 0.5], np.float32) for a in env.agents})
+    frame2 = env.render()
+    assert not np.array_equal(frame, frame2), "moving robots must change the picture"
+    env.close()
+
+
+def test_ground_truth_only_in_infos():
+    env = swarm_envs.make("swarm_envs/Aggregation-v0", n_robots=4, sensing="ideal")
+    obs, infos = env.reset(seed=0)
+    for agent, info in infos.items():
+        gt = info["ground_truth"]
+        assert set(gt) == {"position", "heading", "velocity"}
+        assert gt["position"].shape == (2,) and gt["velocity"].shape == (2,)
+        assert isinstance(obs[agent], dict) and "ground_truth" not in obs[agent]
