@@ -74,6 +74,7 @@ __all__ = [
     "knowledge_from_matrix",
     "null_space_lengths",
     "triangle_sensitivity",
+    "angle_balance",
     "DEGENERATE_ANGLE",
     "NULL_RTOL",
     "RESTRICT_TOL",
@@ -138,6 +139,13 @@ class ScaleFreeResult:
     rigid: np.ndarray
     ids: np.ndarray
     length: np.ndarray
+
+
+def angle_balance(psi_u: np.ndarray, psi_z: np.ndarray, psi_w: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """ANGLEBALANCE [L Alg. 2]: add ``(pi - (psi_u + psi_z + psi_w)) / 3`` to each inner angle (rad), so
+    the three sum to pi."""
+    corr = (np.pi - (psi_u + psi_z + psi_w)) / 3.0
+    return psi_u + corr, psi_z + corr, psi_w + corr
 
 
 def triangle_sensitivity(psi_v: np.ndarray, psi_w: np.ndarray) -> np.ndarray:
@@ -209,8 +217,7 @@ def coordinates_all(
     P = np.abs(_wrap(tzu[:, :, None] - tzw))
     psi_u = np.abs(_wrap(th[:, :, None] - th[:, None, :]))
     if angle_balance:
-        corr = (np.pi - (psi_u + P + np.swapaxes(P, 1, 2))) / 3.0
-        P = P + corr
+        _, P, _ = _angle_balance(psi_u, P, np.swapaxes(P, 1, 2))  # the correction is symmetric in (i, j)
     PT = np.swapaxes(P, 1, 2)
     deg_ok = (
         (np.minimum(P, np.pi - P) > DEGENERATE_ANGLE)
@@ -508,3 +515,6 @@ def coordinates(
         xy[nbrs] = np.stack([lengths * np.cos(th), lengths * np.sin(th)], -1)
         return xy, rigid
     raise ValueError(f"unknown method {method!r}; allowed: 'two_hop', 'null_space'")
+
+
+_angle_balance = angle_balance  # module-level alias: the keyword argument of coordinates_all shadows it
