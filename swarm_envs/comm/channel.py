@@ -1,0 +1,166 @@
+"""SwarmCom physical channel: received intensity and the 12-bit ADC measurement [T20 Sec. 3].
+
+The geometry and the emitter/medium/detector gains come from the shared IR layer
+(:mod:`swarm_envs.ir.layer`, :mod:`swarm_envs.ir.models`); this module only turns gains into the
+received intensity ``y`` and into ADC counts ``m``:
+
+- robot-to-robot model [T20 Eqs. (10),(11)]: ``y_j = min(1, sum_i h_e(alpha_ij) h_m(d_ij) h_d(beta_ji) s(t)
+  + n_j)``, summed over every emitter i of every transmitting robot in line of sight (superposition,
+  so overlapping transmissions collide physically);
+- measurement model [T20 Eqs. (15)-(22)]: ``m = floor((m_max - m_min)(1 - y^0) + m_min + n_m)``, clipped
+  to the ADC range [0, 4095], m_max = 4080 (ambient), m_min = 150 (saturation), n_m ~ N(0, 2.5)
+  (variance 2.5 counts^2) [T20 Sec. 3.4.1, Table 1].
+
+Intensity noise ``n_j``: the paper writes it in Eq. (11) but identifies only the measurement noise n_m
+(Eq. (22) uses the noise-free ``y^0``); so by default ``n_j = 0`` and all noise is n_m. A non-zero
+``intensity_sigma`` adds Gaussian ``n_j`` before the ``min(1, .)`` saturation.
+
+Other platforms. The protocol only needs a dimensionless intensity ``y`` in [0, 1] and an ADC. For a
+platform whose IR model gain is in other units we normalise with the model's measurement constants:
+``y = gain * model.adc_scale / model.adc_max`` (so y = 1 is the platform's saturation level; for the
+e-puck this is the identity), and use an ADC with ``m_max = model.adc_max``, ``m_min = 0`` and noise
+``model.default_noise_sigma``: the Droplet's 8-bit IR receiver (y = counts / 255) and the r-one's binary
+receivers (y in {0, 1}, noiseless) then run the same OOK / start-symbol / dynamic-threshold protocol.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from swarm_envs.platforms import Platform, get_platform
+
+__all__ = [
+    "ADCModel",
+    "adc_model_for",
+    "gain_to_intensity",
+    "detector_intensity",
+    "adc",
+    "M_MAX",
+    "M_MIN",
+    "M_SUP",
+    "NOISE_VAR",
+]
+
+M_MAX = 4080.0  # ambient light value (counts) [T20 Table 1]
+M_MIN = 150.0  # saturation value (counts) [T20 Table 1]
+M_SUP = 4095  # 12-bit ADC full scale, 2^12 - 1 [T20 Sec. 3.3]
+NOISE_VAR = 2.5  # ADC noise variance (counts^2) [T20 Sec. 3.4.1]
+
+
+@dataclass(frozen=True)
+class ADCModel:
+    """Measurement model of one platform [T20 Eqs. (15)-(22)].
+
+    Attributes:
+        m_max: ambient-light value (counts): what an unlit detector reads on average.
+        m_min: saturation value (counts): what a detector reads at y >= 1.
+        m_sup: ADC full scale (counts); measurements are clipped to [0, m_sup].
+        noise_var: variance of the additive Gaussian ADC noise n_m (counts^2).
+        intensity_scale: multiply a summed model gain by this to get the intensity y (1 = saturation).
+    """
+
+    m_max: float = M_MAX
+    m_min: float = M_MIN
+    m_sup: int = M_SUP
+    noise_var: float = NOISE_VAR
+    intensity_scale: float = 1.0
+
+    @property
+    def noise_sigma(self) -> float:
+        return float(np.sqrt(self.noise_var))
+
+
+def adc_model_for(platform: Platform | str) -> ADCModel:
+    """The ADC model of a platform: the e-puck constants of [T20 Table 1]; for other platforms the IR
+    model's own scale (module docstring)."""
+    platform = get_platform(platform)
+    if platform.name == "epuck" or (platform.extras or {}).get("ir_model") == "epuck":
+        return ADCModel()
+    model = platform.ir_model
+    full = float(model.adc_max)
+    sigma = float(getattr(model, "default_noise_sigma", 0.0))
+    return ADCModel(
+        m_max=full,
+        m_min=0.0,
+        m_sup=int(np.ceil(full)),
+        noise_var=sigma * sigma,
+        intensity_scale=float(model.adc_scale) / full,
+    )
+
+
+def gain_to_intensity(gain_sum: np.ndarray, platform: Platform | str, adc_model: ADCModel | None = None) -> np.ndarray:
+    """Summed model gain -> saturated intensity ``y = min(1, scale * gain)`` [T20 Eq. (10)]."""
+    m = adc_model if adc_model is not None else adc_model_for(platform)
+    return np.minimum(1.0, m.intensity_scale * np.asarray(gain_sum, dtype=float))
+
+
+def detector_intensity(
+    tx_xy: np.ndarray,
+    tx_heading: np.ndarray | float,
+    rx_xy: np.ndarray,
+    rx_heading: np.ndarray | float,
+    platform: Platform | str,
+) -> np.ndarray:
+    """Noiseless received intensity y at each detector of the receiver when every emitter of the
+    transmitter is on, line of sight assumed [T20 Eqs. (7)-(14), (10) with n_j = 0].
+
+    Args:
+        tx_xy: (..., 2) transmitter centre, world frame (m).
+        tx_heading: (...) transmitter heading (rad).
+        rx_xy: (..., 2) receiver centre (m).
+        rx_heading: (...) receiver heading (rad).
+        platform: platform of both robots.
+
+    Returns:
+        (..., n_detectors) intensity ``y = min(1, sum_emitters gain)`` (dimensionless, 1 = saturation).
+    """
+    from swarm_envs.ir.layer import pair_gains, wrap_angle
+
+    platform = get_platform(platform)
+    tx_xy, rx_xy = np.asarray(tx_xy, dtype=float), np.asarray(rx_xy, dtype=float)
+    tx_h, rx_h = np.asarray(tx_heading, dtype=float), np.asarray(rx_heading, dtype=float)
+    shape = np.broadcast_shapes(tx_xy.shape[:-1], rx_xy.shape[:-1], tx_h.shape, rx_h.shape)
+    tx_xy = np.broadcast_to(tx_xy, shape + (2,)).reshape(-1, 2)
+    rx_xy = np.broadcast_to(rx_xy, shape + (2,)).reshape(-1, 2)
+    tx_h = np.broadcast_to(tx_h, shape).reshape(-1)
+    rx_h = np.broadcast_to(rx_h, shape).reshape(-1)
+    d = tx_xy - rx_xy
+    c, s = np.cos(rx_h), np.sin(rx_h)
+    rel = np.stack([c * d[:, 0] + s * d[:, 1], -s * d[:, 0] + c * d[:, 1]], axis=-1)
+    g = pair_gains(rel, wrap_angle(tx_h - rx_h), platform)  # (P, n_d, n_e)
+    y = gain_to_intensity(g.sum(axis=-1), platform)
+    return y.reshape(shape + (platform.n_detectors,))
+
+
+def adc(
+    y: np.ndarray,
+    rng: np.random.Generator,
+    m_max: float | np.ndarray = M_MAX,
+    m_min: float = M_MIN,
+    noise_var: float = NOISE_VAR,
+    m_sup: int = M_SUP,
+    intensity_sigma: float = 0.0,
+) -> np.ndarray:
+    """12-bit ADC measurement of intensity y [T20 Eqs. (20)-(22)].
+
+    ``m = floor((m_max - m_min)(1 - min(1, y + n_j)) + m_min + n_m)`` clipped to [0, m_sup], with
+    ``n_m ~ N(0, noise_var)`` and ``n_j ~ N(0, intensity_sigma^2)`` (0 by default, see module doc).
+
+    Args:
+        y: intensity (any shape), dimensionless.
+        rng: random generator for the noise.
+        m_max: ambient value (counts), scalar or broadcastable to y (per-robot ambient light).
+
+    Returns:
+        int32 array of counts, same shape as y.
+    """
+    y = np.asarray(y, dtype=float)
+    if intensity_sigma > 0:
+        y = y + rng.normal(0.0, intensity_sigma, size=y.shape)
+    y = np.minimum(y, 1.0)
+    m = (np.asarray(m_max) - m_min) * (1.0 - y) + m_min
+    if noise_var > 0:
+        m = m + rng.normal(0.0, np.sqrt(noise_var), size=y.shape)
+    return np.clip(np.floor(m), 0, m_sup).astype(np.int32)

@@ -1,0 +1,709 @@
+"""SwarmCom network simulator: bit-slot accurate infrared messaging for a whole swarm [T20 Secs. 3, 4, 6].
+
+:class:`Network` is what an environment calls once per control step (``dt = 0.1 s``). A step carries
+``bitrate * dt`` bit slots (the fractional remainder is carried to the next step, so frames run across
+step boundaries). In every slot, vectorised over all robots:
+
+1. CSMA (:class:`~swarm_envs.comm.protocol.CSMA`): robots with a queued frame sense and maybe start;
+2. the robots that are sending emit their frame's current bit (OOK, all emitters on for an s1);
+3. the received intensity of every detector is the superposition over the emitting transmitters in
+   line of sight, ``y = min(1, sum gains)`` [T20 Eqs. (10),(11)], accumulated with ``np.bincount`` over
+   the links of the emitting robots (links sorted by transmitter once per step);
+4. the 12-bit ADC turns y into counts with Gaussian noise [T20 Eqs. (20)-(22)]
+   (:func:`swarm_envs.comm.channel.adc`, same formula inlined here with noise drawn once per step);
+5. the detectors (:class:`~swarm_envs.comm.protocol.DetectorBank`) take ``min`` over their detectors,
+   detect start symbols, apply the dynamic threshold and store bits; at check points the header is
+   decoded (BCH) and the frame is aborted, continued or delivered.
+
+Bit errors, collisions (superposed frames), losses (aborted / undecodable frames) and hidden terminals
+thus all arise from the channel model; nothing is drawn from a fitted error rate.
+
+Ground truth (for statistics and validation only, never for the receiver's decisions): at a start
+detection the strongest transmitter currently emitting s1 towards the receiver is recorded; while the
+frame lasts the bit that transmitter actually sent in each slot is stored beside the received bit. Bit
+errors are counted on frames whose start coincided with the true start symbol ("aligned" frames).
+
+Modes [T20 Sec. 6]: ``"broadcast"`` (local broadcast: a frame reaches the robots that decode it) and
+``"flooding"`` (each robot re-sends every new ``"app"`` message once, deduplicated by (origin, seq)
+within ``dedupe_window`` seconds; the header then also carries the last-hop id). System kinds queued by
+:meth:`Network.queue_system` are always local broadcast.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from swarm_envs.comm.bch import BCHCode, code as bch_code
+from swarm_envs.comm.channel import ADCModel, adc_model_for
+from swarm_envs.comm.protocol import (
+    CSMA,
+    IDLE,
+    MAX_PAYLOAD,
+    RECV,
+    SEQ_BITS,
+    DetectorBank,
+    FrameFormat,
+    KindRegistry,
+    bits_to_uint,
+)
+from swarm_envs.platforms import Platform, get_platform
+
+__all__ = ["Network", "Deliveries", "BITRATES", "COMM_MODES"]
+
+BITRATES = (310, 650, 1080, 1160, 1670, 1800)  # bps offered by the e-puck hardware [T20 Sec. 5]
+COMM_MODES = ("broadcast", "flooding")
+
+_COUNTERS = (
+    "slots",
+    "tx_started",  # frames put on air (originals + relays)
+    "tx_completed",
+    "tx_relays",  # flooding re-sends queued
+    "deferrals",  # CSMA found the channel busy
+    "queue_dropped",  # oldest waiting frame dropped because the queue was full
+    "rx_starts",  # start symbols detected (includes noise-triggered false starts)
+    "rx_false_starts",  # ... with no transmitter emitting s1 towards the robot (ground truth)
+    "rx_aborted",  # frames abandoned: bad marker/type, undecodable or impossible header
+    "rx_decode_failed",  # complete frames with an undecodable block
+    "rx_decoded",  # complete frames whose blocks all decode and header is valid
+    "rx_delivered",  # ... passed to the application (after flooding dedupe)
+    "rx_duplicates",  # flooding duplicates suppressed
+    "rx_corrupt_delivered",  # delivered but header/payload differ from what was sent (ground truth)
+    "rx_lost",  # aligned frames from a real transmitter that were aborted or failed to decode
+    "collisions",  # received frames during which >= 2 transmitters were significant at the receiver
+    "bits_checked",  # raw bits compared with the truth (aligned frames)
+    "bit_errors",
+    "blocks_checked",  # decoded 15-bit blocks compared with the truth (complete aligned frames)
+    "block_errors",
+)
+_PER_ROBOT = ("tx_started", "deferrals", "rx_delivered", "rx_lost", "collisions", "bits_checked", "bit_errors")
+
+
+@dataclass
+class Deliveries:
+    """Frames delivered to the application during one step (D rows).
+
+    Attributes:
+        receiver: (D,) robot that received the message.
+        origin: (D,) robot that created the message (header).
+        sender: (D,) last hop (header; = origin in broadcast mode).
+        seq: (D,) sequence number (mod 128).
+        detector: (D,) index of the receiver's detector with the smallest ADC value during the frame
+            (the brightest one: a coarse bearing of the sender).
+        kind: (D,) object array of kind names (``"app"`` or the system kind).
+        length: (D,) payload length (bits).
+        payload: (D, Lmax) bool, row i valid up to ``length[i]``.
+        slot: (D,) global bit slot at which the frame's start symbol was received.
+        corrupt: (D,) ground truth: the decoded header/payload differs from what was sent (possible
+            because [15,15], [15,11], [15,1] detect nothing). For metrics only, not an observation.
+        stats: counters of this step (scalars) and per-robot arrays ``<name>_per_robot`` (N,).
+    """
+
+    receiver: np.ndarray
+    origin: np.ndarray
+    sender: np.ndarray
+    seq: np.ndarray
+    detector: np.ndarray
+    kind: np.ndarray
+    length: np.ndarray
+    payload: np.ndarray
+    slot: np.ndarray
+    corrupt: np.ndarray
+    stats: dict[str, Any] = field(default_factory=dict)
+
+    def __len__(self) -> int:
+        return int(self.receiver.shape[0])
+
+    def payloads(self) -> list[np.ndarray]:
+        """Payloads as a list of 1-D bool arrays of their own lengths."""
+        return [self.payload[i, : self.length[i]] for i in range(len(self))]
+
+    def for_kind(self, kind: str) -> "Deliveries":
+        m = self.kind == kind
+        return Deliveries(
+            *(getattr(self, f)[m] for f in ("receiver", "origin", "sender", "seq", "detector", "kind", "length", "payload", "slot", "corrupt")),
+            stats=self.stats,
+        )
+
+
+def _ranges(start: np.ndarray, stop: np.ndarray) -> np.ndarray:
+    """Concatenate ``arange(start[i], stop[i])`` for all i (vectorised)."""
+    counts = stop - start
+    total = int(counts.sum())
+    if total == 0:
+        return np.zeros(0, dtype=np.int64)
+    offs = np.repeat(start - np.concatenate([[0], np.cumsum(counts)[:-1]]), counts)
+    return offs + np.arange(total)
+
+
+class Network:
+    """Bit-level SwarmCom simulation of ``n_robots`` robots (module docstring).
+
+    Args:
+        platform: robot platform (its IR model gives the gains, :func:`adc_model_for` the ADC).
+        n_robots: swarm size N.
+        rng: random generator (ADC noise, CSMA backoff, start-up ambient samples).
+        bitrate: bits per second (e-puck: 310 default, 650, 1080, 1160, 1670, 1800 [T20 Sec. 5]).
+        relative_threshold: m_tr (counts) [T20 Eq. (33)], default 5.
+        code: BCH code (n, k): (15, 15) default, (15, 11), (15, 7), (15, 5), (15, 1).
+        comm_mode: ``"broadcast"`` or ``"flooding"``.
+        payload_bits: default application payload length (bits) used by :meth:`send_many` checks.
+        dt: control step (s).
+        queue_capacity: frames waiting per robot; when full the oldest waiting frame is dropped.
+        backoff_window: CSMA contention window (slots).
+        ambient: true ambient value m_max (counts), scalar or (N,); default the platform's (4080 e-puck).
+        startup_samples: idle samples averaged at reset for the start-up ambient estimate [Sec. 4.5].
+        dedupe_window: seconds a flooded (origin, seq) is remembered.
+        intensity_sigma: std of the intensity noise n_j [Eq. (11)] (0: all noise is ADC noise n_m).
+        adc_model: override the platform's ADC model.
+    """
+
+    def __init__(
+        self,
+        platform: Platform | str,
+        n_robots: int,
+        rng: np.random.Generator,
+        bitrate: float = 310,
+        relative_threshold: float = 5,
+        code: tuple[int, int] | BCHCode = (15, 15),
+        comm_mode: str = "broadcast",
+        payload_bits: int = 8,
+        dt: float = 0.1,
+        queue_capacity: int = 4,
+        backoff_window: int = 32,
+        ambient: float | np.ndarray | None = None,
+        startup_samples: int = 64,
+        dedupe_window: float = 5.0,
+        intensity_sigma: float = 0.0,
+        adc_model: ADCModel | None = None,
+    ) -> None:
+        if comm_mode not in COMM_MODES:
+            raise ValueError(f"comm_mode must be one of {COMM_MODES}, got {comm_mode!r}")
+        if not bitrate > 0:
+            raise ValueError(f"bitrate must be > 0 (e-puck rates: {BITRATES}), got {bitrate!r}")
+        if not 0 <= payload_bits <= MAX_PAYLOAD:
+            raise ValueError(f"payload_bits must be in [0, {MAX_PAYLOAD}], got {payload_bits}")
+        self.platform = get_platform(platform)
+        self.n = int(n_robots)
+        self.rng = rng
+        self.bitrate = float(bitrate)
+        self.dt = float(dt)
+        self.m_tr = float(relative_threshold)
+        self.code = code if isinstance(code, BCHCode) else bch_code(*tuple(code))
+        self.comm_mode = comm_mode
+        self.payload_bits = int(payload_bits)
+        self.Q = int(queue_capacity)
+        self.adc_model = adc_model if adc_model is not None else adc_model_for(self.platform)
+        self.ambient = np.broadcast_to(
+            np.asarray(self.adc_model.m_max if ambient is None else ambient, dtype=float), (self.n,)
+        ).copy()
+        self.startup_samples = int(startup_samples)
+        self.dedupe_slots = int(round(dedupe_window * self.bitrate))
+        self.intensity_sigma = float(intensity_sigma)
+        self.fmt = FrameFormat.for_swarm(self.n, self.code, with_sender=(comm_mode == "flooding"))
+        self.kinds = KindRegistry()
+        self.n_det = self.platform.n_detectors
+        self.det = DetectorBank(self.n, self.m_tr, max_bits=64)
+        self.csma = CSMA(self.n, backoff_window)
+        self.reset()
+
+    # ------------------------------------------------------------------ state
+    def reset(self) -> None:
+        """Empty all queues, idle all transceivers, zero the statistics, redo the start-up ambient
+        estimate (mean of ``startup_samples`` noisy dark samples per detector) [T20 Sec. 4.5]."""
+        n = self.n
+        F = max(64, self.fmt.header_blocks * self.code.n + 1, self.frame_slots() + 1)
+        self.slot = 0
+        self.carry = 0.0
+        self.q_bits = np.zeros((n, self.Q, F), dtype=bool)
+        self.q_slots = np.zeros((n, self.Q), dtype=np.int64)
+        self.q_head = np.zeros(n, dtype=np.int64)
+        self.q_count = np.zeros(n, dtype=np.int64)
+        self.cur_bits = np.zeros((n, F), dtype=bool)
+        self.cur_slots = np.zeros(n, dtype=np.int64)
+        self.cur_pos = np.zeros(n, dtype=np.int64)
+        self.cur_id = np.full(n, -1, dtype=np.int64)
+        self.sending = np.zeros(n, dtype=bool)
+        self.frame_counter = 0
+        self.seq_next = np.zeros(n, dtype=np.int64)
+        self.gt_tx = np.full(n, -1, dtype=np.int64)
+        self.gt_id = np.full(n, -1, dtype=np.int64)
+        self.gt_buf = np.zeros((n, F), dtype=bool)
+        self.collided = np.zeros(n, dtype=bool)
+        self.seen_keys = np.zeros(0, dtype=np.int64)
+        self.seen_slot = np.zeros(0, dtype=np.int64)
+        a = self.adc_model
+        K = max(1, self.startup_samples)
+        dark = np.floor(self.ambient[:, None] + self.rng.normal(0.0, a.noise_sigma, size=(n, K * self.n_det)) if a.noise_var > 0 else np.repeat(self.ambient[:, None], K * self.n_det, 1))
+        self.det.reset(np.clip(dark, 0, a.m_sup).mean(axis=1))
+        self.csma.reset()
+        self.stats: dict[str, Any] = {c: 0 for c in _COUNTERS}
+        for c in _PER_ROBOT:
+            self.stats[c + "_per_robot"] = np.zeros(n, dtype=np.int64)
+        self._step_stats = self._new_step_stats()
+
+    def _new_step_stats(self) -> dict[str, Any]:
+        s: dict[str, Any] = {c: 0 for c in _COUNTERS}
+        for c in _PER_ROBOT:
+            s[c + "_per_robot"] = np.zeros(self.n, dtype=np.int64)
+        return s
+
+    def _count(self, name: str, robots: np.ndarray | None = None, values: np.ndarray | int = 1) -> None:
+        if robots is None:
+            v = int(values)
+            self.stats[name] += v
+            self._step_stats[name] += v
+            return
+        robots = np.asarray(robots)
+        vals = np.broadcast_to(np.asarray(values, dtype=np.int64), robots.shape)
+        tot = int(vals.sum())
+        self.stats[name] += tot
+        self._step_stats[name] += tot
+        if name in _PER_ROBOT and robots.size:
+            np.add.at(self.stats[name + "_per_robot"], robots, vals)
+            np.add.at(self._step_stats[name + "_per_robot"], robots, vals)
+
+    def _ensure_frame_capacity(self, F: int) -> None:
+        cur = self.cur_bits.shape[1]
+        if F <= cur:
+            return
+        F = max(F, 2 * cur, self.det.buf.shape[1])
+        pad = F - cur
+        self.q_bits = np.concatenate([self.q_bits, np.zeros((self.n, self.Q, pad), bool)], axis=2)
+        self.cur_bits = np.concatenate([self.cur_bits, np.zeros((self.n, pad), bool)], axis=1)
+        self.gt_buf = np.concatenate([self.gt_buf, np.zeros((self.n, pad), bool)], axis=1)
+        dw = self.det.buf.shape[1]
+        if dw < F:
+            self.det.buf = np.concatenate([self.det.buf, np.zeros((self.n, F - dw), bool)], axis=1)
+
+    @property
+    def slots_per_step(self) -> float:
+        return self.bitrate * self.dt
+
+    def frame_slots(self, payload_len: int | None = None) -> int:
+        """Bit slots one frame with this payload takes on air (start symbol + blocks)."""
+        return int(self.fmt.frame_slots(self.payload_bits if payload_len is None else payload_len))
+
+    # ------------------------------------------------------------------ queueing
+    def send(self, robot: int, payload_bits: np.ndarray, kind: str = "app") -> int:
+        """Queue one message of ``robot``; returns its sequence number."""
+        p = np.asarray(payload_bits, dtype=bool).reshape(1, -1)
+        return int(self.send_many(np.array([robot]), p, kind)[0])
+
+    def send_many(self, robots: np.ndarray, payloads: np.ndarray, kind: str = "app", lengths: np.ndarray | None = None) -> np.ndarray:
+        """Queue one message per entry of ``robots`` (M,), payloads (M, L) bool (all length L unless
+        ``lengths`` (M,) is given). Returns the (M,) sequence numbers (mod 128)."""
+        robots = np.asarray(robots, dtype=np.int64).reshape(-1)
+        M = robots.size
+        payloads = np.asarray(payloads, dtype=bool).reshape(M, -1)
+        if M == 0:
+            return np.zeros(0, dtype=np.int64)
+        if (robots < 0).any() or (robots >= self.n).any():
+            raise ValueError(f"robot index out of range [0, {self.n})")
+        lengths = np.full(M, payloads.shape[1]) if lengths is None else np.asarray(lengths, dtype=np.int64)
+        tcode = self.kinds.code(kind)
+        # per-origin sequence numbers (robots may repeat within one call)
+        order = np.argsort(robots, kind="stable")
+        rs = robots[order]
+        first = np.r_[True, rs[1:] != rs[:-1]]
+        grp_start = np.maximum.accumulate(np.where(first, np.arange(M), 0))
+        rank = np.empty(M, dtype=np.int64)
+        rank[order] = np.arange(M) - grp_start
+        seq = (self.seq_next[robots] + rank) % (1 << SEQ_BITS)
+        np.add.at(self.seq_next, robots, 1)
+        bits, slots = self.fmt.build(np.full(M, tcode), seq, robots, robots, payloads, lengths)
+        self._enqueue(robots, bits, slots, rank)
+        return seq
+
+    def queue_system(self, robot: int | np.ndarray, bits: np.ndarray, kind: str) -> np.ndarray:
+        """Queue system traffic (any kind name other than ``"app"``, at most 255 bits, local broadcast)
+        for one robot or an array of robots sharing the same payload shape ``(M, L)``."""
+        if kind == "app":
+            raise ValueError("use send()/send_many() for application messages")
+        robots = np.atleast_1d(np.asarray(robot, dtype=np.int64))
+        b = np.asarray(bits, dtype=bool).reshape(robots.size, -1)
+        return self.send_many(robots, b, kind=kind)
+
+    def _enqueue(self, robots: np.ndarray, bits: np.ndarray, slots: np.ndarray, rank: np.ndarray) -> None:
+        self._ensure_frame_capacity(bits.shape[1])
+        F = bits.shape[1]
+        for r in range(int(rank.max()) + 1):
+            sel = np.flatnonzero(rank == r)
+            rb = robots[sel]
+            full = self.q_count[rb] >= self.Q
+            if full.any():
+                fr = rb[full]
+                self.q_head[fr] = (self.q_head[fr] + 1) % self.Q
+                self.q_count[fr] -= 1
+                self._count("queue_dropped", values=int(full.sum()))
+            pos = (self.q_head[rb] + self.q_count[rb]) % self.Q
+            self.q_bits[rb, pos, :] = False
+            self.q_bits[rb, pos, :F] = bits[sel]
+            self.q_slots[rb, pos] = slots[sel]
+            newly = rb[(self.q_count[rb] == 0) & ~self.sending[rb]]
+            self.q_count[rb] += 1
+            self.csma.arm(newly, self.rng)  # access delay before the first carrier sense
+
+    # ------------------------------------------------------------------ the step
+    def step(self, links: Any) -> Deliveries:
+        """Simulate one control step of ``bitrate * dt`` bit slots over the given IR links
+        (:class:`swarm_envs.ir.layer.IRLinks` of the current poses) and return what was delivered."""
+        self._step_stats = self._new_step_stats()
+        n, nd = self.n, self.n_det
+        a = self.adc_model
+        if links is None or len(links.rx) == 0:
+            rx = np.zeros(0, dtype=np.int64)
+            tx = np.zeros(0, dtype=np.int64)
+            G = np.zeros((0, nd))
+        else:
+            rx = np.asarray(links.rx, dtype=np.int64)
+            tx = np.asarray(links.tx, dtype=np.int64)
+            G = a.intensity_scale * np.asarray(links.gains, dtype=float).sum(axis=-1)  # (P, nd) all emitters on
+        order = np.argsort(tx, kind="stable")
+        rx, tx, G = rx[order], tx[order], G[order]
+        tx_ptr = np.searchsorted(tx, np.arange(n + 1))
+        flat = (rx[:, None] * nd + np.arange(nd)[None, :]).ravel()
+        strength = G.max(axis=1) if G.size else np.zeros(0)
+        significant = strength * (self.ambient[rx] - a.m_min) > self.m_tr
+        sig_tx = tx[significant]
+        sig_rx = rx[significant]
+        sig_str = strength[significant]
+        sig_ptr = np.searchsorted(sig_tx, np.arange(n + 1))
+
+        total = self.carry + self.bitrate * self.dt
+        S = int(np.floor(total + 1e-9))
+        self.carry = total - S
+        noise = (
+            self.rng.standard_normal(size=(S, n, nd), dtype=np.float32) * np.float32(a.noise_sigma)
+            if a.noise_var > 0
+            else np.zeros((S, n, nd), dtype=np.float32)
+        )
+        span = (self.ambient - a.m_min)[:, None]
+        deliveries: list[dict[str, np.ndarray]] = []
+        first_check = self.fmt.first_check_slots
+        for s in range(S):
+            # 1. CSMA
+            pending = (self.q_count > 0) & ~self.sending
+            if pending.any():
+                busy = (self.det.state == RECV) | self.det.last_s1
+                go, defer = self.csma.decide(pending, busy, self.rng)
+                if defer.size:
+                    self._count("deferrals", defer)
+                if go.size:
+                    self._start_tx(go)
+            # 2. emission
+            snd = np.flatnonzero(self.sending)
+            bit = self.cur_bits[snd, self.cur_pos[snd]] if snd.size else np.zeros(0, bool)
+            on = snd[bit]
+            # 3. intensity (superposition over emitting transmitters)
+            if on.size:
+                li = _ranges(tx_ptr[on], tx_ptr[on + 1])
+                ysum = np.bincount(flat.reshape(-1, nd)[li].ravel(), weights=G[li].ravel(), minlength=n * nd).reshape(n, nd)
+                if self.intensity_sigma > 0:
+                    ysum = ysum + self.rng.normal(0.0, self.intensity_sigma, size=ysum.shape)
+                y = np.minimum(ysum, 1.0)
+                m = np.floor(span * (1.0 - y) + a.m_min + noise[s])
+            else:
+                y = None
+                if self.intensity_sigma > 0:
+                    yy = np.minimum(self.rng.normal(0.0, self.intensity_sigma, size=(n, nd)), 1.0)
+                    m = np.floor(span * (1.0 - yy) + a.m_min + noise[s])
+                else:
+                    m = np.floor(span + a.m_min + noise[s])
+            np.clip(m, 0, a.m_sup, out=m)
+            # 4./5. detectors
+            listen = ~self.sending
+            ev = self.det.sample(m, listen, first_check, self.slot)
+            if ev["deaf"].size:
+                self.det.finish(ev["deaf"])
+            started, got = ev["started"], ev["got_bit"]
+            if started.size:
+                self._count("rx_starts", values=started.size)
+                self._truth_on_start(started, on, tx_ptr, tx, rx, G)
+            if got.size:
+                if self.det.buf.shape[1] > self.gt_buf.shape[1]:
+                    self._ensure_frame_capacity(self.det.buf.shape[1])
+                self._truth_bits(got)
+                if snd.size:
+                    sl = _ranges(sig_ptr[snd], sig_ptr[snd + 1])
+                    if sl.size:
+                        cnt = np.bincount(sig_rx[sl], minlength=n)
+                        self.collided[got] |= cnt[got] >= 2
+            # advance transmitters
+            if snd.size:
+                self.cur_pos[snd] += 1
+                fin = snd[self.cur_pos[snd] >= self.cur_slots[snd]]
+                if fin.size:
+                    self.sending[fin] = False
+                    self._count("tx_completed", values=fin.size)
+                    self.csma.arm(fin[self.q_count[fin] > 0], self.rng)  # fresh access delay (fairness)
+            if ev["check"].size:
+                d = self._check_points(ev["check"])
+                if d is not None:
+                    deliveries.append(d)
+            self.slot += 1
+        self._count("slots", values=S)
+        return self._finish_step(deliveries)
+
+    def _start_tx(self, go: np.ndarray) -> None:
+        h = self.q_head[go]
+        F = self.q_bits.shape[2]
+        self.cur_bits[go, :F] = self.q_bits[go, h, :]
+        self.cur_slots[go] = self.q_slots[go, h]
+        self.cur_pos[go] = 0
+        self.cur_id[go] = self.frame_counter + np.arange(go.size)
+        self.frame_counter += go.size
+        self.sending[go] = True
+        self.q_head[go] = (h + 1) % self.Q
+        self.q_count[go] -= 1
+        # a robot that was receiving drops its frame (half duplex); CSMA normally prevents this
+        recv = go[self.det.state[go] == RECV]
+        if recv.size:
+            self.det.finish(recv)
+        self._count("tx_started", go)
+
+    def _truth_on_start(self, started, on, tx_ptr, tx, rx, G) -> None:
+        """Ground truth: the strongest transmitter emitting s1 at each robot that just detected a start."""
+        self.gt_tx[started] = -1
+        self.gt_id[started] = -1
+        self.collided[started] = False
+        if on.size:
+            li = _ranges(tx_ptr[on], tx_ptr[on + 1])
+            r, t, st = rx[li], tx[li], G[li].max(axis=1)
+            o = np.lexsort((-st, r))
+            r, t, st = r[o], t[o], st[o]
+            firsts = np.r_[True, r[1:] != r[:-1]]
+            r, t, st = r[firsts], t[firsts], st[firsts]
+            sig = st * (self.ambient[r] - self.adc_model.m_min) > 0.5  # at least half a count of light
+            best = np.full(self.n, -1, dtype=np.int64)
+            best[r[sig]] = t[sig]
+            self.gt_tx[started] = best[started]
+            ok = self.gt_tx[started] >= 0
+            srt = started[ok]
+            tt = self.gt_tx[srt]
+            # aligned only if the transmitter is emitting its own start symbol right now
+            aligned = self.cur_pos[tt] == 0
+            self.gt_id[srt[aligned]] = self.cur_id[tt[aligned]]
+        nfalse = int((self.gt_tx[started] < 0).sum())
+        if nfalse:
+            self._count("rx_false_starts", values=nfalse)
+
+    def _truth_bits(self, got: np.ndarray) -> None:
+        k = self.det.nbits[got] - 1
+        t = self.gt_tx[got]
+        valid = t >= 0
+        tb = np.zeros(got.size, dtype=bool)
+        if valid.any():
+            tv = t[valid]
+            same = self.sending[tv] & (self.cur_id[tv] == self.gt_id[got[valid]])
+            bits = self.cur_bits[tv, np.minimum(self.cur_pos[tv], self.cur_bits.shape[1] - 1)]
+            tb[valid] = same & bits
+        self.gt_buf[got, k] = tb
+
+    # ------------------------------------------------------------------ frame check points
+    def _check_points(self, robots: np.ndarray) -> dict[str, np.ndarray] | None:
+        out = None
+        det, fmt, c = self.det, self.fmt, self.code
+        valid_types = self.kinds.valid_codes()
+        todo = robots
+        while todo.size:
+            nxt = []
+            ph = det.phase[todo]
+            # phase 0: marker/type check
+            p0 = todo[ph == 0]
+            if p0.size:
+                if c.k == c.n:
+                    info = det.buf[p0, :4]
+                else:
+                    info, _ = c.decode(det.buf[p0, : c.n])
+                good = info[:, 0].copy()
+                if info.shape[1] >= 4:
+                    good &= valid_types[bits_to_uint(info[:, 1:4])]
+                self._abort(p0[~good])
+                g = p0[good]
+                det.phase[g] = 1
+                det.expect[g] = fmt.header_blocks * c.n
+                nxt.append(g[det.expect[g] == det.nbits[g]])
+            # phase 1: header decode -> frame length
+            p1 = todo[ph == 1]
+            if p1.size:
+                hb = fmt.header_blocks
+                info, ok = c.decode_stream(det.buf[p1, : hb * c.n])
+                h = fmt.parse_header(info)
+                good = ok & (h["marker"] == 1) & valid_types[h["type"]] & (h["origin"] < self.n) & (h["sender"] < self.n)
+                self._abort(p1[~good])
+                g = p1[good]
+                total = fmt.n_blocks(h["length"][good]) * c.n
+                det.ensure_capacity(int(total.max()) if total.size else 0)
+                self._ensure_frame_capacity(int(total.max()) + 1 if total.size else 0)
+                det.phase[g] = 2
+                det.expect[g] = total
+                nxt.append(g[det.expect[g] == det.nbits[g]])
+            # phase 2: frame complete -> decode and deliver
+            p2 = todo[ph == 2]
+            if p2.size:
+                d = self._complete(p2)
+                if d is not None:
+                    out = d if out is None else {k: np.concatenate([out[k], d[k]]) if k != "payload" else _cat_pad(out[k], d[k]) for k in out}
+            todo = np.concatenate(nxt) if nxt else np.zeros(0, dtype=np.int64)
+        return out
+
+    def _score_bits(self, robots: np.ndarray) -> None:
+        """Raw bit errors of aligned frames (ground truth) over the bits received so far."""
+        al = robots[self.gt_id[robots] >= 0]
+        if al.size:
+            nb = self.det.nbits[al]
+            W = int(nb.max())
+            mask = np.arange(W)[None, :] < nb[:, None]
+            err = ((self.det.buf[al, :W] != self.gt_buf[al, :W]) & mask).sum(axis=1)
+            self._count("bits_checked", al, nb)
+            self._count("bit_errors", al, err)
+            if self.collided[al].any():
+                self._count("collisions", al[self.collided[al]])
+
+    def _abort(self, robots: np.ndarray) -> None:
+        if not robots.size:
+            return
+        self._score_bits(robots)
+        lost = robots[self.gt_id[robots] >= 0]
+        if lost.size:
+            self._count("rx_lost", lost)
+        self._count("rx_aborted", values=robots.size)
+        self.det.finish(robots)
+
+    def _complete(self, robots: np.ndarray) -> dict[str, np.ndarray] | None:
+        det, fmt, c = self.det, self.fmt, self.code
+        self._score_bits(robots)
+        nbits = det.nbits[robots]
+        out: dict[str, list] = {k: [] for k in ("receiver", "origin", "sender", "seq", "type", "length", "payload", "detector", "slot", "corrupt")}
+        for nb in np.unique(nbits):
+            R = robots[nbits == nb]
+            info, ok = c.decode_stream(det.buf[R, :nb])
+            h = fmt.parse_header(info)
+            # ground truth comparison (aligned frames only)
+            al = self.gt_id[R] >= 0
+            corrupt = np.zeros(R.size, dtype=bool)
+            if al.any():
+                tinfo, _ = c.decode_stream(self.gt_buf[R[al], :nb])
+                used = fmt.header_bits + h["length"][al]
+                mask = np.arange(info.shape[1])[None, :] < used[:, None]
+                corrupt[al] = ((info[al] != tinfo) & mask).any(axis=1)
+                nblk = nb // c.n
+                blk_err = (info[al] != tinfo).reshape(-1, nblk, c.k).any(axis=2).sum(axis=1)
+                self._count("blocks_checked", values=int(al.sum()) * int(nblk))
+                self._count("block_errors", values=int(blk_err.sum()))
+            bad = ~ok
+            if bad.any():
+                self._count("rx_decode_failed", values=int(bad.sum()))
+                lost = R[bad & al]
+                if lost.size:
+                    self._count("rx_lost", lost)
+            g = ok
+            if not g.any():
+                continue
+            H = fmt.header_bits
+            L = h["length"][g]
+            Lmax = int(L.max()) if L.size else 0
+            pay = info[g, H : H + Lmax] & (np.arange(Lmax)[None, :] < L[:, None])
+            out["receiver"].append(R[g])
+            out["origin"].append(h["origin"][g])
+            out["sender"].append(h["sender"][g])
+            out["seq"].append(h["seq"][g])
+            out["type"].append(h["type"][g])
+            out["length"].append(L)
+            out["payload"].append(pay)
+            out["detector"].append(det.best_det[R[g]])
+            out["slot"].append(det.start_slot[R[g]])
+            out["corrupt"].append(corrupt[g])
+        det.finish(robots)
+        if not out["receiver"]:
+            return None
+        res = {k: (np.concatenate(v) if k != "payload" else _cat_pad_list(v)) for k, v in out.items()}
+        self._count("rx_decoded", values=res["receiver"].size)
+        return res
+
+    # ------------------------------------------------------------------ end of step
+    def _finish_step(self, parts: list[dict[str, np.ndarray]]) -> Deliveries:
+        if parts:
+            d = {k: (np.concatenate([p[k] for p in parts]) if k != "payload" else _cat_pad_list([p[k] for p in parts])) for k in parts[0]}
+        else:
+            d = {k: np.zeros(0, dtype=np.int64) for k in ("receiver", "origin", "sender", "seq", "type", "length", "detector", "slot")}
+            d["corrupt"] = np.zeros(0, dtype=bool)
+            d["payload"] = np.zeros((0, 0), dtype=bool)
+        keep = np.ones(d["receiver"].size, dtype=bool)
+        if self.comm_mode == "flooding" and keep.size:
+            flood = d["type"] == self.kinds.code("app")
+            own = flood & (d["origin"] == d["receiver"])
+            key = (d["receiver"] * self.n + d["origin"]) * (1 << SEQ_BITS) + d["seq"]
+            # forget old entries
+            fresh = self.seen_slot > self.slot - self.dedupe_slots
+            self.seen_keys, self.seen_slot = self.seen_keys[fresh], self.seen_slot[fresh]
+            seen_before = np.isin(key, self.seen_keys)
+            first = np.zeros(keep.size, dtype=bool)
+            _, idx = np.unique(key, return_index=True)
+            first[idx] = True
+            new = flood & ~own & ~seen_before & first
+            dup = flood & ~new
+            keep &= ~dup
+            if dup.any():
+                self._count("rx_duplicates", values=int((dup & ~own).sum()))
+            if new.any():
+                self.seen_keys = np.concatenate([self.seen_keys, key[new]])
+                self.seen_slot = np.concatenate([self.seen_slot, np.full(int(new.sum()), self.slot)])
+                self._relay(d, np.flatnonzero(new))
+        out = Deliveries(
+            receiver=d["receiver"][keep],
+            origin=d["origin"][keep],
+            sender=d["sender"][keep],
+            seq=d["seq"][keep],
+            detector=d["detector"][keep],
+            kind=np.array([self.kinds.name(t) for t in d["type"][keep]], dtype=object),
+            length=d["length"][keep],
+            payload=d["payload"][keep],
+            slot=d["slot"][keep],
+            corrupt=d["corrupt"][keep],
+        )
+        if len(out):
+            self._count("rx_delivered", out.receiver)
+            self._count("rx_corrupt_delivered", values=int(out.corrupt.sum()))
+        out.stats = self._step_stats
+        return out
+
+    def _relay(self, d: dict[str, np.ndarray], idx: np.ndarray) -> None:
+        """Flooding: queue one re-send of each new message (same origin/seq/payload, sender = relay)."""
+        robots = d["receiver"][idx]
+        bits, slots = self.fmt.build(d["type"][idx], d["seq"][idx], d["origin"][idx], robots, d["payload"][idx], d["length"][idx])
+        order = np.argsort(robots, kind="stable")
+        rs = robots[order]
+        firsts = np.r_[True, rs[1:] != rs[:-1]]
+        grp = np.maximum.accumulate(np.where(firsts, np.arange(rs.size), 0))
+        rank = np.empty(rs.size, dtype=np.int64)
+        rank[order] = np.arange(rs.size) - grp
+        self._enqueue(robots, bits, slots, rank)
+        self._count("tx_relays", values=idx.size)
+
+    # ------------------------------------------------------------------ helpers
+    @property
+    def busy(self) -> np.ndarray:
+        """(N,) robots currently sending or receiving a frame."""
+        return self.sending | (self.det.state == RECV)
+
+    def summary(self) -> dict[str, float]:
+        """Derived rates over everything since :meth:`reset`."""
+        s = self.stats
+        return {
+            "bit_error_rate": s["bit_errors"] / max(1, s["bits_checked"]),
+            "block_error_rate": s["block_errors"] / max(1, s["blocks_checked"]),
+            "delivered_per_started": s["rx_delivered"] / max(1, s["tx_started"]),
+        }
+
+
+def _cat_pad(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    return _cat_pad_list([a, b])
+
+
+def _cat_pad_list(arrs: list[np.ndarray]) -> np.ndarray:
+    W = max((x.shape[1] for x in arrs), default=0)
+    return np.concatenate([np.pad(x, ((0, 0), (0, W - x.shape[1]))) for x in arrs], axis=0) if arrs else np.zeros((0, 0), bool)
