@@ -161,7 +161,7 @@ def test_sinelaw_uses_balanced_angles():
         xy, rig = coordinates(B, 0, "two_hop", angle_balance=ab)
         f = np.hypot(xy[:, 0], xy[:, 1])
         assert rig
-        assert f[2] / f[1] == pytest.approx(np.sin(sz) / np.sin(sw), rel=1e-12)
+        assert f[2] / f[1] == pytest.approx(np.sin(sz) / np.sin(sw), rel=1e-9)  # angles rounded to 1e-10 rad
 
 
 def test_mst_avoids_near_degenerate_triangle():

@@ -83,6 +83,7 @@ __all__ = [
 DEGENERATE_ANGLE = 1e-6  # rad: a triangle whose angle at z or w is this close to 0 or pi is skipped
 NULL_RTOL = 1e-9  # relative singular-value tolerance for the null space of A
 RESTRICT_TOL = 1e-6  # singular-value tolerance for the rank of N' (rows of an orthonormal basis)
+ANGLE_DECIMALS = 10  # 2-hop inner angles are rounded to 1e-10 rad (tie-breaking, see coordinates_all)
 
 
 def _wrap(a: np.ndarray) -> np.ndarray:
@@ -214,8 +215,11 @@ def coordinates_all(
     tri &= ok[:, :, None] & ok[:, None, :]
 
     # Inner angles: P[u, i, j] = angle at neighbour i in triangle (u, i, j); psi_u symmetric.
-    P = np.abs(_wrap(tzu[:, :, None] - tzw))
-    psi_u = np.abs(_wrap(th[:, :, None] - th[:, None, :]))
+    # Angles are rounded to ANGLE_ROUND rad: quantised (sector) bearings make many triangles exactly
+    # equal, and float noise (e.g. 67.5 deg from atan2 vs from a decoded 4-bit sector) must not decide
+    # ties in the MST; ties then fall to slot (bearing) order.
+    P = np.round(np.abs(_wrap(tzu[:, :, None] - tzw)), ANGLE_DECIMALS)
+    psi_u = np.round(np.abs(_wrap(th[:, :, None] - th[:, None, :])), ANGLE_DECIMALS)
     if angle_balance:
         _, P, _ = _angle_balance(psi_u, P, np.swapaxes(P, 1, 2))  # the correction is symmetric in (i, j)
     PT = np.swapaxes(P, 1, 2)

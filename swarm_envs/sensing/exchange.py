@@ -1,0 +1,368 @@
+"""Round-based bearing exchange for scale-free coordinates [L Sec. 5.2.2, Sec. 3.2.1; SPEC 5.2].
+
+[L Sec. 5.2.2]: in communication step 1 every robot broadcasts its id and receivers record the bearing of
+the sender; in step 2 every robot broadcasts its id plus the ids and bearings of its neighbours. After the
+round robot u knows ``theta_u(v)`` for each neighbour v and ``theta_v(w)`` for every ``w in N(v)``: exactly
+the input of the 2-hop algorithm (:func:`swarm_envs.sensing.scale_free.coordinates_all`). On the r-one
+both steps are the same periodic broadcast (every message's reception yields the sender's bearing, and
+every message carries the sender's current neighbour list), which is what we model.
+
+Modes
+-----
+``mode="ideal"``: every step, each robot's own row is its current bearing readings and it receives every
+neighbour's current row instantly and losslessly (ages 0). For ablations.
+
+``mode="network"``: the rows travel as SwarmCom *system* traffic. Every ``period`` steps (each robot with
+its own random phase, drawn from the generator passed in) a robot queues one message with
+``network.queue_system(robot, bits, kind)``; the env advances the network
+(``network.step(links) -> Deliveries``) and hands the deliveries back to :meth:`BearingExchange.receive`.
+A robot's own neighbour table holds the robots it *received a message from*, with the sector bearing
+measured on that reception (the link's current reading), so a lost message means a missing own bearing
+and a missing row. Entries and rows older than ``max_age`` steps are dropped. Losses therefore remove
+information (fewer triangles, fewer rigid robots) but never mix up whose bearing is whose. A decoded
+frame is rejected when its content is inconsistent (announced count vs payload length, an id >= N or the
+sender's own id); an uncoded ([15,15]) frame whose bearing bits flipped can still slip through: that is
+the channel's corruption and it reaches the coordinates as a bearing error.
+
+Bit encoding of a message (payload, most significant bit first)::
+
+    count (c_bits) | count x [ neighbour id (id_bits) | bearing sector (bearing_bits) ]
+
+- The sender's own id is not repeated: the SwarmCom frame header already carries the origin id
+  (:mod:`swarm_envs.comm.protocol`) and ``Deliveries.origin`` reports it.
+- ``id_bits = max(1, ceil(log2 n_robots))``; ``bearing_bits = 4`` by default: the bearing is sent as the
+  index ``round(theta / (2 pi / 16)) mod 16`` of the r-one's 16 sectors of 22.5 degrees [L Sec. 3.2.1]
+  (lossless for r-one sector bearings, a quantisation for continuous R&B bearings).
+- ``count`` is capped at ``max_entries`` so that the payload fits the protocol's 8-bit length field
+  (255 bits): ``max_entries = min(k_max, (255 - c_bits) // (id_bits + bearing_bits))``; with 1000 robots,
+  id 10 bits + 4 = 14 bits per neighbour, i.e. at most 17 neighbours per message.
+- A robot reports the neighbours it currently has in its table, most recently heard first.
+
+Thesis timing for comparison: ``T_round = 2 (1 + N)^2 t_msg`` with t_msg = 32.8 ms for a 3-byte message at
+1250 bps [L Sec. 3.2.1] (2.5 s for 5 neighbours); :func:`thesis_round_time` gives it.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from swarm_envs.sensing.scale_free import NeighbourKnowledge
+
+__all__ = ["BearingExchange", "encode_rows", "decode_rows", "thesis_round_time", "readings_table"]
+
+MAX_PAYLOAD_BITS = 255  # the SwarmCom frame's 8-bit length field (swarm_envs.comm.protocol)
+
+
+def thesis_round_time(n_neighbours: int, t_msg: float = 0.0328) -> float:
+    """Network round time (s) ``2 (1 + N)^2 t_msg`` [L Sec. 3.2.1]; t_msg for a 3-byte message."""
+    return 2.0 * (1 + n_neighbours) ** 2 * t_msg
+
+
+def _uint_bits(v: np.ndarray, width: int) -> np.ndarray:
+    """(...,) uint -> (..., width) bits, MSB first."""
+    v = np.asarray(v, dtype=np.int64)
+    return ((v[..., None] >> np.arange(width - 1, -1, -1)) & 1).astype(np.uint8)
+
+
+def _bits_uint(b: np.ndarray) -> np.ndarray:
+    b = np.asarray(b, dtype=np.int64)
+    w = b.shape[-1]
+    return (b << np.arange(w - 1, -1, -1)).sum(-1)
+
+
+def _quantise(theta: np.ndarray, bearing_bits: int) -> np.ndarray:
+    n = 1 << bearing_bits
+    return np.mod(np.rint(np.asarray(theta) / (2 * np.pi / n)).astype(np.int64), n)
+
+
+def _dequantise(q: np.ndarray, bearing_bits: int) -> np.ndarray:
+    n = 1 << bearing_bits
+    a = np.asarray(q, dtype=float) * (2 * np.pi / n)
+    return np.pi - np.mod(np.pi - a, 2 * np.pi)
+
+
+def encode_rows(ids: np.ndarray, bearings: np.ndarray, id_bits: int, count_bits: int, bearing_bits: int = 4) -> np.ndarray:
+    """Encode R neighbour lists at once. ids (R, L) (-1 = none), bearings (R, L) rad -> (R, n_bits) uint8,
+    zero padded after each row's ``count_bits + count * (id_bits + bearing_bits)`` bits."""
+    ids = np.asarray(ids, dtype=np.int64)
+    R, L = ids.shape
+    present = ids >= 0
+    count = present.sum(1)
+    # compact present entries to the front, keeping their order
+    order = np.argsort(~present, axis=1, kind="stable")
+    cid = np.take_along_axis(ids, order, 1)
+    cb = np.take_along_axis(np.asarray(bearings, float), order, 1)
+    ent = np.concatenate([_uint_bits(np.maximum(cid, 0), id_bits), _uint_bits(_quantise(np.nan_to_num(cb), bearing_bits), bearing_bits)], -1)
+    ent = np.where((np.arange(L)[None, :] < count[:, None])[:, :, None], ent, 0).reshape(R, -1)
+    return np.concatenate([_uint_bits(count, count_bits), ent], 1)
+
+
+def decode_rows(bits: np.ndarray, id_bits: int, count_bits: int, max_entries: int, bearing_bits: int = 4) -> tuple[np.ndarray, np.ndarray]:
+    """Inverse of :func:`encode_rows`: bits (R, >= needed) -> ids (R, max_entries) (-1 pad), bearings (rad)."""
+    bits = np.asarray(bits, dtype=np.uint8)
+    R = bits.shape[0]
+    e = id_bits + bearing_bits
+    need = count_bits + max_entries * e
+    if bits.shape[1] < need:
+        bits = np.concatenate([bits, np.zeros((R, need - bits.shape[1]), np.uint8)], 1)
+    count = np.minimum(_bits_uint(bits[:, :count_bits]), max_entries)
+    ent = bits[:, count_bits:need].reshape(R, max_entries, e)
+    ids = _bits_uint(ent[..., :id_bits])
+    th = _dequantise(_bits_uint(ent[..., id_bits:]), bearing_bits)
+    keep = np.arange(max_entries)[None, :] < count[:, None]
+    return np.where(keep, ids, -1), np.where(keep, th, np.nan)
+
+
+def readings_table(rx: np.ndarray, tx: np.ndarray, bearing: np.ndarray, n_robots: int, k_max: int) -> tuple[np.ndarray, np.ndarray]:
+    """(N, k_max) neighbour ids (ascending, -1 pad) and bearings from per-link readings (vectorised).
+
+    Links with a NaN bearing are dropped; beyond k_max neighbours the lowest ids are kept.
+    """
+    rx = np.asarray(rx, dtype=np.int64)
+    tx = np.asarray(tx, dtype=np.int64)
+    b = np.asarray(bearing, dtype=float)
+    ok = np.isfinite(b) & (rx != tx)
+    rx, tx, b = rx[ok], tx[ok], b[ok]
+    o = np.lexsort((tx, rx))
+    rx, tx, b = rx[o], tx[o], b[o]
+    ids = -np.ones((n_robots, k_max), dtype=np.int64)
+    th = np.full((n_robots, k_max), np.nan)
+    if rx.size:
+        start = np.searchsorted(rx, rx, side="left")
+        slot = np.arange(rx.size) - start
+        keep = slot < k_max
+        ids[rx[keep], slot[keep]] = tx[keep]
+        th[rx[keep], slot[keep]] = b[keep]
+    return ids, th
+
+
+class BearingExchange:
+    """Periodic bearing-list exchange [L Sec. 5.2.2]; output in the form
+    :func:`swarm_envs.sensing.scale_free.coordinates_all` consumes.
+
+    Args:
+        n_robots: swarm size N.
+        mode: ``"ideal"`` (instant, lossless) or ``"network"`` (SwarmCom system traffic).
+        k_max: slots per robot (neighbour table size K) and longest reported list.
+        network: a :class:`swarm_envs.comm.network.Network` (network mode); may also be passed to
+            :meth:`send`.
+        period: steps between two broadcasts of one robot (network mode).
+        max_age: steps after which an unrefreshed neighbour entry / row is dropped (default
+            ``3 * period``).
+        bearing_bits: bits per transmitted bearing (4 = 16 sectors of 22.5 degrees).
+        kind: SwarmCom system message kind.
+        rng: generator for the broadcast phases (network mode).
+    """
+
+    def __init__(
+        self,
+        n_robots: int,
+        mode: str = "ideal",
+        k_max: int = 16,
+        network: Any = None,
+        period: int = 10,
+        max_age: int | None = None,
+        bearing_bits: int = 4,
+        kind: str = "bearing_exchange",
+        rng: np.random.Generator | None = None,
+    ) -> None:
+        if mode not in ("ideal", "network"):
+            raise ValueError(f"unknown exchange mode {mode!r}; allowed: 'ideal', 'network'")
+        self.n = int(n_robots)
+        self.mode = mode
+        self.k_max = int(k_max)
+        self.network = network
+        self.period = max(1, int(period))
+        self.max_age = 3 * self.period if max_age is None else int(max_age)
+        self.bearing_bits = int(bearing_bits)
+        self.kind = kind
+        self.id_bits = max(1, int(np.ceil(np.log2(max(self.n, 2)))))
+        e = self.id_bits + self.bearing_bits
+        self.count_bits = max(1, int(np.ceil(np.log2(self.k_max + 1))))
+        self.max_entries = int(min(self.k_max, (MAX_PAYLOAD_BITS - self.count_bits) // e))
+        self.rng = rng if rng is not None else np.random.default_rng()
+        self.reset()
+
+    # ------------------------------------------------------------------ state
+    def reset(self, rng: np.random.Generator | None = None) -> None:
+        """Clear all tables; draw new broadcast phases."""
+        if rng is not None:
+            self.rng = rng
+        n, k = self.n, self.k_max
+        self.t = 0
+        self.phase = self.rng.integers(0, self.period, self.n)
+        self.tab_ids = -np.ones((n, k), np.int64)
+        self.tab_bear = np.full((n, k), np.nan)
+        self.tab_time = np.full((n, k), -(10**9), np.int64)
+        w = self.k_max if self.mode == "ideal" else self.max_entries  # ideal rows are not truncated
+        self.row_ids = -np.ones((n, k, w), np.int64)
+        self.row_bear = np.full((n, k, w), np.nan)
+        self.row_time = np.full((n, k), -(10**9), np.int64)
+        self.stats = {"sent": 0, "received": 0, "bits_sent": 0, "rejected": 0}
+
+    def bits_per_message(self, count: int) -> int:
+        """Payload length (bits) of a message listing ``count`` neighbours."""
+        return self.count_bits + min(count, self.max_entries) * (self.id_bits + self.bearing_bits)
+
+    # ------------------------------------------------------------------ ideal
+    def _ideal(self, readings: Any) -> NeighbourKnowledge:
+        ids, th = readings_table(readings.rx, readings.tx, readings.bearing, self.n, self.k_max)
+        self.tab_ids, self.tab_bear = ids, th
+        self.tab_time = np.where(ids >= 0, self.t, -(10**9))
+        safe = np.maximum(ids, 0)
+        has = (ids >= 0)[:, :, None]
+        self.row_ids = np.where(has, ids[safe], -1)
+        self.row_bear = np.where(has, th[safe], np.nan)
+        self.row_time = self.tab_time.copy()
+        return self.knowledge()
+
+    # ------------------------------------------------------------------ network
+    def due(self, t: int | None = None) -> np.ndarray:
+        """Robots whose broadcast is due at step t (default: the current step)."""
+        t = self.t if t is None else t
+        return np.nonzero((t - self.phase) % self.period == 0)[0]
+
+    def send(self, network: Any = None) -> int:
+        """Queue this step's messages (network mode): each due robot sends its current table.
+
+        Returns the number of messages queued.
+        """
+        net = network if network is not None else self.network
+        if self.mode != "network":
+            return 0
+        if net is None:
+            raise ValueError("network mode needs a Network (constructor or send(network))")
+        self._expire()
+        robots = self.due()
+        if robots.size == 0:
+            return 0
+        # most recently heard first
+        o = np.argsort(-self.tab_time[robots], axis=1, kind="stable")
+        ids = np.take_along_axis(self.tab_ids[robots], o, 1)[:, : self.max_entries]
+        th = np.take_along_axis(self.tab_bear[robots], o, 1)[:, : self.max_entries]
+        bits = encode_rows(ids, th, self.id_bits, self.count_bits, self.bearing_bits)
+        lens = self.count_bits + (ids >= 0).sum(1) * (self.id_bits + self.bearing_bits)
+        for L in np.unique(lens):  # queue_system takes robots sharing one payload length
+            g = lens == L
+            net.queue_system(robots[g], bits[g, :L].astype(bool), self.kind)
+        self.stats["sent"] += int(robots.size)
+        self.stats["bits_sent"] += int(lens.sum())
+        return int(robots.size)
+
+    def receive(self, deliveries: Any, readings: Any) -> None:
+        """Decode this step's deliveries (network mode) and update tables.
+
+        Args:
+            deliveries: ``Deliveries`` with ``receiver``, ``origin``, ``payload``, ``kind`` arrays (payload
+                either an (D, L) bit array or a sequence of 1-D bit arrays). Only ``kind == self.kind`` is
+                used.
+            readings: this step's :class:`swarm_envs.sensing.bearing_sensor.BearingReadings`: the bearing of
+                each sender is the receiver's current reading of that link (none if the link is gone).
+        """
+        if deliveries is None:
+            return
+        recv = np.asarray(deliveries.receiver, dtype=np.int64).reshape(-1)
+        if recv.size == 0:
+            return
+        origin = np.asarray(deliveries.origin, dtype=np.int64).reshape(-1)
+        kinds = np.asarray(deliveries.kind).reshape(-1)
+        sel = np.nonzero(kinds == self.kind)[0]
+        if sel.size == 0:
+            return
+        payload = deliveries.payload
+        if isinstance(payload, np.ndarray) and payload.ndim == 2:
+            bits = payload[sel]
+        else:
+            rows = [np.asarray(payload[i], dtype=np.uint8).reshape(-1) for i in sel]
+            width = max((r.size for r in rows), default=0)
+            bits = np.zeros((len(rows), max(width, 1)), np.uint8)
+            for j, r in enumerate(rows):
+                bits[j, : r.size] = r
+        ids, th = decode_rows(bits, self.id_bits, self.count_bits, self.max_entries, self.bearing_bits)
+        recv, origin = recv[sel], origin[sel]
+        # sanity checks on what the frame decoded to (uncoded frames can arrive corrupted): the announced
+        # count must match the payload length, ids must exist and not name the sender itself
+        count = (ids >= 0).sum(1)
+        sane = ~((ids >= self.n) | (ids == origin[:, None])).any(1) & (origin >= 0) & (origin < self.n)
+        length = getattr(deliveries, "length", None)
+        if length is not None:
+            length = np.asarray(length, dtype=np.int64).reshape(-1)[sel]
+            sane &= length == self.count_bits + count * (self.id_bits + self.bearing_bits)
+        self.stats["rejected"] = self.stats.get("rejected", 0) + int((~sane).sum())
+        ids, th, recv, origin = ids[sane], th[sane], recv[sane], origin[sane]
+        if recv.size == 0:
+            return
+        # the receiver's bearing of the sender: its current reading of link (recv <- origin)
+        key_l = np.asarray(readings.rx, np.int64) * self.n + np.asarray(readings.tx, np.int64)
+        okl = np.asarray(readings.valid, bool)
+        key_l, bear_l = key_l[okl], np.asarray(readings.bearing, float)[okl]
+        o = np.argsort(key_l)
+        key_l, bear_l = key_l[o], bear_l[o]
+        key = recv * self.n + origin
+        pos = np.clip(np.searchsorted(key_l, key), 0, max(key_l.size - 1, 0))
+        found = key_l.size > 0
+        hit = (key_l[pos] == key) if found else np.zeros(key.size, bool)
+        own_b = np.where(hit, bear_l[pos] if found else np.nan, np.nan)
+        self.stats["received"] += int(recv.size)
+        # process in waves so that one receiver gets at most one delivery per wave
+        todo = np.arange(recv.size)
+        while todo.size:
+            _, first = np.unique(recv[todo], return_index=True)
+            wave = todo[first]
+            self._store(recv[wave], origin[wave], own_b[wave], hit[wave], ids[wave], th[wave])
+            todo = np.setdiff1d(todo, wave, assume_unique=True)
+
+    def _store(self, r, o, own_b, hit, ids, th) -> None:
+        match = self.tab_ids[r] == o[:, None]
+        has = match.any(1)
+        # slot: existing entry, else the oldest (empty slots are the oldest)
+        slot = np.where(has, np.argmax(match, 1), np.argmin(self.tab_time[r], 1))
+        # a sender we have no bearing for (link gone at delivery) only refreshes an existing entry's row
+        ok = has | hit
+        r, o, slot, own_b, hit, ids, th = r[ok], o[ok], slot[ok], own_b[ok], hit[ok], ids[ok], th[ok]
+        self.tab_ids[r, slot] = o
+        self.tab_bear[r, slot] = np.where(hit, own_b, self.tab_bear[r, slot])
+        self.tab_time[r, slot] = np.where(hit, self.t, self.tab_time[r, slot])
+        self.row_ids[r, slot] = ids
+        self.row_bear[r, slot] = th
+        self.row_time[r, slot] = self.t
+
+    def _expire(self) -> None:
+        old = (self.t - self.tab_time > self.max_age) | (self.tab_ids < 0)
+        self.tab_ids[old] = -1
+        self.tab_bear[old] = np.nan
+        self.tab_time[old] = -(10**9)
+        rold = old | (self.t - self.row_time > self.max_age)
+        self.row_ids[rold] = -1
+        self.row_bear[rold] = np.nan
+        self.row_time[rold] = -(10**9)
+
+    # ------------------------------------------------------------------ common
+    def knowledge(self) -> NeighbourKnowledge:
+        """What each robot knows now (own row + received rows with ages)."""
+        age = np.where(self.row_time > -(10**9), self.t - self.row_time, -1)
+        return NeighbourKnowledge(
+            ids=self.tab_ids.copy(),
+            bearings=self.tab_bear.copy(),
+            row_ids=self.row_ids.copy(),
+            row_bearings=self.row_bear.copy(),
+            row_age=age,
+        )
+
+    def step(self, readings: Any, deliveries: Any = None) -> NeighbourKnowledge:
+        """Advance one control step.
+
+        ideal: ``step(readings)`` returns the full, fresh knowledge. network: call :meth:`send` before the
+        network step, then ``step(readings, deliveries)`` after it (it decodes, expires stale entries and
+        returns the knowledge).
+        """
+        if self.mode == "ideal":
+            k = self._ideal(readings)
+        else:
+            self.receive(deliveries, readings)
+            self._expire()
+            k = self.knowledge()
+        self.t += 1
+        return k
