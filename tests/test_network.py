@@ -1,0 +1,191 @@
+"""SwarmCom protocol and network simulator [T20 Sec. 4, 6]: detector, CSMA, collisions, flooding."""
+
+import numpy as np
+import pytest
+
+from swarm_envs.comm.channel import ADCModel, detector_intensity
+from swarm_envs.comm.network import Network
+from swarm_envs.comm.protocol import IDLE, RECV, DetectorBank, FrameFormat
+from swarm_envs.ir.layer import compute_links
+
+NOISELESS = ADCModel(noise_var=0.0)
+
+
+def _pair(d, rng, **kw):
+    pos = np.array([[0.0, 0.0], [d, 0.0]])
+    hd = np.array([0.0, np.pi])
+    return compute_links(pos, hd, "epuck"), Network("epuck", 2, rng, **kw)
+
+
+def _run(net, links, steps):
+    out = []
+    for _ in range(steps):
+        out.append(net.step(links))
+    return out
+
+
+def test_frame_layout_round_trip():
+    fmt = FrameFormat.for_swarm(300, (15, 11), with_sender=True)
+    assert fmt.id_bits == 9
+    assert fmt.header_bits == 1 + 3 + 8 + 7 + 9 + 9
+    pay = np.random.default_rng(0).integers(0, 2, (3, 20)).astype(bool)
+    bits, slots = fmt.build(np.array([1, 2, 1]), np.array([5, 127, 0]), np.array([7, 299, 0]), np.array([8, 1, 2]), pay, np.array([20, 3, 0]))
+    assert bits[:, 0].all()  # start symbol
+    assert slots.tolist() == (1 + 15 * fmt.n_blocks(np.array([20, 3, 0]))).tolist()
+    info, ok = fmt.code.decode_stream(bits[0, 1:slots[0]])
+    h = fmt.parse_header(info[None])
+    assert ok and h["origin"][0] == 7 and h["sender"][0] == 8 and h["seq"][0] == 5 and h["length"][0] == 20
+    assert np.array_equal(info[fmt.header_bits : fmt.header_bits + 20], pay[0])
+
+
+def test_detector_dynamic_threshold_eq36():
+    det = DetectorBank(1, relative_threshold=5)
+    det.reset(np.array([4080.0]))
+    listen = np.ones(1, bool)
+    ev = det.sample(np.full((1, 8), 4080), listen, 4, 0)
+    assert ev["started"].size == 0 and det.state[0] == IDLE
+    m = np.full((1, 8), 4080)
+    m[0, 3] = 3000  # start symbol, amplitude A = 3000 on detector 3
+    ev = det.sample(m, listen, 4, 1)
+    assert ev["started"].tolist() == [0] and det.state[0] == RECV
+    assert det.thr[0] == np.floor(abs(4075 + 3000) / 2)  # 3537
+    for val, bit in [(3600, False), (3500, True), (4070, False), (3536, True)]:
+        m[0, 3] = val
+        det.sample(m, listen, 4, 2)
+        assert det.buf[0, det.nbits[0] - 1] == bit
+    assert det.best_det[0] == 3 and det.best_m[0] == 3000
+
+
+def test_ambient_estimate_tracks_environment(rng):
+    net = Network("epuck", 3, rng, ambient=np.array([4080.0, 4000.0, 3900.0]))
+    assert np.allclose(net.det.m_max_est, [4079.5, 3999.5, 3899.5], atol=0.2)
+
+
+@pytest.mark.parametrize("code", [(15, 15), (15, 11), (15, 1)])
+def test_noiseless_close_pair_decodes_perfectly(rng, code):
+    links, net = _pair(0.15, rng, adc_model=NOISELESS, code=code, payload_bits=12)
+    sent = []
+    got = []
+    gap = int(np.ceil(net.frame_slots() / net.slots_per_step)) + 1  # steps per frame (+1 for CSMA delay)
+    for k in range(4 * gap):
+        if k % gap == 0:
+            p = rng.integers(0, 2, 12).astype(bool)
+            sent.append(p)
+            net.send(0, p)
+        got.append(net.step(links))
+    got += _run(net, links, 10)
+    rx = [(d.receiver[i], d.origin[i], d.payload[i, : d.length[i]]) for d in got for i in range(len(d))]
+    assert len(rx) == len(sent)
+    for (r, o, p), s in zip(rx, sent):
+        assert r == 1 and o == 0 and np.array_equal(p, s)
+    st = net.stats
+    assert st["bit_errors"] == 0 and st["bits_checked"] > 0 and st["rx_false_starts"] == 0
+    assert all(d.detector[i] in (0, 7) for d in got for i in range(len(d)))  # front detectors
+
+
+def test_frames_span_step_boundaries_and_slot_budget(rng):
+    for rate in (310, 1670):
+        links, net = _pair(0.2, rng, adc_model=NOISELESS, bitrate=rate, payload_bits=40)
+        assert net.frame_slots() > 31
+        net.send(0, np.ones(40, bool))
+        n_del = sum(len(d) for d in _run(net, links, 10))
+        assert n_del == 1
+        assert net.stats["slots"] == rate  # 10 steps x 0.1 s, fractional remainder carried
+
+
+def test_far_pair_below_threshold_receives_nothing(rng):
+    d = 0.95
+    y = detector_intensity(np.array([d, 0.0]), np.pi, np.zeros(2), 0.0, "epuck")
+    links, net = _pair(d, rng, adc_model=NOISELESS, relative_threshold=10)
+    assert len(links) == 2 and y.max() * 3930 < 10  # light arrives, but below m_tr
+    deliveries = []
+    for _ in range(5):
+        net.send(0, np.ones(8, bool))
+        deliveries += _run(net, links, 3)
+    assert sum(len(x) for x in deliveries) == 0
+    assert net.stats["rx_starts"] == 0 and net.stats["tx_started"] >= 5
+
+
+def _three(rng, tx_positions, **kw):
+    pos = np.vstack([[0.0, 0.0], tx_positions])
+    head = np.arctan2(-pos[:, 1], -pos[:, 0])  # transmitters face the receiver
+    head[0] = 0.0
+    links = compute_links(pos, head, "epuck")
+    return links, Network("epuck", 3, rng, adc_model=NOISELESS, **kw)
+
+
+def test_hidden_terminals_collide_at_the_receiver(rng):
+    # T1 - R - T2 in a row: R occludes T1 and T2 from each other, so CSMA cannot separate them
+    links, net = _three(rng, [[0.2, 0.0], [-0.2, 0.0]])
+    assert not ((links.rx == 1) & (links.tx == 2)).any()
+    net.send(1, np.array([1, 0, 1, 0, 1, 0, 1, 0], bool))
+    net.send(2, np.array([0, 1, 0, 1, 0, 1, 0, 1], bool))
+    got = _run(net, links, 10)
+    intact = sum(int((~d.corrupt).sum()) for d in got)
+    assert net.stats["collisions"] >= 1
+    assert intact < 2
+
+
+def test_csma_separates_mutually_audible_transmitters(rng):
+    ok = 0
+    for trial in range(5):
+        r = np.random.default_rng(100 + trial)
+        links, net = _three(r, [[0.2, 0.06], [0.2, -0.06]])
+        assert ((links.rx == 1) & (links.tx == 2)).any()
+        net.send(1, np.array([1, 0, 1, 0, 1, 0, 1, 0], bool))
+        net.send(2, np.array([0, 1, 0, 1, 0, 1, 0, 1], bool))
+        got = _run(net, links, 10)
+        at_r = [(d.origin[i], bool(d.corrupt[i])) for d in got for i in range(len(d)) if d.receiver[i] == 0]
+        ok += sorted(at_r) == [(1, False), (2, False)]
+    assert ok >= 4
+    # the same geometry without carrier sense (forced simultaneous start) collides
+    links, net = _three(np.random.default_rng(7), [[0.2, 0.06], [0.2, -0.06]], backoff_window=1)
+    net.send(1, np.array([1, 0, 1, 0, 1, 0, 1, 0], bool))
+    net.send(2, np.array([0, 1, 0, 1, 0, 1, 0, 1], bool))
+    got = _run(net, links, 10)
+    at_r = [(d.origin[i], bool(d.corrupt[i])) for d in got for i in range(len(d)) if d.receiver[i] == 0]
+    assert sorted(at_r) != [(1, False), (2, False)]
+
+
+def test_flooding_reaches_beyond_line_of_sight_and_dedupes(rng):
+    pos = np.array([[0.0, 0.0], [0.2, 0.0], [0.4, 0.0]])  # B occludes A from C
+    head = np.array([0.0, 0.0, np.pi])
+    links = compute_links(pos, head, "epuck")
+    assert not ((links.rx == 2) & (links.tx == 0)).any()
+    results = {}
+    for mode in ("broadcast", "flooding"):
+        net = Network("epuck", 3, np.random.default_rng(3), adc_model=NOISELESS, comm_mode=mode)
+        net.send(0, np.array([1, 1, 0, 0, 1, 0, 1, 1], bool))
+        got = _run(net, links, 20)
+        rec = [(int(d.receiver[i]), int(d.origin[i]), int(d.sender[i])) for d in got for i in range(len(d))]
+        results[mode] = (rec, dict(net.stats))
+    rec_b, st_b = results["broadcast"]
+    rec_f, st_f = results["flooding"]
+    assert sorted(rec_b) == [(1, 0, 0)]
+    assert sorted(rec_f) == [(1, 0, 0), (2, 0, 1)]  # C hears A's message via relay B
+    assert st_f["tx_started"] == 3  # A original, B relay, C relay; nothing is re-sent twice
+    assert st_f["rx_duplicates"] >= 1  # B hears C's relay and drops it
+
+
+def test_same_seed_same_result():
+    rng0 = np.random.default_rng(0)
+    pos = rng0.uniform(0, 0.6, (12, 2))
+    pos = pos[np.argsort(pos[:, 0])]
+    pos[:, 0] = np.arange(12) * 0.08  # non-overlapping
+    head = rng0.uniform(-np.pi, np.pi, 12)
+    links = compute_links(pos, head, "epuck")
+
+    def run(seed):
+        r = np.random.default_rng(seed)
+        net = Network("epuck", 12, r, comm_mode="flooding")
+        out = []
+        for k in range(15):
+            if k % 3 == 0:
+                net.send_many(np.arange(0, 12, 4), np.ones((3, 8), bool))
+            d = net.step(links)
+            out.append((d.receiver.tolist(), d.origin.tolist(), d.seq.tolist(), d.payload.tolist()))
+        return out, {k: v for k, v in net.stats.items() if not k.endswith("per_robot")}
+
+    a, b, c = run(5), run(5), run(6)
+    assert a == b
+    assert a != c
