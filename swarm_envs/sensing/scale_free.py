@@ -206,38 +206,59 @@ def coordinates_all(
     m_zu = rok & (rid == self_ids[:, None, None])  # (N, K, K2)
     has_zu = m_zu.any(-1) & ok
     tzu = np.where(has_zu, rth[rows, np.arange(k)[None, :], np.argmax(m_zu, -1)], 0.0)
-    m_zw = rok[:, :, None, :] & (rid[:, :, None, :] == ids[:, None, :, None])  # (N, K, K, K2)
-    has_zw = m_zw.any(-1)
-    idx_zw = np.argmax(m_zw, -1)  # (N, K, K)
-    tzw = np.take_along_axis(rth, idx_zw, axis=-1)  # rth[u, z, idx_zw[u, z, w]]
+    # Map every reported id to u's slot holding that id with one sorted search over (u, id) keys
+    # (O(N K K2 log NK) instead of an (N, K, K, K2) comparison).
+    space = int(max(ids.max(initial=0), rid.max(initial=0), self_ids.max(initial=0))) + 1
+    own_key = np.where(ok, rows * space + ids, -1).reshape(-1)
+    o_sort = np.argsort(own_key, kind="stable")
+    sorted_key = own_key[o_sort]
+    ru, ri, rm = np.nonzero(rok & ok[:, :, None])  # reported entries of received rows
+    q = ru * space + rid[ru, ri, rm]
+    if sorted_key.size:
+        pos = np.minimum(np.searchsorted(sorted_key, q), sorted_key.size - 1)
+        hit = sorted_key[pos] == q
+        slot_j = o_sort[pos[hit]] % k
+    else:
+        hit, slot_j = np.zeros(q.size, bool), np.zeros(0, np.int64)
+    has_zw = np.zeros((n, k, k), dtype=bool)
+    tzw = np.zeros((n, k, k))
+    hu, hi, hm = ru[hit], ri[hit], rm[hit]
+    # if a row lists the same id twice, the first entry wins (reverse assignment order)
+    tzw[hu[::-1], hi[::-1], slot_j[::-1]] = rth[hu, hi, hm][::-1]
+    has_zw[hu, hi, slot_j] = True
     eye = np.eye(k, dtype=bool)[None]
     tri = has_zw & np.swapaxes(has_zw, 1, 2) & has_zu[:, :, None] & has_zu[:, None, :] & ~eye
     tri &= ok[:, :, None] & ok[:, None, :]
 
-    # Inner angles: P[u, i, j] = angle at neighbour i in triangle (u, i, j); psi_u symmetric.
-    # Angles are rounded to ANGLE_ROUND rad: quantised (sector) bearings make many triangles exactly
+    # Inner angles, computed only on the usable (u, i, j) triangles (sparse): Pij = angle at neighbour i
+    # in triangle (u, i, j), Pji = angle at j, pu = angle at u.
+    # Angles are rounded to 1e-ANGLE_DECIMALS rad: quantised (sector) bearings make many triangles exactly
     # equal, and float noise (e.g. 67.5 deg from atan2 vs from a decoded 4-bit sector) must not decide
     # ties in the MST; ties then fall to slot (bearing) order.
-    P = np.round(np.abs(_wrap(tzu[:, :, None] - tzw)), ANGLE_DECIMALS)
-    psi_u = np.round(np.abs(_wrap(th[:, :, None] - th[:, None, :])), ANGLE_DECIMALS)
+    tu, ti, tj = np.nonzero(tri)
+    Pij = np.round(np.abs(_wrap(tzu[tu, ti] - tzw[tu, ti, tj])), ANGLE_DECIMALS)
+    Pji = np.round(np.abs(_wrap(tzu[tu, tj] - tzw[tu, tj, ti])), ANGLE_DECIMALS)
+    pu = np.round(np.abs(_wrap(th[tu, ti] - th[tu, tj])), ANGLE_DECIMALS)
     if angle_balance:
-        _, P, _ = _angle_balance(psi_u, P, np.swapaxes(P, 1, 2))  # the correction is symmetric in (i, j)
-    PT = np.swapaxes(P, 1, 2)
-    deg_ok = (
-        (np.minimum(P, np.pi - P) > DEGENERATE_ANGLE)
-        & (np.minimum(PT, np.pi - PT) > DEGENERATE_ANGLE)
-        & (P < np.pi)
-        & (PT < np.pi)
-    )
-    E = tri & deg_ok
-    E &= np.swapaxes(E, 1, 2)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        logratio = np.where(E, np.log(np.abs(np.sin(P))) - np.log(np.abs(np.sin(PT))), 0.0)  # f_j/f_i, i->j
+        _, Pij, Pji = _angle_balance(pu, Pij, Pji)
+    good = (
+        (np.minimum(Pij, np.pi - Pij) > DEGENERATE_ANGLE)
+        & (np.minimum(Pji, np.pi - Pji) > DEGENERATE_ANGLE)
+        & (Pij < np.pi)
+        & (Pji < np.pi)
+    )  # symmetric in (i, j) by construction
+    tu, ti, tj, Pij, Pji = tu[good], ti[good], tj[good], Pij[good], Pji[good]
+    E = np.zeros((n, k, k), dtype=bool)
+    E[tu, ti, tj] = True
+    logratio = np.zeros((n, k, k))  # log(f_j / f_i) along i -> j (law of sines)
+    logratio[tu, ti, tj] = np.log(np.sin(Pij)) - np.log(np.sin(Pji))
 
-    # Connected components of the neighbour graph by repeated boolean squaring.
-    R = (E | eye) & ok[:, :, None] & ok[:, None, :]
+    # Connected components of the neighbour graph by repeated squaring of the reachability matrix
+    # (float32 batched matmul: exact for 0/1 entries with K < 2**24).
+    R = ((E | eye) & ok[:, :, None] & ok[:, None, :]).astype(np.float32)
     for _ in range(max(1, int(np.ceil(np.log2(max(k, 2)))))):
-        R = np.matmul(R.astype(np.uint8), R.astype(np.uint8)) > 0
+        R = (np.matmul(R, R) > 0).astype(np.float32)
+    R = R > 0
     comp_size = R.sum(-1)  # (N, K) size of the component of each slot (0 for empty)
     big = comp_size.max(-1) if k else np.zeros(n, np.int64)
     # root: first slot (in bearing order) whose component is largest
@@ -250,19 +271,28 @@ def coordinates_all(
     known[np.arange(n), root] = has_root
     logf = np.zeros((n, k))
     if noise_sensitivity:
+        W = np.full((n, k, k), np.inf)
         with np.errstate(divide="ignore", invalid="ignore"):
-            W = np.where(E, triangle_sensitivity(P, PT), np.inf)
+            W[tu, ti, tj] = triangle_sensitivity(Pij, Pji)
+        # Prim's algorithm in lock-step over robots, O(K) work per robot and iteration: best[u, j] is the
+        # cheapest edge from the tree to j, par[u, j] its tree end (ties: the lower slot).
+        ar = np.arange(n)
+        r0 = root
+        best = np.where(has_root[:, None], W[ar, r0], np.inf)
+        par = np.broadcast_to(r0[:, None], (n, k)).copy()
         for _ in range(k - 1):
-            cand = np.where(known[:, :, None] & ~known[:, None, :], W, np.inf)
-            flat = np.argmin(cand.reshape(n, -1), axis=-1)
-            best = cand.reshape(n, -1)[np.arange(n), flat]
-            go = np.isfinite(best)
+            cand = np.where(known, np.inf, best)
+            j = np.argmin(cand, axis=-1)
+            go = np.isfinite(cand[ar, j])
             if not go.any():
                 break
-            i, j = np.divmod(flat, k)
-            r = np.nonzero(go)[0]
-            logf[r, j[r]] = logf[r, i[r]] + logratio[r, i[r], j[r]]
-            known[r, j[r]] = True
+            r, jj = ar[go], j[go]
+            logf[r, jj] = logf[r, par[r, jj]] + logratio[r, par[r, jj], jj]
+            known[r, jj] = True
+            w_new = W[r, jj]  # (R, K) edges from the new tree node
+            better = (w_new < best[r]) | ((w_new == best[r]) & (jj[:, None] < par[r]) & np.isfinite(w_new))
+            best[r] = np.where(better, w_new, best[r])
+            par[r] = np.where(better, jj[:, None], par[r])
     else:
         # BFS of [L Alg. 1] in lock-step: discovery rank `disc`; parent = adjacent node dequeued first.
         big_i = np.iinfo(np.int64).max
