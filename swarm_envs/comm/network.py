@@ -75,10 +75,20 @@ _COUNTERS = (
     "collisions",  # received frames during which >= 2 transmitters were significant at the receiver
     "bits_checked",  # raw bits compared with the truth (aligned frames)
     "bit_errors",
-    "blocks_checked",  # decoded 15-bit blocks compared with the truth (complete aligned frames)
+    "blocks_checked",  # complete 15-bit blocks of aligned frames, decoded and compared with the truth
     "block_errors",
 )
-_PER_ROBOT = ("tx_started", "deferrals", "rx_delivered", "rx_lost", "collisions", "bits_checked", "bit_errors")
+_PER_ROBOT = (
+    "tx_started",
+    "deferrals",
+    "rx_delivered",
+    "rx_lost",
+    "collisions",
+    "bits_checked",
+    "bit_errors",
+    "blocks_checked",
+    "block_errors",
+)
 
 
 @dataclass
@@ -551,17 +561,30 @@ class Network:
         return out
 
     def _score_bits(self, robots: np.ndarray) -> None:
-        """Raw bit errors of aligned frames (ground truth) over the bits received so far."""
+        """Ground-truth scoring of aligned frames at their end (delivered or aborted): raw bit errors over
+        the bits received, and errors of every complete 15-bit block after BCH decoding."""
         al = robots[self.gt_id[robots] >= 0]
-        if al.size:
-            nb = self.det.nbits[al]
-            W = int(nb.max())
-            mask = np.arange(W)[None, :] < nb[:, None]
-            err = ((self.det.buf[al, :W] != self.gt_buf[al, :W]) & mask).sum(axis=1)
-            self._count("bits_checked", al, nb)
-            self._count("bit_errors", al, err)
-            if self.collided[al].any():
-                self._count("collisions", al[self.collided[al]])
+        if not al.size:
+            return
+        nb = self.det.nbits[al]
+        W = int(nb.max())
+        rxb, tb = self.det.buf[al, :W], self.gt_buf[al, :W]
+        mask = np.arange(W)[None, :] < nb[:, None]
+        err = ((rxb != tb) & mask).sum(axis=1)
+        self._count("bits_checked", al, nb)
+        self._count("bit_errors", al, err)
+        if self.collided[al].any():
+            self._count("collisions", al[self.collided[al]])
+        c = self.code
+        B = W // c.n
+        if B:
+            nblk = nb // c.n
+            shape = (al.size, B, c.n)
+            info, _ = c.decode(rxb[:, : B * c.n].reshape(shape))
+            tinfo, _ = c.decode(tb[:, : B * c.n].reshape(shape))
+            bad = (info != tinfo).any(axis=2) & (np.arange(B)[None, :] < nblk[:, None])
+            self._count("blocks_checked", al, nblk)
+            self._count("block_errors", al, bad.sum(axis=1))
 
     def _abort(self, robots: np.ndarray) -> None:
         if not robots.size:
@@ -590,10 +613,6 @@ class Network:
                 used = fmt.header_bits + h["length"][al]
                 mask = np.arange(info.shape[1])[None, :] < used[:, None]
                 corrupt[al] = ((info[al] != tinfo) & mask).any(axis=1)
-                nblk = nb // c.n
-                blk_err = (info[al] != tinfo).reshape(-1, nblk, c.k).any(axis=2).sum(axis=1)
-                self._count("blocks_checked", values=int(al.sum()) * int(nblk))
-                self._count("block_errors", values=int(blk_err.sum()))
             bad = ~ok
             if bad.any():
                 self._count("rx_decode_failed", values=int(bad.sum()))
