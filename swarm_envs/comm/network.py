@@ -66,7 +66,8 @@ _COUNTERS = (
     "rx_starts",  # start symbols detected (includes noise-triggered false starts)
     "rx_false_starts",  # ... with no transmitter emitting s1 towards the robot (ground truth)
     "rx_aborted",  # frames abandoned: bad marker/type, undecodable or impossible header
-    "rx_decode_failed",  # complete frames with an undecodable block
+    "rx_decode_failed",  # complete frames with an undecodable block or a failed CRC
+    "rx_crc_failed",  # ... of which the CRC failed (crc_bits = 8)
     "rx_decoded",  # complete frames whose blocks all decode and header is valid
     "rx_delivered",  # ... passed to the application (after flooding dedupe)
     "rx_duplicates",  # flooding duplicates suppressed
@@ -168,6 +169,10 @@ class Network:
         dedupe_window: seconds a flooded (origin, seq) is remembered.
         intensity_sigma: std of the intensity noise n_j [Eq. (11)] (0: all noise is ADC noise n_m).
         adc_model: override the platform's ADC model.
+        crc_bits: 0 or 8 (CRC-8 over header + payload, ours; frames failing it are dropped). Default None:
+            0 in broadcast mode (as the paper), 8 in flooding mode: without error detection a corrupted copy
+            (e.g. from a collision) has a new (origin, seq) or payload and is re-flooded by everyone as a new
+            message, a broadcast storm that the paper does not report (validation (c) shows both).
     """
 
     def __init__(
@@ -188,6 +193,7 @@ class Network:
         dedupe_window: float = 5.0,
         intensity_sigma: float = 0.0,
         adc_model: ADCModel | None = None,
+        crc_bits: int | None = None,
     ) -> None:
         if comm_mode not in COMM_MODES:
             raise ValueError(f"comm_mode must be one of {COMM_MODES}, got {comm_mode!r}")
@@ -212,7 +218,10 @@ class Network:
         self.startup_samples = int(startup_samples)
         self.dedupe_slots = int(round(dedupe_window * self.bitrate))
         self.intensity_sigma = float(intensity_sigma)
-        self.fmt = FrameFormat.for_swarm(self.n, self.code, with_sender=(comm_mode == "flooding"))
+        if crc_bits is None:
+            crc_bits = 8 if comm_mode == "flooding" else 0
+        self.crc_bits = int(crc_bits)
+        self.fmt = FrameFormat.for_swarm(self.n, self.code, with_sender=(comm_mode == "flooding"), crc_bits=self.crc_bits)
         self.kinds = KindRegistry()
         self.n_det = self.platform.n_detectors
         self.det = DetectorBank(self.n, self.m_tr, max_bits=64)
@@ -613,6 +622,10 @@ class Network:
                 used = fmt.header_bits + h["length"][al]
                 mask = np.arange(info.shape[1])[None, :] < used[:, None]
                 corrupt[al] = ((info[al] != tinfo) & mask).any(axis=1)
+            crc = fmt.crc_ok(info, h["length"]) | ~ok
+            if not crc.all():
+                self._count("rx_crc_failed", values=int((~crc).sum()))
+                ok = ok & crc
             bad = ~ok
             if bad.any():
                 self._count("rx_decode_failed", values=int(bad.sum()))
