@@ -490,10 +490,13 @@ class Network:
         self.collided[started] = False
         if on.size:
             li = _ranges(tx_ptr[on], tx_ptr[on + 1])
+            is_started = np.zeros(self.n, dtype=bool)
+            is_started[started] = True
+            li = li[is_started[rx[li]]]
             r, t, st = rx[li], tx[li], G[li].max(axis=1)
             o = np.lexsort((-st, r))
             r, t, st = r[o], t[o], st[o]
-            firsts = np.r_[True, r[1:] != r[:-1]]
+            firsts = np.r_[True, r[1:] != r[:-1]] if r.size else np.zeros(0, dtype=bool)
             r, t, st = r[firsts], t[firsts], st[firsts]
             sig = st * (self.ambient[r] - self.adc_model.m_min) > 0.5  # at least half a count of light
             best = np.full(self.n, -1, dtype=np.int64)
