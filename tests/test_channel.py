@@ -80,7 +80,7 @@ def test_adc_model_for_platforms():
     d = adc_model_for("droplet")
     assert d.m_max == 255.0 and d.m_min == 0.0 and np.isclose(d.intensity_scale, 1 / 255)
     r = adc_model_for("rone")
-    assert r.noise_var == 0.0 and r.intensity_scale == 1.0
+    assert r.noise_var == 0.0 and r.intensity_scale == 1.0 and r.m_max - r.m_min > 100
     assert isinstance(e, ADCModel)
 
 

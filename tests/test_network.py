@@ -236,3 +236,23 @@ def test_flooding_network_drops_corrupted_frames_with_crc(rng):
         net.send(2, np.array([0, 1, 0, 1, 0, 1, 0, 1], bool))
         _run(net, links, 6)
     assert net.stats["rx_corrupt_delivered"] >= 1
+
+
+@pytest.mark.parametrize("platform,d", [("droplet", 0.2), ("rone", 0.4)])
+def test_other_platforms_run_the_same_protocol(platform, d):
+    from swarm_envs.comm.channel import recommended_relative_threshold
+
+    rng = np.random.default_rng(1)
+    links = compute_links(np.array([[0.0, 0.0], [d, 0.0]]), np.array([0.0, np.pi]), platform)
+    net = Network(platform, 2, rng, relative_threshold=recommended_relative_threshold(platform))
+    sent = []
+    got = []
+    for k in range(40):
+        if k % 4 == 0:
+            p = rng.integers(0, 2, 8).astype(bool)
+            sent.append(p)
+            net.send(0, p)
+        d_ = net.step(links)
+        got += [d_.payload[i, :8] for i in range(len(d_))]
+    assert len(got) == len(sent) and all(np.array_equal(a, b) for a, b in zip(got, sent))
+    assert net.stats["bit_errors"] == 0

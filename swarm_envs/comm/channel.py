@@ -19,8 +19,11 @@ Other platforms. The protocol only needs a dimensionless intensity ``y`` in [0, 
 platform whose IR model gain is in other units we normalise with the model's measurement constants:
 ``y = gain * model.adc_scale / model.adc_max`` (so y = 1 is the platform's saturation level; for the
 e-puck this is the identity), and use an ADC with ``m_max = model.adc_max``, ``m_min = 0`` and noise
-``model.default_noise_sigma``: the Droplet's 8-bit IR receiver (y = counts / 255) and the r-one's binary
-receivers (y in {0, 1}, noiseless) then run the same OOK / start-symbol / dynamic-threshold protocol.
+``model.default_noise_sigma``: the Droplet's 8-bit IR receiver (y = counts / 255, noise sigma 2 counts;
+the relative threshold m_tr is then in Droplet counts and should be >= ~8, i.e. 4 sigma, see
+:func:`recommended_relative_threshold`). Binary receivers (the r-one, y in {0, 1}) get the e-puck's
+12-bit scale without noise, so the default m_tr = 5 and Eq. (36) work unchanged. All platforms then run
+the same OOK / start-symbol / dynamic-threshold protocol.
 """
 
 from __future__ import annotations
@@ -34,6 +37,7 @@ from swarm_envs.platforms import Platform, get_platform
 __all__ = [
     "ADCModel",
     "adc_model_for",
+    "recommended_relative_threshold",
     "gain_to_intensity",
     "detector_intensity",
     "adc",
@@ -81,6 +85,8 @@ def adc_model_for(platform: Platform | str) -> ADCModel:
     model = platform.ir_model
     full = float(model.adc_max)
     sigma = float(getattr(model, "default_noise_sigma", 0.0))
+    if full <= 1.0:  # binary receivers (r-one): a noiseless 12-bit-like scale so m_tr and Eq. (36) work
+        return ADCModel(noise_var=sigma * sigma, intensity_scale=float(model.adc_scale) / full)
     return ADCModel(
         m_max=full,
         m_min=0.0,
@@ -88,6 +94,16 @@ def adc_model_for(platform: Platform | str) -> ADCModel:
         noise_var=sigma * sigma,
         intensity_scale=float(model.adc_scale) / full,
     )
+
+
+def recommended_relative_threshold(platform: Platform | str) -> float:
+    """A relative threshold m_tr (counts of the platform's ADC model) giving few noise-triggered starts:
+    5 for the e-puck [T20 Eq. (33)] and binary receivers, else 4 noise sigmas (8 for the Droplet)."""
+    platform = get_platform(platform)
+    m = adc_model_for(platform)
+    if platform.name == "epuck" or m.noise_var == 0:
+        return 5.0
+    return float(np.ceil(4.0 * m.noise_sigma))
 
 
 def gain_to_intensity(gain_sum: np.ndarray, platform: Platform | str, adc_model: ADCModel | None = None) -> np.ndarray:
