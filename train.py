@@ -228,8 +228,9 @@ def main(argv: list[str] | None = None) -> int:
     primary, sign = PRIMARY_METRIC[task]
     header = (
         f"# {task}: PPO vs scripted ({cfg['agent']['scripted']}) vs random\n\n"
-        f"env: {json.dumps(eval_kwargs)}; PPO budget {cfg['train']['total_timesteps']} robot-steps"
-        f"{' (eval-only ' + str(args.eval_only) + ')' if args.eval_only else ''}; headline metric `{primary}` "
+        f"env: {json.dumps(eval_kwargs)}; "
+        + (f"PPO checkpoint {args.eval_only} (eval-only)" if args.eval_only else f"PPO budget {cfg['train']['total_timesteps']} robot-steps")
+        + f"; headline metric `{primary}` "
         f"({'higher' if sign > 0 else 'lower'} is better). Final-step values except flocking metrics "
         "(mean over the episode); episode_return = mean per-robot return.\n\n"
     )
