@@ -7,7 +7,7 @@ from pettingzoo.test import api_test, parallel_api_test
 
 import swarm_envs
 
-SENSING = ["ideal"]
+SENSING = ["ideal", "full"]
 
 
 @pytest.mark.parametrize("env_id", swarm_envs.list_envs())

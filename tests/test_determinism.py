@@ -6,7 +6,7 @@ import pytest
 import swarm_envs
 from tests.conftest import assert_tree_equal
 
-SENSING = ["ideal"]
+SENSING = ["ideal", "full"]
 
 
 def rollout(env_id: str, seed: int, sensing: str, steps: int = 300, **kwargs):

@@ -29,6 +29,11 @@ class NeighbourReadings:
     heading: np.ndarray = field(default_factory=_empty)
     age: np.ndarray = field(default_factory=_empty)
 
+    @property
+    def valid(self) -> np.ndarray:
+        """(P,) bool: the reading has a bearing."""
+        return np.isfinite(self.bearing)
+
 
 @dataclass
 class MessageReadings:

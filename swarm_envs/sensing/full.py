@@ -1,0 +1,174 @@
+"""The ``sensing="full"`` stack: every observation value comes from the modelled infrared hardware.
+
+Each control step, in this order (data flows one way):
+
+1. **IR layer** (:func:`swarm_envs.ir.layer.compute_links`): candidate pairs (KD-tree), line of sight,
+   emitter-detector gains of every visible pair, once for everything below.
+2. **Range & bearing** [F14] (:class:`swarm_envs.sensing.range_bearing.RangeBearingSensor`) on the
+   ``droplet`` and ``epuck``: contention-scheduled firing, noisy brightness matrices, the estimator,
+   readings that persist with an age. The ``rone`` has no range sensor: its ``range_bearing`` rows hold
+   sector bearings and orientations [L Sec. 3.2] (:func:`swarm_envs.sensing.bearing_sensor.sense_bearings`)
+   with range 0, in neighbour-id order.
+3. **SwarmCom** [T20] (:class:`swarm_envs.comm.network.Network`): bit-slot simulation of the channel.
+   With ``message_bits > 0`` each robot queues its current action payload whenever its transmit queue
+   is empty (so the newest payload goes out as soon as the radio is free). Decoded application frames
+   become the ``messages`` observation; the sender's bearing is the axis of the receiver's brightest
+   detector during the frame (a coarse bearing from the detector itself, not from ground truth).
+4. **Bearing exchange and scale-free coordinates** [L] (:class:`swarm_envs.sensing.exchange.BearingExchange`,
+   :func:`swarm_envs.sensing.scale_free.coordinates_all`): bearings from ``bearing_source``
+   (``"sectors"`` default on ``rone``, ``"range_bearing"`` elsewhere) travel as SwarmCom system traffic
+   (``exchange="network"``) or instantly (``exchange="ideal"``); the 2-hop algorithm turns what each
+   robot knows into neighbour coordinates up to scale.
+
+Channel and sensor statistics go to ``infos[agent]["sensing"]``.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from swarm_envs.comm.network import Network
+from swarm_envs.ir.layer import IRLinks, compute_links
+from swarm_envs.observation import pack_nearest
+from swarm_envs.platforms import Platform
+from swarm_envs.sensing.base import MessageReadings, NeighbourReadings, ScaleFreeReadings, SensorFrame
+from swarm_envs.sensing.bearing_sensor import sense_bearings
+from swarm_envs.sensing.exchange import BearingExchange
+from swarm_envs.sensing.range_bearing import RangeBearingSensor
+from swarm_envs.sensing.scale_free import coordinates, coordinates_all
+
+__all__ = ["FullSensing"]
+
+_STAT_NAMES = ("tx_started", "deferrals", "rx_delivered", "rx_lost", "collisions", "bits_checked", "bit_errors")
+
+
+class FullSensing:
+    """Physically modelled sensing for ``n_robots`` robots of one platform (module docstring)."""
+
+    def __init__(self, platform: Platform, n_robots: int, config: dict[str, Any]) -> None:
+        self.platform = platform
+        self.n = int(n_robots)
+        self.config = config
+        self.has_range = hasattr(platform.ir_model, "amplitude_inverse")
+        source = config.get("bearing_source") or ("range_bearing" if self.has_range else "sectors")
+        if source == "range_bearing" and not self.has_range:
+            raise ValueError(f"bearing_source='range_bearing' needs a range & bearing platform; {platform.name!r} has none (use 'sectors')")
+        self.bearing_source = source
+        self.k = int(config["n_neighbours"])
+        self.message_bits = int(config["message_bits"])
+        self.method = config["scale_free_method"]
+        self.hops = int(config["scale_free_k"])
+        self.rb: RangeBearingSensor | None = None
+        self.network: Network | None = None
+        self.exchange: BearingExchange | None = None
+        self.links: IRLinks | None = None
+
+    def reset(self, rng: np.random.Generator) -> None:
+        """New sensor, channel and exchange state from independent child streams of ``rng``."""
+        cfg = self.config
+        rb_rng, net_rng, ex_rng = rng.spawn(3)
+        if self.has_range:
+            self.rb = RangeBearingSensor(
+                self.platform, self.n, rb_rng, noise_sigma=cfg["rb_noise"], schedule=cfg["rb_schedule"], max_age=cfg["rb_max_age"]
+            )
+        self.network = Network(
+            self.platform,
+            self.n,
+            net_rng,
+            bitrate=cfg["bitrate"],
+            relative_threshold=cfg["relative_threshold"],
+            code=tuple(cfg["code"]),
+            comm_mode=cfg["comm_mode"],
+            payload_bits=self.message_bits,
+        )
+        self.exchange = BearingExchange(self.n, mode=cfg["exchange"], network=self.network, rng=ex_rng)
+
+    # ------------------------------------------------------------------------------------------------
+    def step(self, positions: np.ndarray, headings: np.ndarray, payloads: np.ndarray | None) -> SensorFrame:
+        """One control step of sensing (module docstring); ``payloads`` (N, b) bool or None."""
+        links = compute_links(positions, headings, self.platform)
+        self.links = links
+
+        # range & bearing (or bearing-only sectors)
+        sectors = sense_bearings(links, self.platform) if self.bearing_source == "sectors" or not self.has_range else None
+        if self.has_range:
+            rb = self.rb.step(links)
+            neighbours = NeighbourReadings(rb.rx, rb.tx, rb.range, rb.bearing, rb.heading, rb.age.astype(float))
+        else:
+            ok = sectors.valid
+            zeros = np.zeros(int(ok.sum()))
+            neighbours = NeighbourReadings(sectors.rx[ok], sectors.tx[ok], zeros, sectors.bearing[ok], sectors.heading[ok], zeros.copy())
+        bearing_readings = neighbours if self.bearing_source == "range_bearing" else _valid_only(sectors)
+
+        # SwarmCom: application payloads and the bearing exchange share the channel
+        net = self.network
+        if payloads is not None and self.message_bits > 0:
+            free = np.flatnonzero(net.q_count == 0)
+            if free.size:
+                net.send_many(free, payloads[free])
+        if self.exchange.mode == "network":
+            self.exchange.send(net)
+        deliveries = net.step(links)
+        app = deliveries.for_kind("app")
+        # an uncoded header can decode to a wrong length: such a frame is not a well-formed message
+        well_formed = (app.length == self.message_bits) & (app.origin < self.n)
+        if self.message_bits > 0 and well_formed.any():
+            payload = np.zeros((len(app), self.message_bits))
+            width = min(self.message_bits, app.payload.shape[1])
+            payload[:, :width] = app.payload[:, :width]
+            sender_bearing = self.platform.detector_directions[app.detector]
+            messages = MessageReadings(
+                app.receiver[well_formed], app.origin[well_formed], sender_bearing[well_formed], payload[well_formed]
+            )
+        else:
+            messages = MessageReadings(payload=np.zeros((0, self.message_bits)))
+
+        knowledge = self.exchange.step(bearing_readings, deliveries if self.exchange.mode == "network" else None)
+        scale_free = self._scale_free(knowledge)
+
+        stats = {name: np.asarray(deliveries.stats[f"{name}_per_robot"]) for name in _STAT_NAMES if f"{name}_per_robot" in deliveries.stats}
+        stats["ir_links"] = np.bincount(links.rx, minlength=self.n)
+        if self.rb is not None:
+            stats["rb_fired"] = self.rb.last_fired.astype(np.int64)
+        stats["rigid"] = scale_free.rigid.astype(np.int64)
+        return SensorFrame(neighbours, messages, scale_free, stats)
+
+    def _scale_free(self, knowledge) -> ScaleFreeReadings:
+        if self.method == "two_hop":
+            result = coordinates_all(knowledge)
+            xy, valid, rigid = result.xy, result.valid, result.rigid
+        else:  # null-space k-hop method: one robot at a time (slow; an analysis option, see README)
+            xy, valid, rigid = self._null_space(knowledge)
+        row, slot = np.nonzero(valid)
+        points = xy[row, slot]
+        packed, order = pack_nearest(self.n, row, np.hypot(points[:, 0], points[:, 1]), points, self.k)
+        return ScaleFreeReadings(packed, order >= 0, np.asarray(rigid, bool))
+
+    def _null_space(self, knowledge) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        n, kmax = knowledge.ids.shape
+        xy = np.full((n, kmax, 2), np.nan)
+        valid = np.zeros((n, kmax), bool)
+        rigid = np.zeros(n, bool)
+        for u in range(n):
+            # what robot u knows: its own bearings and the rows its neighbours reported
+            local = np.full((n, n), np.nan)
+            own = knowledge.ids[u] >= 0
+            local[u, knowledge.ids[u][own]] = knowledge.bearings[u][own]
+            rid, rth = knowledge.row_ids[u], knowledge.row_bearings[u]
+            for slot, v in enumerate(knowledge.ids[u]):
+                if v >= 0:
+                    good = rid[slot] >= 0
+                    local[v, rid[slot][good]] = rth[slot][good]
+            pos, rigid[u] = coordinates(local, u, method="null_space", k=self.hops)
+            for slot, v in enumerate(knowledge.ids[u]):
+                if v >= 0 and np.all(np.isfinite(pos[v])):
+                    xy[u, slot], valid[u, slot] = pos[v], True
+        return xy, valid, rigid
+
+
+def _valid_only(sectors) -> NeighbourReadings:
+    ok = sectors.valid
+    zeros = np.zeros(int(ok.sum()))
+    return NeighbourReadings(sectors.rx[ok], sectors.tx[ok], zeros, sectors.bearing[ok], sectors.heading[ok], zeros.copy())
