@@ -26,7 +26,13 @@ errors are counted on frames whose start coincided with the true start symbol ("
 Modes [T20 Sec. 6]: ``"broadcast"`` (local broadcast: a frame reaches the robots that decode it) and
 ``"flooding"`` (each robot re-sends every new ``"app"`` message once, deduplicated by (origin, seq)
 within ``dedupe_window`` seconds; the header then also carries the last-hop id). System kinds queued by
-:meth:`Network.queue_system` are always local broadcast.
+:meth:`Network.queue_system` are always local broadcast. Flooding frames carry a CRC-8 by default
+(``crc_bits``), our addition: without error detection every corrupted copy has a "new" (origin, seq) or
+payload and is re-flooded by everyone (validation (c) shows the resulting storm).
+
+Queues: each robot holds up to ``queue_capacity`` frames (originals, relays, system traffic, FIFO); a new
+frame for a full queue drops the oldest waiting one (``queue_dropped``). An env whose agents send every
+step therefore keeps only the freshest messages when the channel cannot carry them all.
 """
 
 from __future__ import annotations
