@@ -154,13 +154,15 @@ class OrientationFlocking(_Stateful):
 
     Neighbour orientations are the ``cos/sin heading`` columns of ``range_bearing`` (relative to the robot,
     so the robot's own heading is 0). ``speed`` is the forward speed (fraction of max), ``gain`` the
-    fraction of the heading error corrected per step.
+    fraction of the heading error corrected per step. Defaults (speed 1.0, gain 0.2) were picked on
+    ``sensing="full"``, whose heading estimates are noisy: polarisation 0.40 vs 0.21 with (0.6, 0.5) over
+    6 seeds of 200 steps (ideal sensing: 0.57).
     """
 
     name = "orientation_flocking"
 
     def __init__(self, platform: Platform, layout: ObservationLayout, rng: np.random.Generator | None = None,
-                 speed: float = 0.6, gain: float = 0.5, t_m: float = 2.0) -> None:
+                 speed: float = 1.0, gain: float = 0.2, t_m: float = 2.0) -> None:
         self.speed, self.gain = float(speed), float(gain)
         super().__init__(platform, layout, rng, t_m)
 
@@ -224,16 +226,20 @@ class CentroidSeeker(_Stateful):
     Cycle per robot: pause ``pause_steps`` control steps (the thesis pauses for each neighbour round) ->
     read the centroid of the valid ``scale_free`` neighbour coordinates (the robot's own frame, scaled so
     the mean neighbour distance is 1; only the direction is used) -> turn in place to its bearing ->
-    drive ``d_step`` metres (11 cm in the thesis) at ``speed`` -> repeat. Without scale-free coordinates the
-    direction is the mean neighbour bearing of ``range_bearing``; without neighbours, a random walk.
+    drive ``d_step`` metres (11 cm in the thesis) at ``speed`` -> repeat. Without (complete, rigid) scale-free
+    coordinates the direction is the mean neighbour bearing of ``range_bearing`` (see :meth:`centroid_bearing`;
+    with ``sensing="full"`` this fallback halves the error: 0.14 m vs 0.22 m over 8 seeds, 200 steps);
+    without neighbours, a random walk.
     The robot "has no notion of exact distance to the centroid" so it keeps circling within ~d_step.
     """
 
     name = "centroid_seeker"
 
     def __init__(self, platform: Platform, layout: ObservationLayout, rng: np.random.Generator | None = None,
-                 d_step: float = 0.11, speed: float = 1.0, pause_steps: int = 2, t_m: float = 2.0) -> None:
+                 d_step: float = 0.11, speed: float = 1.0, pause_steps: int = 2, min_scale_free: int = 3,
+                 t_m: float = 2.0) -> None:
         self.d_step, self.speed, self.pause_steps = float(d_step), float(speed), int(pause_steps)
+        self.min_scale_free = int(min_scale_free)
         super().__init__(platform, layout, rng, t_m)
 
     def reset(self, n: int, rng: np.random.Generator | None = None) -> None:
@@ -243,15 +249,22 @@ class CentroidSeeker(_Stateful):
         self._turn = np.zeros(n)
 
     def centroid_bearing(self, obs: dict[str, np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
-        """Bearing (rad, body frame) of the scale-free centroid (fallback: mean neighbour bearing), has-mask."""
+        """Bearing (rad, body frame) of the scale-free centroid (fallback: mean neighbour bearing), has-mask.
+
+        The scale-free centroid is used when the robot is ``rigid`` and its scale-free coordinates cover at
+        least ``min_scale_free`` neighbours and every neighbour it currently senses in ``range_bearing``
+        (a centroid of a subset of the polygon points the wrong way); otherwise the mean neighbour bearing.
+        """
         sf = obs["scale_free"]
         valid = sf[..., 0] > 0.5
         count = valid.sum(axis=1)
         cx = (sf[..., 1] * valid).sum(axis=1) / np.maximum(count, 1)
         cy = (sf[..., 2] * valid).sum(axis=1) / np.maximum(count, 1)
-        has_sf = (count > 0) & (np.hypot(cx, cy) > 1e-9)
         rb = obs["range_bearing"]
-        theta_rb, has_rb = circular_mean(rb[..., 2], rb[..., 3], rb[..., 0] > 0.5)
+        rb_valid = rb[..., 0] > 0.5
+        complete = (obs["rigid"][:, 0] > 0.5) & (count >= np.maximum(self.min_scale_free, rb_valid.sum(axis=1)))
+        has_sf = complete & (np.hypot(cx, cy) > 1e-9)
+        theta_rb, has_rb = circular_mean(rb[..., 2], rb[..., 3], rb_valid)
         bearing = np.where(has_sf, np.arctan2(cy, cx), theta_rb)
         return bearing, has_sf | has_rb
 
