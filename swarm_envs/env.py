@@ -40,7 +40,7 @@ COMMON_DEFAULTS: dict[str, Any] = {
     "message_bits": 0,
     # SwarmCom messaging [T20]
     "bitrate": 310,
-    "relative_threshold": 5,
+    "relative_threshold": None,  # m_tr (ADC counts); None = the platform's: 5 e-puck/r-one [T20], 8 droplet
     "code": (15, 15),
     "comm_mode": "broadcast",
     # range & bearing [F14]
@@ -93,8 +93,8 @@ def _validate(cfg: dict[str, Any]) -> None:
     if not isinstance(cfg["flatten"], bool):
         raise ValueError(f"flatten must be True or False, got {cfg['flatten']!r}")
     threshold = cfg["relative_threshold"]
-    if isinstance(threshold, bool) or not isinstance(threshold, numbers.Real) or threshold <= 0:
-        raise ValueError(f"relative_threshold (m_tr, ADC counts) must be a positive number, got {threshold!r}")
+    if threshold is not None and (isinstance(threshold, bool) or not isinstance(threshold, numbers.Real) or threshold <= 0):
+        raise ValueError(f"relative_threshold (m_tr, ADC counts) must be a positive number or None, got {threshold!r}")
     noise = cfg["rb_noise"]
     if noise is not None and (not isinstance(noise, numbers.Real) or noise < 0):
         raise ValueError(f"rb_noise must be a non-negative number of ADC counts or None, got {noise!r}")

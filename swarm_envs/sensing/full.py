@@ -29,6 +29,7 @@ from typing import Any
 
 import numpy as np
 
+from swarm_envs.comm.channel import recommended_relative_threshold
 from swarm_envs.comm.network import Network
 from swarm_envs.ir.layer import IRLinks, compute_links
 from swarm_envs.observation import pack_nearest
@@ -78,7 +79,7 @@ class FullSensing:
             self.n,
             net_rng,
             bitrate=cfg["bitrate"],
-            relative_threshold=cfg["relative_threshold"],
+            relative_threshold=cfg["relative_threshold"] or recommended_relative_threshold(self.platform),
             code=tuple(cfg["code"]),
             comm_mode=cfg["comm_mode"],
             payload_bits=self.message_bits,
