@@ -17,11 +17,13 @@ Two algorithms:
   spanning tree: ``h_c = h_p + theta_p(c) + pi - theta_c(p)`` (exact for noiseless bearings, where every
   cycle of frame rotations closes). The cycle basis is the fundamental cycle basis of that spanning tree
   (one cycle per non-tree edge, m - n + 1 cycles). ``A`` is ``2(m - n + 1) x m``; its null space comes from
-  an SVD. u is *rigid* iff the null space restricted to u's own edges (``N'``) has dimension 1.
+  an SVD, taken on an equivalent reduced system: each cycle's component across the non-tree edge is one
+  equation on the n - 1 tree lengths, and its component along it gives the non-tree length, so the SVD is
+  of an ``(m - n + 1) x (n - 1)`` matrix (same null space, several times faster). u is *rigid* iff the null space restricted to u's own edges (``N'``) has dimension 1.
 
   Numerical tolerances: a singular value of A counts as zero when it is below
-  ``NULL_RTOL * max(1, s_max)`` (``NULL_RTOL = 1e-9``; entries of A are O(1) unit-vector components, and
-  noiseless float64 bearings give residuals ~1e-14). ``N'`` has orthonormal-basis rows of size O(1); its
+  ``NULL_RTOL * max(1, s_max)`` (``NULL_RTOL = 1e-9``; entries are sums of unit-vector components along
+  tree paths, and noiseless float64 bearings give residuals ~1e-14). ``N'`` has orthonormal-basis rows of size O(1); its
   rank counts singular values above ``RESTRICT_TOL = 1e-6``. The method is meant for exact bearings (the
   rigidity study of [L Fig. 5.1]); with quantised bearings A generically has full column rank and u is
   reported non-rigid.
@@ -435,13 +437,24 @@ def _null_space_basis(B: np.ndarray, verts: np.ndarray, sym: np.ndarray) -> tupl
     nt = np.nonzero(~tree_edge)[0]
     if len(nt) == 0:
         return np.stack([verts[ea], verts[eb]], -1), np.eye(m)
-    # cycle for non-tree edge e=(a,b): f_e D_e - (p_b - p_a) = 0, x and y rows
-    A = -(Pxy[eb[nt]] - Pxy[ea[nt]])  # (c, 2, m)
-    A[np.arange(len(nt)), :, nt] += D[nt]
-    A = A.reshape(-1, m)
-    _, s, vt = np.linalg.svd(A, full_matrices=True)
+    # Cycle of non-tree edge e = (a, b): f_e D_e - (p_b - p_a) = 0 (x and y rows of A, [L Eq. (5.1)]).
+    # Equivalent reduced system on the n - 1 tree lengths t (same null space, much smaller SVD):
+    # the component across D_e gives one row of C, ``D_e_perp . (p_b - p_a)(t) = 0``, and the component
+    # along D_e fixes ``f_e = D_e . (p_b - p_a)(t)``. So null(A) = {(t, L t) : C t = 0}.
+    tc = np.nonzero(tree_edge)[0]
+    delta = (Pxy[eb[nt]] - Pxy[ea[nt]])[:, :, tc]  # (c, 2, n - 1)
+    Dn = D[nt]
+    C = -Dn[:, 1, None] * delta[:, 0] + Dn[:, 0, None] * delta[:, 1]  # D_perp . delta
+    Lnt = Dn[:, 0, None] * delta[:, 0] + Dn[:, 1, None] * delta[:, 1]  # D . delta
+    _, s, vt = np.linalg.svd(C, full_matrices=True)
     rank = int(np.sum(s > NULL_RTOL * max(1.0, s[0] if len(s) else 0.0)))
-    return np.stack([verts[ea], verts[eb]], -1), vt[rank:].T
+    T = vt[rank:].T  # (n - 1, d)
+    N = np.zeros((m, T.shape[1]))
+    N[tc] = T
+    N[nt] = Lnt @ T
+    if N.shape[1]:
+        N, _ = np.linalg.qr(N)  # orthonormal basis of null(A)
+    return np.stack([verts[ea], verts[eb]], -1), N
 
 
 def null_space_lengths(
