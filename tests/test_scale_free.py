@@ -237,3 +237,54 @@ def test_missing_rows_drop_information_not_correctness():
         if sel.sum() >= 2:  # same shape up to scale
             a, b = part.length[u, sel], np.hypot(*(pos[part.ids[u, sel]] - pos[u]).T)
             np.testing.assert_allclose(a / a.mean(), b / b.mean(), rtol=1e-9)
+
+
+def _reference_alg4(B, u):
+    """Independent [L Alg. 4] for one robot: scipy MST over triangle sensitivities, BFS along it."""
+    from scipy.sparse import csr_matrix
+    from scipy.sparse.csgraph import breadth_first_order, minimum_spanning_tree
+
+    nb = np.nonzero(~np.isnan(B[u]))[0]
+    k = len(nb)
+    W = np.zeros((k, k))
+    ratio = np.ones((k, k))
+    for i, z in enumerate(nb):
+        for j, w in enumerate(nb):
+            if i == j or np.isnan(B[z, w]) or np.isnan(B[w, z]):
+                continue
+            pu = abs(wrap(B[u, z] - B[u, w]))
+            pz = abs(wrap(B[z, u] - B[z, w]))
+            pw = abs(wrap(B[w, z] - B[w, u]))
+            _, pz, pw = angle_balance(pu, pz, pw)
+            W[i, j] = 1 + 1 / np.tan(pz) ** 2 + 1 / np.tan(pw) ** 2
+            ratio[i, j] = np.sin(pz) / np.sin(pw)  # f_w / f_z
+    root = int(np.argmin(np.mod(B[u, nb], 2 * np.pi)))
+    T = minimum_spanning_tree(csr_matrix(W)).toarray()
+    T = ((T + T.T) > 0).astype(float)
+    order, pred = breadth_first_order(csr_matrix(T), root, directed=False)
+    f = np.full(k, np.nan)
+    f[root] = 1.0
+    for v in order[1:]:
+        f[v] = f[pred[v]] * ratio[pred[v], v]
+    out = np.full(len(B), np.nan)
+    out[nb] = f / np.nanmean(f)
+    return out
+
+
+def test_batched_prim_matches_scipy_minimum_spanning_tree():
+    rng = np.random.default_rng(8)
+    checked = 0
+    for _ in range(5):
+        pos, hd, B = random_scene(rng, n=16, side=1.6)
+        Bn = np.where(np.isnan(B), np.nan, B + rng.normal(0, np.deg2rad(4), B.shape))  # distinct weights
+        res = coordinates_all(knowledge_from_matrix(Bn), noise_sensitivity=True, angle_balance=True)
+        for u in range(16):
+            if not res.rigid[u] or (res.ids[u] >= 0).sum() < 3:
+                continue
+            ref = _reference_alg4(Bn, u)
+            got = np.full(16, np.nan)
+            sel = res.ids[u] >= 0
+            got[res.ids[u, sel]] = res.length[u, sel]
+            np.testing.assert_allclose(got, ref, rtol=1e-8, equal_nan=True)
+            checked += 1
+    assert checked > 20
