@@ -201,3 +201,27 @@ def test_runs_over_the_real_swarmcom_network():
     np.testing.assert_allclose(kn.bearings[sel], B[u, kn.ids[sel]])
     res = coordinates_all(kn)
     assert np.all(np.isfinite(res.xy[res.valid]))
+
+
+def test_scale_free_sensor_pipeline():
+    from swarm_envs.sensing.scale_free import ScaleFreeSensor
+
+    pos, hd, links, rd = scene(3)
+    n = len(pos)
+    ideal = ScaleFreeSensor(n, "rone", "ideal", k_max=n)
+    res = ideal.step(links)
+    ref = coordinates_all(BearingExchange(n, "ideal", k_max=n).step(rd))
+    np.testing.assert_allclose(res.xy, ref.xy, equal_nan=True)
+    assert res.rigid.tolist() == ref.rigid.tolist()
+    # exact bearings passed in (bearing_source = R&B or ground truth): rigid robots recover true geometry
+    res = ideal.step(links, readings=exact_readings(links))
+    for u in np.nonzero(res.rigid)[0]:
+        sel = res.valid[u]
+        d = np.hypot(*(pos[res.ids[u, sel]] - pos[u]).T)
+        np.testing.assert_allclose(res.length[u, sel], d / d.mean(), rtol=1e-9)
+    net = FakeNetwork(0.0, np.random.default_rng(0))
+    sensor = ScaleFreeSensor(n, "rone", "network", k_max=n, period=3, rng=np.random.default_rng(1))
+    for _ in range(8):
+        sensor.send(net)
+        res = sensor.step(links, net.step(links))
+    assert res.rigid.tolist() == ref.rigid.tolist()

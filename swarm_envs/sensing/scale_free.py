@@ -71,6 +71,7 @@ import numpy as np
 __all__ = [
     "coordinates",
     "coordinates_all",
+    "ScaleFreeSensor",
     "NeighbourKnowledge",
     "ScaleFreeResult",
     "knowledge_from_matrix",
@@ -567,3 +568,61 @@ def coordinates(
 
 
 _angle_balance = angle_balance  # module-level alias: the keyword argument of coordinates_all shadows it
+
+
+class ScaleFreeSensor:
+    """Batched entry point for an environment: IR links -> bearings -> exchange -> 2-hop coordinates.
+
+    Per control step: ``sensor.send(network)`` (network mode only, before the network step), then
+    ``result = sensor.step(links, deliveries)``. Bearings come from the r-one sector rule
+    (:func:`swarm_envs.sensing.bearing_sensor.sense_bearings`) unless ``readings`` is passed to
+    :meth:`step` (any object with ``rx, tx, bearing, valid`` per link, e.g. R&B estimates: SPEC 5.1
+    ``bearing_source``).
+
+    Args:
+        n_robots: swarm size.
+        platform: platform whose IR channels define the sectors (``"rone"``).
+        exchange: ``"ideal"`` or ``"network"`` (:class:`swarm_envs.sensing.exchange.BearingExchange`).
+        k_max: neighbour table slots K (use at least the largest expected degree: beyond K the
+            lowest-id neighbours are kept and the rest are ignored).
+        noise_sensitivity, angle_balance: 2-hop options [L Algs. 2-4].
+        **exchange_kwargs: passed to :class:`~swarm_envs.sensing.exchange.BearingExchange` (``network``,
+            ``period``, ``max_age``, ``bearing_bits``, ``rng``).
+    """
+
+    def __init__(
+        self,
+        n_robots: int,
+        platform: str = "rone",
+        exchange: str = "ideal",
+        k_max: int = 16,
+        noise_sensitivity: bool = True,
+        angle_balance: bool = True,
+        **exchange_kwargs,
+    ) -> None:
+        from swarm_envs.platforms import get_platform
+        from swarm_envs.sensing.exchange import BearingExchange
+
+        self.platform = get_platform(platform)
+        self.exchange = BearingExchange(n_robots, exchange, k_max=k_max, **exchange_kwargs)
+        self.noise_sensitivity = noise_sensitivity
+        self.angle_balance = angle_balance
+        self.last_readings = None
+
+    def reset(self, rng: np.random.Generator | None = None) -> None:
+        self.exchange.reset(rng)
+        self.last_readings = None
+
+    def send(self, network=None) -> int:
+        """Queue this step's bearing-list messages (network mode; no-op when ideal)."""
+        return self.exchange.send(network)
+
+    def step(self, links, deliveries=None, readings=None) -> ScaleFreeResult:
+        """Sense (unless ``readings`` is given), exchange and compute every robot's coordinates."""
+        if readings is None:
+            from swarm_envs.sensing.bearing_sensor import sense_bearings
+
+            readings = sense_bearings(links, self.platform)
+        self.last_readings = readings
+        kn = self.exchange.step(readings, deliveries)
+        return coordinates_all(kn, noise_sensitivity=self.noise_sensitivity, angle_balance=self.angle_balance)
