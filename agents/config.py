@@ -97,6 +97,8 @@ def _merge(base: dict, update: dict, path: str = "") -> dict:
             continue
         if key not in base:
             raise ConfigError(f"unknown config key {dotted!r}; allowed keys here: {sorted(base)}")
+        if isinstance(base[key], dict) and value is None:
+            value = {}  # an empty section in YAML (``env:``) means "all defaults"
         if isinstance(base[key], dict) and dotted not in ("agent.scripted_kwargs",):
             if not isinstance(value, dict):
                 raise ConfigError(f"config key {dotted!r} must be a mapping, got {value!r}")

@@ -110,3 +110,11 @@ def test_train_end_to_end_then_eval_only(tmp_path):
     second = json.loads((out2 / "per_seed.json").read_text())
     assert first["ppo"] == second["ppo"] and first["scripted"] == second["scripted"]
     assert not (out2 / "model.zip").exists()
+
+
+def test_empty_sections_take_defaults(tmp_path):
+    path = tmp_path / "c.yaml"
+    path.write_text("task: flocking\nenv:\ntrain:\n  n_envs: 3\n")
+    cfg = load_config(path)
+    assert cfg["env"] == {} and cfg["train"]["n_envs"] == 3
+    assert cfg["train"]["total_timesteps"] == DEFAULTS["train"]["total_timesteps"]
