@@ -20,14 +20,12 @@ All public inputs/outputs are SI (metres, radians, angles wrapped to (-pi, pi]).
 from __future__ import annotations
 
 from dataclasses import dataclass
-from itertools import chain
-
 import numpy as np
 from scipy.spatial import cKDTree
 
 from swarm_envs.platforms import Platform, get_platform
 
-__all__ = ["IRLinks", "compute_links", "pair_geometry", "pair_gains", "line_of_sight", "wrap_angle"]
+__all__ = ["IRLinks", "compute_links", "pair_geometry", "pair_cosines", "pair_gains", "line_of_sight", "wrap_angle"]
 
 
 def wrap_angle(a: np.ndarray | float) -> np.ndarray:
@@ -101,15 +99,48 @@ def pair_geometry(
     return distance, detector_angle, emitter_angle
 
 
+def pair_cosines(
+    rel_position: np.ndarray, rel_heading: np.ndarray, platform: Platform | str
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The same geometry as :func:`pair_geometry` as (distance, cos detector angle, cos emitter angle).
+
+    Every IR model is symmetric in its angles (SPEC 3.1), so gains need only the cosines, which come from
+    dot products with the unit detector-emitter vectors: no arctan2 and no angle wrapping on the
+    (P, n_d, n_e) hot path.
+    """
+    platform = get_platform(platform)
+    R = np.asarray(rel_position, dtype=float).reshape(-1, 2)
+    psi = np.asarray(rel_heading, dtype=float).reshape(-1)
+    c, s = np.cos(psi)[:, None], np.sin(psi)[:, None]
+    ex, ey = platform.emitter_positions[:, 0][None, :], platform.emitter_positions[:, 1][None, :]
+    emx = R[:, 0:1] + c * ex - s * ey  # emitter positions in the receiver frame (P, n_e)
+    emy = R[:, 1:2] + s * ex + c * ey
+    eca, esa = np.cos(platform.emitter_directions)[None, :], np.sin(platform.emitter_directions)[None, :]
+    eax = (c * eca - s * esa)[:, None, :]  # emitter axes in the receiver frame (P, 1, n_e)
+    eay = (s * eca + c * esa)[:, None, :]
+    dx = emx[:, None, :] - platform.detector_positions[None, :, 0, None]
+    dy = emy[:, None, :] - platform.detector_positions[None, :, 1, None]
+    distance = np.hypot(dx, dy)
+    inv = 1.0 / np.maximum(distance, 1e-12)
+    ux, uy = dx * inv, dy * inv  # unit vector detector -> emitter
+    dax = np.cos(platform.detector_directions)[None, :, None]
+    day = np.sin(platform.detector_directions)[None, :, None]
+    cos_detector = ux * dax + uy * day
+    cos_emitter = -(ux * eax + uy * eay)
+    return distance, cos_detector, cos_emitter
+
+
 def pair_gains(rel_position: np.ndarray, rel_heading: np.ndarray, platform: Platform | str) -> np.ndarray:
     """Noiseless gains (P, n_detectors, n_emitters) of the platform's IR model for P pairs.
 
-    Line of sight is assumed (occlusion is :func:`line_of_sight`'s job). Pairs whose centre distance
-    exceeds ``platform.ir_range`` get zero gain (the platform's "no infrared beyond" cut-off).
+    Equal to ``model.gain(*pair_geometry(...))``, computed from cosines (:func:`pair_cosines`,
+    ``model.gain_from_cos``) for speed. Line of sight is assumed (occlusion is :func:`line_of_sight`'s
+    job). Pairs whose centre distance exceeds ``platform.ir_range`` get zero gain (the platform's
+    "no infrared beyond" cut-off).
     """
     platform = get_platform(platform)
-    distance, det_angle, em_angle = pair_geometry(rel_position, rel_heading, platform)
-    g = np.asarray(platform.ir_model.gain(distance, det_angle, em_angle), dtype=float)
+    distance, cos_det, cos_em = pair_cosines(rel_position, rel_heading, platform)
+    g = np.asarray(platform.ir_model.gain_from_cos(distance, cos_det, cos_em), dtype=float)
     centre = np.hypot(*np.asarray(rel_position, dtype=float).reshape(-1, 2).T)
     return g * (centre <= platform.ir_range)[:, None, None]
 
@@ -122,9 +153,12 @@ def line_of_sight(
     tree: cKDTree | None = None,
 ) -> np.ndarray:
     """True where the segment between centres ``positions[i]`` and ``positions[j]`` crosses no third
-    robot's disc (open disc of ``radius`` m around every other centre). Vectorised over pairs: the
-    robots near each segment come from one KD-tree ball query around the segment midpoints (radius
-    half-length + ``radius``), flattened to (pair, candidate) arrays.
+    robot's disc (open disc of ``radius`` m around every other centre).
+
+    Vectorised over pairs without Python lists: a robot k within ``radius`` of the segment lies within
+    ``|ij| / 2 + radius`` of the nearer endpoint, so the candidates are the neighbours of i and of j
+    within that distance, gathered from one KD-tree ``query_pairs`` in CSR form and tested as flat
+    (pair, candidate) arrays.
 
     Returns: (P,) bool mask.
     """
@@ -137,26 +171,33 @@ def line_of_sight(
     if tree is None:
         tree = cKDTree(positions)
     a = positions[i]
-    b = positions[j]
-    seg = b - a
-    mid = 0.5 * (a + b)
-    half = 0.5 * np.hypot(seg[:, 0], seg[:, 1])
-    near = tree.query_ball_point(mid, half + radius, return_sorted=False)
-    counts = np.fromiter(map(len, near), dtype=np.intp, count=P)
-    total = int(counts.sum())
-    cand = np.fromiter(chain.from_iterable(near), dtype=np.intp, count=total)
-    pair = np.repeat(np.arange(P), counts)
-    keep = (cand != i[pair]) & (cand != j[pair])
-    cand, pair = cand[keep], pair[keep]
-    c = positions[cand]
-    ap = c - a[pair]
-    sp = seg[pair]
-    L2 = np.einsum("ij,ij->i", sp, sp)
-    t = np.clip(np.einsum("ij,ij->i", ap, sp) / np.where(L2 > 0, L2, 1.0), 0.0, 1.0)
-    closest = a[pair] + t[:, None] * sp
-    d2 = np.einsum("ij,ij->i", c - closest, c - closest)
+    seg = positions[j] - a
+    length = np.hypot(seg[:, 0], seg[:, 1])
+    reach = 0.5 * float(length.max()) + radius
+    near = tree.query_pairs(reach, output_type="ndarray")
+    if near.shape[0] == 0:
+        return np.ones(P, dtype=bool)
+    src = np.concatenate([near[:, 0], near[:, 1]])
+    dst = np.concatenate([near[:, 1], near[:, 0]])
+    order = np.argsort(src, kind="stable")
+    dst = dst[order]
+    counts = np.bincount(src, minlength=positions.shape[0])
+    starts = np.cumsum(counts) - counts
     blocked = np.zeros(P, dtype=bool)
-    blocked[pair[d2 < radius * radius]] = True
+    L2 = np.where(length > 0, length * length, 1.0)
+    for end in (i, j):  # two vectorised passes: neighbours of i, then of j
+        c = counts[end]
+        pair = np.repeat(np.arange(P), c)
+        offset = np.arange(int(c.sum())) - np.repeat(starts[end] * 0 + np.cumsum(c) - c, c)
+        cand = dst[np.repeat(starts[end], c) + offset]
+        keep = (cand != i[pair]) & (cand != j[pair])
+        cand, pair = cand[keep], pair[keep]
+        ap = positions[cand] - a[pair]
+        sp = seg[pair]
+        t = np.clip((ap[:, 0] * sp[:, 0] + ap[:, 1] * sp[:, 1]) / L2[pair], 0.0, 1.0)
+        rx_ = ap[:, 0] - t * sp[:, 0]
+        ry_ = ap[:, 1] - t * sp[:, 1]
+        blocked[pair[rx_ * rx_ + ry_ * ry_ < radius * radius]] = True
     return ~blocked
 
 

@@ -109,6 +109,12 @@ class DropletIR:
             * self.amplitude(100.0 * np.asarray(distance_m, dtype=float))
         )
 
+    def gain_from_cos(self, distance_m: Any, cos_detector: Any, cos_emitter: Any) -> np.ndarray:
+        """:meth:`gain` from the cosines of the (symmetric) angles, as the IR layer computes them."""
+        a = np.arccos(np.clip(cos_detector, -1.0, 1.0))
+        b = np.arccos(np.clip(cos_emitter, -1.0, 1.0))
+        return self.gain(distance_m, a, b)
+
     def __repr__(self) -> str:
         return "DropletIR()"
 
@@ -175,6 +181,20 @@ class EpuckIR:
             * self.sensor(detector_angle)
         )
 
+    def gain_from_cos(self, distance_m: Any, cos_detector: Any, cos_emitter: Any) -> np.ndarray:
+        """:meth:`gain` from the angles' cosines: ``max(cos, 0)^7`` and ``max(cos, 0)^3`` are h_e and h_d
+        [T20 Eqs. (27),(24)] (|a| <= pi/2 exactly where cos a >= 0), without trigonometry."""
+        ce = np.asarray(cos_emitter, dtype=float)
+        cd = np.asarray(cos_detector, dtype=float)
+        d = np.asarray(distance_m, dtype=float)
+        ce, cd, d = np.broadcast_arrays(ce, cd, d)
+        lit = (ce > 0.0) & (cd > 0.0)  # the power law is evaluated only where light arrives
+        out = np.zeros(ce.shape)
+        e, c = ce[lit], cd[lit]
+        e2 = e * e
+        out[lit] = (e2 * e2 * e2 * e) * (c * c * c) * self.amplitude(100.0 * d[lit])
+        return out
+
     def __repr__(self) -> str:
         return "EpuckIR()"
 
@@ -221,6 +241,13 @@ class RoneIR:
         """Binary reception (1.0 / 0.0); distance_m in metres."""
         inside = np.asarray(distance_m, dtype=float) <= self.max_range
         return self.sensor(detector_angle) * self.emitter(emitter_angle) * inside
+
+    def gain_from_cos(self, distance_m: Any, cos_detector: Any, cos_emitter: Any) -> np.ndarray:
+        """:meth:`gain` from the angles' cosines (inside the arc iff cos >= cos(half arc))."""
+        inside = np.asarray(distance_m, dtype=float) <= self.max_range
+        heard = np.asarray(cos_detector) >= np.cos(self.sensor_half_arc + self._eps)
+        seen = np.asarray(cos_emitter) >= np.cos(self.emitter_half_arc + self._eps)
+        return (heard & seen & inside).astype(float)
 
     def __repr__(self) -> str:
         return "RoneIR()"
