@@ -188,7 +188,7 @@ def line_of_sight(
     for end in (i, j):  # two vectorised passes: neighbours of i, then of j
         c = counts[end]
         pair = np.repeat(np.arange(P), c)
-        offset = np.arange(int(c.sum())) - np.repeat(starts[end] * 0 + np.cumsum(c) - c, c)
+        offset = np.arange(int(c.sum())) - np.repeat(np.cumsum(c) - c, c)
         cand = dst[np.repeat(starts[end], c) + offset]
         keep = (cand != i[pair]) & (cand != j[pair])
         cand, pair = cand[keep], pair[keep]
