@@ -55,7 +55,7 @@ DEFAULTS: dict[str, Any] = {
     "train": {
         "total_timesteps": 100_000,
         "n_envs": 2,  # env copies in the VecEnv
-        "torch_threads": 1,  # measured best on the 2-core box: benchmarks/bench_torch_threads.py
+        "torch_threads": 1,  # benchmarks/bench_torch_threads.py: 2 is <=5 % faster idle, 4-8x slower with a busy core
         "checkpoint_freq": 50_000,  # robot-steps between checkpoints (0 = only the final model)
         "progress_bar": True,
     },
