@@ -169,9 +169,13 @@ def test_sorted_following_keeps_robots_behind_their_predecessor():
 
 
 @pytest.mark.skipif(not _full_available(), reason="sensing='full' not integrated yet")
-@pytest.mark.parametrize("name, task", [(v, k) for k, v in TASK_SCRIPTED.items()] + [("random_walk", "aggregation")])
-def test_scripted_runs_with_full_sensing(name, task):
-    env = make_env(task, sensing="full", max_cycles=10)
+@pytest.mark.parametrize(
+    "name, task, kwargs",
+    [(v, k, {}) for k, v in TASK_SCRIPTED.items()]
+    + [("random_walk", "aggregation", {}), ("sorted_following", "flocking", {"n_robots": 5, "message_bits": 3})],
+)
+def test_scripted_runs_with_full_sensing(name, task, kwargs):
+    env = make_env(task, sensing="full", max_cycles=10, **kwargs)
     metrics = run_episode(env, make_scripted(name, env), 0, task)
     assert all(np.isfinite(v) for v in metrics.values())
 
@@ -179,3 +183,21 @@ def test_scripted_runs_with_full_sensing(name, task):
 def test_registry_complete():
     assert set(TASK_SCRIPTED.values()) <= set(SCRIPTED)
     assert {"random_walk", "sorted_following"} <= set(SCRIPTED)
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(not _full_available(), reason="sensing='full' not integrated yet")
+@pytest.mark.parametrize("task", list(TASK_SCRIPTED))
+def test_scripted_beats_random_with_full_sensing(task, request):
+    """~40 s: runs only when selected with ``-m slow``."""
+    if "slow" not in (request.config.getoption("markexpr") or ""):
+        pytest.skip("slow; run with -m slow")
+    from agents.evaluation import PRIMARY_METRIC
+
+    kw = {"sensing": "full", "max_cycles": 200}
+    metric, sign = PRIMARY_METRIC[task]
+    seeds = list(range(10))
+    scripted = evaluate(task, kw, lambda env: make_scripted(TASK_SCRIPTED[task], env), seeds)[metric]
+    random = evaluate(task, kw, random_factory, seeds)[metric]
+    diff = sign * (scripted - random)
+    assert diff.mean() > 0 and stats.ttest_1samp(diff, 0.0, alternative="greater").pvalue < 0.01, (scripted, random)
