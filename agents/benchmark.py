@@ -6,6 +6,8 @@ For each task the task's scripted controller (:data:`agents.scripted.TASK_SCRIPT
 random walk and uniform random actions run on the same seeds ``0 .. N-1``; on flocking also the sorted
 following controller ([L] Alg. 6, with 4 message bits for the ids). Prints one table per task:
 ``mean [95 % t-interval]`` per metric (see :mod:`agents.evaluation` for the reductions) and the wall time.
+Cost: ~5 ms per env step with ``sensing="full"`` (10 robots), so ``--episodes 20 --max-cycles 300`` takes
+~4.5 min on 2 cores and the defaults (30 episodes x 500 steps) ~15 min; ``--sensing ideal`` is ~8x faster.
 """
 
 from __future__ import annotations

@@ -33,6 +33,7 @@ __all__ = [
     "write_csv",
     "markdown_table",
     "RESULT_COLUMNS",
+    "random_factory",
 ]
 
 #: task name -> module path of its parallel env
