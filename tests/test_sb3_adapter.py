@@ -144,3 +144,16 @@ def test_short_ppo_run_save_reload_same_actions(tmp_path):
     env = vec.envs[0]
     parts = {k: v[env.agent_robots] for k, v in env.batched_observations().items()}
     np.testing.assert_allclose(SB3Policy(loaded, env.platform, env.layout).act_batch(parts), np.clip(a2[vec.rows(0)], -1, 1))
+
+
+def test_adapter_with_full_sensing():
+    try:
+        vec = SwarmVecEnv(aggregation_v0.parallel_env, 1, {"sensing": "full", "n_robots": 3, "max_cycles": 3})
+    except NotImplementedError:
+        pytest.skip("sensing='full' not integrated yet")
+    vec.seed(0)
+    obs = vec.reset()
+    assert obs.shape == (3,) + vec.observation_space.shape and np.all(np.isfinite(obs))
+    for _ in range(3):
+        obs, rewards, dones, infos = vec.step(np.zeros((3, 2), np.float32))
+    assert dones.all() and all(np.all(np.isfinite(i["terminal_observation"])) for i in infos)
