@@ -11,6 +11,16 @@ os.environ.setdefault("SDL_VIDEODRIVER", "dummy")
 os.environ.setdefault("PYGAME_HIDE_SUPPORT_PROMPT", "1")
 
 
+def pytest_collection_modifyitems(config, items):
+    """Tests marked ``slow`` run only when selected (``pytest -m slow``); the default run skips them."""
+    if "slow" in (config.getoption("markexpr") or ""):
+        return
+    skip = pytest.mark.skip(reason="slow: run with `pytest -m slow`")
+    for item in items:
+        if "slow" in item.keywords:
+            item.add_marker(skip)
+
+
 def assert_tree_equal(a, b, path: str = "") -> None:
     """Recursively assert two nested dict/list/array structures are identical (NaN == NaN)."""
     if isinstance(a, dict):

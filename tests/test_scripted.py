@@ -14,14 +14,6 @@ from swarm_envs.env import DT
 SEEDS = list(range(5))
 
 
-def _full_available() -> bool:
-    try:
-        make_env("aggregation", sensing="full", n_robots=3).close()
-        return True
-    except NotImplementedError:
-        return False
-
-
 @pytest.mark.parametrize(
     "task, kwargs",
     [
@@ -168,7 +160,6 @@ def test_sorted_following_keeps_robots_behind_their_predecessor():
     assert np.all(follow < rand) and follow.mean() < 0.6 * rand.mean()
 
 
-@pytest.mark.skipif(not _full_available(), reason="sensing='full' not integrated yet")
 @pytest.mark.parametrize(
     "name, task, kwargs",
     [(v, k, {}) for k, v in TASK_SCRIPTED.items()]
@@ -186,12 +177,9 @@ def test_registry_complete():
 
 
 @pytest.mark.slow
-@pytest.mark.skipif(not _full_available(), reason="sensing='full' not integrated yet")
 @pytest.mark.parametrize("task", list(TASK_SCRIPTED))
-def test_scripted_beats_random_with_full_sensing(task, request):
-    """~40 s: runs only when selected with ``-m slow``."""
-    if "slow" not in (request.config.getoption("markexpr") or ""):
-        pytest.skip("slow; run with -m slow")
+def test_scripted_beats_random_with_full_sensing(task):
+    """~40 s: runs only when selected with ``-m slow`` (see tests/conftest.py)."""
     from agents.evaluation import PRIMARY_METRIC
 
     kw = {"sensing": "full", "max_cycles": 200}
