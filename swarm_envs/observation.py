@@ -21,6 +21,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from gymnasium import spaces
 
+from swarm_envs.geometry import wrap_angle
 from swarm_envs.world import N_BUMP_SECTORS
 
 __all__ = [
@@ -46,8 +47,7 @@ def relative_pose(
     distance = np.hypot(delta[:, 0], delta[:, 1])
     bearing = np.arctan2(delta[:, 1], delta[:, 0]) - headings[rx]
     heading = headings[tx] - headings[rx]
-    wrap = lambda a: np.mod(a + np.pi, 2 * np.pi) - np.pi  # noqa: E731
-    return distance, wrap(bearing), wrap(heading)
+    return distance, wrap_angle(bearing), wrap_angle(heading)
 
 
 def pack_nearest(

@@ -19,6 +19,7 @@ import numpy as np
 import pymunk
 from scipy.spatial import cKDTree
 
+from swarm_envs.geometry import wrap_angle
 from swarm_envs.platforms import Platform
 
 __all__ = ["Arena", "World", "spawn_positions", "wrap_angle", "N_BUMP_SECTORS"]
@@ -27,12 +28,6 @@ N_BUMP_SECTORS = 8  # bump sensor: one flag per 45-degree sector of the body (se
 _ROBOT, _WALL = 1, 2
 MOTOR_ACCELERATION = 50.0  # m/s^2: bounded motor force / mass; full speed within one physics sub-step
 MOTOR_ANGULAR_ACCELERATION = 2000.0  # rad/s^2
-
-
-def wrap_angle(angle: np.ndarray | float) -> np.ndarray:
-    """Wrap angles (rad) to (-pi, pi]."""
-    wrapped = np.mod(np.asarray(angle, dtype=float) + np.pi, 2.0 * np.pi) - np.pi
-    return np.where(wrapped == -np.pi, np.pi, wrapped)
 
 
 @dataclass(frozen=True)

@@ -23,14 +23,10 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial import cKDTree
 
+from swarm_envs.geometry import wrap_angle
 from swarm_envs.platforms import Platform, get_platform
 
 __all__ = ["IRLinks", "compute_links", "pair_geometry", "pair_cosines", "pair_gains", "line_of_sight", "wrap_angle"]
-
-
-def wrap_angle(a: np.ndarray | float) -> np.ndarray:
-    """Wrap angles (rad) to (-pi, pi]."""
-    return np.pi - np.mod(np.pi - np.asarray(a, dtype=float), 2.0 * np.pi)
 
 
 @dataclass

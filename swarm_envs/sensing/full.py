@@ -98,9 +98,7 @@ class FullSensing:
             rb = self.rb.step(links)
             neighbours = NeighbourReadings(rb.rx, rb.tx, rb.range, rb.bearing, rb.heading, rb.age.astype(float))
         else:
-            ok = sectors.valid
-            zeros = np.zeros(int(ok.sum()))
-            neighbours = NeighbourReadings(sectors.rx[ok], sectors.tx[ok], zeros, sectors.bearing[ok], sectors.heading[ok], zeros.copy())
+            neighbours = _valid_only(sectors)
         bearing_readings = neighbours if self.bearing_source == "range_bearing" else _valid_only(sectors)
 
         # SwarmCom: application payloads and the bearing exchange share the channel
@@ -170,6 +168,7 @@ class FullSensing:
 
 
 def _valid_only(sectors) -> NeighbourReadings:
+    """Sector readings with a bearing, as neighbour readings without range (range 0, age 0)."""
     ok = sectors.valid
     zeros = np.zeros(int(ok.sum()))
     return NeighbourReadings(sectors.rx[ok], sectors.tx[ok], zeros, sectors.bearing[ok], sectors.heading[ok], zeros.copy())
