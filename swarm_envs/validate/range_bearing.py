@@ -1,0 +1,265 @@
+"""Range & bearing error sweep like [F14]'s gantry (Sec. V, Figs. 5-7), printed beside the paper's claims.
+
+``python -m swarm_envs.validate range-bearing [--json] [--noise S] [--platform P] [--out DIR]``
+
+Two robots (RX at the origin facing +x, TX at centre distance R, bearing b, relative heading h):
+R from one radius of gap (6.6 cm) to 4.5 diameters (~20 cm) on the Droplet (scaled by the diameter on
+other platforms), every bearing and heading on a grid, noisy measurement with power selection
+(:func:`swarm_envs.sensing.range_bearing.measure`) then the [F14] estimator. Errors are estimate - truth
+(range in cm, angles wrapped, in degrees). The paper gives its results as plots; the claims compared
+are those of its text (SPEC 3.4):
+
+- range error bounded within one robot diameter (|mean| + std < diameter) and roughly constant with
+  distance up to 4.5 diameters [F14 Sec. V, Fig. 5];
+- bearing error a few degrees [Fig. 6];
+- heading error larger than the bearing error, periodic with the 60-degree channel spacing [Fig. 7];
+- usable down to one robot radius of gap.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import time
+
+import numpy as np
+
+from swarm_envs.ir.layer import wrap_angle
+from swarm_envs.platforms import get_platform
+from swarm_envs.sensing.range_bearing import brightness, estimate, measure
+
+DROPLET_DIAMETER_CM = 4.4
+
+
+def _sweep(platform, R_cm, bearings, headings, sigma, repeats, rng):
+    """Errors for every (distance, bearing, heading, repeat) on the grid. Returns dict of arrays."""
+    B, H = np.meshgrid(bearings, headings, indexing="ij")
+    B, H = B.ravel(), H.ravel()
+    out = {k: [] for k in ("R", "b", "h", "er", "eb", "eh", "p")}
+    for R in R_cm:
+        rel = (R / 100.0) * np.stack([np.cos(B), np.sin(B)], -1)
+        lam = brightness(rel, H, platform)
+        lam = np.repeat(lam, repeats, axis=0)
+        meas, p = measure(lam, rng, sigma, platform)
+        Re, be, he = estimate(meas, platform, power=p)
+        b = np.repeat(B, repeats)
+        h = np.repeat(H, repeats)
+        out["R"].append(np.full(b.size, R))
+        out["b"].append(b)
+        out["h"].append(h)
+        out["er"].append(Re * 100.0 - R)
+        out["eb"].append(np.degrees(wrap_angle(be - b)))
+        out["eh"].append(np.degrees(wrap_angle(he - h)))
+        out["p"].append(p)
+    return {k: np.concatenate(v) for k, v in out.items()}
+
+
+def _binned(x, y, edges):
+    idx = np.clip(np.digitize(x, edges) - 1, 0, len(edges) - 2)
+    rows = []
+    for k in range(len(edges) - 1):
+        v = y[idx == k]
+        v = v[np.isfinite(v)]
+        rows.append((float(v.mean()) if v.size else np.nan, float(v.std()) if v.size else np.nan,
+                     float(np.abs(v).mean()) if v.size else np.nan, int(v.size)))
+    return rows
+
+
+def _harmonic(values, period_k=6):
+    """Fourier analysis of a curve sampled uniformly over 360 degrees: the dominant non-constant harmonic
+    k (k = 6: 60-degree period) and the share of the non-constant power in harmonics that are multiples
+    of ``period_k`` (1.0 = the curve repeats exactly every 360/period_k degrees)."""
+    v = np.asarray(values, dtype=float)
+    v = v - np.nanmean(v)
+    v = np.nan_to_num(v)
+    spec = np.abs(np.fft.rfft(v)) ** 2
+    spec[0] = 0.0
+    k = int(np.argmax(spec))
+    total = spec.sum()
+    share = float(spec[period_k::period_k].sum() / total) if total > 0 else 0.0
+    return k, share
+
+
+def run(platform_name="droplet", sigma=None, repeats=2, seed=0, bearing_step=3.0, heading_step=5.0):
+    platform = get_platform(platform_name)
+    model = platform.ir_model
+    sigma = float(model.default_noise_sigma if sigma is None else sigma)
+    scale = platform.diameter * 100.0 / DROPLET_DIAMETER_CM
+    R_cm = np.round(np.linspace(6.6, 20.0, 14) * scale, 2)
+    bearings = np.radians(np.arange(0.0, 360.0, bearing_step))
+    headings = np.radians(np.arange(0.0, 360.0, heading_step))
+    rng = np.random.default_rng(seed)
+    t0 = time.perf_counter()
+    d = _sweep(platform, R_cm, bearings, headings, sigma, repeats, rng)
+    diam = platform.diameter * 100.0
+
+    # per distance
+    per_dist = []
+    for R in R_cm:
+        m = d["R"] == R
+        er = d["er"][m]
+        ok = np.isfinite(er)
+        e = er[ok]
+        eb, eh = d["eb"][m][ok], d["eh"][m][ok]
+        per_dist.append({
+            "R_cm": float(R), "n": int(m.sum()), "no_reading": float(1 - ok.mean()),
+            "power_median": float(np.median(d["p"][m])),
+            "range_mean": float(e.mean()), "range_std": float(e.std()),
+            "range_bound": float(abs(e.mean()) + e.std()),
+            "bearing_mean": float(eb.mean()), "bearing_std": float(eb.std()),
+            "heading_mean": float(eh.mean()), "heading_std": float(eh.std()),
+        })
+    ok = np.isfinite(d["er"])
+    b_edges = np.radians(np.arange(0.0, 360.0 + 1e-9, 15.0))
+    by_bearing = _binned(d["b"][ok], d["eb"][ok], b_edges)
+    by_heading = _binned(d["h"][ok], d["eh"][ok], b_edges)
+    # Fig. 7-like gantry curve: TX rotating on the spot at bearing 0, every distance
+    fine = headings
+    m0 = ok & (np.abs(wrap_angle(d["b"])) < 1e-9)
+    h_edges = np.append(headings - np.radians(heading_step) / 2, 2 * np.pi - np.radians(heading_step) / 2)
+    by_heading_b0 = _binned(d["h"][m0], d["eh"][m0], h_edges)
+    k_h, share_h = _harmonic([r[0] for r in by_heading_b0])
+    k_habs, share_habs = _harmonic([r[2] for r in _binned(d["h"][ok], d["eh"][ok], np.append(headings, 2 * np.pi))])
+    k_b, share_b = _harmonic([r[0] for r in _binned(d["b"][ok], d["eb"][ok], np.append(bearings, 2 * np.pi))])
+
+    eb_all, eh_all = d["eb"][ok], d["eh"][ok]
+    worst_bound = max(r["range_bound"] for r in per_dist)
+    means = [r["range_mean"] for r in per_dist]
+    claims = [
+        ("range |mean|+std < 1 diameter at every distance [Fig. 5]",
+         f"< {diam:.1f} cm", f"worst {worst_bound:.2f} cm", worst_bound < diam),
+        ("range error roughly constant with distance [Fig. 5]",
+         "no trend", f"mean spans {min(means):+.2f}..{max(means):+.2f} cm", max(means) - min(means) < 0.5 * diam),
+        ("bearing error a few degrees [Fig. 6] (ours: |mean|+std < 10)",
+         "a few deg", f"mean {eb_all.mean():+.2f}, std {eb_all.std():.2f}, |err| {np.abs(eb_all).mean():.2f} deg",
+         abs(eb_all.mean()) + eb_all.std() < 10.0),
+        ("heading error larger than bearing error [Fig. 7]",
+         "larger", f"std {eh_all.std():.2f} vs {eb_all.std():.2f} deg", eh_all.std() > eb_all.std()),
+        ("heading error periodic with 60-deg channel spacing [Fig. 7]",
+         "period 60 deg", f"{100 * share_h:.0f}% (TX turning at bearing 0) / {100 * share_habs:.0f}% (all, |err|) "
+         "of the curve's power repeats every 60 deg", min(share_h, share_habs) > 0.8),
+        ("usable down to one radius of gap (R = 1.5 diameters) [Sec. V]",
+         "works", f"no-reading {100 * per_dist[0]['no_reading']:.1f}%, |mean|+std {per_dist[0]['range_bound']:.2f} cm",
+         per_dist[0]["no_reading"] < 0.01 and per_dist[0]["range_bound"] < diam),
+    ]
+    return {
+        "platform": platform.name, "sigma_counts": sigma, "repeats": repeats, "seed": seed,
+        "n_measurements": int(d["er"].size), "seconds": time.perf_counter() - t0,
+        "per_distance": per_dist,
+        "by_bearing_deg": [{"bin": float(np.degrees(b_edges[k])), "mean": r[0], "std": r[1], "abs": r[2], "n": r[3]}
+                           for k, r in enumerate(by_bearing)],
+        "by_heading_deg": [{"bin": float(np.degrees(b_edges[k])), "mean": r[0], "std": r[1], "abs": r[2], "n": r[3]}
+                           for k, r in enumerate(by_heading)],
+        "heading_at_bearing0": [{"heading": float(np.degrees(fine[k])), "mean": r[0], "std": r[1], "n": r[3]}
+                                for k, r in enumerate(by_heading_b0)],
+        "harmonics": {"heading_mean_at_bearing0": [k_h, share_h], "heading_abs_all": [k_habs, share_habs],
+                      "bearing_mean": [k_b, share_b]},
+        "claims": [{"claim": c, "paper": p, "ours": o, "ok": bool(v)} for c, p, o, v in claims],
+    }
+
+
+def _sensitivity(platform_name, sigmas, seed):
+    rows = []
+    for s in sigmas:
+        r = run(platform_name, s, repeats=1, seed=seed, bearing_step=6.0, heading_step=10.0)
+        rows.append({
+            "sigma": s,
+            "worst_range_bound": max(x["range_bound"] for x in r["per_distance"]),
+            "bearing_std": float(np.mean([x["bearing_std"] for x in r["per_distance"]])),
+            "heading_std": float(np.mean([x["heading_std"] for x in r["per_distance"]])),
+            "no_reading": float(np.mean([x["no_reading"] for x in r["per_distance"]])),
+        })
+    return rows
+
+
+def _plots(res, out_dir):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    os.makedirs(out_dir, exist_ok=True)
+    name = res["platform"]
+    paths = []
+    pd = res["per_distance"]
+    fig, ax = plt.subplots(figsize=(6, 4))
+    ax.errorbar([r["R_cm"] for r in pd], [r["range_mean"] for r in pd], yerr=[r["range_std"] for r in pd],
+                fmt="o-", capsize=3, label="ours (mean +- std)")
+    diam = get_platform(name).diameter * 100
+    ax.axhline(diam, color="r", ls="--", lw=1, label="1 diameter (paper's bound)")
+    ax.axhline(-diam, color="r", ls="--", lw=1)
+    ax.set_xlabel("actual range R (cm)")
+    ax.set_ylabel("range error (cm)")
+    ax.set_title(f"{name}: range error vs range (cf. [F14] Fig. 5), sigma={res['sigma_counts']:.2g}")
+    ax.legend()
+    fig.tight_layout()
+    paths.append(os.path.join(out_dir, f"range_bearing_{name}_range_error.png"))
+    fig.savefig(paths[-1], dpi=100)
+    plt.close(fig)
+    for key, label, fig_no in (("by_bearing_deg", "bearing", 6), ("by_heading_deg", "heading", 7)):
+        rows = res[key]
+        fig, ax = plt.subplots(figsize=(6, 4))
+        ax.errorbar([r["bin"] + 7.5 for r in rows], [r["mean"] for r in rows], yerr=[r["std"] for r in rows],
+                    fmt="o-", capsize=3, label="all distances and orientations")
+        if label == "heading":
+            hb = res["heading_at_bearing0"]
+            ax.plot([r["heading"] for r in hb], [r["mean"] for r in hb], "-", lw=1, label="TX turning at bearing 0")
+        ax.axhline(0, color="k", lw=0.5)
+        ax.set_xlabel(f"actual {label} (deg)")
+        ax.set_ylabel(f"{label} error (deg)")
+        ax.set_title(f"{name}: {label} error vs {label} (cf. [F14] Fig. {fig_no})")
+        ax.legend(fontsize=8)
+        fig.tight_layout()
+        paths.append(os.path.join(out_dir, f"range_bearing_{name}_{label}_error.png"))
+        fig.savefig(paths[-1], dpi=100)
+        plt.close(fig)
+    return paths
+
+
+def main(argv: list[str]) -> int:
+    ap = argparse.ArgumentParser(prog="python -m swarm_envs.validate range-bearing", description=__doc__.split("\n")[0])
+    ap.add_argument("--json", action="store_true", help="print the results as JSON")
+    ap.add_argument("--noise", type=float, default=None, help="ADC noise sigma in counts (default: the model's)")
+    ap.add_argument("--platform", default="droplet", choices=["droplet", "epuck"])
+    ap.add_argument("--out", default="validation_output", help="directory for the PNG plots")
+    ap.add_argument("--repeats", type=int, default=2, help="noisy measurements per grid point")
+    ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--no-plots", action="store_true")
+    args = ap.parse_args(argv)
+
+    res = run(args.platform, args.noise, args.repeats, args.seed)
+    res["sigma_sensitivity"] = _sensitivity(args.platform, [0.0, 1.0, 2.0, 4.0, 8.0], args.seed + 1)
+    if not args.no_plots:
+        res["plots"] = _plots(res, args.out)
+    if args.json:
+        print(json.dumps(res, indent=1))
+        return 0
+
+    print(f"Range & bearing sweep [F14 Sec. V]: platform={res['platform']}, noise sigma={res['sigma_counts']:.3g} "
+          f"counts, {res['n_measurements']} measurements ({res['seconds']:.1f} s)")
+    print("\nclaims                                                        paper            ours")
+    for c in res["claims"]:
+        print(f"  [{'ok ' if c['ok'] else 'NO '}] {c['claim']:57s} {c['paper']:15s}  {c['ours']}")
+    print("\nper distance (errors = estimate - truth; range in cm, angles in deg)")
+    print("   R cm  no-read  p_med   range mean   std  |m|+std   bearing mean   std   heading mean   std")
+    for r in res["per_distance"]:
+        print(f"  {r['R_cm']:5.1f}  {100 * r['no_reading']:5.1f}%  {r['power_median']:6.4f}  {r['range_mean']:+9.2f} "
+              f"{r['range_std']:6.2f}  {r['range_bound']:6.2f}   {r['bearing_mean']:+10.2f} {r['bearing_std']:6.2f}"
+              f"   {r['heading_mean']:+10.2f} {r['heading_std']:6.2f}")
+    print("\nper 15-deg bin      bearing error (by actual bearing)   heading error (by actual heading)")
+    for rb, rh in zip(res["by_bearing_deg"], res["by_heading_deg"]):
+        print(f"  {rb['bin']:5.0f}-{rb['bin'] + 15:3.0f}      {rb['mean']:+7.2f} +- {rb['std']:5.2f} (|e| {rb['abs']:5.2f})"
+              f"          {rh['mean']:+7.2f} +- {rh['std']:5.2f} (|e| {rh['abs']:5.2f})")
+    h = res["harmonics"]
+    print(f"\nFourier: dominant harmonic k over 360 deg (share of power in multiples of 6, i.e. repeating every 60 deg):"
+          f"\n  heading error at bearing 0: k={h['heading_mean_at_bearing0'][0]}"
+          f" ({100 * h['heading_mean_at_bearing0'][1]:.0f}%), |heading error| all: k={h['heading_abs_all'][0]}"
+          f" ({100 * h['heading_abs_all'][1]:.0f}%), bearing error: k={h['bearing_mean'][0]} ({100 * h['bearing_mean'][1]:.0f}%)")
+    print("\nnoise sensitivity (sigma in counts)   worst |mean|+std (cm)   bearing std   heading std   no-reading")
+    for r in res["sigma_sensitivity"]:
+        print(f"  {r['sigma']:5.1f}                              {r['worst_range_bound']:7.2f}           "
+              f"{r['bearing_std']:7.2f}      {r['heading_std']:7.2f}     {100 * r['no_reading']:5.1f}%")
+    if "plots" in res:
+        print("\nplots: " + ", ".join(res["plots"]))
+    return 0
