@@ -73,3 +73,27 @@ def test_ground_truth_only_in_infos():
         assert set(gt) == {"position", "heading", "velocity"}
         assert gt["position"].shape == (2,) and gt["velocity"].shape == (2,)
         assert isinstance(obs[agent], dict) and "ground_truth" not in obs[agent]
+
+
+def test_human_render_mode_opens_a_window(monkeypatch):
+    """render_mode="human" draws into a pygame display window (SDL's dummy video driver here)."""
+    monkeypatch.setenv("SDL_VIDEODRIVER", "dummy")
+    env = swarm_envs.make("swarm_envs/Flocking-v0", n_robots=3, sensing="ideal", render_mode="human")
+    env.reset(seed=0)
+    import pygame
+
+    assert pygame.display.get_surface() is not None
+    assert env.render() is None
+    env.close()
+    assert not pygame.display.get_init()
+
+
+def test_demo_writes_a_gif(tmp_path):
+    import imageio.v2 as imageio
+
+    from swarm_envs.demo import main
+
+    out = tmp_path / "demo.gif"
+    assert main(["--task", "aggregation", "--steps", "5", "--out", str(out), "--n-robots", "4"]) == 0
+    frames = imageio.mimread(out)
+    assert len(frames) == 6 and frames[0].shape[:2] == (480, 480)
