@@ -47,6 +47,7 @@ COMMON_DEFAULTS: dict[str, Any] = {
     "rb_schedule": "contention",
     "rb_max_age": 10,
     "rb_noise": None,  # ADC counts; None = the platform model's documented default
+    "rb_near_model": False,  # Droplet: firmware low-power fit instead of the power ladder when saturated
     # bearing-only sensing and scale-free coordinates [L]
     "bearing_source": None,  # None = "sectors" on rone, "range_bearing" elsewhere
     "exchange": "network",
@@ -90,6 +91,10 @@ def _validate(cfg: dict[str, Any]) -> None:
     size = cfg["arena_size"]
     if size is not None and (isinstance(size, bool) or not isinstance(size, numbers.Real) or not np.isfinite(size) or size <= 0):
         raise ValueError(f"arena_size must be a positive number of metres or None, got {size!r}")
+    if not isinstance(cfg["rb_near_model"], bool):
+        raise ValueError(f"rb_near_model must be True or False, got {cfg['rb_near_model']!r}")
+    if cfg["rb_near_model"] and get_platform(cfg["platform"]).name != "droplet":
+        raise ValueError("rb_near_model=True is the Droplet firmware's low-power fit; use platform='droplet'")
     if not isinstance(cfg["flatten"], bool):
         raise ValueError(f"flatten must be True or False, got {cfg['flatten']!r}")
     threshold = cfg["relative_threshold"]

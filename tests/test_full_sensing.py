@@ -107,3 +107,12 @@ def test_messages_travel_over_the_channel():
     exact = np.mean([np.array_equal(np.array(g) > 0.5, pattern > 0) for g in got])
     assert exact > 0.7
     assert "tx_started" in infos["robot_0"]["sensing"]
+
+
+def test_droplet_near_model_in_the_env():
+    env, (r, b, h, r_true, b_true, h_true) = collect("droplet", steps=10, rb_schedule="every_step", rb_near_model=True)
+    near = r_true < 0.20
+    err = r[near] - r_true[near]
+    assert near.sum() > 20 and abs(err.mean()) + err.std() < env.platform.diameter
+    with pytest.raises(ValueError, match="rb_near_model"):
+        swarm_envs.make("swarm_envs/Aggregation-v0", platform="epuck", rb_near_model=True)

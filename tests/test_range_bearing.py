@@ -6,7 +6,7 @@ import pytest
 from swarm_envs.geometry import wrap_angle
 from swarm_envs.ir.layer import compute_links
 from swarm_envs.platforms import get_platform
-from swarm_envs.sensing.range_bearing import POWER_LADDER, RangeBearingSensor, brightness, estimate, measure
+from swarm_envs.sensing.range_bearing import POWER_LADDER, RangeBearingSensor, brightness, estimate, measure, read
 
 DROPLET = get_platform("droplet")
 
@@ -182,3 +182,28 @@ def test_sensor_is_deterministic_for_a_seed():
 def test_rone_has_no_range_model():
     with pytest.raises(ValueError, match="no range & bearing"):
         estimate(np.ones((1, 8, 8)), get_platform("rone"))
+
+
+def test_low_power_near_model_matches_the_firmware_fit_and_inverts():
+    from swarm_envs.ir.models import DropletLowPowerIR
+
+    low = DropletLowPowerIR(DROPLET)
+    R = np.linspace(5.0, 14.0, 10)  # centre distance (cm); facing emitter-sensor distance r = R - 2 rho
+    np.testing.assert_allclose(low.amplitude(R - 4.0), 1100.0 / (R - 4.0) ** 2 + 12.5)
+    x = low.amplitude(np.linspace(1.0, 30.0, 20))
+    np.testing.assert_allclose(low.amplitude_inverse(x), np.linspace(1.0, 30.0, 20))
+    assert np.isinf(low.amplitude_inverse(12.0))
+
+
+def test_near_model_option_reads_close_pairs_without_the_ladder():
+    rng = np.random.default_rng(6)
+    pos, theta, phi, R = random_geometry(rng, 800, 0.066, 0.12)
+    lam = brightness(pos, phi, DROPLET)
+    est_R, est_theta, _, p = read(lam, pos, phi, rng, 2.0, DROPLET, near_model=True)
+    assert np.isnan(p).mean() > 0.9  # nearly all saturate at full power and use the low-power fit
+    err = est_R - R
+    assert np.isfinite(est_R).all()
+    assert abs(err.mean()) + err.std() < DROPLET.diameter
+    assert np.degrees(np.abs(wrap_angle(est_theta - theta))).mean() < 10.0
+    with pytest.raises(ValueError, match="low-power"):
+        RangeBearingSensor("epuck", 2, rng, near_model=True)

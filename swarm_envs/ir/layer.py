@@ -126,17 +126,21 @@ def pair_cosines(
     return distance, cos_detector, cos_emitter
 
 
-def pair_gains(rel_position: np.ndarray, rel_heading: np.ndarray, platform: Platform | str) -> np.ndarray:
+def pair_gains(
+    rel_position: np.ndarray, rel_heading: np.ndarray, platform: Platform | str, model: object | None = None
+) -> np.ndarray:
     """Noiseless gains (P, n_detectors, n_emitters) of the platform's IR model for P pairs.
 
     Equal to ``model.gain(*pair_geometry(...))``, computed from cosines (:func:`pair_cosines`,
     ``model.gain_from_cos``) for speed. Line of sight is assumed (occlusion is :func:`line_of_sight`'s
     job). Pairs whose centre distance exceeds ``platform.ir_range`` get zero gain (the platform's
-    "no infrared beyond" cut-off).
+    "no infrared beyond" cut-off). ``model`` overrides the platform's IR model (e.g. the Droplet's
+    low-power emitters, :class:`swarm_envs.ir.models.DropletLowPowerIR`).
     """
     platform = get_platform(platform)
+    model = platform.ir_model if model is None else model
     distance, cos_det, cos_em = pair_cosines(rel_position, rel_heading, platform)
-    g = np.asarray(platform.ir_model.gain_from_cos(distance, cos_det, cos_em), dtype=float)
+    g = np.asarray(model.gain_from_cos(distance, cos_det, cos_em), dtype=float)
     centre = np.hypot(*np.asarray(rel_position, dtype=float).reshape(-1, 2).T)
     return g * (centre <= platform.ir_range)[:, None, None]
 

@@ -22,7 +22,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["DropletIR", "EpuckIR", "RoneIR", "model_for"]
+__all__ = ["DropletIR", "DropletLowPowerIR", "EpuckIR", "RoneIR", "model_for"]
 
 
 class DropletIR:
@@ -117,6 +117,36 @@ class DropletIR:
 
     def __repr__(self) -> str:
         return "DropletIR()"
+
+
+class DropletLowPowerIR(DropletIR):
+    """The Droplet emitters fired at the firmware's low power setting 250, for near range [F14 Sec. IV].
+
+    The firmware's near fit is ``A(R) = 1100 / (R - 4)^2 + 12.5`` counts with R the centre distance in cm
+    (SPEC 3.1). With both channels at rho = 2 cm, R - 4 = R - 2 rho is the facing emitter-sensor
+    distance r, so in this module's convention (r = emitter-sensor distance) ``A_low(r) = 1100 / r^2 +
+    12.5``; inverse ``r = sqrt(1100 / (x - 12.5))`` for x > 12.5 counts (x <= 12.5 reads as far away).
+    Directivities S and E are the full-power ones. Used by the range & bearing sensor's
+    ``near_model=True`` option instead of the power ladder when the full-power matrix saturates.
+    """
+
+    name = "droplet_low_power"
+    low_coeff = 1100.0
+    low_offset = 12.5
+
+    def amplitude(self, r_cm: Any) -> np.ndarray:
+        """Low-power amplitude (counts): ``1100 / r^2 + 12.5``, r = emitter-sensor distance (cm)."""
+        r = np.maximum(np.asarray(r_cm, dtype=float), 1e-9)
+        return self.low_coeff / r**2 + self.low_offset
+
+    def amplitude_inverse(self, x: Any) -> np.ndarray:
+        """Inverse of :meth:`amplitude` (cm); x <= 12.5 counts gives infinity."""
+        x = np.asarray(x, dtype=float)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return np.where(x > self.low_offset, np.sqrt(self.low_coeff / np.maximum(x - self.low_offset, 1e-300)), np.inf)
+
+    def __repr__(self) -> str:
+        return "DropletLowPowerIR()"
 
 
 class EpuckIR:

@@ -72,7 +72,13 @@ class FullSensing:
         rb_rng, net_rng, ex_rng = rng.spawn(3)
         if self.has_range:
             self.rb = RangeBearingSensor(
-                self.platform, self.n, rb_rng, noise_sigma=cfg["rb_noise"], schedule=cfg["rb_schedule"], max_age=cfg["rb_max_age"]
+                self.platform,
+                self.n,
+                rb_rng,
+                noise_sigma=cfg["rb_noise"],
+                schedule=cfg["rb_schedule"],
+                max_age=cfg["rb_max_age"],
+                near_model=cfg["rb_near_model"],
             )
         self.network = Network(
             self.platform,

@@ -38,6 +38,7 @@ __all__ = [
     "brightness",
     "measure",
     "estimate",
+    "read",
     "RangeBearingReadings",
     "RangeBearingSensor",
 ]
@@ -130,6 +131,7 @@ def estimate(
     platform: Platform | str = "droplet",
     power: np.ndarray | None = None,
     refine: int = 1,
+    model: object | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Range, bearing and heading from brightness matrices [F14 Sec. II], vectorised over P pairs.
 
@@ -158,12 +160,14 @@ def estimate(
         platform: platform of both robots (geometry, sensor/emitter/amplitude models).
         power: optional (P,) power factors of the readings; brightness is divided by it.
         refine: number of refinement passes of step 5 (0 returns R0).
+        model: IR model whose S, E, A^-1 invert the matrix (default the platform's; the Droplet's
+            low-power near model is :class:`swarm_envs.ir.models.DropletLowPowerIR`).
 
     Returns:
         ranges (m), bearings (rad), headings (rad), each (P,), NaN where there is no reading.
     """
     platform = get_platform(platform)
-    model = _model(platform)
+    model = _model(platform) if model is None else model
     lam = np.asarray(brightness, dtype=float)
     if lam.ndim == 2:
         lam = lam[None]
@@ -201,14 +205,15 @@ def estimate(
     d_i = dpos[i_star]
     e_j = np.stack([c * epos[j_star, 0] - s * epos[j_star, 1], s * epos[j_star, 0] + c * epos[j_star, 1]], -1)
     u = np.stack([np.cos(theta), np.sin(theta)], -1)
-    for _ in range(int(refine)):
+    for _ in range(int(refine)):  # an infinite r (light below a fit's floor) gives NaN: no reading
         rvec = R[:, None] * u + e_j - d_i
         ang = np.arctan2(rvec[:, 1], rvec[:, 0])
         alpha = wrap_angle(ang - dd[i_star])
         beta = wrap_angle(ang + np.pi - (phi + ed[j_star]))
         r = ainv_m(alpha, beta)
         norm = np.maximum(np.hypot(rvec[:, 0], rvec[:, 1]), 1e-12)
-        Rvec = r[:, None] * rvec / norm[:, None] + d_i - e_j
+        with np.errstate(invalid="ignore"):
+            Rvec = r[:, None] * rvec / norm[:, None] + d_i - e_j
         R = np.hypot(Rvec[:, 0], Rvec[:, 1])
 
     none = ~(raw_max >= model.no_reading_floor)
@@ -216,6 +221,43 @@ def estimate(
     theta = np.where(none, np.nan, theta)
     phi = np.where(none, np.nan, phi)
     return R, theta, phi
+
+
+def read(
+    brightness: np.ndarray,
+    rel_position: np.ndarray,
+    rel_heading: np.ndarray,
+    rng: np.random.Generator,
+    sigma: float | None = None,
+    platform: Platform | str = "droplet",
+    ladder: tuple[float, ...] = POWER_LADDER,
+    near_model: bool = False,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Measure and estimate P pairs with power control: (range m, bearing rad, heading rad, power).
+
+    Default: :func:`measure` on the power ladder, then :func:`estimate` divided by the chosen power.
+    ``near_model=True`` (Droplet firmware style): one full-power reading; a saturated one is measured
+    again with the emitters at the firmware's low power (brightness from the pair geometry with
+    :class:`swarm_envs.ir.models.DropletLowPowerIR`) and inverted with that low-power amplitude fit;
+    its power is reported as NaN (a different fit, not a factor).
+    """
+    platform = get_platform(platform)
+    if not near_model:
+        meas, p = measure(brightness, rng, sigma, platform, ladder)
+        return (*estimate(meas, platform, power=p), p)
+    from swarm_envs.ir.models import DropletLowPowerIR
+
+    meas, p = measure(brightness, rng, sigma, platform, (1.0,))
+    R, th, ph = estimate(meas, platform)
+    sat = np.flatnonzero(meas.reshape(len(meas), -1).max(axis=1) >= float(platform.ir_model.adc_max))
+    if sat.size:
+        low = DropletLowPowerIR(platform)
+        lam = pair_gains(np.asarray(rel_position)[sat], np.asarray(rel_heading)[sat], platform, model=low)
+        meas_low, _ = measure(lam, rng, sigma, platform, (1.0,))
+        R[sat], th[sat], ph[sat] = estimate(meas_low, platform, model=low)
+        p = p.copy()
+        p[sat] = np.nan
+    return R, th, ph, p
 
 
 @dataclass
@@ -247,6 +289,9 @@ class RangeBearingSensor:
 
     Each control step (0.1 s, the Droplet's 10 Hz R&B rate [F14 Sec. V]):
 
+    - power control: a saturated matrix is re-measured on the power ladder (SPEC 3.1), or with
+      ``near_model=True`` (Droplet) once at the firmware's low power and inverted with its own amplitude
+      fit (:class:`swarm_envs.ir.models.DropletLowPowerIR`).
     - ``schedule="contention"``: every robot draws a random priority; a robot *fires* (its TX emits the
       R&B sequence) iff no robot it shares an IR link with and of higher priority fires. This is the
       greedy maximal independent set in priority order, computed with vectorised Luby rounds over the
@@ -272,9 +317,13 @@ class RangeBearingSensor:
         schedule: str = "contention",
         max_age: int = 10,
         ladder: tuple[float, ...] = POWER_LADDER,
+        near_model: bool = False,
     ) -> None:
         self.platform = get_platform(platform)
         _model(self.platform)
+        if near_model and self.platform.name != "droplet":
+            raise ValueError(f"near_model=True is the Droplet firmware's low-power fit; platform {self.platform.name!r} has none")
+        self.near_model = bool(near_model)
         if schedule not in ("contention", "every_step"):
             raise ValueError(f"schedule must be 'contention' or 'every_step', got {schedule!r}")
         self.n_robots = int(n_robots)
@@ -326,8 +375,10 @@ class RangeBearingSensor:
         self.last_fired = fired
         sel = np.nonzero(fired[links.tx])[0]
         if sel.size:
-            meas, p = measure(links.gains[sel], self.rng, self.noise_sigma, self.platform, self.ladder)
-            R, th, ph = estimate(meas, self.platform, power=p)
+            R, th, ph, _ = read(
+                links.gains[sel], links.rel_position[sel], links.rel_heading[sel], self.rng, self.noise_sigma,
+                self.platform, self.ladder, self.near_model,
+            )
             ok = np.isfinite(R)
             sel, R, th, ph = sel[ok], R[ok], th[ok], ph[ok]
         else:

@@ -27,12 +27,12 @@ import numpy as np
 
 from swarm_envs.ir.layer import wrap_angle
 from swarm_envs.platforms import get_platform
-from swarm_envs.sensing.range_bearing import brightness, estimate, measure
+from swarm_envs.sensing.range_bearing import brightness, read
 
 DROPLET_DIAMETER_CM = 4.4
 
 
-def _sweep(platform, R_cm, bearings, headings, sigma, repeats, rng):
+def _sweep(platform, R_cm, bearings, headings, sigma, repeats, rng, near_model=False):
     """Errors for every (distance, bearing, heading, repeat) on the grid. Returns dict of arrays."""
     B, H = np.meshgrid(bearings, headings, indexing="ij")
     B, H = B.ravel(), H.ravel()
@@ -41,10 +41,9 @@ def _sweep(platform, R_cm, bearings, headings, sigma, repeats, rng):
         rel = (R / 100.0) * np.stack([np.cos(B), np.sin(B)], -1)
         lam = brightness(rel, H, platform)
         lam = np.repeat(lam, repeats, axis=0)
-        meas, p = measure(lam, rng, sigma, platform)
-        Re, be, he = estimate(meas, platform, power=p)
         b = np.repeat(B, repeats)
         h = np.repeat(H, repeats)
+        Re, be, he, p = read(lam, np.repeat(rel, repeats, axis=0), h, rng, sigma, platform, near_model=near_model)
         out["R"].append(np.full(b.size, R))
         out["b"].append(b)
         out["h"].append(h)
@@ -81,7 +80,7 @@ def _harmonic(values, period_k=6):
     return k, share
 
 
-def run(platform_name="droplet", sigma=None, repeats=2, seed=0, bearing_step=3.0, heading_step=5.0):
+def run(platform_name="droplet", sigma=None, repeats=2, seed=0, bearing_step=3.0, heading_step=5.0, near_model=False):
     platform = get_platform(platform_name)
     model = platform.ir_model
     sigma = float(model.default_noise_sigma if sigma is None else sigma)
@@ -91,7 +90,7 @@ def run(platform_name="droplet", sigma=None, repeats=2, seed=0, bearing_step=3.0
     headings = np.radians(np.arange(0.0, 360.0, heading_step))
     rng = np.random.default_rng(seed)
     t0 = time.perf_counter()
-    d = _sweep(platform, R_cm, bearings, headings, sigma, repeats, rng)
+    d = _sweep(platform, R_cm, bearings, headings, sigma, repeats, rng, near_model)
     diam = platform.diameter * 100.0
 
     # per distance
@@ -104,7 +103,8 @@ def run(platform_name="droplet", sigma=None, repeats=2, seed=0, bearing_step=3.0
         eb, eh = d["eb"][m][ok], d["eh"][m][ok]
         per_dist.append({
             "R_cm": float(R), "n": int(m.sum()), "no_reading": float(1 - ok.mean()),
-            "power_median": float(np.median(d["p"][m])),
+            "power_median": float(np.median(d["p"][m])),  # NaN where the low-power near model was used
+            "low_power_share": float(np.mean(np.isnan(d["p"][m]))),
             "range_mean": float(e.mean()), "range_std": float(e.std()),
             "range_bound": float(abs(e.mean()) + e.std()),
             "bearing_mean": float(eb.mean()), "bearing_std": float(eb.std()),
@@ -159,10 +159,10 @@ def run(platform_name="droplet", sigma=None, repeats=2, seed=0, bearing_step=3.0
     }
 
 
-def _sensitivity(platform_name, sigmas, seed):
+def _sensitivity(platform_name, sigmas, seed, near_model=False):
     rows = []
     for s in sigmas:
-        r = run(platform_name, s, repeats=1, seed=seed, bearing_step=6.0, heading_step=10.0)
+        r = run(platform_name, s, repeats=1, seed=seed, bearing_step=6.0, heading_step=10.0, near_model=near_model)
         rows.append({
             "sigma": s,
             "worst_range_bound": max(x["range_bound"] for x in r["per_distance"]),
@@ -226,10 +226,14 @@ def main(argv: list[str]) -> int:
     ap.add_argument("--repeats", type=int, default=2, help="noisy measurements per grid point")
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--no-plots", action="store_true")
+    ap.add_argument("--near-model", action="store_true", help="Droplet: firmware low-power fit instead of the power ladder")
     args = ap.parse_args(argv)
+    if args.near_model and args.platform != "droplet":
+        ap.error("--near-model is the Droplet firmware's low-power fit; use --platform droplet")
 
-    res = run(args.platform, args.noise, args.repeats, args.seed)
-    res["sigma_sensitivity"] = _sensitivity(args.platform, [0.0, 1.0, 2.0, 4.0, 8.0], args.seed + 1)
+    res = run(args.platform, args.noise, args.repeats, args.seed, near_model=args.near_model)
+    res["near_model"] = args.near_model
+    res["sigma_sensitivity"] = _sensitivity(args.platform, [0.0, 1.0, 2.0, 4.0, 8.0], args.seed + 1, args.near_model)
     if not args.no_plots:
         res["plots"] = _plots(res, args.out)
     if args.json:
