@@ -221,9 +221,9 @@ class SwarmEnv(ParallelEnv):
     def reset(self, seed: int | None = None, options: dict | None = None):
         if seed is not None:
             self._rng = np.random.default_rng(seed)
-        # independent child streams: spawn, sensing (noise/channel/MAC), task
-        streams = np.random.SeedSequence(int(self._rng.integers(2**63))).spawn(3)
-        self._spawn_rng, sensing_rng, self._task_rng = (np.random.default_rng(s) for s in streams)
+        # independent child streams: spawn, and sensing (which splits it into noise, channel and MAC)
+        streams = np.random.SeedSequence(int(self._rng.integers(2**63))).spawn(2)
+        self._spawn_rng, sensing_rng = (np.random.default_rng(s) for s in streams)
         options = dict(options or {})
         unknown = sorted(set(options) - {"positions", "headings"})
         if unknown:  # a warning, not an error: PettingZoo's API test passes arbitrary options
