@@ -31,7 +31,7 @@ import numpy as np
 
 from swarm_envs.comm.channel import recommended_relative_threshold
 from swarm_envs.comm.network import Network
-from swarm_envs.ir.layer import IRLinks, compute_links
+from swarm_envs.ir.layer import compute_links
 from swarm_envs.observation import pack_nearest
 from swarm_envs.platforms import Platform
 from swarm_envs.sensing.base import MessageReadings, NeighbourReadings, ScaleFreeReadings, SensorFrame
@@ -64,7 +64,6 @@ class FullSensing:
         self.rb: RangeBearingSensor | None = None
         self.network: Network | None = None
         self.exchange: BearingExchange | None = None
-        self.links: IRLinks | None = None
 
     def reset(self, rng: np.random.Generator) -> None:
         """New sensor, channel and exchange state from independent child streams of ``rng``."""
@@ -85,7 +84,9 @@ class FullSensing:
             self.n,
             net_rng,
             bitrate=cfg["bitrate"],
-            relative_threshold=cfg["relative_threshold"] or recommended_relative_threshold(self.platform),
+            relative_threshold=(
+                recommended_relative_threshold(self.platform) if cfg["relative_threshold"] is None else cfg["relative_threshold"]
+            ),
             code=tuple(cfg["code"]),
             comm_mode=cfg["comm_mode"],
             payload_bits=self.message_bits,
@@ -96,16 +97,15 @@ class FullSensing:
     def step(self, positions: np.ndarray, headings: np.ndarray, payloads: np.ndarray | None) -> SensorFrame:
         """One control step of sensing (module docstring); ``payloads`` (N, b) bool or None."""
         links = compute_links(positions, headings, self.platform)
-        self.links = links
 
         # range & bearing (or bearing-only sectors)
-        sectors = sense_bearings(links, self.platform) if self.bearing_source == "sectors" or not self.has_range else None
+        sectors = _valid_only(sense_bearings(links, self.platform)) if self.bearing_source == "sectors" else None
         if self.has_range:
             rb = self.rb.step(links)
             neighbours = NeighbourReadings(rb.rx, rb.tx, rb.range, rb.bearing, rb.heading, rb.age.astype(float))
         else:
-            neighbours = _valid_only(sectors)
-        bearing_readings = neighbours if self.bearing_source == "range_bearing" else _valid_only(sectors)
+            neighbours = sectors
+        bearing_readings = sectors if self.bearing_source == "sectors" else neighbours
 
         # SwarmCom: application payloads and the bearing exchange share the channel
         net = self.network
