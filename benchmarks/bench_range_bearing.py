@@ -34,6 +34,7 @@ def main(argv: list[str] | None = None) -> int:
         sensor = RangeBearingSensor(env.platform, n, np.random.default_rng(0))
         rng = np.random.default_rng(1)
         act = rng.uniform(-0.5, 0.5, (n, 2))
+        sensor.step(compute_links(env.world.positions, env.world.headings, env.platform))  # warm-up (JIT load)
         t = dict.fromkeys(("layer", "rb", "physics", "ideal"), 0.0)
         n_links = 0
         for _ in range(args.steps):

@@ -24,6 +24,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from swarm_envs.geometry import wrap_angle
+from swarm_envs.ir import kernels
 from swarm_envs.platforms import Platform, get_platform
 
 __all__ = ["IRLinks", "compute_links", "pair_geometry", "pair_cosines", "pair_gains", "line_of_sight", "wrap_angle"]
@@ -131,18 +132,30 @@ def pair_gains(
 ) -> np.ndarray:
     """Noiseless gains (P, n_detectors, n_emitters) of the platform's IR model for P pairs.
 
-    Equal to ``model.gain(*pair_geometry(...))``, computed from cosines (:func:`pair_cosines`,
-    ``model.gain_from_cos``) for speed. Line of sight is assumed (occlusion is :func:`line_of_sight`'s
+    Equal to ``model.gain(*pair_geometry(...))``: a compiled kernel (:mod:`swarm_envs.ir.kernels`) when
+    numba is installed, else numpy from cosines (:func:`pair_cosines`, ``model.gain_from_cos``). Line of sight is assumed (occlusion is :func:`line_of_sight`'s
     job). Pairs whose centre distance exceeds ``platform.ir_range`` get zero gain (the platform's
     "no infrared beyond" cut-off). ``model`` overrides the platform's IR model (e.g. the Droplet's
     low-power emitters, :class:`swarm_envs.ir.models.DropletLowPowerIR`).
     """
     platform = get_platform(platform)
     model = platform.ir_model if model is None else model
-    distance, cos_det, cos_em = pair_cosines(rel_position, rel_heading, platform)
+    R = np.ascontiguousarray(rel_position, dtype=float).reshape(-1, 2)
+    psi = np.ascontiguousarray(rel_heading, dtype=float).reshape(-1)
+    if kernels.HAVE_NUMBA and type(model).__name__ in kernels.MODEL_IDS:
+        kind, params = kernels.model_params(model)
+        return kernels.gains_kernel(
+            R, psi, platform.detector_positions, platform.detector_directions,
+            platform.emitter_positions, platform.emitter_directions, kind, params, float(platform.ir_range),
+        )
+    return _pair_gains_numpy(R, psi, platform, model)
+
+
+def _pair_gains_numpy(R: np.ndarray, psi: np.ndarray, platform: Platform, model: object) -> np.ndarray:
+    """The numpy reference of :func:`pair_gains` (used without numba, and to test the kernel)."""
+    distance, cos_det, cos_em = pair_cosines(R, psi, platform)
     g = np.asarray(model.gain_from_cos(distance, cos_det, cos_em), dtype=float)
-    centre = np.hypot(*np.asarray(rel_position, dtype=float).reshape(-1, 2).T)
-    return g * (centre <= platform.ir_range)[:, None, None]
+    return g * (np.hypot(R[:, 0], R[:, 1]) <= platform.ir_range)[:, None, None]
 
 
 def line_of_sight(
@@ -157,12 +170,12 @@ def line_of_sight(
 
     Vectorised over pairs without Python lists: a robot k within ``radius`` of the segment lies within
     ``|ij| / 2 + radius`` of the nearer endpoint, so the candidates are the neighbours of i and of j
-    within that distance, gathered from one KD-tree ``query_pairs`` in CSR form and tested as flat
-    (pair, candidate) arrays.
+    within that distance, gathered from one KD-tree ``query_pairs`` in CSR form and tested by a compiled
+    kernel (numba), or as flat (pair, candidate) numpy arrays without numba.
 
     Returns: (P,) bool mask.
     """
-    positions = np.asarray(positions, dtype=float)
+    positions = np.ascontiguousarray(positions, dtype=float)
     i = np.asarray(i, dtype=np.intp).reshape(-1)
     j = np.asarray(j, dtype=np.intp).reshape(-1)
     P = i.shape[0]
@@ -183,6 +196,8 @@ def line_of_sight(
     dst = dst[order]
     counts = np.bincount(src, minlength=positions.shape[0])
     starts = np.cumsum(counts) - counts
+    if kernels.HAVE_NUMBA:
+        return ~kernels.occluded_kernel(positions, float(radius), i, j, starts, counts, dst)
     blocked = np.zeros(P, dtype=bool)
     L2 = np.where(length > 0, length * length, 1.0)
     for end in (i, j):  # two vectorised passes: neighbours of i, then of j
