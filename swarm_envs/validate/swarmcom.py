@@ -435,6 +435,17 @@ def experiment_d(rng: np.random.Generator, quick: bool) -> dict[str, Any]:
 
 
 # ---------------------------------------------------------------------------------------------- output
+def _save(fig, out_dir: str, name: str) -> str:
+    """Lay out, write and close a matplotlib figure; returns its path."""
+    import matplotlib.pyplot as plt
+
+    fig.tight_layout()
+    path = os.path.join(out_dir, name)
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
+
+
 def _plots(results: dict[str, Any], out_dir: str) -> list[str]:
     import matplotlib
 
@@ -457,11 +468,7 @@ def _plots(results: dict[str, Any], out_dir: str) -> list[str]:
         ax[1].set(xlabel="distance (cm)", ylabel="P_l", title="message loss (paper ranges dashed)")
         ax[0].legend(fontsize=7)
         ax[1].legend(fontsize=7)
-        fig.tight_layout()
-        f = os.path.join(out_dir, "swarmcom_a_range_pe.png")
-        fig.savefig(f, dpi=110)
-        plt.close(fig)
-        files.append(f)
+        files.append(_save(fig, out_dir, "swarmcom_a_range_pe.png"))
     if "b" in results:
         b = results["b"]
         fig, ax = plt.subplots(1, 2, figsize=(11, 4))
@@ -480,11 +487,7 @@ def _plots(results: dict[str, Any], out_dir: str) -> list[str]:
         ax[1].plot(ns, [b["arena"][n]["paper"] for n in ns], "r*", ms=10, label="paper Fig. 21")
         ax[1].set(xlabel="robots in 72x72 cm", ylabel="n_C", title="arena")
         ax[1].legend(fontsize=7)
-        fig.tight_layout()
-        f = os.path.join(out_dir, "swarmcom_b_channels.png")
-        fig.savefig(f, dpi=110)
-        plt.close(fig)
-        files.append(f)
+        files.append(_save(fig, out_dir, "swarmcom_b_channels.png"))
     if "c" in results:
         c = results["c"]
         fig, ax = plt.subplots(figsize=(5.5, 4))
@@ -493,11 +496,7 @@ def _plots(results: dict[str, Any], out_dir: str) -> list[str]:
             ax.plot(ns, [c[mode][n]["P_l"] for n in ns], mk, label=mode.replace("_", " "))
         ax.set(xlabel="robots", ylabel="P_l", title="message loss, random walk, 310 bps, m_tr=10")
         ax.legend()
-        fig.tight_layout()
-        f = os.path.join(out_dir, "swarmcom_c_flooding.png")
-        fig.savefig(f, dpi=110)
-        plt.close(fig)
-        files.append(f)
+        files.append(_save(fig, out_dir, "swarmcom_c_flooding.png"))
     if "d" in results:
         d = results["d"]
         fig, ax = plt.subplots(figsize=(6, 4))
@@ -507,11 +506,7 @@ def _plots(results: dict[str, Any], out_dir: str) -> list[str]:
             ax.semilogy(x, np.maximum(np.array(d[key]["predicted_1-P_f"], float), 1e-6), "-", color=col, label=f"[{key}] Eq. (34)")
         ax.set(xlabel="distance (cm)", ylabel="1 - P_f (floored at 1e-6)", title="15-bit message error, 310 bps")
         ax.legend(fontsize=7)
-        fig.tight_layout()
-        f = os.path.join(out_dir, "swarmcom_d_coding.png")
-        fig.savefig(f, dpi=110)
-        plt.close(fig)
-        files.append(f)
+        files.append(_save(fig, out_dir, "swarmcom_d_coding.png"))
     return files
 
 
