@@ -226,3 +226,99 @@ def test_sensor_deterministic_and_uses_only_gains():
     idx = np.array([truth[(int(u), int(w))] for u, w in zip(r.rx, r.tx)])
     close = links.distance[idx] < 0.2
     assert np.all(np.abs(r.range[close] - links.distance[idx][close]) < 0.03)
+
+
+# --- power control, vectorisation and the Droplet low-power near model ---
+
+from swarm_envs.platforms import get_platform  # noqa: E402
+from swarm_envs.sensing.range_bearing import read  # noqa: E402
+
+DROPLET = get_platform("droplet")
+
+
+def random_geometry(rng, n, r_min, r_max):
+    R = rng.uniform(r_min, r_max, n)
+    theta = rng.uniform(-np.pi, np.pi, n)
+    phi = rng.uniform(-np.pi, np.pi, n)
+    return np.stack([R * np.cos(theta), R * np.sin(theta)], -1), theta, phi, R
+
+
+def test_explicit_facing_pair():
+    """TX 12 cm ahead, facing the RX: RX sensors 0/5 (+-30 deg) and TX emitters 0/5 (+-30 deg, towards the
+    RX) are lit, brightest on the crossing diagonal (sensor 0 sees emitter 5 and vice versa)."""
+    lam = brightness(np.array([[0.12, 0.0]]), np.array([np.pi]), DROPLET)[0]
+    i, j = np.unravel_index(lam.argmax(), lam.shape)
+    assert {int(i), int(j)} == {0, 5}
+    assert lam[0, 5] == pytest.approx(lam[5, 0]) and lam[0, 5] > lam[0, 0] > lam[2, 2]
+    R, theta, phi = estimate(lam[None], DROPLET)
+    assert R[0] == pytest.approx(0.12, abs=0.01)
+    assert abs(theta[0]) < np.radians(3) and abs(wrap_angle(phi[0] - np.pi)) < np.radians(10)
+
+
+def test_power_selection_keeps_close_pairs_usable():
+    """One radius of gap (R = 6.6 cm) saturates at full power; the re-fire at lower power keeps R&B usable."""
+    rng = np.random.default_rng(3)
+    pos, theta, phi, R = random_geometry(rng, 500, 0.066, 0.070)
+    lam = brightness(pos, phi, DROPLET)
+    assert (lam.reshape(500, -1).max(1) > 255).all()
+    meas, p = measure(lam, rng, 2.0, DROPLET)
+    assert (p < 1).all() and set(np.unique(p)) <= set(POWER_LADDER)
+    assert (meas * p[:, None, None]).max() < 255  # the kept reading did not saturate
+    est_R, _, _ = estimate(meas, DROPLET, power=p)
+    err = est_R - R
+    assert abs(err.mean()) + err.std() < DROPLET.diameter
+
+
+def test_vectorised_estimate_equals_per_matrix_loop():
+    rng = np.random.default_rng(4)
+    pos, _, phi, _ = random_geometry(rng, 50, 0.066, 0.4)
+    meas, p = measure(brightness(pos, phi, DROPLET), rng, 2.0, DROPLET)
+    batch = estimate(meas, DROPLET, power=p)
+    for k in range(50):
+        single = estimate(meas[k : k + 1], DROPLET, power=p[k : k + 1])
+        for a, b in zip(batch, single):
+            np.testing.assert_allclose(a[k], b[0], rtol=1e-12, equal_nan=True)
+
+
+def scene(n=30, side=0.6, seed=0):
+    rng = np.random.default_rng(seed)
+    pos = []
+    while len(pos) < n:
+        q = rng.uniform(0, side, 2)
+        if all(np.hypot(*(q - o)) > 2.2 * DROPLET.radius for o in pos):
+            pos.append(q)
+    return np.array(pos), rng.uniform(-np.pi, np.pi, n)
+
+
+def test_every_step_schedule_reads_all_links_each_step():
+    pos, hd = scene(15, 0.4, seed=2)
+    links = compute_links(pos, hd, DROPLET)
+    sensor = RangeBearingSensor(DROPLET, len(pos), np.random.default_rng(0), schedule="every_step")
+    r = sensor.step(links)
+    assert np.all(r.age == 0)
+    assert len(r) >= 0.9 * len(links)
+
+
+def test_low_power_near_model_matches_the_firmware_fit_and_inverts():
+    from swarm_envs.ir.models import DropletLowPowerIR
+
+    low = DropletLowPowerIR(DROPLET)
+    R = np.linspace(5.0, 14.0, 10)  # centre distance (cm); facing emitter-sensor distance r = R - 2 rho
+    np.testing.assert_allclose(low.amplitude(R - 4.0), 1100.0 / (R - 4.0) ** 2 + 12.5)
+    x = low.amplitude(np.linspace(1.0, 30.0, 20))
+    np.testing.assert_allclose(low.amplitude_inverse(x), np.linspace(1.0, 30.0, 20))
+    assert np.isinf(low.amplitude_inverse(12.0))
+
+
+def test_near_model_option_reads_close_pairs_without_the_ladder():
+    rng = np.random.default_rng(6)
+    pos, theta, phi, R = random_geometry(rng, 800, 0.066, 0.12)
+    lam = brightness(pos, phi, DROPLET)
+    est_R, est_theta, _, p = read(lam, pos, phi, rng, 2.0, DROPLET, near_model=True)
+    assert np.isnan(p).mean() > 0.9  # nearly all saturate at full power and use the low-power fit
+    err = est_R - R
+    assert np.isfinite(est_R).all()
+    assert abs(err.mean()) + err.std() < DROPLET.diameter
+    assert np.degrees(np.abs(wrap_angle(est_theta - theta))).mean() < 10.0
+    with pytest.raises(ValueError, match="low-power"):
+        RangeBearingSensor("epuck", 2, rng, near_model=True)
