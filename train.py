@@ -23,8 +23,8 @@ from typing import Any
 import numpy as np
 import yaml
 
-from agents.config import ConfigError, load_config, resolve
-from agents.evaluation import (
+from swarm_envs.agents.config import ConfigError, load_config, resolve
+from swarm_envs.agents.evaluation import (
     PRIMARY_METRIC,
     TASKS,
     evaluate,
@@ -121,7 +121,7 @@ def make_callbacks(cfg: dict[str, Any], out: Path, num_envs: int):
 
 def train(cfg: dict[str, Any], out: Path):
     """Train PPO; returns (model, seconds)."""
-    from agents.sb3_vec_env import SwarmVecEnv
+    from swarm_envs.agents.sb3_vec_env import SwarmVecEnv
 
     module = __import__(TASKS[cfg["task"]], fromlist=["parallel_env"])
     venv = SwarmVecEnv(module.parallel_env, cfg["train"]["n_envs"], env_kwargs_of(cfg))
@@ -198,8 +198,8 @@ def main(argv: list[str] | None = None) -> int:
 
     from stable_baselines3 import PPO
 
-    from agents.sb3_vec_env import SB3Policy
-    from agents.scripted import make_scripted
+    from swarm_envs.agents.sb3_vec_env import SB3Policy
+    from swarm_envs.agents.scripted import make_scripted
 
     timing: dict[str, float] = {}
     if args.eval_only:

@@ -20,8 +20,8 @@ from typing import Any
 
 import numpy as np
 
-from agents.evaluation import PRIMARY_METRIC, TASK_METRICS, evaluate, markdown_table, random_factory, summarise
-from agents.scripted import TASK_SCRIPTED, make_scripted
+from swarm_envs.agents.evaluation import PRIMARY_METRIC, TASK_METRICS, evaluate, markdown_table, random_factory, summarise
+from swarm_envs.agents.scripted import TASK_SCRIPTED, make_scripted
 
 __all__ = ["run_benchmark", "main"]
 

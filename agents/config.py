@@ -109,7 +109,7 @@ def _merge(base: dict, update: dict, path: str = "") -> dict:
 
 
 def _env_allowed(task: str) -> dict[str, Any]:
-    from agents.evaluation import TASKS
+    from swarm_envs.agents.evaluation import TASKS
     import importlib
 
     from swarm_envs.env import COMMON_DEFAULTS
@@ -120,8 +120,8 @@ def _env_allowed(task: str) -> dict[str, Any]:
 
 def validate(cfg: dict[str, Any]) -> dict[str, Any]:
     """Check every key and value; returns ``cfg`` (raises :class:`ConfigError`)."""
-    from agents.evaluation import TASKS
-    from agents.scripted import SCRIPTED
+    from swarm_envs.agents.evaluation import TASKS
+    from swarm_envs.agents.scripted import SCRIPTED
 
     if cfg["task"] not in TASKS:
         raise ConfigError(f"task={cfg['task']!r} is not a task; allowed values: {sorted(TASKS)}")
@@ -171,7 +171,7 @@ def validate(cfg: dict[str, Any]) -> dict[str, Any]:
     if "flatten" in cfg["env"] or "render_mode" in cfg["env"]:
         raise ConfigError("env.flatten and env.render_mode are set by train.py; remove them from the config")
     # let the env check its own values (cheap: building an env does not step it)
-    from agents.evaluation import make_env
+    from swarm_envs.agents.evaluation import make_env
 
     env_kwargs = dict(cfg["env"])
     if isinstance(env_kwargs.get("code"), list):
@@ -246,7 +246,7 @@ def load_config(path: str | Path | None, overrides: list[str] | None = None) -> 
 
 def resolve(cfg: dict[str, Any]) -> dict[str, Any]:
     """The config with task defaults filled in (scripted baseline name), for saving beside results."""
-    from agents.scripted import TASK_SCRIPTED
+    from swarm_envs.agents.scripted import TASK_SCRIPTED
 
     out = copy.deepcopy(cfg)
     if out["agent"]["scripted"] is None:

@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 from scipy import stats
 
-from agents.base import Policy, RandomPolicy
+from swarm_envs.agents.base import Policy, RandomPolicy
 
 __all__ = [
     "TASKS",

@@ -24,7 +24,7 @@ from typing import Any
 import numpy as np
 from stable_baselines3.common.vec_env import VecEnv
 
-from agents.base import Policy, flatten_batch
+from swarm_envs.agents.base import Policy, flatten_batch
 
 __all__ = ["SwarmVecEnv", "SB3Policy"]
 

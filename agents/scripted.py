@@ -26,7 +26,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from agents.base import Policy, wrap_angle
+from swarm_envs.agents.base import Policy, wrap_angle
 from swarm_envs.env import DT
 from swarm_envs.observation import ObservationLayout
 from swarm_envs.platforms import Platform

@@ -28,7 +28,7 @@ import numpy as np, torch
 threads, timesteps, repeats = int(sys.argv[1]), int(sys.argv[2]), int(sys.argv[3])
 torch.set_num_threads(threads)
 from stable_baselines3 import PPO
-from agents.sb3_vec_env import SwarmVecEnv
+from swarm_envs.agents.sb3_vec_env import SwarmVecEnv
 from swarm_envs import aggregation_v0
 venv = SwarmVecEnv(aggregation_v0.parallel_env, 2, dict(sensing="ideal", max_cycles=200, reward_mode="local"))
 venv.seed(0)

@@ -8,8 +8,8 @@ import torch
 from stable_baselines3 import PPO
 from stable_baselines3.common.vec_env import VecCheckNan
 
-from agents.base import flatten_batch
-from agents.sb3_vec_env import SB3Policy, SwarmVecEnv
+from swarm_envs.agents.base import flatten_batch
+from swarm_envs.agents.sb3_vec_env import SB3Policy, SwarmVecEnv
 from swarm_envs import aggregation_v0, flocking_v0
 
 N_ROBOTS = 4

@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from agents.base import RandomPolicy
-from agents.evaluation import confidence_interval, evaluate, make_env, random_factory, run_episode
-from agents.scripted import SCRIPTED, TASK_SCRIPTED, bump_direction, circular_mean, make_scripted
+from swarm_envs.agents.base import RandomPolicy
+from swarm_envs.agents.evaluation import confidence_interval, evaluate, make_env, random_factory, run_episode
+from swarm_envs.agents.scripted import SCRIPTED, TASK_SCRIPTED, bump_direction, circular_mean, make_scripted
 from swarm_envs.env import DT
 
 SEEDS = list(range(5))
@@ -23,7 +23,7 @@ SEEDS = list(range(5))
     ],
 )
 def test_scripted_beats_random_on_task_metric(task, kwargs):
-    from agents.evaluation import PRIMARY_METRIC
+    from swarm_envs.agents.evaluation import PRIMARY_METRIC
 
     kw = {"sensing": "ideal", **kwargs}
     metric, sign = PRIMARY_METRIC[task]
@@ -180,7 +180,7 @@ def test_registry_complete():
 @pytest.mark.parametrize("task", list(TASK_SCRIPTED))
 def test_scripted_beats_random_with_full_sensing(task):
     """~40 s: runs only when selected with ``-m slow`` (see tests/conftest.py)."""
-    from agents.evaluation import PRIMARY_METRIC
+    from swarm_envs.agents.evaluation import PRIMARY_METRIC
 
     kw = {"sensing": "full", "max_cycles": 200}
     metric, sign = PRIMARY_METRIC[task]

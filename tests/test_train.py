@@ -10,7 +10,7 @@ import pytest
 import yaml
 
 import train
-from agents.config import DEFAULTS, ConfigError, apply_overrides, load_config
+from swarm_envs.agents.config import DEFAULTS, ConfigError, apply_overrides, load_config
 
 ROOT = Path(__file__).resolve().parents[1]
 CONFIGS = sorted((ROOT / "configs").glob("*.yaml"))
