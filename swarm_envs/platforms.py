@@ -2,7 +2,7 @@
 
 All quantities are SI (metres, seconds, radians) in the robot's body frame: origin at the centre,
 x-axis forward, angles counter-clockwise. The infrared *hardware model* (gain functions) of each
-platform lives in :mod:`swarm_envs.ir.models`; :attr:`Platform.ir_model` returns it.
+platform lives in :mod:`swarm_envs.ir.models`; :attr:`Platform.ir_model` (or :func:`model_for`) returns it.
 
 Sources (SPEC section 1):
 - ``droplet``: Farrow et al., ICRA 2014 [F14 Sec. III]: 4.4 cm diameter, 6 emitters and 6 sensors
@@ -17,14 +17,13 @@ Sources (SPEC section 1):
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
-if TYPE_CHECKING:  # pragma: no cover
-    pass
+from swarm_envs.ir.models import MODEL_CLASSES
 
-__all__ = ["Platform", "PLATFORMS", "get_platform"]
+__all__ = ["Platform", "PLATFORMS", "get_platform", "model_for"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -79,8 +78,6 @@ class Platform:
     @property
     def ir_model(self) -> Any:
         """The platform's infrared hardware model (see :mod:`swarm_envs.ir.models`)."""
-        from swarm_envs.ir.models import model_for  # local import: models depend on platforms
-
         return model_for(self)
 
     def __repr__(self) -> str:
@@ -167,3 +164,31 @@ def get_platform(platform: str | Platform) -> Platform:
         raise ValueError(
             f"unknown platform {platform!r}; allowed values: {sorted(PLATFORMS)}"
         ) from None
+
+
+_MODEL_CACHE: dict[str, Any] = {}
+
+
+def model_for(platform: Any) -> Any:
+    """The IR model of a platform (a :class:`Platform` or a preset name), cached by platform name.
+
+    A custom platform may name a model class via ``platform.extras["ir_model"]`` (``"droplet"``,
+    ``"epuck"`` or ``"rone"``, see :data:`swarm_envs.ir.models.MODEL_CLASSES`); it is then cached under
+    its own name.
+    """
+    if isinstance(platform, str):
+        platform = get_platform(platform)
+    name = platform.name
+    model = _MODEL_CACHE.get(name)
+    if model is None:
+        kind = (getattr(platform, "extras", None) or {}).get("ir_model", name)
+        try:
+            cls = MODEL_CLASSES[kind]
+        except KeyError:
+            raise ValueError(
+                f"no IR model for platform {name!r}; allowed: {sorted(MODEL_CLASSES)} "
+                "(or set platform.extras['ir_model'])"
+            ) from None
+        model = cls(platform)
+        _MODEL_CACHE[name] = model
+    return model

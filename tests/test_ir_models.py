@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
-from swarm_envs.ir.models import DropletIR, EpuckIR, RoneIR, model_for
-from swarm_envs.platforms import get_platform
+from swarm_envs.ir.models import DropletIR, EpuckIR, RoneIR
+from swarm_envs.platforms import get_platform, model_for
 
 
 def test_model_for_cached_and_by_name():

@@ -1,6 +1,8 @@
 """Infrared hardware models: emitter directivity x detector directivity x medium attenuation.
 
-One small object per platform, obtained with :func:`model_for` (cached by platform name). Every model
+One small object per platform, obtained with ``platform.ir_model`` or
+:func:`swarm_envs.platforms.model_for` (cached by platform name; this module knows no platform presets,
+so it does not import :mod:`swarm_envs.platforms`). Every model
 has ``gain(distance_m, detector_angle, emitter_angle) -> ndarray`` (numpy broadcasting), the noiseless
 light one emitter delivers to one detector:
 
@@ -22,7 +24,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["DropletIR", "DropletLowPowerIR", "EpuckIR", "RoneIR", "model_for"]
+__all__ = ["DropletIR", "DropletLowPowerIR", "EpuckIR", "RoneIR", "MODEL_CLASSES"]
 
 
 class DropletIR:
@@ -283,29 +285,5 @@ class RoneIR:
         return "RoneIR()"
 
 
-_MODEL_CLASSES = {"droplet": DropletIR, "epuck": EpuckIR, "rone": RoneIR}
-_CACHE: dict[str, Any] = {}
-
-
-def model_for(platform: Any) -> Any:
-    """The IR model of a platform (a :class:`~swarm_envs.platforms.Platform` or a preset name), cached by
-    platform name. A custom platform may name a model class via ``platform.extras["ir_model"]``
-    (``"droplet"``, ``"epuck"`` or ``"rone"``); it is then cached under its own name."""
-    if isinstance(platform, str):
-        from swarm_envs.platforms import get_platform
-
-        platform = get_platform(platform)
-    name = platform.name
-    model = _CACHE.get(name)
-    if model is None:
-        kind = (getattr(platform, "extras", None) or {}).get("ir_model", name)
-        try:
-            cls = _MODEL_CLASSES[kind]
-        except KeyError:
-            raise ValueError(
-                f"no IR model for platform {name!r}; allowed: {sorted(_MODEL_CLASSES)} "
-                "(or set platform.extras['ir_model'])"
-            ) from None
-        model = cls(platform)
-        _CACHE[name] = model
-    return model
+#: Model class for each kind of IR hardware; :func:`swarm_envs.platforms.model_for` picks one per platform.
+MODEL_CLASSES: dict[str, type] = {"droplet": DropletIR, "epuck": EpuckIR, "rone": RoneIR}

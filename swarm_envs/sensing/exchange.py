@@ -44,15 +44,44 @@ Thesis timing for comparison: ``T_round = 2 (1 + N)^2 t_msg`` with t_msg = 32.8 
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-from swarm_envs.sensing.scale_free import NeighbourKnowledge
-
-__all__ = ["BearingExchange", "encode_rows", "decode_rows", "thesis_round_time", "readings_table"]
+__all__ = ["BearingExchange", "NeighbourKnowledge", "encode_rows", "decode_rows", "thesis_round_time", "readings_table"]
 
 MAX_PAYLOAD_BITS = 255  # the SwarmCom frame's 8-bit length field (swarm_envs.comm.protocol)
+
+
+@dataclass
+class NeighbourKnowledge:
+    """What each robot knows after an exchange round [L Sec. 5.2.2] (slot layout, K slots per robot).
+
+    The output of :class:`BearingExchange` and the input of the 2-hop algorithm
+    (:func:`swarm_envs.sensing.scale_free.coordinates_all`, which re-exports this class).
+
+    Attributes:
+        ids: (N, K) int, neighbour ids of each robot (-1 = empty slot).
+        bearings: (N, K) float, own bearing ``theta_u(ids[u, i])`` (rad).
+        row_ids: (N, K, K2) int, the neighbour list reported by neighbour ``ids[u, i]`` (-1 = empty, and all
+            -1 if nothing was received from that neighbour).
+        row_bearings: (N, K, K2) float, the bearings ``theta_z(row_ids[u, i, j])`` it reported (rad).
+        row_age: (N, K) int, steps since the row was received (0 = fresh, -1 = never received).
+        robot_ids: (N,) int, the id of each row's robot (default ``arange(N)``); lets a single robot be
+            evaluated with N = 1.
+    """
+
+    ids: np.ndarray
+    bearings: np.ndarray
+    row_ids: np.ndarray
+    row_bearings: np.ndarray
+    row_age: np.ndarray | None = None
+    robot_ids: np.ndarray | None = None
+
+    @property
+    def n_robots(self) -> int:
+        return int(self.ids.shape[0])
 
 
 def thesis_round_time(n_neighbours: int, t_msg: float = 0.0328) -> float:

@@ -68,6 +68,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from swarm_envs.sensing.exchange import BearingExchange, NeighbourKnowledge
+
 __all__ = [
     "coordinates",
     "coordinates_all",
@@ -97,33 +99,6 @@ def _wrap(a: np.ndarray) -> np.ndarray:
 # --------------------------------------------------------------------------------------------------
 # Batched 2-hop algorithm
 # --------------------------------------------------------------------------------------------------
-
-
-@dataclass
-class NeighbourKnowledge:
-    """What each robot knows after an exchange round [L Sec. 5.2.2] (slot layout, K slots per robot).
-
-    Attributes:
-        ids: (N, K) int, neighbour ids of each robot (-1 = empty slot).
-        bearings: (N, K) float, own bearing ``theta_u(ids[u, i])`` (rad).
-        row_ids: (N, K, K2) int, the neighbour list reported by neighbour ``ids[u, i]`` (-1 = empty, and all
-            -1 if nothing was received from that neighbour).
-        row_bearings: (N, K, K2) float, the bearings ``theta_z(row_ids[u, i, j])`` it reported (rad).
-        row_age: (N, K) int, steps since the row was received (0 = fresh, -1 = never received).
-        robot_ids: (N,) int, the id of each row's robot (default ``arange(N)``); lets a single robot be
-            evaluated with N = 1.
-    """
-
-    ids: np.ndarray
-    bearings: np.ndarray
-    row_ids: np.ndarray
-    row_bearings: np.ndarray
-    row_age: np.ndarray | None = None
-    robot_ids: np.ndarray | None = None
-
-    @property
-    def n_robots(self) -> int:
-        return int(self.ids.shape[0])
 
 
 @dataclass
@@ -601,7 +576,6 @@ class ScaleFreeSensor:
         **exchange_kwargs,
     ) -> None:
         from swarm_envs.platforms import get_platform
-        from swarm_envs.sensing.exchange import BearingExchange
 
         self.platform = get_platform(platform)
         self.exchange = BearingExchange(n_robots, exchange, k_max=k_max, **exchange_kwargs)
