@@ -40,7 +40,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--seed", type=int, default=0)
     args = parser.parse_args(argv)
 
-    import imageio.v2 as imageio
+    import imageio.v3 as iio
 
     import swarm_envs
 
@@ -56,7 +56,10 @@ def main(argv: list[str] | None = None) -> int:
         obs, _, _, _, infos = env.step(actions)
         frames.append(env.render())
     env.close()
-    imageio.mimsave(args.out, frames, duration=0.1, loop=0)
+    # Pillow's GIF writer takes the frame delay in milliseconds (a GIF stores centiseconds):
+    # one control step per frame, shown at the env's render_fps (10 fps = 100 ms per frame).
+    frame_ms = 1000.0 / env.metadata["render_fps"]
+    iio.imwrite(args.out, np.stack(frames), plugin="pillow", extension=".gif", duration=frame_ms, loop=0)
     metrics = next(iter(infos.values()))["metrics"] if infos else {}
     print(f"wrote {args.out}: {len(frames)} frames; final metrics: " + ", ".join(f"{k}={v:.3f}" for k, v in metrics.items()))
     return 0
