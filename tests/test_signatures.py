@@ -1,0 +1,72 @@
+"""Each task's ``parallel_env`` has an explicit, typed, documented signature that matches the env's defaults."""
+
+from __future__ import annotations
+
+import inspect
+import re
+import typing
+
+import pytest
+
+from swarm_envs import aggregation_v0, centroid_seeking_v0, flocking_v0
+from swarm_envs.env import _CHOICES, COMMON_DEFAULTS
+from swarm_envs.platforms import PLATFORMS
+
+TASK_MODULES = [aggregation_v0, flocking_v0, centroid_seeking_v0]
+SECTIONS = ["Description", "Action Space", "Observation Space", "Rewards", "Starting State", "Episode End", "Arguments", "Version History"]
+
+
+def _defaults(module) -> dict:
+    return {**COMMON_DEFAULTS, **module.raw_env.TASK_DEFAULTS}
+
+
+@pytest.mark.parametrize("module", TASK_MODULES, ids=lambda m: m.__name__)
+def test_signature_defaults_match_env_defaults(module):
+    params = inspect.signature(module.parallel_env).parameters
+    assert all(p.kind is inspect.Parameter.KEYWORD_ONLY for p in params.values())
+    assert {name: p.default for name, p in params.items()} == _defaults(module)
+
+
+@pytest.mark.parametrize("module", TASK_MODULES, ids=lambda m: m.__name__)
+def test_every_argument_is_typed_and_choices_match_validation(module):
+    hints = typing.get_type_hints(module.parallel_env)
+    assert set(hints) == set(_defaults(module)) | {"return"}
+    assert hints["return"] is module.raw_env
+    for name, hint in hints.items():
+        literals = [arg for arg in typing.get_args(hint) if typing.get_origin(arg) is typing.Literal]
+        if typing.get_origin(hint) is typing.Literal:
+            literals = [hint]
+        values = {v for lit in literals for v in typing.get_args(lit)}
+        if type(None) in typing.get_args(hint):
+            values.add(None)
+        if name in _CHOICES:
+            assert values == set(_CHOICES[name]), name
+        elif name == "platform":
+            assert values == set(PLATFORMS)
+        else:
+            assert not literals, f"{name}: a Literal the env does not validate"
+
+
+@pytest.mark.parametrize("module", TASK_MODULES, ids=lambda m: m.__name__)
+def test_docstring_has_gymnasium_sections_and_every_argument(module):
+    doc = inspect.getdoc(module.parallel_env)
+    headings = re.findall(r"^## (.+)$", doc, flags=re.M)
+    assert headings == SECTIONS
+    arguments = doc.split("## Arguments", 1)[1].split("## Version History", 1)[0]
+    documented = re.findall(r"^\| ``(\w+)`` \| ([^|]+) \|", arguments, flags=re.M)
+    assert [name for name, _ in documented] == list(inspect.signature(module.parallel_env).parameters)
+    for name, default in documented:  # the table's default column states the real default
+        assert default.strip().strip("`") == repr(_defaults(module)[name]).replace("'", '"'), name
+
+
+@pytest.mark.parametrize("module", TASK_MODULES, ids=lambda m: m.__name__)
+def test_arguments_reach_the_env(module):
+    env = module.parallel_env(n_robots=3, sensing="ideal", max_cycles=7, arena_size=2.0)
+    assert env.n_agents == 3 and env.max_cycles == 7 and env.arena.size == 2.0
+    assert env.config == {**_defaults(module), "n_robots": 3, "sensing": "ideal", "max_cycles": 7, "arena_size": 2.0}
+    with pytest.raises(TypeError):
+        module.parallel_env(n_robot=3)  # misspelt
+    with pytest.raises(TypeError):
+        module.parallel_env(3)  # keyword-only
+    aec = module.env(n_robots=2, sensing="ideal")
+    assert aec.possible_agents == ["robot_0", "robot_1"]
