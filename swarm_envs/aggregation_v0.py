@@ -95,10 +95,10 @@ def parallel_env(
 
     Per agent ``Box(-1, 1, (2 + message_bits,), float32)``: linear and angular velocity as fractions of
     the platform's maxima (``Platform.max_speed`` m/s and ``Platform.max_angular_speed`` rad/s; the
-    wheel speeds are then limited to ``max_speed``), followed by ``message_bits`` payload bits (an entry
-    > 0 is a 1-bit), broadcast over SwarmCom whenever the robot's transmit queue is empty. Finite values
-    outside [-1, 1] are clipped; NaN/inf, wrong shapes and actions for unknown or missing agents raise.
-    Zero actions keep a robot still.
+    wheel speeds are then limited to ``max_speed``), followed by ``message_bits`` payload bits (each
+    entry above 0 is a 1-bit), broadcast over SwarmCom whenever the robot's transmit queue is empty.
+    Finite values outside [-1, 1] are clipped; NaN/inf, wrong shapes and actions for unknown or missing
+    agents raise. Zero actions keep a robot still.
 
     ## Observation Space
 
