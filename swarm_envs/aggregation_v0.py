@@ -14,9 +14,9 @@ import numpy as np
 from pettingzoo import AECEnv
 from pettingzoo.utils.conversions import parallel_to_aec
 
-from swarm_envs.platforms import Platform
-from swarm_envs.env import SwarmEnv
+from swarm_envs.env import SwarmEnv, reports_unknown_kwargs
 from swarm_envs.metrics import cluster_stats, mean_distance_to_centroid
+from swarm_envs.platforms import Platform
 
 __all__ = ["AggregationEnv", "raw_env", "parallel_env", "env"]
 
@@ -55,6 +55,7 @@ class AggregationEnv(SwarmEnv):
 raw_env = AggregationEnv
 
 
+@reports_unknown_kwargs
 def parallel_env(
     *,
     n_robots: int = 10,

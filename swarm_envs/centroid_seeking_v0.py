@@ -16,8 +16,8 @@ from pettingzoo import AECEnv
 from pettingzoo.utils.conversions import parallel_to_aec
 from scipy.spatial import cKDTree
 
+from swarm_envs.env import SwarmEnv, reports_unknown_kwargs
 from swarm_envs.platforms import Platform
-from swarm_envs.env import SwarmEnv
 from swarm_envs.world import Arena, spawn_positions
 
 __all__ = ["CentroidSeekingEnv", "raw_env", "parallel_env", "env"]
@@ -94,6 +94,7 @@ class CentroidSeekingEnv(SwarmEnv):
 raw_env = CentroidSeekingEnv
 
 
+@reports_unknown_kwargs
 def parallel_env(
     *,
     n_robots: int = 1,

@@ -15,9 +15,9 @@ import numpy as np
 from pettingzoo import AECEnv
 from pettingzoo.utils.conversions import parallel_to_aec
 
-from swarm_envs.platforms import Platform
-from swarm_envs.env import SwarmEnv, bump_any
+from swarm_envs.env import SwarmEnv, bump_any, reports_unknown_kwargs
 from swarm_envs.metrics import components, polarisation
+from swarm_envs.platforms import Platform
 from swarm_envs.sensing.ideal import neighbour_pairs
 
 __all__ = ["FlockingEnv", "raw_env", "parallel_env", "env"]
@@ -72,6 +72,7 @@ class FlockingEnv(SwarmEnv):
 raw_env = FlockingEnv
 
 
+@reports_unknown_kwargs
 def parallel_env(
     *,
     n_robots: int = 10,

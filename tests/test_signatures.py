@@ -64,8 +64,8 @@ def test_arguments_reach_the_env(module):
     env = module.parallel_env(n_robots=3, sensing="ideal", max_cycles=7, arena_size=2.0)
     assert env.n_agents == 3 and env.max_cycles == 7 and env.arena.size == 2.0
     assert env.config == {**_defaults(module), "n_robots": 3, "sensing": "ideal", "max_cycles": 7, "arena_size": 2.0}
-    with pytest.raises(TypeError):
-        module.parallel_env(n_robot=3)  # misspelt
+    with pytest.raises(TypeError, match=r"unknown keyword argument\(s\) \['n_robot'\]; allowed: \[.*'n_robots'"):
+        module.parallel_env(n_robot=3)  # misspelt: the message lists the allowed names
     with pytest.raises(TypeError):
         module.parallel_env(3)  # keyword-only
     aec = module.env(n_robots=2, sensing="ideal")
