@@ -14,7 +14,8 @@ import numpy as np
 from pettingzoo import AECEnv
 from pettingzoo.utils.conversions import parallel_to_aec
 
-from swarm_envs.env import SwarmEnv, reports_unknown_kwargs
+from swarm_envs.env import SwarmEnv
+from swarm_envs.factories import reports_unknown_kwargs
 from swarm_envs.metrics import cluster_stats, mean_distance_to_centroid
 from swarm_envs.platforms import Platform
 

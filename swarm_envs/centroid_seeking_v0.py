@@ -16,7 +16,8 @@ from pettingzoo import AECEnv
 from pettingzoo.utils.conversions import parallel_to_aec
 from scipy.spatial import cKDTree
 
-from swarm_envs.env import SwarmEnv, reports_unknown_kwargs
+from swarm_envs.env import SwarmEnv
+from swarm_envs.factories import reports_unknown_kwargs
 from swarm_envs.platforms import Platform
 from swarm_envs.world import Arena, spawn_positions
 

@@ -8,11 +8,8 @@ Ground truth goes to ``infos[agent]["ground_truth"]`` only.
 
 from __future__ import annotations
 
-import functools
-import inspect
 import numbers
-from collections.abc import Callable
-from typing import Any, TypeVar
+from typing import Any
 
 import numpy as np
 from gymnasium import spaces
@@ -380,24 +377,3 @@ class SwarmEnv(ParallelEnv):
 def bump_any(bumps: np.ndarray) -> np.ndarray:
     """True per robot in contact with anything this step."""
     return bumps.reshape(len(bumps), N_BUMP_SECTORS).any(axis=1)
-
-
-_Factory = TypeVar("_Factory", bound=Callable[..., Any])
-
-
-def reports_unknown_kwargs(factory: _Factory) -> _Factory:
-    """Decorate an env factory with explicit keyword arguments so that an unknown or misspelt name raises
-    ``TypeError`` listing the allowed names (as ``SwarmEnv`` does), not Python's bare message.
-
-    The signature, type hints and docstring stay the factory's (``functools.wraps``).
-    """
-    allowed = sorted(inspect.signature(factory).parameters)
-
-    @functools.wraps(factory)
-    def checked(*args: Any, **kwargs: Any) -> Any:
-        unknown = sorted(set(kwargs) - set(allowed))
-        if unknown:
-            raise TypeError(f"{factory.__module__}.{factory.__name__}() got unknown keyword argument(s) {unknown}; allowed: {allowed}")
-        return factory(*args, **kwargs)
-
-    return checked  # type: ignore[return-value]

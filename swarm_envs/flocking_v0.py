@@ -15,7 +15,8 @@ import numpy as np
 from pettingzoo import AECEnv
 from pettingzoo.utils.conversions import parallel_to_aec
 
-from swarm_envs.env import SwarmEnv, bump_any, reports_unknown_kwargs
+from swarm_envs.env import SwarmEnv, bump_any
+from swarm_envs.factories import reports_unknown_kwargs
 from swarm_envs.metrics import components, polarisation
 from swarm_envs.platforms import Platform
 from swarm_envs.sensing.ideal import neighbour_pairs
