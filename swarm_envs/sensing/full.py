@@ -48,9 +48,13 @@ _STAT_NAMES = ("tx_started", "deferrals", "rx_delivered", "rx_lost", "collisions
 class FullSensing:
     """Physically modelled sensing for ``n_robots`` robots of one platform (module docstring)."""
 
-    def __init__(self, platform: Platform, n_robots: int, config: dict[str, Any]) -> None:
+    def __init__(self, platform: Platform, n_robots: int, config: dict[str, Any], n_copies: int = 1) -> None:
         self.platform = platform
-        self.n = int(n_robots)
+        self.copy_size = int(n_robots)
+        self.n_copies = int(n_copies)
+        if self.n_copies != 1:
+            raise NotImplementedError("full sensing is not batched over env copies yet")
+        self.n = self.copy_size * self.n_copies
         self.config = config
         self.has_range = hasattr(platform.ir_model, "amplitude_inverse")
         source = config.get("bearing_source") or ("range_bearing" if self.has_range else "sectors")
@@ -65,10 +69,11 @@ class FullSensing:
         self.network: Network | None = None
         self.exchange: BearingExchange | None = None
 
-    def reset(self, rng: np.random.Generator) -> None:
-        """New sensor, channel and exchange state from independent child streams of ``rng``."""
+    def reset(self, copies: np.ndarray, rngs: list[np.random.Generator]) -> None:
+        """New sensor, channel and exchange state of ``copies`` from independent child streams of each
+        copy's generator ``rngs[k]``."""
         cfg = self.config
-        rb_rng, net_rng, ex_rng = rng.spawn(3)
+        rb_rng, net_rng, ex_rng = rngs[0].spawn(3)
         if self.has_range:
             self.rb = RangeBearingSensor(
                 self.platform,
@@ -94,8 +99,11 @@ class FullSensing:
         self.exchange = BearingExchange(self.n, mode=cfg["exchange"], network=self.network, rng=ex_rng)
 
     # ------------------------------------------------------------------------------------------------
-    def step(self, positions: np.ndarray, headings: np.ndarray, payloads: np.ndarray | None) -> SensorFrame:
-        """One control step of sensing (module docstring); ``payloads`` (N, b) bool or None."""
+    def step(
+        self, positions: np.ndarray, headings: np.ndarray, payloads: np.ndarray | None, sending: np.ndarray | None = None
+    ) -> SensorFrame:
+        """One control step of sensing (module docstring); ``payloads`` (N, b) bool or None; ``sending``
+        (N,) bool: robots whose payload may be queued this step (default all)."""
         links = compute_links(positions, headings, self.platform)
 
         # range & bearing (or bearing-only sectors)
@@ -110,7 +118,10 @@ class FullSensing:
         # SwarmCom: application payloads and the bearing exchange share the channel
         net = self.network
         if payloads is not None and self.message_bits > 0:
-            free = np.flatnonzero(net.q_count == 0)
+            free = net.q_count == 0
+            if sending is not None:
+                free &= np.asarray(sending, bool)
+            free = np.flatnonzero(free)
             if free.size:
                 net.send_many(free, payloads[free])
         if self.exchange.mode == "network":
