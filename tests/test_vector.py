@@ -7,8 +7,8 @@ import pytest
 
 import swarm_envs
 
-SENSING = ["ideal"]  # full sensing joins once every stage of the stack is batched over copies
 STEPS = 300
+PLATFORMS = ["epuck", "droplet", "rone"]
 
 
 def _actions(rng: np.random.Generator, shape: tuple[int, ...]) -> np.ndarray:
@@ -47,25 +47,43 @@ def _assert_copy_equals_single(vec_obs, vec_rew, vec_infos, b, agents, single, f
             assert vec_infos["reward_terms"][k][b, i] == v, k
 
 
-@pytest.mark.parametrize("sensing", SENSING)
-@pytest.mark.parametrize("env_id", swarm_envs.list_envs())
-def test_each_copy_equals_a_single_env_bit_for_bit(env_id, sensing):
+def _check_copies_equal_singles(env_id, sensing, platform, steps):
     seeds = [11, 4, 27]
-    kwargs = dict(sensing=sensing, max_cycles=STEPS, n_robots=6 if "Centroid" not in env_id else 2, message_bits=3)
+    kwargs = dict(sensing=sensing, platform=platform, max_cycles=steps, n_robots=6 if "Centroid" not in env_id else 2, message_bits=3)
     vec = swarm_envs.make_vec(env_id, len(seeds), **kwargs)
     rng = np.random.default_rng(0)
-    actions = _actions(rng, (STEPS, len(seeds), vec.n_agents, vec.layout.action_size))
+    actions = _actions(rng, (steps, len(seeds), vec.n_agents, vec.layout.action_size))
     singles = [_single_rollout(env_id, s, actions[:, b], **kwargs) for b, s in enumerate(seeds)]
     obs, infos = vec.reset(seed=seeds)
     for b in range(len(seeds)):
         agents, traj = singles[b]
         _assert_copy_equals_single(obs, None, infos, b, agents, traj[0], False)
-    for t in range(STEPS):
+    for t in range(steps):
         obs, rew, term, trunc, infos = vec.step(actions[t])
         for b in range(len(seeds)):
             agents, traj = singles[b]
             _assert_copy_equals_single(obs, rew, infos, b, agents, traj[t + 1], False)
     assert trunc.all()
+
+
+@pytest.mark.parametrize("sensing", ["ideal", "full"])
+@pytest.mark.parametrize("env_id", swarm_envs.list_envs())
+def test_each_copy_equals_a_single_env_bit_for_bit(env_id, sensing):
+    """Copy b of a 3-copy vector env reset with seed s_b equals a single env reset with s_b, 300 steps."""
+    _check_copies_equal_singles(env_id, sensing, "epuck", STEPS)
+
+
+@pytest.mark.parametrize("platform", ["droplet", "rone"])
+def test_copies_equal_single_envs_on_other_platforms(platform):
+    _check_copies_equal_singles("swarm_envs/Flocking-v0", "full", platform, 100)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("platform", PLATFORMS)
+@pytest.mark.parametrize("sensing", ["ideal", "full"])
+@pytest.mark.parametrize("env_id", swarm_envs.list_envs())
+def test_copies_equal_single_envs_every_task_platform_and_mode(env_id, sensing, platform):
+    _check_copies_equal_singles(env_id, sensing, platform, STEPS)
 
 
 def test_flattened_observation_matches_single_env():
@@ -78,12 +96,14 @@ def test_flattened_observation_matches_single_env():
     np.testing.assert_array_equal(obs[1], np.stack([single[a] for a in env.possible_agents]))
 
 
-def test_autoreset_next_step_and_other_copies_unaffected():
-    """Copy 0 ends after 5 steps and restarts; copy 1 (longer episodes) must not notice."""
-    kwargs = dict(sensing="ideal", n_robots=4, max_cycles=5)
+@pytest.mark.parametrize("sensing", ["ideal", "full"])
+def test_autoreset_next_step_restarts_like_a_single_env(sensing):
+    """Both copies end after 5 steps and restart on the next step (zero reward, not done); the restarted
+    copy equals a single env whose generator continued after its first episode."""
+    kwargs = dict(sensing=sensing, n_robots=4, max_cycles=5, message_bits=2)
     vec = swarm_envs.make_vec("swarm_envs/Flocking-v0", 2, **kwargs)
     rng = np.random.default_rng(1)
-    actions = rng.uniform(-1, 1, (12, 2, 4, 2))
+    actions = rng.uniform(-1, 1, (12, 2, 4, 4))
     obs, _ = vec.reset(seed=[5, 6])
     positions = []
     for t in range(12):
@@ -105,23 +125,28 @@ def test_autoreset_next_step_and_other_copies_unaffected():
         np.testing.assert_array_equal(positions[t][0], np.stack([infos[a]["ground_truth"]["position"] for a in env.possible_agents]))
 
 
-def test_resetting_one_copy_leaves_the_other_unchanged():
-    """Copy 1's trajectory is the same whether copy 0 runs short or long episodes."""
+@pytest.mark.parametrize("sensing", ["ideal", "full"])
+def test_restarting_one_copy_leaves_the_others_unchanged(sensing):
+    """Copy 0 restarts mid-way (it alone reached its step limit); copy 1 must not notice: its
+    observations equal those of a run in which copy 0 never restarts."""
     rng = np.random.default_rng(2)
-    actions = rng.uniform(-1, 1, (30, 2, 4, 2))
+    actions = rng.uniform(-1, 1, (30, 2, 4, 4))
 
-    def copy1_positions(max_cycles):
-        vec = swarm_envs.make_vec("swarm_envs/Aggregation-v0", 2, sensing="ideal", n_robots=4, max_cycles=max_cycles)
+    def run(limit_copy0):
+        vec = swarm_envs.make_vec("swarm_envs/Aggregation-v0", 2, sensing=sensing, n_robots=4, max_cycles=100, message_bits=2)
         vec.reset(seed=[1, 2])
         out = []
         for t in range(30):
-            _, _, _, _, infos = vec.step(actions[t])
-            out.append(infos["ground_truth"]["position"][1].copy())
-        return np.stack(out)
+            if t == limit_copy0:
+                vec._needs_reset[0] = True  # as if copy 0's episode had ended: it restarts on this step
+            obs, _, _, _, infos = vec.step(actions[t])
+            out.append((obs["range_bearing"][1].copy(), obs["messages"][1].copy(), obs["scale_free"][1].copy(), infos["ground_truth"]["position"][1].copy()))
+        return out
 
-    short = copy1_positions(7)  # both copies restart every 8 steps
-    long = copy1_positions(100)
-    np.testing.assert_array_equal(short[:7], long[:7])
+    restarted, plain = run(10), run(-1)
+    for a, b in zip(restarted, plain):
+        for x, y in zip(a, b):
+            np.testing.assert_array_equal(x, y)
 
 
 def test_shapes_dtypes_and_spaces():

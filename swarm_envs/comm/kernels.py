@@ -236,11 +236,12 @@ def slot_loop(
     state, m_max_est, thr, nbits, expect, phase, buf, best_m, best_det, last_s1, start_slot,
     gt_tx, gt_id, gt_buf, collided,
     code_n, code_k, table_msg, table_ok, header_blocks, header_bits, id_bits, with_sender, crc_bits, crc_table, valid_types,
-    counts, per_robot, d_int, d_pay,
+    n_ids, counts, per_robot, d_int, d_pay,
 ):  # fmt: skip
     """All S bit slots of one control step for all robots (module docstring). State arrays are updated in
     place; ``frame_counter`` is a (1,) array. Deliveries are written to ``d_int`` (D, 10) with columns
-    :data:`DELIVERY_FIELDS` and ``d_pay`` (D, >= 255) bool; returns the number written."""
+    :data:`DELIVERY_FIELDS` and ``d_pay`` (D, >= 255) bool; returns the number written. Header ids are a
+    copy's own robot numbers, valid below ``n_ids`` (the robots per env copy)."""
     n = sending.shape[0]
     Q = q_bits.shape[1]
     F = cur_bits.shape[1]
@@ -421,7 +422,7 @@ def slot_loop(
                     length = _uint(info, 4, 8)
                     origin = _uint(info, 19, id_bits)
                     sender = _uint(info, 19 + id_bits, id_bits) if with_sender else origin
-                    good = ok and info[0] and valid_types[typ] and origin < n and sender < n
+                    good = ok and info[0] and valid_types[typ] and origin < n_ids and sender < n_ids
                     if not good:
                         _abort(r, state, nbits, buf, gt_buf, gt_id, collided, code_n, code_k, table_msg, table_ok, counts, per_robot)
                         break

@@ -42,6 +42,7 @@ from typing import Any
 
 import numpy as np
 
+from swarm_envs.copies import CopyRandom
 from swarm_envs.comm.bch import BCHCode, code as bch_code
 from swarm_envs.comm.channel import ADCModel, adc_model_for
 from swarm_envs.comm.kernels import COUNTERS, DELIVERY_FIELDS, HAVE_NUMBA, PER_ROBOT, StepDraws, draw_step, slot_loop
@@ -153,6 +154,10 @@ class Network:
         backend: ``"numba"`` (default when numba imports): the compiled slot loop of
             :mod:`swarm_envs.comm.kernels`; ``"numpy"``: the vectorised reference. Both consume the same
             pre-drawn random numbers (:func:`swarm_envs.comm.kernels.draw_step`) and give the same results.
+        n_copies: env copies of ``n_robots`` robots each (rows copy-major); ``rng`` is then a
+            :class:`swarm_envs.copies.CopyRandom` with one generator per copy. Frames carry a copy's own
+            robot numbers (header widths as in a single env), every random number of a copy comes from its
+            own generator, and :meth:`reset_copies` restarts some copies only.
     """
 
     def __init__(
@@ -175,6 +180,7 @@ class Network:
         adc_model: ADCModel | None = None,
         crc_bits: int | None = None,
         backend: str | None = None,
+        n_copies: int = 1,
     ) -> None:
         if backend is None:
             backend = "numba" if HAVE_NUMBA else "numpy"
@@ -190,8 +196,16 @@ class Network:
         if not 0 <= payload_bits <= MAX_PAYLOAD:
             raise ValueError(f"payload_bits must be in [0, {MAX_PAYLOAD}], got {payload_bits}")
         self.platform = get_platform(platform)
-        self.n = int(n_robots)
-        self.rng = rng
+        self.rng = rng if isinstance(rng, CopyRandom) else CopyRandom([rng] * int(n_copies))
+        if self.rng.n_copies != int(n_copies):
+            raise ValueError(f"need one generator per env copy ({n_copies}), got {self.rng.n_copies}")
+        self.copy_size = int(n_robots)
+        self.n_copies = int(n_copies)
+        self.n = self.copy_size * self.n_copies
+        self.copy_of = np.repeat(np.arange(self.n_copies), self.copy_size)
+        self.offset = self.copy_of * self.copy_size  # first robot of each robot's copy: frames carry local ids
+        if self.n_copies > 1 and abs(bitrate * dt - round(bitrate * dt)) > 1e-9:
+            raise ValueError(f"env copies need a whole number of bit slots per step; bitrate * dt = {bitrate * dt}")
         self.bitrate = float(bitrate)
         self.dt = float(dt)
         self.m_tr = float(relative_threshold)
@@ -209,7 +223,7 @@ class Network:
         if crc_bits is None:
             crc_bits = 8 if comm_mode == "flooding" else 0
         self.crc_bits = int(crc_bits)
-        self.fmt = FrameFormat.for_swarm(self.n, self.code, with_sender=(comm_mode == "flooding"), crc_bits=self.crc_bits)
+        self.fmt = FrameFormat.for_swarm(self.copy_size, self.code, with_sender=(comm_mode == "flooding"), crc_bits=self.crc_bits)
         self.kinds = KindRegistry()
         self.n_det = self.platform.n_detectors
         self.det = DetectorBank(self.n, self.m_tr, max_bits=64)
@@ -223,6 +237,7 @@ class Network:
         n = self.n
         F = max(64, self.fmt.header_blocks * self.code.n + 1, self.frame_slots() + 1)
         self.slot = 0
+        self.slot0 = np.zeros(self.n_copies, dtype=np.int64)  # global slot at each copy's reset
         self.carry = 0.0
         self.q_bits = np.zeros((n, self.Q, F), dtype=bool)
         self.q_slots = np.zeros((n, self.Q), dtype=np.int64)
@@ -241,15 +256,49 @@ class Network:
         self.collided = np.zeros(n, dtype=bool)
         self.seen_keys = np.zeros(0, dtype=np.int64)
         self.seen_slot = np.zeros(0, dtype=np.int64)
-        a = self.adc_model
-        K = max(1, self.startup_samples)
-        dark = np.floor(self.ambient[:, None] + self.rng.normal(0.0, a.noise_sigma, size=(n, K * self.n_det)) if a.noise_var > 0 else np.repeat(self.ambient[:, None], K * self.n_det, 1))
-        self.det.reset(np.clip(dark, 0, a.m_sup).mean(axis=1))
+        self.det.reset(self._startup_ambient(np.arange(n)))
         self.csma.reset()
         self.stats: dict[str, Any] = {c: 0 for c in _COUNTERS}
         for c in _PER_ROBOT:
             self.stats[c + "_per_robot"] = np.zeros(n, dtype=np.int64)
         self._step_stats = self._new_step_stats()
+
+    def _startup_ambient(self, rows: np.ndarray) -> np.ndarray:
+        """Start-up ambient estimate of ``rows`` (sorted, whole copies): mean of noisy dark samples [Sec. 4.5]."""
+        a = self.adc_model
+        K = max(1, self.startup_samples)
+        amb = self.ambient[rows, None]
+        if a.noise_var > 0:
+            dark = np.floor(amb + self.rng.normal(a.noise_sigma, self.copy_of[rows], (K * self.n_det,)))
+        else:
+            dark = np.repeat(amb, K * self.n_det, 1)
+        return np.clip(dark, 0, a.m_sup).mean(axis=1)
+
+    def reset_copies(self, copies: np.ndarray, rngs: list[np.random.Generator]) -> None:
+        """Reset the robots of env ``copies`` as a fresh network would be (queues, transceivers, detector,
+        sequence numbers, per-robot statistics), drawing their start-up ambient from ``rngs`` (one per copy,
+        which become those copies' streams). Other copies are untouched."""
+        copies = np.asarray(copies, dtype=np.int64).reshape(-1)
+        for b, g in zip(copies, rngs):
+            self.rng.generators[b] = g
+        rows = np.flatnonzero(np.isin(self.copy_of, copies))
+        self.slot0[copies] = self.slot
+        for arr, value in (
+            (self.q_bits, False), (self.q_slots, 0), (self.q_head, 0), (self.q_count, 0), (self.cur_bits, False),
+            (self.cur_slots, 0), (self.cur_pos, 0), (self.cur_id, -1), (self.sending, False), (self.seq_next, 0),
+            (self.gt_tx, -1), (self.gt_id, -1), (self.gt_buf, False), (self.collided, False),
+        ):  # fmt: skip
+            arr[rows] = value
+        det = self.det
+        for arr in (det.state, det.thr, det.nbits, det.expect, det.phase, det.buf, det.best_m, det.best_det, det.last_s1, det.start_slot):
+            arr[rows] = 0
+        det.m_max_est[rows] = self._startup_ambient(rows)
+        self.csma.backoff[rows] = 0
+        receiver = self.seen_keys // (1 << SEQ_BITS) // self.n
+        keep = ~np.isin(self.copy_of[receiver], copies) if self.seen_keys.size else np.zeros(0, bool)
+        self.seen_keys, self.seen_slot = self.seen_keys[keep], self.seen_slot[keep]
+        for c in _PER_ROBOT:
+            self.stats[c + "_per_robot"][rows] = 0
 
     def _new_step_stats(self) -> dict[str, Any]:
         s: dict[str, Any] = {c: 0 for c in _COUNTERS}
@@ -320,7 +369,8 @@ class Network:
         rank[order] = np.arange(M) - grp_start
         seq = (self.seq_next[robots] + rank) % (1 << SEQ_BITS)
         np.add.at(self.seq_next, robots, 1)
-        bits, slots = self.fmt.build(np.full(M, tcode), seq, robots, robots, payloads, lengths)
+        local = robots - self.offset[robots]  # frames carry a copy's own robot numbers
+        bits, slots = self.fmt.build(np.full(M, tcode), seq, local, local, payloads, lengths)
         self._enqueue(robots, bits, slots, rank)
         return seq
 
@@ -394,7 +444,19 @@ class Network:
     def draw_step(self, S: int) -> StepDraws:
         """Every random number of a step of S slots, drawn before the slot loop (same for both backends)."""
         a = self.adc_model
-        return draw_step(self.rng, S, self.n, self.n_det, a.noise_sigma if a.noise_var > 0 else 0.0, self.intensity_sigma, self.csma.window)
+        parts = [
+            draw_step(g, S, self.copy_size, self.n_det, a.noise_sigma if a.noise_var > 0 else 0.0, self.intensity_sigma, self.csma.window)
+            for g in self.rng.generators
+        ]
+        if len(parts) == 1:
+            return parts[0]
+        inoise = np.concatenate([p.intensity_noise for p in parts], axis=1) if parts[0].intensity_noise.size else parts[0].intensity_noise
+        return StepDraws(
+            np.concatenate([p.noise for p in parts], axis=1),
+            inoise,
+            np.concatenate([p.backoff for p in parts], axis=0),
+            np.concatenate([p.access for p in parts], axis=0),
+        )
 
     def _slots_kernel(self, S, draws, tx_ptr, rx, G, sig_ptr, sig_rx) -> list[dict[str, np.ndarray]]:
         """The compiled slot loop (:func:`swarm_envs.comm.kernels.slot_loop`)."""
@@ -421,7 +483,7 @@ class Network:
             self.gt_tx, self.gt_id, self.gt_buf, self.collided,
             c.n, c.k, c._table_msg, c._table_ok, fmt.header_blocks, fmt.header_bits, fmt.id_bits, fmt.with_sender,
             fmt.crc_bits, crc8_table(fmt.header_bits + MAX_PAYLOAD + 8), self.kinds.valid_codes(),
-            counts, per_robot, d_int, d_pay,
+            self.copy_size, counts, per_robot, d_int, d_pay,
         )  # fmt: skip
         self.frame_counter = int(fc[0])
         self.slot += S
@@ -600,7 +662,7 @@ class Network:
                 hb = fmt.header_blocks
                 info, ok = c.decode_stream(det.buf[p1, : hb * c.n])
                 h = fmt.parse_header(info)
-                good = ok & (h["marker"] == 1) & valid_types[h["type"]] & (h["origin"] < self.n) & (h["sender"] < self.n)
+                good = ok & (h["marker"] == 1) & valid_types[h["type"]] & (h["origin"] < self.copy_size) & (h["sender"] < self.copy_size)
                 self._abort(p1[~good])
                 g = p1[good]
                 total = fmt.n_blocks(h["length"][good]) * c.n
@@ -717,6 +779,10 @@ class Network:
         # canonical order: by the slot the frame was completed in, then by receiver (one per robot and slot)
         o = np.lexsort((d["receiver"], d["done_slot"]))
         d = {k: v[o] for k, v in d.items()}
+        # header ids are the receiver's copy's own numbers: to robot rows; slots counted from the copy's reset
+        base = self.offset[d["receiver"]]
+        d["origin"], d["sender"] = d["origin"] + base, d["sender"] + base
+        d["slot"] = d["slot"] - self.slot0[self.copy_of[d["receiver"]]]
         keep = np.ones(d["receiver"].size, dtype=bool)
         if self.comm_mode == "flooding" and keep.size:
             flood = d["type"] == self.kinds.code("app")
@@ -759,7 +825,8 @@ class Network:
     def _relay(self, d: dict[str, np.ndarray], idx: np.ndarray) -> None:
         """Flooding: queue one re-send of each new message (same origin/seq/payload, sender = relay)."""
         robots = d["receiver"][idx]
-        bits, slots = self.fmt.build(d["type"][idx], d["seq"][idx], d["origin"][idx], robots, d["payload"][idx], d["length"][idx])
+        base = self.offset[robots]
+        bits, slots = self.fmt.build(d["type"][idx], d["seq"][idx], d["origin"][idx] - base, robots - base, d["payload"][idx], d["length"][idx])
         order = np.argsort(robots, kind="stable")
         rs = robots[order]
         firsts = np.r_[True, rs[1:] != rs[:-1]]
