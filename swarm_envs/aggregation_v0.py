@@ -14,7 +14,7 @@ import numpy as np
 from pettingzoo.utils.conversions import parallel_to_aec
 
 from swarm_envs.env import SwarmEnv
-from swarm_envs.metrics import cluster_stats
+from swarm_envs.metrics import largest_component_fraction
 from swarm_envs.task import BatchState, Task
 
 __all__ = ["AggregationTask", "AggregationEnv", "raw_env", "parallel_env", "env"]
@@ -41,10 +41,10 @@ class AggregationTask(Task):
         global_rows = np.repeat(global_term[:, None], self.n_agents, axis=1)
         rewards = global_rows if self.reward_mode == "global" else local_term
         link = CLUSTER_LINK_DIAMETERS * self.platform.diameter
-        clusters = np.array([cluster_stats(p, link) for p in pos], dtype=float).reshape(-1, 2)
+        largest, n_clusters = largest_component_fraction(pos, link)
         metrics = {
-            "largest_cluster_fraction": clusters[:, 0],
-            "n_clusters": clusters[:, 1],
+            "largest_cluster_fraction": largest,
+            "n_clusters": n_clusters.astype(float),
             "mean_distance_to_centroid": spread,
         }
         terms = {"spread_decrease": global_rows, "own_distance_decrease": local_term}

@@ -15,7 +15,7 @@ import numpy as np
 from pettingzoo.utils.conversions import parallel_to_aec
 
 from swarm_envs.env import SwarmEnv
-from swarm_envs.metrics import components
+from swarm_envs.metrics import largest_component_fraction
 from swarm_envs.task import BatchState, Task, bump_any
 from swarm_envs.sensing.ideal import neighbour_pairs
 
@@ -40,7 +40,7 @@ class FlockingTask(Task):
         speed = np.linalg.norm(self.agents_of(state.velocities), axis=2)  # (B, A)
         vmax = self.platform.max_speed
         ir_range = self.platform.ir_range
-        cohesion = np.array([np.bincount(components(p, ir_range)).max() / A for p in pos], dtype=float)
+        cohesion, _ = largest_component_fraction(pos, ir_range)
         weight = np.clip(speed / vmax, 0.0, 1.0)
         vec = np.stack([np.cos(head), np.sin(head)], -1) * weight[..., None]  # (B, A, 2)
         pol = np.linalg.norm(vec.mean(axis=1), axis=1)  # (B,) [polarisation]
