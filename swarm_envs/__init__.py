@@ -22,6 +22,7 @@ __all__ = [
     "flocking_v0",
     "centroid_seeking_v0",
     "make",
+    "make_vec",
     "list_envs",
     "ENV_IDS",
     "PLATFORMS",
@@ -53,3 +54,10 @@ def make(env_id: str, **kwargs: Any) -> ParallelEnv:
     import pettingzoo
 
     return pettingzoo.make("parallel", env_id, **kwargs)
+
+
+def make_vec(env_id: str, num_envs: int, **kwargs: Any):
+    """``num_envs`` copies of a registered task stepped by one batched core (:mod:`swarm_envs.vector`)."""
+    from swarm_envs.vector import make_vec as _make_vec
+
+    return _make_vec(env_id, num_envs, **kwargs)

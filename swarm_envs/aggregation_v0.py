@@ -16,41 +16,52 @@ from pettingzoo.utils.conversions import parallel_to_aec
 
 from swarm_envs.env import SwarmEnv
 from swarm_envs.factories import reports_unknown_kwargs
-from swarm_envs.metrics import cluster_stats, mean_distance_to_centroid
+from swarm_envs.metrics import largest_component_fraction
 from swarm_envs.platforms import Platform
+from swarm_envs.task import BatchState, Task
 
-__all__ = ["AggregationEnv", "raw_env", "parallel_env", "env"]
+__all__ = ["AggregationTask", "AggregationEnv", "raw_env", "parallel_env", "env"]
 
 CLUSTER_LINK_DIAMETERS = 1.5
+
+
+class AggregationTask(Task):
+    """Aggregation rewards and metrics over all env copies (module docstring)."""
+
+    def __init__(self, config: dict[str, Any], platform, n_copies: int = 1) -> None:
+        super().__init__(config, platform, n_copies)
+        self._prev_own = np.zeros((self.n_copies, self.n_agents))
+
+    def rewards(self, state: BatchState, first: np.ndarray):
+        pos = self.agents_of(state.positions)  # (B, A, 2)
+        own = np.linalg.norm(pos - pos.mean(axis=1, keepdims=True), axis=2)  # (B, A)
+        spread = own.mean(axis=1)
+        self._prev_own[first] = own[first]
+        size = self.arena.size
+        global_term = (self._prev_own.mean(axis=1) - spread) / size  # (B,)
+        local_term = (self._prev_own - own) / size
+        self._prev_own = own
+        global_rows = np.repeat(global_term[:, None], self.n_agents, axis=1)
+        rewards = global_rows if self.reward_mode == "global" else local_term
+        link = CLUSTER_LINK_DIAMETERS * self.platform.diameter
+        largest, n_clusters = largest_component_fraction(pos, link)
+        metrics = {
+            "largest_cluster_fraction": largest,
+            "n_clusters": n_clusters.astype(float),
+            "mean_distance_to_centroid": spread,
+        }
+        terms = {"spread_decrease": global_rows, "own_distance_decrease": local_term}
+        return rewards, terms, metrics
+
+    def markers(self, positions: np.ndarray) -> dict[str, np.ndarray]:
+        return {"centroid": positions[self.n_static :].mean(axis=0)}
 
 
 class AggregationEnv(SwarmEnv):
     """Aggregation task; see the module docstring and :class:`swarm_envs.env.SwarmEnv` for kwargs."""
 
     metadata = {**SwarmEnv.metadata, "name": "aggregation_v0"}
-
-    def _rewards(self, first: bool):
-        pos = self.world.positions[self.agent_robots]
-        own = np.linalg.norm(pos - pos.mean(axis=0), axis=1)
-        spread = float(own.mean())
-        if first:
-            self._prev_own = own
-        size = self.arena.size
-        global_term = (self._prev_own.mean() - spread) / size
-        local_term = (self._prev_own - own) / size
-        self._prev_own = own
-        rewards = np.full(self.n_agents, global_term) if self.reward_mode == "global" else local_term
-        largest, n_clusters = cluster_stats(pos, CLUSTER_LINK_DIAMETERS * self.platform.diameter)
-        metrics = {
-            "largest_cluster_fraction": largest,
-            "n_clusters": float(n_clusters),
-            "mean_distance_to_centroid": mean_distance_to_centroid(pos),
-        }
-        terms = {"spread_decrease": np.full(self.n_agents, global_term), "own_distance_decrease": local_term}
-        return rewards, terms, metrics
-
-    def _markers(self) -> dict[str, np.ndarray]:
-        return {"centroid": self.world.positions[self.agent_robots].mean(axis=0)}
+    TASK = AggregationTask
 
 
 raw_env = AggregationEnv

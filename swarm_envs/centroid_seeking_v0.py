@@ -19,16 +19,21 @@ from scipy.spatial import cKDTree
 from swarm_envs.env import SwarmEnv
 from swarm_envs.factories import reports_unknown_kwargs
 from swarm_envs.platforms import Platform
-from swarm_envs.world import Arena, spawn_positions
+from swarm_envs.task import BatchState, Task
+from swarm_envs.world import spawn_positions
 
-__all__ = ["CentroidSeekingEnv", "raw_env", "parallel_env", "env"]
+__all__ = ["CentroidSeekingTask", "CentroidSeekingEnv", "raw_env", "parallel_env", "env"]
 
 
-class CentroidSeekingEnv(SwarmEnv):
-    """Centroid-seeking task; extra kwarg ``n_anchors`` (default 4, at least 3)."""
+class CentroidSeekingTask(Task):
+    """Centroid-seeking rewards and metrics over all env copies; extra kwarg ``n_anchors`` (default 4, >= 3)."""
 
-    metadata = {**SwarmEnv.metadata, "name": "centroid_seeking_v0"}
     TASK_DEFAULTS = {"n_anchors": 4, "n_robots": 1}
+
+    def __init__(self, config: dict[str, Any], platform, n_copies: int = 1) -> None:
+        super().__init__(config, platform, n_copies)
+        self._second_half_sum = np.zeros(self.n_copies)
+        self._second_half_steps = np.zeros(self.n_copies, dtype=np.int64)
 
     def _n_static(self) -> int:
         n = self.config["n_anchors"]
@@ -36,16 +41,16 @@ class CentroidSeekingEnv(SwarmEnv):
             raise ValueError(f"n_anchors must be an integer >= 3 (a polygon), got {n!r}")
         return int(n)
 
-    def _default_arena_size(self) -> float:
+    def default_arena_size(self) -> float:
         # room for an anchor polygon of radius ~0.3 IR ranges plus seekers around it
-        return max(super()._default_arena_size(), 0.9 * self.platform.ir_range)
+        return max(super().default_arena_size(), 0.9 * self.platform.ir_range)
 
     @property
     def polygon_radius(self) -> float:
         """Radius (m) of the circle the anchors stand on: within IR range of each other."""
         return min(0.3 * self.platform.ir_range, 0.3 * self.arena.size)
 
-    def _spawn(self, rng: np.random.Generator):
+    def spawn(self, rng: np.random.Generator):
         n_a, radius = self.n_static, self.platform.radius
         # points on a circle are in convex position; keep corners apart by at least a diameter + margin
         for _ in range(1000):
@@ -66,30 +71,41 @@ class CentroidSeekingEnv(SwarmEnv):
         positions = np.concatenate([anchors, seekers])
         return positions, rng.uniform(-np.pi, np.pi, self.n_world)
 
+    def centroids(self, positions: np.ndarray) -> np.ndarray:
+        """The anchors' centroid (..., 2) m of positions (..., n_world, 2), ground truth."""
+        return positions[..., : self.n_static, :].mean(axis=-2)
+
+    def rewards(self, state: BatchState, first: np.ndarray):
+        seekers = self.agents_of(state.positions)  # (B, A, 2)
+        dist = np.linalg.norm(seekers - self.centroids(state.positions)[:, None, :], axis=2)  # (B, A)
+        mean_dist = dist.mean(axis=1)
+        self._second_half_sum[first] = 0.0
+        self._second_half_steps[first] = 0
+        late = state.num_cycles >= self.max_cycles / 2
+        self._second_half_sum[late] += mean_dist[late]
+        self._second_half_steps[late] += 1
+        rewards = -dist / self.arena.size
+        if self.reward_mode == "global":
+            rewards = np.repeat(rewards.mean(axis=1)[:, None], self.n_agents, axis=1)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            second = np.where(self._second_half_steps > 0, self._second_half_sum / np.maximum(self._second_half_steps, 1), np.nan)
+        metrics = {"mean_distance_to_centroid": mean_dist, "mean_distance_second_half": second}
+        return rewards, {"distance_to_centroid": dist}, metrics
+
+    def markers(self, positions: np.ndarray) -> dict[str, np.ndarray]:
+        return {"centroid": self.centroids(positions)}
+
+
+class CentroidSeekingEnv(SwarmEnv):
+    """Centroid-seeking task; extra kwarg ``n_anchors`` (default 4, at least 3)."""
+
+    metadata = {**SwarmEnv.metadata, "name": "centroid_seeking_v0"}
+    TASK = CentroidSeekingTask
+
     @property
     def centroid(self) -> np.ndarray:
         """The anchors' centroid (m), ground truth."""
-        return self.world.positions[: self.n_static].mean(axis=0)
-
-    def _rewards(self, first: bool):
-        seekers = self.world.positions[self.agent_robots]
-        dist = np.linalg.norm(seekers - self.centroid, axis=1)
-        if first:
-            self._second_half_sum, self._second_half_steps = 0.0, 0
-        if self.num_cycles >= self.max_cycles / 2:
-            self._second_half_sum += float(dist.mean())
-            self._second_half_steps += 1
-        rewards = -dist / self.arena.size
-        if self.reward_mode == "global":
-            rewards = np.full(self.n_agents, rewards.mean())
-        metrics = {
-            "mean_distance_to_centroid": float(dist.mean()),
-            "mean_distance_second_half": (self._second_half_sum / self._second_half_steps) if self._second_half_steps else float("nan"),
-        }
-        return rewards, {"distance_to_centroid": dist}, metrics
-
-    def _markers(self) -> dict[str, np.ndarray]:
-        return {"centroid": self.centroid}
+        return self.task.centroids(self.world.positions)
 
 
 raw_env = CentroidSeekingEnv

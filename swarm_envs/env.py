@@ -15,14 +15,14 @@ import numpy as np
 from gymnasium import spaces
 from pettingzoo import ParallelEnv
 
-from swarm_envs.observation import ObservationLayout, pack_nearest
+from swarm_envs.core import DT, SwarmCore
+from swarm_envs.observation import ObservationLayout
 from swarm_envs.platforms import PLATFORMS, Platform, get_platform
 from swarm_envs.sensing.base import SensorFrame
-from swarm_envs.world import N_BUMP_SECTORS, Arena, World, spawn_positions
+from swarm_envs.task import Task
+from swarm_envs.world import Arena, World
 
-__all__ = ["SwarmEnv", "DT", "COMMON_DEFAULTS"]
-
-DT = 0.1  # s, one control step = the Droplet R&B update rate [F14 Sec. V]
+__all__ = ["SwarmEnv", "DT", "COMMON_DEFAULTS", "resolve_config", "make_layout"]
 
 #: Keyword arguments every task accepts, with their defaults (see README "Environments").
 COMMON_DEFAULTS: dict[str, Any] = {
@@ -71,8 +71,6 @@ _CHOICES: dict[str, tuple] = {
 _POSITIVE_INTS = ("n_robots", "max_cycles", "n_neighbours", "n_messages", "rb_max_age", "scale_free_k", "physics_substeps")
 _NON_NEGATIVE_INTS = ("message_bits",)
 
-# default centre spacing (m) used to size the arena when arena_size is None
-_SPACING = {"droplet": 0.15, "epuck": 0.25, "rone": 0.45}
 
 
 def _validate(cfg: dict[str, Any]) -> None:
@@ -108,11 +106,35 @@ def _validate(cfg: dict[str, Any]) -> None:
         raise ValueError(f"code must be a BCH (n, k) pair with n = 15, e.g. (15, 15), (15, 11), (15, 1); got {code!r}")
 
 
+def resolve_config(task: type[Task], kwargs: dict[str, Any], owner: str = "env") -> dict[str, Any]:
+    """Defaults + ``kwargs`` for ``task``, checked: unknown names raise ``TypeError``, bad values ``ValueError``."""
+    defaults = {**COMMON_DEFAULTS, **task.TASK_DEFAULTS}
+    unknown = sorted(set(kwargs) - set(defaults))
+    if unknown:
+        raise TypeError(f"{owner} got unknown keyword argument(s) {unknown}; allowed: {sorted(defaults)}")
+    cfg = {**defaults, **kwargs}
+    _validate(cfg)
+    return cfg
+
+
+def make_layout(cfg: dict[str, Any], platform: Platform) -> ObservationLayout:
+    """One robot's observation layout for resolved settings ``cfg``."""
+    return ObservationLayout(
+        n_neighbours=cfg["n_neighbours"],
+        n_messages=cfg["n_messages"],
+        message_bits=cfg["message_bits"],
+        max_range=platform.ir_range,
+        max_age=cfg["rb_max_age"],
+        flatten=cfg["flatten"],
+    )
+
+
 class SwarmEnv(ParallelEnv):
     """A swarm of disc robots whose observations come from a modelled infrared sensing stack.
 
-    Subclasses set ``TASK_DEFAULTS`` (extra kwargs and task-specific defaults) and implement
-    :meth:`_spawn` and :meth:`_rewards`. See :data:`COMMON_DEFAULTS` for the shared keyword arguments.
+    A thin PettingZoo view of the batched core (:class:`swarm_envs.core.SwarmCore`) with one copy.
+    Subclasses set ``TASK`` (a :class:`swarm_envs.task.Task` subclass: extra kwargs, spawn, rewards).
+    See :data:`COMMON_DEFAULTS` for the shared keyword arguments.
 
     Actions are ``Box(-1, 1, (2 + message_bits,))``: (linear, angular) velocity as fractions of the
     platform maxima, then the message bits (entries > 0 are 1-bits). Finite values outside [-1, 1] are
@@ -120,85 +142,54 @@ class SwarmEnv(ParallelEnv):
     """
 
     metadata = {"name": "swarm_v0", "render_modes": ["human", "rgb_array"], "render_fps": int(1 / DT), "is_parallelizable": True}
+    TASK: type[Task] = Task
     TASK_DEFAULTS: dict[str, Any] = {}
 
+    def __init_subclass__(cls, **kwargs: Any) -> None:
+        super().__init_subclass__(**kwargs)
+        cls.TASK_DEFAULTS = dict(cls.TASK.TASK_DEFAULTS)
+
     def __init__(self, **kwargs: Any) -> None:
-        defaults = {**COMMON_DEFAULTS, **self.TASK_DEFAULTS}
-        unknown = sorted(set(kwargs) - set(defaults))
-        if unknown:
-            raise TypeError(
-                f"{type(self).__name__} got unknown keyword argument(s) {unknown}; allowed: {sorted(defaults)}"
-            )
-        cfg = {**defaults, **kwargs}
-        _validate(cfg)
+        cfg = resolve_config(self.TASK, kwargs, type(self).__name__)
         self.config = cfg
         self.platform: Platform = get_platform(cfg["platform"])
         self.render_mode = cfg["render_mode"]
-        self.max_cycles = int(cfg["max_cycles"])
-        self.reward_mode = cfg["reward_mode"]
-        self.n_static = self._n_static()
-        self.n_agents = int(cfg["n_robots"])
-        self.n_world = self.n_static + self.n_agents
-        size = cfg["arena_size"] if cfg["arena_size"] is not None else self._default_arena_size()
-        self.arena = Arena(cfg["arena"], float(size))
+        self.task = self.TASK(cfg, self.platform, n_copies=1)
+        self.max_cycles = self.task.max_cycles
+        self.reward_mode = self.task.reward_mode
+        self.n_static = self.task.n_static
+        self.n_agents = self.task.n_agents
+        self.n_world = self.task.n_world
+        self.arena = self.task.arena
         self.possible_agents = [f"robot_{i}" for i in range(self.n_agents)]
         self.agents: list[str] = []
         self._agent_index = {a: i for i, a in enumerate(self.possible_agents)}
-        self.agent_robots = np.arange(self.n_static, self.n_world)  # robot index of each agent
-        self.layout = ObservationLayout(
-            n_neighbours=cfg["n_neighbours"],
-            n_messages=cfg["n_messages"],
-            message_bits=cfg["message_bits"],
-            max_range=self.platform.ir_range,
-            max_age=cfg["rb_max_age"],
-            flatten=cfg["flatten"],
-        )
+        self.agent_robots = self.task.agent_robots  # robot index of each agent
+        self.layout = make_layout(cfg, self.platform)
         self._obs_space = self.layout.space()
         self._act_space = self.layout.action_space()
-        self.world = World(self.platform, self.n_world, self.arena, substeps=cfg["physics_substeps"])
-        self.sensing = self._make_sensing()
-        self._rng = np.random.default_rng()
+        self.core = SwarmCore(self.task, self.layout)
         self._renderer = None
-        self._last_actions = np.zeros((self.n_world, self.layout.action_size))
-        self._frame: SensorFrame | None = None
         self.num_cycles = 0
 
-    # -- hooks for tasks -----------------------------------------------------------------------------
-    def _n_static(self) -> int:
-        """Number of non-agent (static) robots; they sense and emit but are never commanded."""
-        return 0
+    # -- the core's single copy ----------------------------------------------------------------------
+    @property
+    def world(self) -> World:
+        """The physics of the env's one copy."""
+        return self.core.worlds[0]
 
-    def _default_arena_size(self) -> float:
-        """Arena size (m) when ``arena_size=None``: the platform's spacing times sqrt(robots)."""
-        return _SPACING.get(self.platform.name, 4 * self.platform.diameter) * float(np.sqrt(self.n_world))
+    @property
+    def sensing(self):
+        """The sensing stack (one copy)."""
+        return self.core.sensing
 
-    def _spawn(self, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
-        """Task's initial (positions (n_world, 2) m, headings (n_world,) rad)."""
-        positions = spawn_positions(rng, self.n_world, self.platform.radius, self.arena)
-        return positions, rng.uniform(-np.pi, np.pi, self.n_world)
-
-    def _rewards(self, first: bool) -> tuple[np.ndarray, dict[str, np.ndarray], dict[str, float]]:
-        """(reward per agent (n_agents,), reward terms per agent, swarm metrics). ``first`` on reset."""
-        raise NotImplementedError
+    @property
+    def _frame(self) -> SensorFrame | None:
+        return self.core.frame
 
     def _markers(self) -> dict[str, np.ndarray]:
         """Task markers to draw (name -> world point)."""
-        return {}
-
-    # -- sensing ---------------------------------------------------------------------------------------
-    def _make_sensing(self):
-        cfg = self.config
-        if cfg["sensing"] == "ideal":
-            from swarm_envs.sensing.ideal import IdealSensing
-
-            return IdealSensing(self.platform, self.n_world, cfg["n_neighbours"], cfg["message_bits"])
-        try:
-            from swarm_envs.sensing.full import FullSensing
-        except ImportError as err:  # pragma: no cover - only while a sensing module is missing
-            raise NotImplementedError(
-                f"sensing='full' needs the module {err.name!r}, which is not available; use sensing='ideal'"
-            ) from err
-        return FullSensing(self.platform, self.n_world, cfg)
+        return self.task.markers(self.world.positions)
 
     # -- spaces ----------------------------------------------------------------------------------------
     def observation_space(self, agent: str) -> spaces.Space:
@@ -219,35 +210,19 @@ class SwarmEnv(ParallelEnv):
 
     # -- reset / step ------------------------------------------------------------------------------------
     def reset(self, seed: int | None = None, options: dict | None = None):
-        if seed is not None:
-            self._rng = np.random.default_rng(seed)
-        # independent child streams: spawn, and sensing (which splits it into noise, channel and MAC)
-        streams = np.random.SeedSequence(int(self._rng.integers(2**63))).spawn(2)
-        self._spawn_rng, sensing_rng = (np.random.default_rng(s) for s in streams)
+        self.core.seed(0, seed)
         options = dict(options or {})
         unknown = sorted(set(options) - {"positions", "headings"})
         if unknown:  # a warning, not an error: PettingZoo's API test passes arbitrary options
             import gymnasium
 
             gymnasium.logger.warn(f"ignoring unknown reset option(s) {unknown}; allowed: ['headings', 'positions']")
-        positions, headings = self._spawn(self._spawn_rng)
-        if "positions" in options:
-            positions = np.asarray(options["positions"], dtype=float)
-            if positions.shape != (self.n_world, 2):
-                raise ValueError(f"options['positions'] must have shape ({self.n_world}, 2) metres, got {positions.shape}")
-        if "headings" in options:
-            headings = np.asarray(options["headings"], dtype=float)
-            if headings.shape != (self.n_world,):
-                raise ValueError(f"options['headings'] must have shape ({self.n_world},) radians, got {headings.shape}")
-        self.world.place(positions, headings)
-        self.sensing.reset(sensing_rng)
+        self.core.start([0], [options])
+        self.core.step(None)
         self.agents = list(self.possible_agents)
         self.num_cycles = 0
-        self._last_actions[:] = 0.0
-        self._frame = self.sensing.step(self.world.positions, self.world.headings, None)
-        _, terms, metrics = self._rewards(first=True)
         obs = self._observations()
-        infos = self._infos(terms, metrics)
+        infos = self._infos()
         if self.render_mode == "human":
             self.render()
         return obs, infos
@@ -282,18 +257,11 @@ class SwarmEnv(ParallelEnv):
         if not self.agents:
             raise RuntimeError("step() called on a finished episode; call reset() first")
         act = self._action_array(actions)
-        self._last_actions = act
-        linear = act[:, 0] * self.platform.max_speed
-        angular = act[:, 1] * self.platform.max_angular_speed
-        self.world.step(linear, angular, DT)
-        payloads = act[:, 2:] > 0 if self.layout.message_bits else None
-        if payloads is not None:
-            payloads[: self.n_static] = False  # static robots send no application messages
-        self._frame = self.sensing.step(self.world.positions, self.world.headings, payloads)
-        self.num_cycles += 1
-        rewards_arr, terms, metrics = self._rewards(first=False)
+        self.core.step(act)
+        self.num_cycles = int(self.core.num_cycles[0])
+        rewards_arr = self.core.rewards[0]
         obs = self._observations()
-        infos = self._infos(terms, metrics)
+        infos = self._infos()
         rewards = {a: float(rewards_arr[i]) for i, a in enumerate(self.agents)}
         truncated = self.num_cycles >= self.max_cycles
         terminations = {a: False for a in self.agents}
@@ -307,33 +275,17 @@ class SwarmEnv(ParallelEnv):
     # -- observations and infos ----------------------------------------------------------------------------
     def batched_observations(self) -> dict[str, np.ndarray]:
         """Observation parts of every robot (leading axis = world robot), from the last sensor frame."""
-        frame = self._frame
-        n, k, m, b = self.n_world, self.layout.n_neighbours, self.layout.n_messages, self.layout.message_bits
-        nb = frame.neighbours
-        rb_values = np.stack(
-            [np.ones(len(nb.rx)), nb.range, np.cos(nb.bearing), np.sin(nb.bearing), np.cos(nb.heading), np.sin(nb.heading), nb.age],
-            axis=-1,
-        ) if len(nb.rx) else np.zeros((0, 7))
-        range_bearing, _ = pack_nearest(n, nb.rx, nb.range, rb_values, k)
-        msg = frame.messages
-        if len(msg.receiver):
-            key = msg.distance_hint if msg.distance_hint is not None else np.arange(len(msg.receiver), dtype=float)
-            msg_values = np.concatenate([np.ones((len(msg.receiver), 1)), msg.bearing[:, None] / np.pi, msg.payload.reshape(len(msg.receiver), b)], axis=1)
-            messages, _ = pack_nearest(n, msg.receiver, key, msg_values, m)
-        else:
-            messages = np.zeros((n, m, 2 + b))
-        sf = frame.scale_free
-        scale_free = np.concatenate([sf.valid[..., None].astype(float), np.where(sf.valid[..., None], sf.xy, 0.0)], axis=-1)
-        proprio = np.concatenate([self.world.bumps.astype(float), self._last_actions], axis=1)
-        return self.layout.build(range_bearing, messages, scale_free, sf.rigid.astype(float), proprio)
+        return self.core.observations()
 
     def _observations(self) -> dict[str, Any]:
         batched = self.batched_observations()
         return {a: self.layout.per_robot(batched, self.agent_robots[i]) for i, a in enumerate(self.agents)}
 
-    def _infos(self, terms: dict[str, np.ndarray], metrics: dict[str, float]) -> dict[str, dict]:
+    def _infos(self) -> dict[str, dict]:
+        core = self.core
         world = self.world
-        stats = self._frame.stats if self._frame is not None else {}
+        stats = core.frame.stats if core.frame is not None else {}
+        metrics = {name: float(v[0]) for name, v in core.metrics.items()}
         infos = {}
         for i, agent in enumerate(self.agents):
             r = self.agent_robots[i]
@@ -343,7 +295,7 @@ class SwarmEnv(ParallelEnv):
                     "heading": float(world.headings[r]),
                     "velocity": world.velocities[r].copy(),
                 },
-                "reward_terms": {name: float(v[i]) for name, v in terms.items()},
+                "reward_terms": {name: float(v[0, i]) for name, v in core.terms.items()},
                 "metrics": dict(metrics),
                 "sensing": {name: (v[r].item() if np.ndim(v) == 1 else v[r].copy()) for name, v in stats.items()},
             }
@@ -373,7 +325,4 @@ class SwarmEnv(ParallelEnv):
     def __repr__(self) -> str:
         return f"{type(self).__name__}(n_robots={self.n_agents}, platform={self.platform.name!r}, sensing={self.config['sensing']!r})"
 
-
-def bump_any(bumps: np.ndarray) -> np.ndarray:
-    """True per robot in contact with anything this step."""
-    return bumps.reshape(len(bumps), N_BUMP_SECTORS).any(axis=1)
+from swarm_envs.task import bump_any  # noqa: E402,F401  (kept importable from here)

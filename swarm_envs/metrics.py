@@ -7,7 +7,7 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
-__all__ = ["components", "cluster_stats", "mean_distance_to_centroid", "polarisation"]
+__all__ = ["components", "cluster_stats", "largest_component_fraction", "mean_distance_to_centroid", "polarisation"]
 
 
 def components(positions: np.ndarray, link_distance: float) -> np.ndarray:
@@ -16,6 +16,29 @@ def components(positions: np.ndarray, link_distance: float) -> np.ndarray:
     pairs = cKDTree(positions).query_pairs(link_distance, output_type="ndarray")
     graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(n, n)) if len(pairs) else coo_matrix((n, n))
     return connected_components(graph, directed=False)[1]
+
+
+def largest_component_fraction(positions: np.ndarray, link_distance: float) -> tuple[np.ndarray, np.ndarray]:
+    """For (B, N, 2) positions of B env copies: (largest-component fraction (B,), number of components
+    (B,)), linking centres of one copy closer than ``link_distance`` (m), chained. One graph for all copies
+    (pairs never cross copies), so one connected-components call per step instead of one per copy."""
+    from swarm_envs.sensing.ideal import candidate_pairs
+
+    B, N = positions.shape[:2]
+    copy = np.repeat(np.arange(B), N)
+    pairs = candidate_pairs(positions.reshape(B * N, 2), link_distance, copy)
+    n = B * N
+    graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(n, n))
+    labels = connected_components(graph, directed=False)[1]
+    sizes = np.bincount(labels, minlength=n)
+    # components never span copies: each label belongs to the copy of its robots
+    label_copy = np.full(sizes.size, -1)
+    label_copy[labels] = copy
+    present = sizes > 0
+    largest = np.zeros(B)
+    np.maximum.at(largest, label_copy[present], sizes[present])
+    count = np.bincount(label_copy[present], minlength=B)
+    return largest / N, count
 
 
 def cluster_stats(positions: np.ndarray, link_distance: float) -> tuple[float, int]:

@@ -3,11 +3,16 @@
 One :class:`pymunk.Space` per world, robots as dynamic circles, arena walls as static segments.
 Each control step (``dt`` = 0.1 s) is split into physics sub-steps. Every robot is dragged by a
 kinematic *control body* (pymunk's top-down "tank" pattern): a pivot joint and a gear joint with zero
-bias and bounded force make the body's velocity track the commanded (v, w) as motors would, so a free
-robot follows the differential-drive arc (heading taken at the middle of each sub-step) with one
-sub-step (12.5 ms at the default 8 sub-steps) of motor latency, while contacts,
-which have unbounded force, win over the motors: robots push each other but never overlap and walls
-hold; bump sensing comes from pymunk's post-solve collision callbacks (SPEC 1).
+bias and bounded force make the body's velocity track the control body's as motors would, while
+contacts, which have unbounded force, win over the motors: robots push each other but never overlap
+and walls hold; bump sensing comes from pymunk's post-solve collision callbacks (SPEC 1).
+
+The control bodies are set once per control step (no Python work per sub-step): translation along the
+chord of the differential-drive arc, ``D = v dt sinc(w dt / 2)`` towards ``heading + w dt / 2``, and
+rotation at ``w``. pymunk moves a body with its previous velocity during the first sub-step (the joints
+act from the second on), so the control velocities are set to ``(D - h u) / (dt - h)`` and
+``(w dt - h omega) / (dt - h)`` (h the sub-step, u / omega the body's velocity at the step start): a free
+robot then ends every control step exactly on its differential-drive arc.
 """
 
 from __future__ import annotations
@@ -266,15 +271,22 @@ class World:
         linear, angular = self.wheel_limited(np.asarray(linear, float), np.asarray(angular, float))
         h = dt / self.substeps
         self._contacts.clear()
-        lin = linear.tolist()
-        ang = angular.tolist()
+        # chord of the differential-drive arc over the control step (module docstring)
+        half = 0.5 * angular * dt
+        chord = linear * dt * np.sinc(half / np.pi)
+        mid = self.headings + half
+        if self.substeps > 1:
+            body_v = np.array([b.velocity for b in self.bodies], dtype=float).reshape(self.n, 2)
+            body_w = np.array([b.angular_velocity for b in self.bodies], dtype=float)
+            vx = (chord * np.cos(mid) - h * body_v[:, 0]) / (dt - h)
+            vy = (chord * np.sin(mid) - h * body_v[:, 1]) / (dt - h)
+            w = (angular * dt - h * body_w) / (dt - h)
+        else:  # one sub-step: the joints act only from the next step on
+            vx, vy, w = chord * np.cos(mid) / dt, chord * np.sin(mid) / dt, angular
+        for control, cx, cy, cw in zip(self.controls, vx.tolist(), vy.tolist(), w.tolist()):
+            control.velocity = (cx, cy)
+            control.angular_velocity = cw
         for _ in range(self.substeps):
-            for body, control, v, w in zip(self.bodies, self.controls, lin, ang):
-                # pymunk moves bodies with the velocity solved in the previous sub-step, so the new
-                # velocity acts over [angle + omega h, angle + omega h + w h]: aim at its middle
-                mid = body.angle + (body.angular_velocity + 0.5 * w) * h
-                control.velocity = (v * math.cos(mid), v * math.sin(mid))
-                control.angular_velocity = w
             self.space.step(h)
         before_pos, before_heading = self.positions, self.headings
         self._read_state()

@@ -72,3 +72,16 @@ def test_centroid_seeker_approaching_raises_reward():
     assert np.isfinite(m["mean_distance_second_half"])
     # anchors never move and are not agents
     assert env.possible_agents == ["robot_0"] and env.n_static == 4
+
+
+def test_batched_components_equal_one_graph_per_copy():
+    """largest_component_fraction over B copies at once equals cluster_stats copy by copy."""
+    from swarm_envs.metrics import cluster_stats, largest_component_fraction
+
+    rng = np.random.default_rng(0)
+    for B, N in [(1, 5), (7, 10), (3, 50)]:
+        pos = rng.uniform(0, 1, (B, N, 2))
+        largest, count = largest_component_fraction(pos, 0.2)
+        expected = np.array([cluster_stats(p, 0.2) for p in pos])
+        np.testing.assert_array_equal(largest, expected[:, 0])
+        np.testing.assert_array_equal(count, expected[:, 1])

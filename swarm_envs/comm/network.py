@@ -42,8 +42,10 @@ from typing import Any
 
 import numpy as np
 
+from swarm_envs.copies import CopyRandom
 from swarm_envs.comm.bch import BCHCode, code as bch_code
 from swarm_envs.comm.channel import ADCModel, adc_model_for
+from swarm_envs.comm.kernels import COUNTERS, DELIVERY_FIELDS, HAVE_NUMBA, PER_ROBOT, StepDraws, draw_step, slot_loop
 from swarm_envs.comm.protocol import (
     CSMA,
     IDLE,
@@ -54,48 +56,18 @@ from swarm_envs.comm.protocol import (
     FrameFormat,
     KindRegistry,
     bits_to_uint,
+    crc8_table,
 )
 from swarm_envs.platforms import Platform, get_platform
 
-__all__ = ["Network", "Deliveries", "BITRATES", "COMM_MODES"]
+__all__ = ["Network", "Deliveries", "BITRATES", "COMM_MODES", "BACKENDS"]
 
 BITRATES = (310, 650, 1080, 1160, 1670, 1800)  # bps offered by the e-puck hardware [T20 Sec. 5]
 COMM_MODES = ("broadcast", "flooding")
+BACKENDS = ("numpy", "numba")
 
-_COUNTERS = (
-    "slots",
-    "tx_started",  # frames put on air (originals + relays)
-    "tx_completed",
-    "tx_relays",  # flooding re-sends queued
-    "deferrals",  # CSMA found the channel busy
-    "queue_dropped",  # oldest waiting frame dropped because the queue was full
-    "rx_starts",  # start symbols detected (includes noise-triggered false starts)
-    "rx_false_starts",  # ... with no transmitter emitting s1 towards the robot (ground truth)
-    "rx_aborted",  # frames abandoned: bad marker/type, undecodable or impossible header
-    "rx_decode_failed",  # complete frames with an undecodable block or a failed CRC
-    "rx_crc_failed",  # ... of which the CRC failed (crc_bits = 8)
-    "rx_decoded",  # complete frames whose blocks all decode and header is valid
-    "rx_delivered",  # ... passed to the application (after flooding dedupe)
-    "rx_duplicates",  # flooding duplicates suppressed
-    "rx_corrupt_delivered",  # delivered but header/payload differ from what was sent (ground truth)
-    "rx_lost",  # aligned frames from a real transmitter that were aborted or failed to decode
-    "collisions",  # received frames during which >= 2 transmitters were significant at the receiver
-    "bits_checked",  # raw bits compared with the truth (aligned frames)
-    "bit_errors",
-    "blocks_checked",  # complete 15-bit blocks of aligned frames, decoded and compared with the truth
-    "block_errors",
-)
-_PER_ROBOT = (
-    "tx_started",
-    "deferrals",
-    "rx_delivered",
-    "rx_lost",
-    "collisions",
-    "bits_checked",
-    "bit_errors",
-    "blocks_checked",
-    "block_errors",
-)
+_COUNTERS = COUNTERS  # statistics counters (documented in comm/kernels.py)
+_PER_ROBOT = PER_ROBOT  # ... also kept per robot
 
 
 @dataclass
@@ -179,6 +151,13 @@ class Network:
             0 in broadcast mode (as the paper), 8 in flooding mode: without error detection a corrupted copy
             (e.g. from a collision) has a new (origin, seq) or payload and is re-flooded by everyone as a new
             message, a broadcast storm that the paper does not report (validation (c) shows both).
+        backend: ``"numba"`` (default when numba imports): the compiled slot loop of
+            :mod:`swarm_envs.comm.kernels`; ``"numpy"``: the vectorised reference. Both consume the same
+            pre-drawn random numbers (:func:`swarm_envs.comm.kernels.draw_step`) and give the same results.
+        n_copies: env copies of ``n_robots`` robots each (rows copy-major); ``rng`` is then a
+            :class:`swarm_envs.copies.CopyRandom` with one generator per copy. Frames carry a copy's own
+            robot numbers (header widths as in a single env), every random number of a copy comes from its
+            own generator, and :meth:`reset_copies` restarts some copies only.
     """
 
     def __init__(
@@ -200,7 +179,16 @@ class Network:
         intensity_sigma: float = 0.0,
         adc_model: ADCModel | None = None,
         crc_bits: int | None = None,
+        backend: str | None = None,
+        n_copies: int = 1,
     ) -> None:
+        if backend is None:
+            backend = "numba" if HAVE_NUMBA else "numpy"
+        if backend not in BACKENDS:
+            raise ValueError(f"backend must be one of {BACKENDS}, got {backend!r}")
+        if backend == "numba" and not HAVE_NUMBA:
+            raise ValueError("backend='numba' needs numba (pip install numba)")
+        self.backend = backend
         if comm_mode not in COMM_MODES:
             raise ValueError(f"comm_mode must be one of {COMM_MODES}, got {comm_mode!r}")
         if not bitrate > 0:
@@ -208,8 +196,16 @@ class Network:
         if not 0 <= payload_bits <= MAX_PAYLOAD:
             raise ValueError(f"payload_bits must be in [0, {MAX_PAYLOAD}], got {payload_bits}")
         self.platform = get_platform(platform)
-        self.n = int(n_robots)
-        self.rng = rng
+        self.rng = rng if isinstance(rng, CopyRandom) else CopyRandom([rng] * int(n_copies))
+        if self.rng.n_copies != int(n_copies):
+            raise ValueError(f"need one generator per env copy ({n_copies}), got {self.rng.n_copies}")
+        self.copy_size = int(n_robots)
+        self.n_copies = int(n_copies)
+        self.n = self.copy_size * self.n_copies
+        self.copy_of = np.repeat(np.arange(self.n_copies), self.copy_size)
+        self.offset = self.copy_of * self.copy_size  # first robot of each robot's copy: frames carry local ids
+        if self.n_copies > 1 and abs(bitrate * dt - round(bitrate * dt)) > 1e-9:
+            raise ValueError(f"env copies need a whole number of bit slots per step; bitrate * dt = {bitrate * dt}")
         self.bitrate = float(bitrate)
         self.dt = float(dt)
         self.m_tr = float(relative_threshold)
@@ -227,7 +223,7 @@ class Network:
         if crc_bits is None:
             crc_bits = 8 if comm_mode == "flooding" else 0
         self.crc_bits = int(crc_bits)
-        self.fmt = FrameFormat.for_swarm(self.n, self.code, with_sender=(comm_mode == "flooding"), crc_bits=self.crc_bits)
+        self.fmt = FrameFormat.for_swarm(self.copy_size, self.code, with_sender=(comm_mode == "flooding"), crc_bits=self.crc_bits)
         self.kinds = KindRegistry()
         self.n_det = self.platform.n_detectors
         self.det = DetectorBank(self.n, self.m_tr, max_bits=64)
@@ -241,6 +237,7 @@ class Network:
         n = self.n
         F = max(64, self.fmt.header_blocks * self.code.n + 1, self.frame_slots() + 1)
         self.slot = 0
+        self.slot0 = np.zeros(self.n_copies, dtype=np.int64)  # global slot at each copy's reset
         self.carry = 0.0
         self.q_bits = np.zeros((n, self.Q, F), dtype=bool)
         self.q_slots = np.zeros((n, self.Q), dtype=np.int64)
@@ -259,15 +256,49 @@ class Network:
         self.collided = np.zeros(n, dtype=bool)
         self.seen_keys = np.zeros(0, dtype=np.int64)
         self.seen_slot = np.zeros(0, dtype=np.int64)
-        a = self.adc_model
-        K = max(1, self.startup_samples)
-        dark = np.floor(self.ambient[:, None] + self.rng.normal(0.0, a.noise_sigma, size=(n, K * self.n_det)) if a.noise_var > 0 else np.repeat(self.ambient[:, None], K * self.n_det, 1))
-        self.det.reset(np.clip(dark, 0, a.m_sup).mean(axis=1))
+        self.det.reset(self._startup_ambient(np.arange(n)))
         self.csma.reset()
         self.stats: dict[str, Any] = {c: 0 for c in _COUNTERS}
         for c in _PER_ROBOT:
             self.stats[c + "_per_robot"] = np.zeros(n, dtype=np.int64)
         self._step_stats = self._new_step_stats()
+
+    def _startup_ambient(self, rows: np.ndarray) -> np.ndarray:
+        """Start-up ambient estimate of ``rows`` (sorted, whole copies): mean of noisy dark samples [Sec. 4.5]."""
+        a = self.adc_model
+        K = max(1, self.startup_samples)
+        amb = self.ambient[rows, None]
+        if a.noise_var > 0:
+            dark = np.floor(amb + self.rng.normal(a.noise_sigma, self.copy_of[rows], (K * self.n_det,)))
+        else:
+            dark = np.repeat(amb, K * self.n_det, 1)
+        return np.clip(dark, 0, a.m_sup).mean(axis=1)
+
+    def reset_copies(self, copies: np.ndarray, rngs: list[np.random.Generator]) -> None:
+        """Reset the robots of env ``copies`` as a fresh network would be (queues, transceivers, detector,
+        sequence numbers, per-robot statistics), drawing their start-up ambient from ``rngs`` (one per copy,
+        which become those copies' streams). Other copies are untouched."""
+        copies = np.asarray(copies, dtype=np.int64).reshape(-1)
+        for b, g in zip(copies, rngs):
+            self.rng.generators[b] = g
+        rows = np.flatnonzero(np.isin(self.copy_of, copies))
+        self.slot0[copies] = self.slot
+        for arr, value in (
+            (self.q_bits, False), (self.q_slots, 0), (self.q_head, 0), (self.q_count, 0), (self.cur_bits, False),
+            (self.cur_slots, 0), (self.cur_pos, 0), (self.cur_id, -1), (self.sending, False), (self.seq_next, 0),
+            (self.gt_tx, -1), (self.gt_id, -1), (self.gt_buf, False), (self.collided, False),
+        ):  # fmt: skip
+            arr[rows] = value
+        det = self.det
+        for arr in (det.state, det.thr, det.nbits, det.expect, det.phase, det.buf, det.best_m, det.best_det, det.last_s1, det.start_slot):
+            arr[rows] = 0
+        det.m_max_est[rows] = self._startup_ambient(rows)
+        self.csma.backoff[rows] = 0
+        receiver = self.seen_keys // (1 << SEQ_BITS) // self.n
+        keep = ~np.isin(self.copy_of[receiver], copies) if self.seen_keys.size else np.zeros(0, bool)
+        self.seen_keys, self.seen_slot = self.seen_keys[keep], self.seen_slot[keep]
+        for c in _PER_ROBOT:
+            self.stats[c + "_per_robot"][rows] = 0
 
     def _new_step_stats(self) -> dict[str, Any]:
         s: dict[str, Any] = {c: 0 for c in _COUNTERS}
@@ -338,7 +369,8 @@ class Network:
         rank[order] = np.arange(M) - grp_start
         seq = (self.seq_next[robots] + rank) % (1 << SEQ_BITS)
         np.add.at(self.seq_next, robots, 1)
-        bits, slots = self.fmt.build(np.full(M, tcode), seq, robots, robots, payloads, lengths)
+        local = robots - self.offset[robots]  # frames carry a copy's own robot numbers
+        bits, slots = self.fmt.build(np.full(M, tcode), seq, local, local, payloads, lengths)
         self._enqueue(robots, bits, slots, rank)
         return seq
 
@@ -369,7 +401,7 @@ class Network:
             self.q_slots[rb, pos] = slots[sel]
             newly = rb[(self.q_count[rb] == 0) & ~self.sending[rb]]
             self.q_count[rb] += 1
-            self.csma.arm(newly, self.rng)  # access delay before the first carrier sense
+            self.csma.request(newly)  # access delay before the first carrier sense, drawn next step
 
     # ------------------------------------------------------------------ the step
     def step(self, links: Any) -> Deliveries:
@@ -400,11 +432,82 @@ class Network:
         total = self.carry + self.bitrate * self.dt
         S = int(np.floor(total + 1e-9))
         self.carry = total - S
-        noise = (
-            self.rng.standard_normal(size=(S, n, nd), dtype=np.float32) * np.float32(a.noise_sigma)
-            if a.noise_var > 0
-            else np.zeros((S, n, nd), dtype=np.float32)
+        draws = self.draw_step(S)
+        self.csma.draw_requested(draws.access)
+        if self.backend == "numba":
+            deliveries = self._slots_kernel(S, draws, tx_ptr, rx, G, sig_ptr, sig_rx)
+        else:
+            deliveries = self._slots_numpy(S, draws, tx_ptr, rx, tx, G, flat, sig_ptr, sig_rx)
+        self._count("slots", values=S)
+        return self._finish_step(deliveries)
+
+    def draw_step(self, S: int) -> StepDraws:
+        """Every random number of a step of S slots, drawn before the slot loop (same for both backends)."""
+        a = self.adc_model
+        parts = [
+            draw_step(g, S, self.copy_size, self.n_det, a.noise_sigma if a.noise_var > 0 else 0.0, self.intensity_sigma, self.csma.window)
+            for g in self.rng.generators
+        ]
+        if len(parts) == 1:
+            return parts[0]
+        inoise = np.concatenate([p.intensity_noise for p in parts], axis=1) if parts[0].intensity_noise.size else parts[0].intensity_noise
+        return StepDraws(
+            np.concatenate([p.noise for p in parts], axis=1),
+            inoise,
+            np.concatenate([p.backoff for p in parts], axis=0),
+            np.concatenate([p.access for p in parts], axis=0),
         )
+
+    def _slots_kernel(self, S, draws, tx_ptr, rx, G, sig_ptr, sig_rx) -> list[dict[str, np.ndarray]]:
+        """The compiled slot loop (:func:`swarm_envs.comm.kernels.slot_loop`)."""
+        a, det, fmt, c = self.adc_model, self.det, self.fmt, self.code
+        wmax = int(fmt.n_blocks(MAX_PAYLOAD)) * c.n + 1  # longest frame any header can announce
+        det.ensure_capacity(wmax)
+        if self.gt_buf.shape[1] < det.buf.shape[1]:
+            self.gt_buf = np.concatenate([self.gt_buf, np.zeros((self.n, det.buf.shape[1] - self.gt_buf.shape[1]), bool)], axis=1)
+        dcap = self.n * (1 + S // (fmt.header_blocks * c.n + 1))  # completions per robot and step are bounded
+        d_int = np.zeros((dcap, 10), dtype=np.int64)
+        d_pay = np.zeros((dcap, MAX_PAYLOAD), dtype=bool)
+        counts = np.zeros(len(_COUNTERS), dtype=np.int64)
+        per_robot = np.zeros((len(_PER_ROBOT), self.n), dtype=np.int64)
+        fc = np.array([self.frame_counter], dtype=np.int64)
+        state = det.state.view(np.int8)
+        D = slot_loop(
+            S, self.slot, self.n_det, float(a.m_min), int(a.m_sup), self.m_tr, det.alpha, fmt.first_check_slots,
+            tx_ptr, rx, np.ascontiguousarray(G, dtype=np.float64), sig_ptr, sig_rx, self.ambient,
+            draws.noise, draws.intensity_noise, draws.backoff,
+            self.q_bits, self.q_slots, self.q_head, self.q_count, self.cur_bits, self.cur_slots, self.cur_pos, self.cur_id,
+            self.sending, fc, self.csma.backoff,
+            state, det.m_max_est, det.thr, det.nbits, det.expect, det.phase, det.buf, det.best_m, det.best_det,
+            det.last_s1, det.start_slot,
+            self.gt_tx, self.gt_id, self.gt_buf, self.collided,
+            c.n, c.k, c._table_msg, c._table_ok, fmt.header_blocks, fmt.header_bits, fmt.id_bits, fmt.with_sender,
+            fmt.crc_bits, crc8_table(fmt.header_bits + MAX_PAYLOAD + 8), self.kinds.valid_codes(),
+            self.copy_size, counts, per_robot, d_int, d_pay,
+        )  # fmt: skip
+        self.frame_counter = int(fc[0])
+        self.slot += S
+        for i, name in enumerate(_COUNTERS):
+            if counts[i]:
+                self._count(name, values=int(counts[i]))
+        for i, name in enumerate(_PER_ROBOT):
+            self.stats[name + "_per_robot"] += per_robot[i]
+            self._step_stats[name + "_per_robot"] += per_robot[i]
+        if D == 0:
+            return []
+        cols = {f: d_int[:D, i] for i, f in enumerate(DELIVERY_FIELDS)}
+        L = cols["length"]
+        Lmax = int(L.max())
+        out = {k: cols[k] for k in ("receiver", "origin", "sender", "seq", "type", "length", "detector", "slot", "done_slot")}
+        out["corrupt"] = cols["corrupt"].astype(bool)
+        out["payload"] = d_pay[:D, :Lmax].copy()
+        return [out]
+
+    def _slots_numpy(self, S, draws, tx_ptr, rx, tx, G, flat, sig_ptr, sig_rx) -> list[dict[str, np.ndarray]]:
+        """The vectorised numpy slot loop (the reference of the compiled kernel)."""
+        n, nd = self.n, self.n_det
+        a = self.adc_model
+        noise = draws.noise
         span = (self.ambient - a.m_min)[:, None]
         deliveries: list[dict[str, np.ndarray]] = []
         first_check = self.fmt.first_check_slots
@@ -413,7 +516,7 @@ class Network:
             pending = (self.q_count > 0) & ~self.sending
             if pending.any():
                 busy = (self.det.state == RECV) | self.det.last_s1
-                go, defer = self.csma.decide(pending, busy, self.rng)
+                go, defer = self.csma.decide(pending, busy, draws.backoff[:, s])
                 if defer.size:
                     self._count("deferrals", defer)
                 if go.size:
@@ -427,13 +530,13 @@ class Network:
                 li = _ranges(tx_ptr[on], tx_ptr[on + 1])
                 ysum = np.bincount(flat.reshape(-1, nd)[li].ravel(), weights=G[li].ravel(), minlength=n * nd).reshape(n, nd)
                 if self.intensity_sigma > 0:
-                    ysum = ysum + self.rng.normal(0.0, self.intensity_sigma, size=ysum.shape)
+                    ysum = ysum + draws.intensity_noise[s]
                 y = np.minimum(ysum, 1.0)
                 m = np.floor(span * (1.0 - y) + a.m_min + noise[s])
             else:
                 y = None
                 if self.intensity_sigma > 0:
-                    yy = np.minimum(self.rng.normal(0.0, self.intensity_sigma, size=(n, nd)), 1.0)
+                    yy = np.minimum(draws.intensity_noise[s], 1.0)
                     m = np.floor(span * (1.0 - yy) + a.m_min + noise[s])
                 else:
                     m = np.floor(span + a.m_min + noise[s])
@@ -463,14 +566,13 @@ class Network:
                 if fin.size:
                     self.sending[fin] = False
                     self._count("tx_completed", values=fin.size)
-                    self.csma.arm(fin[self.q_count[fin] > 0], self.rng)  # fresh access delay (fairness)
+                    self.csma.arm(fin[self.q_count[fin] > 0], draws.backoff[:, s])  # fresh access delay (fairness)
             if ev["check"].size:
                 d = self._check_points(ev["check"])
                 if d is not None:
                     deliveries.append(d)
             self.slot += 1
-        self._count("slots", values=S)
-        return self._finish_step(deliveries)
+        return deliveries
 
     def _start_tx(self, go: np.ndarray) -> None:
         h = self.q_head[go]
@@ -560,7 +662,7 @@ class Network:
                 hb = fmt.header_blocks
                 info, ok = c.decode_stream(det.buf[p1, : hb * c.n])
                 h = fmt.parse_header(info)
-                good = ok & (h["marker"] == 1) & valid_types[h["type"]] & (h["origin"] < self.n) & (h["sender"] < self.n)
+                good = ok & (h["marker"] == 1) & valid_types[h["type"]] & (h["origin"] < self.copy_size) & (h["sender"] < self.copy_size)
                 self._abort(p1[~good])
                 g = p1[good]
                 total = fmt.n_blocks(h["length"][good]) * c.n
@@ -618,7 +720,7 @@ class Network:
         det, fmt, c = self.det, self.fmt, self.code
         self._score_bits(robots)
         nbits = det.nbits[robots]
-        out: dict[str, list] = {k: [] for k in ("receiver", "origin", "sender", "seq", "type", "length", "payload", "detector", "slot", "corrupt")}
+        out: dict[str, list] = {k: [] for k in ("receiver", "origin", "sender", "seq", "type", "length", "payload", "detector", "slot", "corrupt", "done_slot")}
         for nb in np.unique(nbits):
             R = robots[nbits == nb]
             info, ok = c.decode_stream(det.buf[R, :nb])
@@ -658,6 +760,7 @@ class Network:
             out["detector"].append(det.best_det[R[g]])
             out["slot"].append(det.start_slot[R[g]])
             out["corrupt"].append(corrupt[g])
+            out["done_slot"].append(np.full(int(g.sum()), self.slot, dtype=np.int64))
         det.finish(robots)
         if not out["receiver"]:
             return None
@@ -670,9 +773,16 @@ class Network:
         if parts:
             d = {k: (np.concatenate([p[k] for p in parts]) if k != "payload" else _cat_pad_list([p[k] for p in parts])) for k in parts[0]}
         else:
-            d = {k: np.zeros(0, dtype=np.int64) for k in ("receiver", "origin", "sender", "seq", "type", "length", "detector", "slot")}
+            d = {k: np.zeros(0, dtype=np.int64) for k in ("receiver", "origin", "sender", "seq", "type", "length", "detector", "slot", "done_slot")}
             d["corrupt"] = np.zeros(0, dtype=bool)
             d["payload"] = np.zeros((0, 0), dtype=bool)
+        # canonical order: by the slot the frame was completed in, then by receiver (one per robot and slot)
+        o = np.lexsort((d["receiver"], d["done_slot"]))
+        d = {k: v[o] for k, v in d.items()}
+        # header ids are the receiver's copy's own numbers: to robot rows; slots counted from the copy's reset
+        base = self.offset[d["receiver"]]
+        d["origin"], d["sender"] = d["origin"] + base, d["sender"] + base
+        d["slot"] = d["slot"] - self.slot0[self.copy_of[d["receiver"]]]
         keep = np.ones(d["receiver"].size, dtype=bool)
         if self.comm_mode == "flooding" and keep.size:
             flood = d["type"] == self.kinds.code("app")
@@ -715,7 +825,8 @@ class Network:
     def _relay(self, d: dict[str, np.ndarray], idx: np.ndarray) -> None:
         """Flooding: queue one re-send of each new message (same origin/seq/payload, sender = relay)."""
         robots = d["receiver"][idx]
-        bits, slots = self.fmt.build(d["type"][idx], d["seq"][idx], d["origin"][idx], robots, d["payload"][idx], d["length"][idx])
+        base = self.offset[robots]
+        bits, slots = self.fmt.build(d["type"][idx], d["seq"][idx], d["origin"][idx] - base, robots - base, d["payload"][idx], d["length"][idx])
         order = np.argsort(robots, kind="stable")
         rs = robots[order]
         firsts = np.r_[True, rs[1:] != rs[:-1]]

@@ -43,7 +43,7 @@ after the number of blocks announced by the header.
 CSMA [T20 Sec. 4.4]
 -------------------
 A robot with a queued frame first waits a random access delay (0..W-1 slots, so robots given messages at
-the same step boundary do not all start together); then it senses the channel: busy if its detector is
+the same step boundary do not all start together; drawn at the start of the next step); then it senses the channel: busy if its detector is
 inside a frame or its last sample was s1. If free it starts sending in this slot; if busy it defers for
 a random 1..W slots and senses again (non-persistent CSMA). Two robots that start in the same slot (or
 hidden terminals that cannot sense each other) collide physically at receivers that hear both.
@@ -68,6 +68,7 @@ __all__ = [
     "bits_to_uint",
     "uint_to_bits",
     "crc8",
+    "crc8_table",
 ]
 
 IDLE = 0
@@ -98,18 +99,11 @@ _CRC8_POLY = 0x107  # x^8 + x^2 + x + 1 (CRC-8/ATM), zero initial value
 _CRC8_TABLE: np.ndarray | None = None
 
 
-def crc8(bits: np.ndarray, length: np.ndarray) -> np.ndarray:
-    """CRC-8 (polynomial x^8 + x^2 + x + 1, zero init, no reflection) of the first ``length[i]`` bits of
-    each row of ``bits (M, W)``, vectorised: the CRC is linear, so it is the XOR of the CRCs of the set
-    bits, and a set bit followed by j bits contributes ``x^(j+8) mod g``.
-
-    Ours, not in [T20]: optional error detection so that corrupted frames (e.g. collisions) are dropped
-    instead of being delivered or re-flooded as new messages (``Network(crc_bits=8)``)."""
+def crc8_table(size: int = 512) -> np.ndarray:
+    """(>= size,) int64: entry j is x^(j+8) mod g, the CRC-8 of a set bit followed by j bits (cached)."""
     global _CRC8_TABLE
-    bits = np.asarray(bits, dtype=bool)
-    M, W = bits.shape
-    if _CRC8_TABLE is None or _CRC8_TABLE.size < W + 1:
-        n = max(W + 1, 512)
+    if _CRC8_TABLE is None or _CRC8_TABLE.size < size:
+        n = max(size, 512)
         t = np.zeros(n, dtype=np.int64)
         r = 1 << 8 ^ _CRC8_POLY  # x^8 mod g
         for j in range(n):  # t[j] = x^(j+8) mod g
@@ -118,10 +112,23 @@ def crc8(bits: np.ndarray, length: np.ndarray) -> np.ndarray:
             if r & 0x100:
                 r ^= _CRC8_POLY
         _CRC8_TABLE = t
+    return _CRC8_TABLE
+
+
+def crc8(bits: np.ndarray, length: np.ndarray) -> np.ndarray:
+    """CRC-8 (polynomial x^8 + x^2 + x + 1, zero init, no reflection) of the first ``length[i]`` bits of
+    each row of ``bits (M, W)``, vectorised: the CRC is linear, so it is the XOR of the CRCs of the set
+    bits, and a set bit followed by j bits contributes ``x^(j+8) mod g``.
+
+    Ours, not in [T20]: optional error detection so that corrupted frames (e.g. collisions) are dropped
+    instead of being delivered or re-flooded as new messages (``Network(crc_bits=8)``)."""
+    bits = np.asarray(bits, dtype=bool)
+    M, W = bits.shape
+    table = crc8_table(W + 1)
     length = np.asarray(length, dtype=np.int64).reshape(M)
     j = length[:, None] - 1 - np.arange(W)[None, :]
     use = bits & (j >= 0)
-    vals = np.where(use, _CRC8_TABLE[np.clip(j, 0, None)], 0)
+    vals = np.where(use, table[np.clip(j, 0, None)], 0)
     return np.bitwise_xor.reduce(vals, axis=1) if W else np.zeros(M, dtype=np.int64)
 
 
@@ -392,19 +399,32 @@ class CSMA:
     def reset(self) -> None:
         self.backoff[:] = 0
 
-    def arm(self, robots: np.ndarray, rng: np.random.Generator) -> None:
-        """Random access delay before the first carrier sense of a newly queued frame."""
+    def request(self, robots: np.ndarray) -> None:
+        """Mark robots whose queue just became non-empty: their access delay is drawn at the start of the
+        next step (:meth:`draw_requested`), so every draw of a step comes from pre-drawn per-robot arrays."""
         if len(robots):
-            self.backoff[robots] = rng.integers(0, self.window, size=len(robots))
+            self.backoff[robots] = -1
 
-    def decide(self, pending: np.ndarray, busy: np.ndarray, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
+    def draw_requested(self, delays: np.ndarray) -> None:
+        """Give every requested robot its access delay ``delays[robot]`` (``delays`` (N,) ints in [0, W))."""
+        req = self.backoff < 0
+        self.backoff[req] = delays[req]
+
+    def arm(self, robots: np.ndarray, draws: np.ndarray) -> None:
+        """Fresh random access delay ``draws[robot]`` (``draws`` (N,) ints in [0, W)) before the next
+        carrier sense of ``robots``."""
+        if len(robots):
+            self.backoff[robots] = draws[robots]
+
+    def decide(self, pending: np.ndarray, busy: np.ndarray, draws: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """One slot of CSMA. ``pending`` (N,) bool: has a frame waiting and is not sending; ``busy`` (N,) bool:
-        carrier sensed. Returns (robots that start sending now, robots that deferred)."""
+        carrier sensed; ``draws`` (N,) ints in [0, W) of this slot (a deferring robot waits ``1 + draw``).
+        Returns (robots that start sending now, robots that deferred)."""
         waiting = pending & (self.backoff > 0)
         self.backoff[waiting] -= 1
         ready = pending & ~waiting
         go = np.flatnonzero(ready & ~busy)
         defer = np.flatnonzero(ready & busy)
         if defer.size:
-            self.backoff[defer] = rng.integers(1, self.window + 1, size=defer.size)
+            self.backoff[defer] = 1 + draws[defer]
         return go, defer

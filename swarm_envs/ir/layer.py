@@ -222,6 +222,7 @@ def compute_links(
     platform: Platform | str,
     max_range: float | None = None,
     drop_zero: bool = True,
+    copy: np.ndarray | None = None,
 ) -> IRLinks:
     """All directed IR links of a scene (SPEC 2), vectorised.
 
@@ -232,6 +233,9 @@ def compute_links(
         max_range: candidate cut-off on centre distance (m); default ``platform.ir_range``.
         drop_zero: drop pairs whose gain matrix is all zero (e.g. beyond the range, or r-one pairs outside
             each other's cones). Default True.
+        copy: (N,) env copy of each robot (batched engine): no pair and no occluder crosses copies (the
+            KD-tree gets a third coordinate that puts copies out of each other's range; 0 within a copy, so
+            every distance and link equals that of the copy alone).
 
     Returns:
         :class:`IRLinks` with both directions (u, w) and (w, u) of every candidate pair in line of sight,
@@ -245,7 +249,11 @@ def compute_links(
     n_d, n_e = platform.n_detectors, platform.n_emitters
     if N < 2:
         return _empty_links(n_d, n_e, N)
-    tree = cKDTree(positions)
+    points = positions
+    if copy is not None:
+        lift = np.asarray(copy, dtype=float).reshape(-1, 1) * (4.0 * r + 4.0 * platform.radius + 1.0)
+        points = np.concatenate([positions, lift], axis=1)
+    tree = cKDTree(points)
     pairs = tree.query_pairs(r, output_type="ndarray")
     if pairs.shape[0] == 0:
         return _empty_links(n_d, n_e, N)

@@ -49,6 +49,8 @@ from typing import Any
 
 import numpy as np
 
+from swarm_envs.copies import CopyRandom
+
 __all__ = ["BearingExchange", "NeighbourKnowledge", "encode_rows", "decode_rows", "thesis_round_time", "readings_table"]
 
 MAX_PAYLOAD_BITS = 255  # the SwarmCom frame's 8-bit length field (swarm_envs.comm.protocol)
@@ -182,7 +184,10 @@ class BearingExchange:
             ``3 * period``).
         bearing_bits: bits per transmitted bearing (4 = 16 sectors of 22.5 degrees).
         kind: SwarmCom system message kind.
-        rng: generator for the broadcast phases (network mode).
+        rng: generator for the broadcast phases (network mode), or per-copy streams
+            (:class:`swarm_envs.copies.CopyRandom`) when the exchange runs several env copies.
+        n_copies: env copies of ``n_robots`` robots each (rows copy-major; ids in messages are a copy's own
+            0..n_robots-1, so messages and their widths are those of a single env).
     """
 
     def __init__(
@@ -195,11 +200,16 @@ class BearingExchange:
         max_age: int | None = None,
         bearing_bits: int = 4,
         kind: str = "bearing_exchange",
-        rng: np.random.Generator | None = None,
+        rng: np.random.Generator | CopyRandom | None = None,
+        n_copies: int = 1,
     ) -> None:
         if mode not in ("ideal", "network"):
             raise ValueError(f"unknown exchange mode {mode!r}; allowed: 'ideal', 'network'")
-        self.n = int(n_robots)
+        self.copy_size = int(n_robots)
+        self.n_copies = int(n_copies)
+        self.n = self.copy_size * self.n_copies
+        self.copy_of = np.repeat(np.arange(self.n_copies), self.copy_size)
+        self.offset = self.copy_of * self.copy_size  # first robot of each robot's copy
         self.mode = mode
         self.k_max = int(k_max)
         self.network = network
@@ -207,29 +217,51 @@ class BearingExchange:
         self.max_age = 3 * self.period if max_age is None else int(max_age)
         self.bearing_bits = int(bearing_bits)
         self.kind = kind
-        self.id_bits = max(1, int(np.ceil(np.log2(max(self.n, 2)))))
+        self.id_bits = max(1, int(np.ceil(np.log2(max(self.copy_size, 2)))))
         e = self.id_bits + self.bearing_bits
         self.count_bits = max(1, int(np.ceil(np.log2(self.k_max + 1))))
         self.max_entries = int(min(self.k_max, (MAX_PAYLOAD_BITS - self.count_bits) // e))
-        self.rng = rng if rng is not None else np.random.default_rng()
+        rng = rng if rng is not None else np.random.default_rng()
+        self.rng = rng if isinstance(rng, CopyRandom) else CopyRandom([rng] * self.n_copies)
         self.reset()
 
     # ------------------------------------------------------------------ state
-    def reset(self, rng: np.random.Generator | None = None) -> None:
-        """Clear all tables; draw new broadcast phases."""
+    def reset(self, rng: np.random.Generator | None = None, copies: np.ndarray | None = None, rngs: list | None = None) -> None:
+        """Clear all tables and draw new broadcast phases (of ``copies`` only if given, with their new
+        generators ``rngs``; ``rng`` replaces a single env's generator)."""
         if rng is not None:
-            self.rng = rng
-        n, k = self.n, self.k_max
-        self.t = 0
-        self.phase = self.rng.integers(0, self.period, self.n)
-        self.tab_ids = -np.ones((n, k), np.int64)
-        self.tab_bear = np.full((n, k), np.nan)
-        self.tab_time = np.full((n, k), -(10**9), np.int64)
-        w = self.k_max if self.mode == "ideal" else self.max_entries  # ideal rows are not truncated
-        self.row_ids = -np.ones((n, k, w), np.int64)
-        self.row_bear = np.full((n, k, w), np.nan)
-        self.row_time = np.full((n, k), -(10**9), np.int64)
-        self.stats = {"sent": 0, "received": 0, "bits_sent": 0, "rejected": 0}
+            self.rng = CopyRandom([rng] * self.n_copies)
+        if copies is None:
+            n, k = self.n, self.k_max
+            self.t = np.zeros(self.n_copies, np.int64)
+            self.phase = self.rng.integers(0, self.period, self.copy_of)
+            self.tab_ids = -np.ones((n, k), np.int64)
+            self.tab_bear = np.full((n, k), np.nan)
+            self.tab_time = np.full((n, k), -(10**9), np.int64)
+            w = self.k_max if self.mode == "ideal" else self.max_entries  # ideal rows are not truncated
+            self.row_ids = -np.ones((n, k, w), np.int64)
+            self.row_bear = np.full((n, k, w), np.nan)
+            self.row_time = np.full((n, k), -(10**9), np.int64)
+            self.stats = {"sent": 0, "received": 0, "bits_sent": 0, "rejected": 0}
+            return
+        copies = np.asarray(copies, dtype=np.int64).reshape(-1)
+        if rngs is not None:
+            for b, g in zip(copies, rngs):
+                self.rng.generators[b] = g
+        rows = np.flatnonzero(np.isin(self.copy_of, copies))
+        self.t[copies] = 0
+        self.phase[rows] = self.rng.integers(0, self.period, self.copy_of[rows])
+        self.tab_ids[rows] = -1
+        self.tab_bear[rows] = np.nan
+        self.tab_time[rows] = -(10**9)
+        self.row_ids[rows] = -1
+        self.row_bear[rows] = np.nan
+        self.row_time[rows] = -(10**9)
+
+    @property
+    def _now(self) -> np.ndarray:
+        """(N,) each robot's copy clock (steps since its reset)."""
+        return self.t[self.copy_of]
 
     def bits_per_message(self, count: int) -> int:
         """Payload length (bits) of a message listing ``count`` neighbours."""
@@ -239,7 +271,7 @@ class BearingExchange:
     def _ideal(self, readings: Any) -> NeighbourKnowledge:
         ids, th = readings_table(readings.rx, readings.tx, readings.bearing, self.n, self.k_max)
         self.tab_ids, self.tab_bear = ids, th
-        self.tab_time = np.where(ids >= 0, self.t, -(10**9))
+        self.tab_time = np.where(ids >= 0, self._now[:, None], -(10**9))
         safe = np.maximum(ids, 0)
         has = (ids >= 0)[:, :, None]
         self.row_ids = np.where(has, ids[safe], -1)
@@ -250,7 +282,7 @@ class BearingExchange:
     # ------------------------------------------------------------------ network
     def due(self, t: int | None = None) -> np.ndarray:
         """Robots whose broadcast is due at step t (default: the current step)."""
-        t = self.t if t is None else t
+        t = self._now if t is None else t
         return np.nonzero((t - self.phase) % self.period == 0)[0]
 
     def send(self, network: Any = None) -> int:
@@ -271,7 +303,8 @@ class BearingExchange:
         o = np.argsort(-self.tab_time[robots], axis=1, kind="stable")
         ids = np.take_along_axis(self.tab_ids[robots], o, 1)[:, : self.max_entries]
         th = np.take_along_axis(self.tab_bear[robots], o, 1)[:, : self.max_entries]
-        bits = encode_rows(ids, th, self.id_bits, self.count_bits, self.bearing_bits)
+        local = np.where(ids >= 0, ids - self.offset[robots][:, None], -1)  # ids in a copy's own numbering
+        bits = encode_rows(local, th, self.id_bits, self.count_bits, self.bearing_bits)
         lens = self.count_bits + (ids >= 0).sum(1) * (self.id_bits + self.bearing_bits)
         for L in np.unique(lens):  # queue_system takes robots sharing one payload length
             g = lens == L
@@ -310,11 +343,13 @@ class BearingExchange:
             for j, r in enumerate(rows):
                 bits[j, : r.size] = r
         ids, th = decode_rows(bits, self.id_bits, self.count_bits, self.max_entries, self.bearing_bits)
-        recv, origin = recv[sel], origin[sel]
         # sanity checks on what the frame decoded to (uncoded frames can arrive corrupted): the announced
         # count must match the payload length, ids must exist and not name the sender itself
         count = (ids >= 0).sum(1)
-        sane = ~((ids >= self.n) | (ids == origin[:, None])).any(1) & (origin >= 0) & (origin < self.n)
+        recv, origin = recv[sel], origin[sel]
+        ids = np.where(ids >= 0, ids + self.offset[recv][:, None], -1)  # a copy's own numbering -> robot rows
+        sane = ~((ids >= self.offset[recv][:, None] + self.copy_size) | (ids == origin[:, None])).any(1)
+        sane &= (origin >= 0) & (origin < self.n)
         length = getattr(deliveries, "length", None)
         if length is not None:
             length = np.asarray(length, dtype=np.int64).reshape(-1)[sel]
@@ -353,17 +388,18 @@ class BearingExchange:
         r, o, slot, own_b, hit, ids, th = r[ok], o[ok], slot[ok], own_b[ok], hit[ok], ids[ok], th[ok]
         self.tab_ids[r, slot] = o
         self.tab_bear[r, slot] = np.where(hit, own_b, self.tab_bear[r, slot])
-        self.tab_time[r, slot] = np.where(hit, self.t, self.tab_time[r, slot])
+        self.tab_time[r, slot] = np.where(hit, self._now[r], self.tab_time[r, slot])
         self.row_ids[r, slot] = ids
         self.row_bear[r, slot] = th
-        self.row_time[r, slot] = self.t
+        self.row_time[r, slot] = self._now[r]
 
     def _expire(self) -> None:
-        old = (self.t - self.tab_time > self.max_age) | (self.tab_ids < 0)
+        now = self._now[:, None]
+        old = (now - self.tab_time > self.max_age) | (self.tab_ids < 0)
         self.tab_ids[old] = -1
         self.tab_bear[old] = np.nan
         self.tab_time[old] = -(10**9)
-        rold = old | (self.t - self.row_time > self.max_age)
+        rold = old | (now - self.row_time > self.max_age)
         self.row_ids[rold] = -1
         self.row_bear[rold] = np.nan
         self.row_time[rold] = -(10**9)
@@ -371,7 +407,7 @@ class BearingExchange:
     # ------------------------------------------------------------------ common
     def knowledge(self) -> NeighbourKnowledge:
         """What each robot knows now (own row + received rows with ages)."""
-        age = np.where(self.row_time > -(10**9), self.t - self.row_time, -1)
+        age = np.where(self.row_time > -(10**9), self._now[:, None] - self.row_time, -1)
         return NeighbourKnowledge(
             ids=self.tab_ids.copy(),
             bearings=self.tab_bear.copy(),

@@ -31,6 +31,7 @@ import numpy as np
 
 from swarm_envs.comm.channel import recommended_relative_threshold
 from swarm_envs.comm.network import Network
+from swarm_envs.copies import CopyRandom
 from swarm_envs.ir.layer import compute_links
 from swarm_envs.observation import pack_nearest
 from swarm_envs.platforms import Platform
@@ -48,9 +49,11 @@ _STAT_NAMES = ("tx_started", "deferrals", "rx_delivered", "rx_lost", "collisions
 class FullSensing:
     """Physically modelled sensing for ``n_robots`` robots of one platform (module docstring)."""
 
-    def __init__(self, platform: Platform, n_robots: int, config: dict[str, Any]) -> None:
+    def __init__(self, platform: Platform, n_robots: int, config: dict[str, Any], n_copies: int = 1) -> None:
         self.platform = platform
-        self.n = int(n_robots)
+        self.copy_size = int(n_robots)
+        self.n_copies = int(n_copies)
+        self.n = self.copy_size * self.n_copies
         self.config = config
         self.has_range = hasattr(platform.ir_model, "amplitude_inverse")
         source = config.get("bearing_source") or ("range_bearing" if self.has_range else "sectors")
@@ -61,42 +64,53 @@ class FullSensing:
         self.message_bits = int(config["message_bits"])
         self.method = config["scale_free_method"]
         self.hops = int(config["scale_free_k"])
+        self.copy_of = np.repeat(np.arange(self.n_copies), self.copy_size)
+        # one stack for all copies; each module keeps one generator per copy (placeholders until reset)
+        streams = [CopyRandom([np.random.default_rng(0) for _ in range(self.n_copies)]) for _ in range(3)]
         self.rb: RangeBearingSensor | None = None
-        self.network: Network | None = None
-        self.exchange: BearingExchange | None = None
-
-    def reset(self, rng: np.random.Generator) -> None:
-        """New sensor, channel and exchange state from independent child streams of ``rng``."""
-        cfg = self.config
-        rb_rng, net_rng, ex_rng = rng.spawn(3)
         if self.has_range:
             self.rb = RangeBearingSensor(
-                self.platform,
-                self.n,
-                rb_rng,
-                noise_sigma=cfg["rb_noise"],
-                schedule=cfg["rb_schedule"],
-                max_age=cfg["rb_max_age"],
-                near_model=cfg["rb_near_model"],
+                platform,
+                self.copy_size,
+                streams[0],
+                noise_sigma=config["rb_noise"],
+                schedule=config["rb_schedule"],
+                max_age=config["rb_max_age"],
+                near_model=config["rb_near_model"],
             )
+        threshold = config["relative_threshold"]
         self.network = Network(
-            self.platform,
-            self.n,
-            net_rng,
-            bitrate=cfg["bitrate"],
-            relative_threshold=(
-                recommended_relative_threshold(self.platform) if cfg["relative_threshold"] is None else cfg["relative_threshold"]
-            ),
-            code=tuple(cfg["code"]),
-            comm_mode=cfg["comm_mode"],
+            platform,
+            self.copy_size,
+            streams[1],
+            bitrate=config["bitrate"],
+            relative_threshold=recommended_relative_threshold(platform) if threshold is None else threshold,
+            code=tuple(config["code"]),
+            comm_mode=config["comm_mode"],
             payload_bits=self.message_bits,
+            n_copies=self.n_copies,
         )
-        self.exchange = BearingExchange(self.n, mode=cfg["exchange"], network=self.network, rng=ex_rng)
+        self.exchange = BearingExchange(
+            self.copy_size, mode=config["exchange"], network=self.network, rng=streams[2], n_copies=self.n_copies
+        )
+
+    def reset(self, copies: np.ndarray, rngs: list[np.random.Generator]) -> None:
+        """Fresh sensor, channel and exchange state of env ``copies``, from independent child streams
+        (range & bearing, channel, exchange) of each copy's generator ``rngs[k]``; other copies untouched."""
+        copies = np.asarray(copies, dtype=np.int64).reshape(-1)
+        children = [g.spawn(3) for g in rngs]
+        if self.rb is not None:
+            self.rb.reset(copies, [c[0] for c in children])
+        self.network.reset_copies(copies, [c[1] for c in children])
+        self.exchange.reset(copies=copies, rngs=[c[2] for c in children])
 
     # ------------------------------------------------------------------------------------------------
-    def step(self, positions: np.ndarray, headings: np.ndarray, payloads: np.ndarray | None) -> SensorFrame:
-        """One control step of sensing (module docstring); ``payloads`` (N, b) bool or None."""
-        links = compute_links(positions, headings, self.platform)
+    def step(
+        self, positions: np.ndarray, headings: np.ndarray, payloads: np.ndarray | None, sending: np.ndarray | None = None
+    ) -> SensorFrame:
+        """One control step of sensing (module docstring); ``payloads`` (N, b) bool or None; ``sending``
+        (N,) bool: robots whose payload may be queued this step (default all)."""
+        links = compute_links(positions, headings, self.platform, copy=self.copy_of if self.n_copies > 1 else None)
 
         # range & bearing (or bearing-only sectors)
         sectors = _valid_only(sense_bearings(links, self.platform)) if self.bearing_source == "sectors" else None
@@ -110,7 +124,10 @@ class FullSensing:
         # SwarmCom: application payloads and the bearing exchange share the channel
         net = self.network
         if payloads is not None and self.message_bits > 0:
-            free = np.flatnonzero(net.q_count == 0)
+            free = net.q_count == 0
+            if sending is not None:
+                free &= np.asarray(sending, bool)
+            free = np.flatnonzero(free)
             if free.size:
                 net.send_many(free, payloads[free])
         if self.exchange.mode == "network":

@@ -15,37 +15,73 @@ from swarm_envs.observation import pack_nearest, relative_pose
 from swarm_envs.platforms import Platform
 from swarm_envs.sensing.base import MessageReadings, NeighbourReadings, ScaleFreeReadings, SensorFrame
 
-__all__ = ["IdealSensing", "neighbour_pairs"]
+__all__ = ["IdealSensing", "candidate_pairs", "neighbour_pairs"]
 
 
-def neighbour_pairs(positions: np.ndarray, max_range: float) -> tuple[np.ndarray, np.ndarray]:
-    """Both directions (rx, tx) of every pair of centres closer than ``max_range`` (m); KD-tree, not N^2."""
-    pairs = cKDTree(positions).query_pairs(max_range, output_type="ndarray")
+def candidate_pairs(positions: np.ndarray, max_range: float, copy: np.ndarray | None = None) -> np.ndarray:
+    """(P, 2) index pairs i < j of centres closer than ``max_range`` (m), sorted; KD-tree, not N^2.
+
+    ``copy`` (N,) gives each robot's env copy: robots of different copies are never paired (the tree gets
+    a third coordinate that puts copies beyond the range of each other; within a copy it is 0, so the
+    distances and the pairs are those of the copy alone). Sorted lexicographically, so each copy's pairs
+    come in the same order as in a single env.
+    """
+    positions = np.asarray(positions, dtype=float).reshape(-1, 2)
+    if copy is not None and len(positions):
+        lift = np.asarray(copy, dtype=float).reshape(-1, 1) * (2.0 * float(max_range) + 1.0)
+        points = np.concatenate([positions, lift], axis=1)
+    else:
+        points = positions
+    pairs = cKDTree(points).query_pairs(max_range, output_type="ndarray")
+    if len(pairs) == 0:
+        return np.zeros((0, 2), dtype=np.int64)
+    pairs = pairs.astype(np.int64)
+    return pairs[np.lexsort((pairs[:, 1], pairs[:, 0]))]
+
+
+def neighbour_pairs(positions: np.ndarray, max_range: float, copy: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Both directions (rx, tx) of every pair of centres closer than ``max_range`` (m), sorted by (rx, tx).
+
+    ``copy`` as in :func:`candidate_pairs` (no pair crosses copies).
+    """
+    pairs = candidate_pairs(positions, max_range, copy)
     if len(pairs) == 0:
         empty = np.zeros(0, dtype=np.int64)
         return empty, empty
-    return np.concatenate([pairs[:, 0], pairs[:, 1]]), np.concatenate([pairs[:, 1], pairs[:, 0]])
+    rx = np.concatenate([pairs[:, 0], pairs[:, 1]])
+    tx = np.concatenate([pairs[:, 1], pairs[:, 0]])
+    order = np.lexsort((tx, rx))
+    return rx[order], tx[order]
 
 
 class IdealSensing:
-    """Ground-truth sensing within IR range (see module docstring)."""
+    """Ground-truth sensing within IR range (see module docstring), for ``n_copies`` env copies of
+    ``n_robots`` robots each (rows = robots of all copies, copy-major)."""
 
-    def __init__(self, platform: Platform, n_robots: int, n_neighbours: int, message_bits: int) -> None:
+    def __init__(self, platform: Platform, n_robots: int, n_neighbours: int, message_bits: int, n_copies: int = 1) -> None:
         self.platform = platform
-        self.n = n_robots
+        self.copy_size = int(n_robots)
+        self.n_copies = int(n_copies)
+        self.n = self.copy_size * self.n_copies
+        self.copy = np.repeat(np.arange(self.n_copies), self.copy_size)
         self.k = n_neighbours
         self.message_bits = message_bits
 
-    def reset(self, rng: np.random.Generator | None = None) -> None:
+    def reset(self, copies: np.ndarray | None = None, rngs: list[np.random.Generator] | None = None) -> None:
         """Nothing to reset: the ideal stack is stateless and noiseless."""
 
-    def step(self, positions: np.ndarray, headings: np.ndarray, payloads: np.ndarray | None) -> SensorFrame:
-        rx, tx = neighbour_pairs(positions, self.platform.ir_range)
+    def step(
+        self, positions: np.ndarray, headings: np.ndarray, payloads: np.ndarray | None, sending: np.ndarray | None = None
+    ) -> SensorFrame:
+        """One step for all robots; ``payloads`` (N, b) bool or None, ``sending`` (N,) bool robots whose
+        payload goes out this step (default: all when payloads are given)."""
+        rx, tx = neighbour_pairs(positions, self.platform.ir_range, self.copy if self.n_copies > 1 else None)
         distance, bearing, heading = relative_pose(positions, headings, rx, tx)
         neighbours = NeighbourReadings(rx, tx, distance, bearing, heading, np.zeros(len(rx)))
 
         if self.message_bits > 0 and payloads is not None:
-            messages = MessageReadings(rx, tx, bearing, payloads[tx].astype(float), distance)
+            got = np.ones(len(rx), dtype=bool) if sending is None else np.asarray(sending, bool)[tx]
+            messages = MessageReadings(rx[got], tx[got], bearing[got], payloads[tx[got]].astype(float), distance[got])
         else:
             messages = MessageReadings(payload=np.zeros((0, self.message_bits)))
 

@@ -30,6 +30,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from swarm_envs.copies import CopyRandom
 from swarm_envs.ir.layer import IRLinks, pair_gains, wrap_angle
 from swarm_envs.platforms import Platform, get_platform
 
@@ -78,10 +79,11 @@ def brightness(rel_position: np.ndarray, rel_heading: np.ndarray, platform: Plat
 
 def measure(
     brightness: np.ndarray,
-    rng: np.random.Generator,
+    rng: np.random.Generator | CopyRandom,
     sigma: float | None = None,
     platform: Platform | str = "droplet",
     ladder: tuple[float, ...] = POWER_LADDER,
+    row_copy: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Simulated ADC reading of brightness matrices with power selection (SPEC 3.1).
 
@@ -93,10 +95,13 @@ def measure(
 
     Args:
         brightness: (P, n_d, n_e) noiseless full-power brightness (model units).
-        rng: random generator for the noise.
+        rng: random generator for the noise, or per-copy streams (:class:`swarm_envs.copies.CopyRandom`)
+            with ``row_copy`` (P,) the env copy of each matrix (sorted): each copy's noise then comes from its
+            own stream, as in a single env.
         sigma: noise standard deviation in ADC counts; default the model's ``default_noise_sigma``.
         platform: platform (selects the ADC constants).
         ladder: decreasing power factors, starting with 1.
+        row_copy: see ``rng``.
 
     Returns:
         measured (P, n_d, n_e) in model units *at the chosen power* (divide by p for the estimate, or pass
@@ -116,7 +121,7 @@ def measure(
             break
         counts = p * lam[todo] * scale
         if sigma > 0:
-            counts = counts + rng.normal(0.0, sigma, counts.shape)
+            counts = counts + _noise(rng, sigma, counts.shape, None if row_copy is None else row_copy[todo])
         counts = np.clip(np.round(counts), 0.0, top)
         sat = counts.reshape(todo.size, -1).max(axis=1) >= top
         done = ~sat if k < len(ladder) - 1 else np.ones(todo.size, dtype=bool)
@@ -124,6 +129,14 @@ def measure(
         power[todo[done]] = p
         todo = todo[~done]
     return out, power
+
+
+def _noise(rng: np.random.Generator | CopyRandom, sigma: float, shape: tuple[int, ...], row_copy: np.ndarray | None) -> np.ndarray:
+    """N(0, sigma^2) noise of ``shape``; rows from each copy's stream when ``rng`` is a CopyRandom."""
+    if isinstance(rng, CopyRandom):
+        rows = np.zeros(shape[0], dtype=np.int64) if row_copy is None else row_copy
+        return rng.normal(sigma, rows, shape[1:])
+    return rng.normal(0.0, sigma, shape)
 
 
 def estimate(
@@ -227,11 +240,12 @@ def read(
     brightness: np.ndarray,
     rel_position: np.ndarray,
     rel_heading: np.ndarray,
-    rng: np.random.Generator,
+    rng: np.random.Generator | CopyRandom,
     sigma: float | None = None,
     platform: Platform | str = "droplet",
     ladder: tuple[float, ...] = POWER_LADDER,
     near_model: bool = False,
+    row_copy: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Measure and estimate P pairs with power control: (range m, bearing rad, heading rad, power).
 
@@ -239,21 +253,21 @@ def read(
     ``near_model=True`` (Droplet firmware style): one full-power reading; a saturated one is measured
     again with the emitters at the firmware's low power (brightness from the pair geometry with
     :class:`swarm_envs.ir.models.DropletLowPowerIR`) and inverted with that low-power amplitude fit;
-    its power is reported as NaN (a different fit, not a factor).
+    its power is reported as NaN (a different fit, not a factor). ``rng``/``row_copy`` as in :func:`measure`.
     """
     platform = get_platform(platform)
     if not near_model:
-        meas, p = measure(brightness, rng, sigma, platform, ladder)
+        meas, p = measure(brightness, rng, sigma, platform, ladder, row_copy)
         return (*estimate(meas, platform, power=p), p)
     from swarm_envs.ir.models import DropletLowPowerIR
 
-    meas, p = measure(brightness, rng, sigma, platform, (1.0,))
+    meas, p = measure(brightness, rng, sigma, platform, (1.0,), row_copy)
     R, th, ph = estimate(meas, platform)
     sat = np.flatnonzero(meas.reshape(len(meas), -1).max(axis=1) >= float(platform.ir_model.adc_max))
     if sat.size:
         low = DropletLowPowerIR(platform)
         lam = pair_gains(np.asarray(rel_position)[sat], np.asarray(rel_heading)[sat], platform, model=low)
-        meas_low, _ = measure(lam, rng, sigma, platform, (1.0,))
+        meas_low, _ = measure(lam, rng, sigma, platform, (1.0,), None if row_copy is None else row_copy[sat])
         R[sat], th[sat], ph[sat] = estimate(meas_low, platform, model=low)
         p = p.copy()
         p[sat] = np.nan
@@ -312,7 +326,7 @@ class RangeBearingSensor:
         self,
         platform: Platform | str,
         n_robots: int,
-        rng: np.random.Generator,
+        rng: np.random.Generator | CopyRandom,
         noise_sigma: float | None = None,
         schedule: str = "contention",
         max_age: int = 10,
@@ -326,8 +340,10 @@ class RangeBearingSensor:
         self.near_model = bool(near_model)
         if schedule not in ("contention", "every_step"):
             raise ValueError(f"schedule must be 'contention' or 'every_step', got {schedule!r}")
-        self.n_robots = int(n_robots)
-        self.rng = rng
+        self.rng = rng if isinstance(rng, CopyRandom) else CopyRandom([rng])
+        self.copy_size = int(n_robots)
+        self.n_robots = self.copy_size * self.rng.n_copies
+        self.copy_of = np.repeat(np.arange(self.rng.n_copies), self.copy_size)
         self.noise_sigma = float(self.platform.ir_model.default_noise_sigma if noise_sigma is None else noise_sigma)
         self.schedule = schedule
         self.max_age = int(max_age)
@@ -335,14 +351,24 @@ class RangeBearingSensor:
         self.last_fired = np.zeros(self.n_robots, dtype=bool)
         self.reset()
 
-    def reset(self) -> None:
-        """Forget all readings."""
-        self._key = np.zeros(0, dtype=np.int64)
-        self._range = np.zeros(0)
-        self._bearing = np.zeros(0)
-        self._heading = np.zeros(0)
-        self._age = np.zeros(0, dtype=np.int64)
-        self.last_fired = np.zeros(self.n_robots, dtype=bool)
+    def reset(self, copies: np.ndarray | None = None, rngs: list[np.random.Generator] | None = None) -> None:
+        """Forget all readings (of ``copies`` only, given; their streams become ``rngs`` if given)."""
+        if copies is None:
+            self._key = np.zeros(0, dtype=np.int64)
+            self._range = np.zeros(0)
+            self._bearing = np.zeros(0)
+            self._heading = np.zeros(0)
+            self._age = np.zeros(0, dtype=np.int64)
+            self.last_fired = np.zeros(self.n_robots, dtype=bool)
+            return
+        copies = np.asarray(copies, dtype=np.int64).reshape(-1)
+        if rngs is not None:
+            for b, g in zip(copies, rngs):
+                self.rng.generators[b] = g
+        keep = ~np.isin((self._key // self.n_robots) // self.copy_size, copies)
+        self._key, self._range, self._bearing = self._key[keep], self._range[keep], self._bearing[keep]
+        self._heading, self._age = self._heading[keep], self._age[keep]
+        self.last_fired[np.isin(self.copy_of, copies)] = False
 
     # -- scheduling ------------------------------------------------------------------------------------
     def fire_mask(self, links: IRLinks) -> np.ndarray:
@@ -350,7 +376,7 @@ class RangeBearingSensor:
         N = self.n_robots
         if self.schedule == "every_step":
             return np.ones(N, dtype=bool)
-        prio = self.rng.random(N)
+        prio = self.rng.random(self.copy_of)
         a = np.concatenate([links.rx, links.tx])
         b = np.concatenate([links.tx, links.rx])
         fired = np.zeros(N, dtype=bool)
@@ -377,7 +403,7 @@ class RangeBearingSensor:
         if sel.size:
             R, th, ph, _ = read(
                 links.gains[sel], links.rel_position[sel], links.rel_heading[sel], self.rng, self.noise_sigma,
-                self.platform, self.ladder, self.near_model,
+                self.platform, self.ladder, self.near_model, self.copy_of[links.rx[sel]],
             )
             ok = np.isfinite(R)
             sel, R, th, ph = sel[ok], R[ok], th[ok], ph[ok]

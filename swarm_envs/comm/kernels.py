@@ -1,0 +1,485 @@
+"""Compiled (numba) SwarmCom bit-slot loop, with the numpy implementation in ``network.py`` as reference.
+
+:func:`slot_loop` runs every bit slot of one control step for all robots in one call [T20 Secs. 3, 4]:
+
+1. CSMA: pending robots count down their access delay / backoff, sense the carrier (their detector is
+   inside a frame or saw s1 in the last slot) and start or defer (deferral ``1 + draw``) [Sec. 4.4];
+2. emission of the current bit of every sending robot (OOK, all emitters on for an s1);
+3. superposed intensities ``y = min(1, sum gains + n_j)`` over the links of the emitting transmitters
+   [Eqs. (10),(11)], and the 12-bit ADC ``m = floor((m_max - m_min)(1 - y) + m_min + n_m)`` clipped to
+   [0, m_sup] [Eqs. (20)-(22)] with the noise drawn before the loop;
+4. the detector state machine: ``min`` over the detectors, start detection ``m < m_t = m_max_est - m_tr``
+   [Eqs. (30)-(33)], the dynamic threshold ``floor(|m_t + A| / 2)`` [Eq. (36)], bit storage, run-time
+   ambient adaptation on idle s0 samples [Sec. 4.5], half duplex;
+5. frame check points: marker/type check, header decode (BCH by table look-up: the code's decoding
+   table over all 2^15 received words, the same table :class:`swarm_envs.comm.bch.BCHCode` uses), abort,
+   completion with the optional CRC-8 and delivery;
+6. ground truth for statistics only (strongest s1 transmitter at a start, the bits it really sent,
+   collisions, bit / block errors, corrupt deliveries).
+
+Every random number the step needs is an input (:class:`StepDraws`, drawn by :func:`draw_step`): the
+kernel and the numpy reference consume the same arrays and must give the same deliveries and counters
+(``tests/test_network_kernel.py``). The arrays are indexed by robot and their shapes do not depend on
+what the robots do, so a batched engine can draw them per env copy and concatenate the robot axes.
+
+The flooding dedupe and relaying run once per step in numpy (``Network._finish_step``), not per slot.
+Without numba the same functions run as (slow) plain Python; ``Network`` then defaults to numpy.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+
+try:  # numba is optional: an accelerator, not a requirement
+    from numba import njit
+
+    HAVE_NUMBA = True
+except ImportError:  # pragma: no cover - exercised only without numba
+    HAVE_NUMBA = False
+
+__all__ = ["HAVE_NUMBA", "COUNTERS", "PER_ROBOT", "DELIVERY_FIELDS", "StepDraws", "draw_step", "slot_loop", "decode_words"]
+
+COUNTERS = (
+    "slots",
+    "tx_started",  # frames put on air (originals + relays)
+    "tx_completed",
+    "tx_relays",  # flooding re-sends queued
+    "deferrals",  # CSMA found the channel busy
+    "queue_dropped",  # oldest waiting frame dropped because the queue was full
+    "rx_starts",  # start symbols detected (includes noise-triggered false starts)
+    "rx_false_starts",  # ... with no transmitter emitting s1 towards the robot (ground truth)
+    "rx_aborted",  # frames abandoned: bad marker/type, undecodable or impossible header
+    "rx_decode_failed",  # complete frames with an undecodable block or a failed CRC
+    "rx_crc_failed",  # ... of which the CRC failed (crc_bits = 8)
+    "rx_decoded",  # complete frames whose blocks all decode and header is valid
+    "rx_delivered",  # ... passed to the application (after flooding dedupe)
+    "rx_duplicates",  # flooding duplicates suppressed
+    "rx_corrupt_delivered",  # delivered but header/payload differ from what was sent (ground truth)
+    "rx_lost",  # aligned frames from a real transmitter that were aborted or failed to decode
+    "collisions",  # received frames during which >= 2 transmitters were significant at the receiver
+    "bits_checked",  # raw bits compared with the truth (aligned frames)
+    "bit_errors",
+    "blocks_checked",  # complete 15-bit blocks of aligned frames, decoded and compared with the truth
+    "block_errors",
+)
+PER_ROBOT = (
+    "tx_started",
+    "deferrals",
+    "rx_delivered",
+    "rx_lost",
+    "collisions",
+    "bits_checked",
+    "bit_errors",
+    "blocks_checked",
+    "block_errors",
+)
+#: integer columns of the kernel's delivery records
+DELIVERY_FIELDS = ("receiver", "origin", "sender", "seq", "type", "length", "detector", "slot", "corrupt", "done_slot")
+
+# counter indices (compile-time constants in the kernel)
+_C_TX_STARTED, _C_TX_COMPLETED, _C_DEFERRALS = COUNTERS.index("tx_started"), COUNTERS.index("tx_completed"), COUNTERS.index("deferrals")
+_C_RX_STARTS, _C_FALSE_STARTS, _C_ABORTED = COUNTERS.index("rx_starts"), COUNTERS.index("rx_false_starts"), COUNTERS.index("rx_aborted")
+_C_DECODE_FAILED, _C_CRC_FAILED, _C_DECODED = COUNTERS.index("rx_decode_failed"), COUNTERS.index("rx_crc_failed"), COUNTERS.index("rx_decoded")
+_C_LOST, _C_COLL, _C_BITS = COUNTERS.index("rx_lost"), COUNTERS.index("collisions"), COUNTERS.index("bits_checked")
+_C_BIT_ERR, _C_BLOCKS, _C_BLOCK_ERR = COUNTERS.index("bit_errors"), COUNTERS.index("blocks_checked"), COUNTERS.index("block_errors")
+_P_TX_STARTED, _P_DEFERRALS, _P_LOST, _P_COLL = PER_ROBOT.index("tx_started"), PER_ROBOT.index("deferrals"), PER_ROBOT.index("rx_lost"), PER_ROBOT.index("collisions")
+_P_BITS, _P_BIT_ERR, _P_BLOCKS, _P_BLOCK_ERR = PER_ROBOT.index("bits_checked"), PER_ROBOT.index("bit_errors"), PER_ROBOT.index("blocks_checked"), PER_ROBOT.index("block_errors")
+_IDLE, _RECV = 0, 1  # detector states (as protocol.IDLE / protocol.RECV)
+
+
+class StepDraws(NamedTuple):
+    """All random numbers of one control step of S slots for N robots (module docstring).
+
+    Attributes:
+        noise: (S, N, n_det) float32, ADC noise n_m of every detector sample (counts).
+        intensity_noise: (S, N, n_det) float64 intensity noise n_j, or shape (0, 0, 0) when sigma = 0.
+        backoff: (N, S) int64 in [0, W): the draw a robot uses if it defers (``1 + draw``) or arms a fresh
+            access delay after a frame (``draw``) in slot s (at most one of the two per robot and slot).
+        access: (N,) int64 in [0, W): access delay of a robot whose queue was filled since the last step.
+    """
+
+    noise: np.ndarray
+    intensity_noise: np.ndarray
+    backoff: np.ndarray
+    access: np.ndarray
+
+
+def draw_step(rng: np.random.Generator, S: int, n: int, n_det: int, noise_sigma: float, intensity_sigma: float, window: int) -> StepDraws:
+    """Draw the random numbers of one step in a fixed order and with shapes fixed by (S, n), independent of
+    the robots' activity (a batched engine calls this once per env copy and concatenates robot axes)."""
+    if noise_sigma > 0:
+        noise = rng.standard_normal(size=(S, n, n_det), dtype=np.float32) * np.float32(noise_sigma)
+    else:
+        noise = np.zeros((S, n, n_det), dtype=np.float32)
+    if intensity_sigma > 0:
+        inoise = rng.normal(0.0, intensity_sigma, size=(S, n, n_det))
+    else:
+        inoise = np.zeros((0, 0, 0))
+    backoff = rng.integers(0, window, size=(n, S), dtype=np.int64)
+    access = rng.integers(0, window, size=n, dtype=np.int64)
+    return StepDraws(noise, inoise, backoff, access)
+
+
+def _identity(f):  # pragma: no cover - used only without numba
+    return f
+
+
+_jit = njit(cache=True) if HAVE_NUMBA else _identity
+
+
+@_jit
+def _word(bits, off, n):
+    """n bits starting at ``off`` (MSB first) -> int."""
+    w = 0
+    for i in range(n):
+        w = (w << 1) | (1 if bits[off + i] else 0)
+    return w
+
+
+@_jit
+def _decode_block(word, n, k, table_msg, table_ok):
+    """BCH bounded-distance decoding by table look-up (as ``BCHCode.decode``): (message int, ok)."""
+    if table_ok[word]:
+        return table_msg[word], True
+    return word >> (n - k), False
+
+
+@_jit
+def _decode_stream(bits, nbits, n, k, table_msg, table_ok, info):
+    """Decode the ``nbits // n`` whole blocks of ``bits`` into ``info`` (k bits per block); all ok?"""
+    ok_all = True
+    for b in range(nbits // n):
+        msg, ok = _decode_block(_word(bits, b * n, n), n, k, table_msg, table_ok)
+        ok_all = ok_all and ok
+        for i in range(k):
+            info[b * k + i] = (msg >> (k - 1 - i)) & 1 == 1
+    return ok_all
+
+
+@_jit
+def decode_words(words, n, k, table_msg, table_ok):
+    """Vector form of the kernel's block decoder (for tests): words (M,) -> (messages (M,), ok (M,))."""
+    msg = np.zeros(words.size, dtype=np.int64)
+    ok = np.zeros(words.size, dtype=np.bool_)
+    for i in range(words.size):
+        msg[i], ok[i] = _decode_block(words[i], n, k, table_msg, table_ok)
+    return msg, ok
+
+
+@_jit
+def _uint(info, off, w):
+    v = 0
+    for i in range(w):
+        v = (v << 1) | (1 if info[off + i] else 0)
+    return v
+
+
+@_jit
+def _crc8(info, end, crc_table):
+    """CRC-8 of the first ``end`` bits (as ``protocol.crc8``: XOR of x^(j+8) mod g over set bits)."""
+    c = 0
+    for i in range(end):
+        if info[i]:
+            c ^= crc_table[end - 1 - i]
+    return c
+
+
+@_jit
+def _score(r, nbits, buf, gt_buf, gt_id, collided, n, k, table_msg, table_ok, counts, per_robot):
+    """Ground-truth scoring of an aligned frame at its end (as ``Network._score_bits``)."""
+    if gt_id[r] < 0:
+        return
+    nb = nbits[r]
+    err = 0
+    for i in range(nb):
+        if buf[r, i] != gt_buf[r, i]:
+            err += 1
+    counts[_C_BITS] += nb
+    per_robot[_P_BITS, r] += nb
+    counts[_C_BIT_ERR] += err
+    per_robot[_P_BIT_ERR, r] += err
+    if collided[r]:
+        counts[_C_COLL] += 1
+        per_robot[_P_COLL, r] += 1
+    nblk = nb // n
+    bad = 0
+    for b in range(nblk):
+        m1, _ = _decode_block(_word(buf[r], b * n, n), n, k, table_msg, table_ok)
+        m2, _ = _decode_block(_word(gt_buf[r], b * n, n), n, k, table_msg, table_ok)
+        if m1 != m2:
+            bad += 1
+    counts[_C_BLOCKS] += nblk
+    per_robot[_P_BLOCKS, r] += nblk
+    counts[_C_BLOCK_ERR] += bad
+    per_robot[_P_BLOCK_ERR, r] += bad
+
+
+@_jit
+def _abort(r, state, nbits, buf, gt_buf, gt_id, collided, n, k, table_msg, table_ok, counts, per_robot):
+    _score(r, nbits, buf, gt_buf, gt_id, collided, n, k, table_msg, table_ok, counts, per_robot)
+    if gt_id[r] >= 0:
+        counts[_C_LOST] += 1
+        per_robot[_P_LOST, r] += 1
+    counts[_C_ABORTED] += 1
+    state[r] = _IDLE
+    nbits[r] = 0
+
+
+@_jit
+def slot_loop(
+    S, slot0, n_det, m_min, m_sup, m_tr, alpha, first_check,
+    tx_ptr, lrx, G, sig_ptr, sig_rx, ambient,
+    noise, inoise, pool,
+    q_bits, q_slots, q_head, q_count, cur_bits, cur_slots, cur_pos, cur_id, sending, frame_counter, backoff,
+    state, m_max_est, thr, nbits, expect, phase, buf, best_m, best_det, last_s1, start_slot,
+    gt_tx, gt_id, gt_buf, collided,
+    code_n, code_k, table_msg, table_ok, header_blocks, header_bits, id_bits, with_sender, crc_bits, crc_table, valid_types,
+    n_ids, counts, per_robot, d_int, d_pay,
+):  # fmt: skip
+    """All S bit slots of one control step for all robots (module docstring). State arrays are updated in
+    place; ``frame_counter`` is a (1,) array. Deliveries are written to ``d_int`` (D, 10) with columns
+    :data:`DELIVERY_FIELDS` and ``d_pay`` (D, >= 255) bool; returns the number written. Header ids are a
+    copy's own robot numbers, valid below ``n_ids`` (the robots per env copy)."""
+    n = sending.shape[0]
+    Q = q_bits.shape[1]
+    F = cur_bits.shape[1]
+    Fq = q_bits.shape[2]
+    W = buf.shape[1]
+    has_inoise = inoise.shape[0] > 0
+    ysum = np.zeros((n, n_det))
+    best_str = np.full(n, -np.inf)
+    best_tx = np.full(n, -1, dtype=np.int64)
+    sigcnt = np.zeros(n, dtype=np.int64)
+    check = np.zeros(n, dtype=np.bool_)
+    info = np.zeros(W, dtype=np.bool_)
+    tinfo = np.zeros(W, dtype=np.bool_)
+    dirty = False
+    nd_out = 0
+    fc = frame_counter[0]
+    for s in range(S):
+        slot = slot0 + s
+        # 1. CSMA [Sec. 4.4]
+        for r in range(n):
+            if q_count[r] > 0 and not sending[r]:
+                if backoff[r] > 0:
+                    backoff[r] -= 1
+                elif state[r] == _RECV or last_s1[r]:
+                    counts[_C_DEFERRALS] += 1
+                    per_robot[_P_DEFERRALS, r] += 1
+                    backoff[r] = 1 + pool[r, s]
+                else:  # start sending the head of the queue
+                    h = q_head[r]
+                    for i in range(Fq):
+                        cur_bits[r, i] = q_bits[r, h, i]
+                    cur_slots[r] = q_slots[r, h]
+                    cur_pos[r] = 0
+                    cur_id[r] = fc
+                    fc += 1
+                    sending[r] = True
+                    q_head[r] = (h + 1) % Q
+                    q_count[r] -= 1
+                    if state[r] == _RECV:  # half duplex (CSMA normally prevents this)
+                        state[r] = _IDLE
+                        nbits[r] = 0
+                    counts[_C_TX_STARTED] += 1
+                    per_robot[_P_TX_STARTED, r] += 1
+        # 2./3. emission and superposed intensities [Eqs. (10),(11)]
+        if dirty:
+            ysum[:] = 0.0
+            best_str[:] = -np.inf
+            best_tx[:] = -1
+            sigcnt[:] = 0
+            dirty = False
+        for t in range(n):
+            if not sending[t]:
+                continue
+            dirty = True
+            for j in range(sig_ptr[t], sig_ptr[t + 1]):
+                sigcnt[sig_rx[j]] += 1
+            if cur_bits[t, cur_pos[t]]:
+                for li in range(tx_ptr[t], tx_ptr[t + 1]):
+                    r = lrx[li]
+                    st = -np.inf
+                    for d in range(n_det):
+                        g = G[li, d]
+                        ysum[r, d] += g
+                        if g > st:
+                            st = g
+                    if st > best_str[r]:
+                        best_str[r] = st
+                        best_tx[r] = t
+        # 4./5. ADC [Eqs. (20)-(22)] and detectors [Sec. 4.2, Eq. (36), Sec. 4.5]
+        for r in range(n):
+            listen = not sending[r]
+            in_frame = state[r] == _RECV
+            if not listen:
+                last_s1[r] = False
+                if in_frame:  # a transmitting robot drops what it was receiving
+                    state[r] = _IDLE
+                    nbits[r] = 0
+                continue
+            span = ambient[r] - m_min
+            mv = np.inf
+            md = 0
+            msum = 0.0
+            for d in range(n_det):
+                y = ysum[r, d]
+                if has_inoise:
+                    y = y + inoise[s, r, d]
+                if y > 1.0:
+                    y = 1.0
+                m = np.floor(span * (1.0 - y) + m_min + np.float64(noise[s, r, d]))
+                if m < 0.0:
+                    m = 0.0
+                elif m > m_sup:
+                    m = m_sup
+                msum += m
+                if m < mv:
+                    mv = m
+                    md = d
+            m_t = m_max_est[r] - m_tr
+            s1 = mv < (thr[r] if in_frame else m_t)
+            last_s1[r] = s1
+            if not in_frame:
+                if s1:  # start symbol
+                    state[r] = _RECV
+                    thr[r] = np.floor(abs(m_t + mv) / 2.0)  # Eq. (36)
+                    nbits[r] = 0
+                    expect[r] = first_check
+                    phase[r] = 0
+                    best_m[r] = np.int64(mv)
+                    best_det[r] = md
+                    start_slot[r] = slot
+                    counts[_C_RX_STARTS] += 1
+                    # ground truth: strongest transmitter emitting s1 towards r
+                    gt_tx[r] = -1
+                    gt_id[r] = -1
+                    collided[r] = False
+                    t = best_tx[r]
+                    if t >= 0 and best_str[r] * (ambient[r] - m_min) > 0.5:
+                        gt_tx[r] = t
+                        if cur_pos[t] == 0:
+                            gt_id[r] = cur_id[t]
+                    else:
+                        counts[_C_FALSE_STARTS] += 1
+                else:  # run-time ambient adaptation on idle s0 samples
+                    m_max_est[r] = m_max_est[r] + alpha * (msum / n_det - m_max_est[r])
+            else:  # store a bit
+                kb = nbits[r]
+                buf[r, kb] = s1
+                nbits[r] = kb + 1
+                if mv < best_m[r]:
+                    best_m[r] = np.int64(mv)
+                    best_det[r] = md
+                t = gt_tx[r]
+                tb = False
+                if t >= 0:
+                    if sending[t] and cur_id[t] == gt_id[r]:
+                        tb = cur_bits[t, min(cur_pos[t], F - 1)]
+                gt_buf[r, kb] = tb
+                if sigcnt[r] >= 2:
+                    collided[r] = True
+                if nbits[r] == expect[r]:
+                    check[r] = True
+        # advance transmitters
+        for t in range(n):
+            if sending[t]:
+                cur_pos[t] += 1
+                if cur_pos[t] >= cur_slots[t]:
+                    sending[t] = False
+                    counts[_C_TX_COMPLETED] += 1
+                    if q_count[t] > 0:
+                        backoff[t] = pool[t, s]  # fresh access delay (fairness)
+        # 5. frame check points
+        for r in range(n):
+            if not check[r]:
+                continue
+            check[r] = False
+            while True:
+                ph = phase[r]
+                if ph == 0:  # marker / type
+                    if code_k == code_n:
+                        for i in range(4):
+                            info[i] = buf[r, i]
+                        good = info[0] and valid_types[_uint(info, 1, 3)]
+                    else:
+                        _decode_stream(buf[r], code_n, code_n, code_k, table_msg, table_ok, info)
+                        good = info[0]
+                        if code_k >= 4:
+                            good = good and valid_types[_uint(info, 1, 3)]
+                    if not good:
+                        _abort(r, state, nbits, buf, gt_buf, gt_id, collided, code_n, code_k, table_msg, table_ok, counts, per_robot)
+                        break
+                    phase[r] = 1
+                    expect[r] = header_blocks * code_n
+                    if expect[r] != nbits[r]:
+                        break
+                elif ph == 1:  # header -> frame length
+                    ok = _decode_stream(buf[r], header_blocks * code_n, code_n, code_k, table_msg, table_ok, info)
+                    typ = _uint(info, 1, 3)
+                    length = _uint(info, 4, 8)
+                    origin = _uint(info, 19, id_bits)
+                    sender = _uint(info, 19 + id_bits, id_bits) if with_sender else origin
+                    good = ok and info[0] and valid_types[typ] and origin < n_ids and sender < n_ids
+                    if not good:
+                        _abort(r, state, nbits, buf, gt_buf, gt_id, collided, code_n, code_k, table_msg, table_ok, counts, per_robot)
+                        break
+                    phase[r] = 2
+                    expect[r] = ((header_bits + length + crc_bits + code_k - 1) // code_k) * code_n
+                    if expect[r] != nbits[r]:
+                        break
+                else:  # complete: decode, check, deliver
+                    _score(r, nbits, buf, gt_buf, gt_id, collided, code_n, code_k, table_msg, table_ok, counts, per_robot)
+                    nb = nbits[r]
+                    ok = _decode_stream(buf[r], nb, code_n, code_k, table_msg, table_ok, info)
+                    width = (nb // code_n) * code_k
+                    typ = _uint(info, 1, 3)
+                    length = _uint(info, 4, 8)
+                    seq = _uint(info, 12, 7)
+                    origin = _uint(info, 19, id_bits)
+                    sender = _uint(info, 19 + id_bits, id_bits) if with_sender else origin
+                    aligned = gt_id[r] >= 0
+                    corrupt = False
+                    if aligned:
+                        _decode_stream(gt_buf[r], nb, code_n, code_k, table_msg, table_ok, tinfo)
+                        for i in range(min(header_bits + length, width)):
+                            if info[i] != tinfo[i]:
+                                corrupt = True
+                                break
+                    if crc_bits > 0 and ok:
+                        end = header_bits + length
+                        got = 0
+                        for i in range(8):
+                            got = (got << 1) | (1 if info[min(end + i, width - 1)] else 0)
+                        if got != _crc8(info, end, crc_table):
+                            counts[_C_CRC_FAILED] += 1
+                            ok = False
+                    if not ok:
+                        counts[_C_DECODE_FAILED] += 1
+                        if aligned:
+                            counts[_C_LOST] += 1
+                            per_robot[_P_LOST, r] += 1
+                    else:
+                        if nd_out >= d_int.shape[0]:
+                            raise RuntimeError("delivery buffer too small")
+                        d_int[nd_out, 0] = r
+                        d_int[nd_out, 1] = origin
+                        d_int[nd_out, 2] = sender
+                        d_int[nd_out, 3] = seq
+                        d_int[nd_out, 4] = typ
+                        d_int[nd_out, 5] = length
+                        d_int[nd_out, 6] = best_det[r]
+                        d_int[nd_out, 7] = start_slot[r]
+                        d_int[nd_out, 8] = 1 if corrupt else 0
+                        d_int[nd_out, 9] = slot
+                        for i in range(length):
+                            d_pay[nd_out, i] = info[header_bits + i]
+                        nd_out += 1
+                        counts[_C_DECODED] += 1
+                    state[r] = _IDLE
+                    nbits[r] = 0
+                    break
+    frame_counter[0] = fc
+    return nd_out

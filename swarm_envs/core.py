@@ -1,0 +1,204 @@
+"""The batched simulation core: ``B`` independent copies of one task stepped as one array program.
+
+Every per-step array covers all ``B x n_world`` robots (robot ``b * n_world + i`` is robot ``i`` of copy
+``b``). Data flows one way each control step (``DT`` = 0.1 s): physics (one pymunk ``Space`` per copy,
+:mod:`swarm_envs.world`) -> sensing stack over all robots at once (IR links, range & bearing, SwarmCom,
+bearing exchange, scale-free coordinates; no link, message or random draw crosses copies) -> observation
+arrays -> rewards (the task, on ``(B, ...)`` views).
+
+Thin views sit on top: :class:`swarm_envs.env.SwarmEnv` (a PettingZoo ``ParallelEnv``) is the core with
+``B = 1``; :func:`swarm_envs.vector.make_vec` exposes ``B`` copies as arrays. Because each copy draws from
+its own generators in the order a single env would, copy ``b`` seeded with ``s`` reproduces a single env
+seeded with ``s`` bit for bit.
+
+Episode starts: a copy is (re)started by :meth:`SwarmCore.start` before a sensing step; that step is the
+copy's reset step (its first observation), while the other copies take an ordinary step. So resetting
+one copy never advances or re-draws anything of another.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+
+from swarm_envs.copies import CopyRandom
+from swarm_envs.observation import ObservationLayout, pack_nearest
+from swarm_envs.sensing.base import SensorFrame
+from swarm_envs.task import BatchState, Task
+from swarm_envs.world import N_BUMP_SECTORS, World
+
+__all__ = ["SwarmCore", "DT"]
+
+DT = 0.1  # s, one control step = the Droplet R&B update rate [F14 Sec. V]
+
+
+class SwarmCore:
+    """``n_copies`` copies of ``task`` (module docstring).
+
+    Args:
+        task: the task (its config, platform, arena and robots); built for ``n_copies`` copies.
+        layout: observation layout of one robot.
+    """
+
+    def __init__(self, task: Task, layout: ObservationLayout) -> None:
+        cfg = task.config
+        self.task = task
+        self.layout = layout
+        self.platform = task.platform
+        self.B = task.n_copies
+        self.n_world = task.n_world
+        self.n_total = self.B * self.n_world
+        self.copy_of_robot = np.repeat(np.arange(self.B), self.n_world)
+        self.worlds = [World(self.platform, self.n_world, task.arena, substeps=cfg["physics_substeps"]) for _ in range(self.B)]
+        self.sensing = _make_sensing(cfg, self.platform, self.n_world, self.B)
+        self.generators = [np.random.default_rng() for _ in range(self.B)]
+        self.static = (np.arange(self.n_total) % self.n_world) < task.n_static
+        self.last_actions = np.zeros((self.n_total, layout.action_size))
+        self.num_cycles = np.zeros(self.B, dtype=np.int64)
+        self.positions = np.zeros((self.n_total, 2))
+        self.headings = np.zeros(self.n_total)
+        self.velocities = np.zeros((self.n_total, 2))
+        self.bumps = np.zeros((self.n_total, N_BUMP_SECTORS), dtype=bool)
+        self.frame: SensorFrame | None = None
+        self.rewards = np.zeros((self.B, task.n_agents))
+        self.terms: dict[str, np.ndarray] = {}
+        self.metrics: dict[str, np.ndarray] = {}
+        self._starting = np.zeros(self.B, dtype=bool)
+
+    # -- episodes ------------------------------------------------------------------------------------
+    def seed(self, copy: int, seed: int | None) -> None:
+        """Re-seed copy ``copy``'s episode generator (``None``: keep its generator running)."""
+        if seed is not None:
+            self.generators[copy] = np.random.default_rng(seed)
+
+    def start(self, copies: Sequence[int], options: Sequence[dict | None] | None = None) -> None:
+        """Begin new episodes in ``copies``: spawn (or place from ``options``), fresh sensing state.
+
+        The copies' first observation comes from the next :meth:`step` (which does not move them).
+        ``options[k]`` may hold ``"positions"`` (n_world, 2) m and ``"headings"`` (n_world,) rad.
+        """
+        copies = np.asarray(copies, dtype=np.int64).reshape(-1)
+        options = list(options) if options is not None else [None] * len(copies)
+        sensing_rngs = []
+        for b, opt in zip(copies, options):
+            # independent child streams: spawn, and sensing (which splits it into noise, channel and MAC)
+            streams = np.random.SeedSequence(int(self.generators[b].integers(2**63))).spawn(2)
+            spawn_rng, sensing_rng = (np.random.default_rng(s) for s in streams)
+            positions, headings = self._initial_pose(spawn_rng, opt or {})
+            self.worlds[b].place(positions, headings)
+            sensing_rngs.append(sensing_rng)
+        self.sensing.reset(copies, sensing_rngs)
+        rows = np.flatnonzero(np.isin(self.copy_of_robot, copies))
+        self.last_actions[rows] = 0.0
+        self.num_cycles[copies] = 0
+        self._starting[copies] = True
+
+    def _initial_pose(self, rng: np.random.Generator, options: dict[str, Any]) -> tuple[np.ndarray, np.ndarray]:
+        n = self.n_world
+        positions, headings = self.task.spawn(rng)
+        if "positions" in options:
+            positions = np.asarray(options["positions"], dtype=float)
+            if positions.shape != (n, 2):
+                raise ValueError(f"options['positions'] must have shape ({n}, 2) metres, got {positions.shape}")
+        if "headings" in options:
+            headings = np.asarray(options["headings"], dtype=float)
+            if headings.shape != (n,):
+                raise ValueError(f"options['headings'] must have shape ({n},) radians, got {headings.shape}")
+        return positions, headings
+
+    # -- stepping ------------------------------------------------------------------------------------
+    def step(self, actions: np.ndarray | None) -> None:
+        """One control step of every copy.
+
+        Copies started since the last step do not move: this step senses their initial state (their reset
+        observation). The others apply ``actions`` (n_total, action_size), already checked and clipped to
+        [-1, 1] (rows of static robots are ignored).
+        """
+        starting = self._starting.copy()
+        moving = ~starting
+        size = self.layout.action_size
+        act = np.zeros((self.n_total, size)) if actions is None else np.asarray(actions, dtype=float).reshape(self.n_total, size)
+        act = np.where(self.static[:, None], 0.0, act)
+        p = self.platform
+        for b in np.flatnonzero(moving):
+            rows = slice(b * self.n_world, (b + 1) * self.n_world)
+            self.worlds[b].step(act[rows, 0] * p.max_speed, act[rows, 1] * p.max_angular_speed, DT)
+        row_moving = moving[self.copy_of_robot]
+        self.last_actions[row_moving] = act[row_moving]
+        self._gather()
+        payloads = None
+        if self.layout.message_bits:
+            payloads = (act[:, 2:] > 0) & ~self.static[:, None]  # static robots send no application messages
+        self.frame = self.sensing.step(self.positions, self.headings, payloads, row_moving if payloads is not None else None)
+        self.num_cycles[moving] += 1
+        state = self.state()
+        self.rewards, self.terms, self.metrics = self.task.rewards(state, starting)
+        self._starting[:] = False
+
+    def _gather(self) -> None:
+        w = self.worlds
+        self.positions = np.concatenate([x.positions for x in w]) if self.B > 1 else w[0].positions
+        self.headings = np.concatenate([x.headings for x in w]) if self.B > 1 else w[0].headings
+        self.velocities = np.concatenate([x.velocities for x in w]) if self.B > 1 else w[0].velocities
+        self.bumps = np.concatenate([x.bumps for x in w]) if self.B > 1 else w[0].bumps
+
+    def state(self) -> BatchState:
+        """Ground truth of all copies as (B, n_world, ...) arrays."""
+        B, n = self.B, self.n_world
+        return BatchState(
+            self.positions.reshape(B, n, 2),
+            self.headings.reshape(B, n),
+            self.velocities.reshape(B, n, 2),
+            self.bumps.reshape(B, n, N_BUMP_SECTORS),
+            self.num_cycles.copy(),
+        )
+
+    # -- observations ---------------------------------------------------------------------------------
+    def observations(self) -> dict[str, np.ndarray]:
+        """Observation parts of every robot (leading axis = robot of all copies), from the last frame."""
+        frame = self.frame
+        n, k, m, b = self.n_total, self.layout.n_neighbours, self.layout.n_messages, self.layout.message_bits
+        nb = frame.neighbours
+        rb_values = (
+            np.stack(
+                [np.ones(len(nb.rx)), nb.range, np.cos(nb.bearing), np.sin(nb.bearing), np.cos(nb.heading), np.sin(nb.heading), nb.age],
+                axis=-1,
+            )
+            if len(nb.rx)
+            else np.zeros((0, 7))
+        )
+        range_bearing, _ = pack_nearest(n, nb.rx, nb.range, rb_values, k)
+        msg = frame.messages
+        if len(msg.receiver):
+            key = msg.distance_hint if msg.distance_hint is not None else np.arange(len(msg.receiver), dtype=float)
+            msg_values = np.concatenate(
+                [np.ones((len(msg.receiver), 1)), msg.bearing[:, None] / np.pi, msg.payload.reshape(len(msg.receiver), b)], axis=1
+            )
+            messages, _ = pack_nearest(n, msg.receiver, key, msg_values, m)
+        else:
+            messages = np.zeros((n, m, 2 + b))
+        sf = frame.scale_free
+        scale_free = np.concatenate([sf.valid[..., None].astype(float), np.where(sf.valid[..., None], sf.xy, 0.0)], axis=-1)
+        proprio = np.concatenate([self.bumps.astype(float), self.last_actions], axis=1)
+        return self.layout.build(range_bearing, messages, scale_free, sf.rigid.astype(float), proprio)
+
+    def agent_rows(self) -> np.ndarray:
+        """(B, n_agents) row index of every agent of every copy."""
+        return np.arange(self.B)[:, None] * self.n_world + self.task.agent_robots[None, :]
+
+
+def _make_sensing(cfg: dict[str, Any], platform, n_world: int, n_copies: int):
+    if cfg["sensing"] == "ideal":
+        from swarm_envs.sensing.ideal import IdealSensing
+
+        return IdealSensing(platform, n_world, cfg["n_neighbours"], cfg["message_bits"], n_copies)
+    from swarm_envs.sensing.full import FullSensing
+
+    return FullSensing(platform, n_world, cfg, n_copies)
+
+
+def copy_random(generators: Sequence[np.random.Generator]) -> CopyRandom:
+    """Per-copy streams for a sensing module (one generator per copy)."""
+    return CopyRandom(list(generators))

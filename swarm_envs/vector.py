@@ -1,0 +1,195 @@
+"""``make_vec``: many copies of a swarm task stepped by one batched core, with array inputs and outputs.
+
+A :class:`SwarmVectorEnv` is a Gymnasium 1.x ``VectorEnv`` over ``B = num_envs`` copies of one task, each
+copy a whole swarm of ``N`` agents. Everything is an array with leading axes ``(B, N)``:
+
+- ``step(actions)`` takes ``(B, N, A)`` actions (A = 2 + message_bits, clipped to [-1, 1]; NaN/inf,
+  complex, non-numeric or wrongly shaped actions raise ``ValueError``/``TypeError`` before anything moves);
+- observations: a dict of ``(B, N, ...)`` float32 arrays, or ``(B, N, D)`` with ``flatten=True``;
+- rewards, terminations, truncations: ``(B, N)``;
+- infos: arrays, no per-agent dicts: ``metrics[name]`` ``(B,)``, ``reward_terms[name]`` ``(B, N)``,
+  ``ground_truth["position"]`` ``(B, N, 2)`` m, ``["heading"]`` ``(B, N)`` rad, ``["velocity"]``
+  ``(B, N, 2)`` m/s, ``sensing[name]`` ``(B, N)``, and ``episode_step`` ``(B,)``.
+
+Autoreset: Gymnasium's ``NEXT_STEP`` mode (the 1.x default). When copy b's episode ends at step t, step t
+returns its last observation (and infos) with ``truncations[b] = True``; the next ``step`` resets copy b
+(its actions are ignored) and returns its first observation with zero reward and no termination or
+truncation, while the other copies step on. Seeding: ``reset(seed=s)`` seeds copy b with ``s + b``;
+``reset(seed=[s0, s1, ...])`` seeds each copy; copy b seeded with ``s`` reproduces
+``swarm_envs.make(env_id, ...)`` reset with ``s`` bit for bit, given the same actions.
+"""
+
+from __future__ import annotations
+
+import importlib
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+from gymnasium import spaces
+from gymnasium.vector import AutoresetMode, VectorEnv
+
+from swarm_envs.core import SwarmCore
+from swarm_envs.env import make_layout, resolve_config
+from swarm_envs.platforms import get_platform
+
+__all__ = ["SwarmVectorEnv", "make_vec"]
+
+
+def _batch_space(space: spaces.Box, lead: tuple[int, ...]) -> spaces.Box:
+    low = np.broadcast_to(space.low, lead + space.shape)
+    high = np.broadcast_to(space.high, lead + space.shape)
+    return spaces.Box(low, high, dtype=space.dtype)
+
+
+class SwarmVectorEnv(VectorEnv):
+    """``num_envs`` copies of the task of ``env_cls`` (a :class:`swarm_envs.env.SwarmEnv` subclass).
+
+    Args:
+        env_cls: the task's env class (e.g. :class:`swarm_envs.aggregation_v0.AggregationEnv`).
+        num_envs: number of copies B.
+        **kwargs: env settings, as for the single env.
+    """
+
+    metadata = {"autoreset_mode": AutoresetMode.NEXT_STEP, "render_modes": []}
+
+    def __init__(self, env_cls: type, num_envs: int, **kwargs: Any) -> None:
+        if isinstance(num_envs, bool) or not isinstance(num_envs, (int, np.integer)) or num_envs < 1:
+            raise ValueError(f"num_envs must be an integer >= 1, got {num_envs!r}")
+        if kwargs.get("render_mode") is not None:
+            raise ValueError("make_vec does not render; use the single env (swarm_envs.make) with render_mode")
+        cfg = resolve_config(env_cls.TASK, kwargs, "make_vec")
+        self.config = cfg
+        self.platform = get_platform(cfg["platform"])
+        self.task = env_cls.TASK(cfg, self.platform, n_copies=int(num_envs))
+        self.layout = make_layout(cfg, self.platform)
+        self.core = SwarmCore(self.task, self.layout)
+        self.num_envs = int(num_envs)
+        self.n_agents = self.task.n_agents
+        self.possible_agents = [f"robot_{i}" for i in range(self.n_agents)]
+        self.max_cycles = self.task.max_cycles
+        agent_obs = self.layout.space()
+        agent_act = self.layout.action_space()
+        lead = (self.n_agents,)
+        if isinstance(agent_obs, spaces.Dict):
+            self.single_observation_space = spaces.Dict({k: _batch_space(v, lead) for k, v in agent_obs.spaces.items()})
+            self.observation_space = spaces.Dict({k: _batch_space(v, (self.num_envs,) + lead) for k, v in agent_obs.spaces.items()})
+        else:
+            self.single_observation_space = _batch_space(agent_obs, lead)
+            self.observation_space = _batch_space(agent_obs, (self.num_envs,) + lead)
+        self.single_action_space = _batch_space(agent_act, lead)
+        self.action_space = _batch_space(agent_act, (self.num_envs,) + lead)
+        self.agent_observation_space = agent_obs
+        self.agent_action_space = agent_act
+        self._rows = self.core.agent_rows()  # (B, N)
+        self._needs_reset = np.zeros(self.num_envs, dtype=bool)
+        self._started = False
+
+    # -- API --------------------------------------------------------------------------------------------
+    def reset(self, *, seed: int | Sequence[int | None] | None = None, options: dict[str, Any] | None = None):
+        """Reset every copy; returns (observations, infos). ``options`` as for the single env, applied to all."""
+        seeds = self._seeds(seed)
+        if options is not None and not isinstance(options, dict):
+            raise TypeError(f"options must be a dict or None, got {type(options).__name__}")
+        for b, s in enumerate(seeds):
+            self.core.seed(b, s)
+        self.core.start(np.arange(self.num_envs), [options] * self.num_envs)
+        self.core.step(None)
+        self._needs_reset[:] = False
+        self._started = True
+        return self._observations(), self._infos()
+
+    def step(self, actions: np.ndarray):
+        """Step every copy with ``actions`` (B, N, A); see the module docstring for outputs and autoreset."""
+        if not self._started:
+            raise RuntimeError("step() called before reset()")
+        act = self._check_actions(actions)
+        restart = np.flatnonzero(self._needs_reset)
+        if restart.size:
+            self.core.start(restart)
+        full = np.zeros((self.core.n_total, self.layout.action_size))
+        full[self._rows.reshape(-1)] = act.reshape(-1, self.layout.action_size)
+        self.core.step(full)
+        rewards = self.core.rewards.astype(np.float32)
+        rewards[restart] = 0.0
+        truncated = self.core.num_cycles >= self.max_cycles
+        truncated[restart] = False
+        self._needs_reset = truncated.copy()
+        truncations = np.repeat(truncated[:, None], self.n_agents, axis=1)
+        terminations = np.zeros((self.num_envs, self.n_agents), dtype=bool)
+        return self._observations(), rewards, terminations, truncations, self._infos()
+
+    def close_extras(self, **kwargs: Any) -> None:
+        pass
+
+    # -- helpers ----------------------------------------------------------------------------------------
+    def _seeds(self, seed: int | Sequence[int | None] | None) -> list[int | None]:
+        B = self.num_envs
+        if seed is None:
+            return [None] * B
+        if isinstance(seed, (int, np.integer)) and not isinstance(seed, bool):
+            if seed < 0:
+                raise ValueError(f"seed must be a non-negative integer, got {seed}")
+            return [int(seed) + b for b in range(B)]
+        if isinstance(seed, Sequence) and not isinstance(seed, (str, bytes)):
+            seeds = list(seed)
+            if len(seeds) != B:
+                raise ValueError(f"seed list must have one entry per copy ({B}), got {len(seeds)}")
+            for s in seeds:
+                if s is not None and (isinstance(s, bool) or not isinstance(s, (int, np.integer)) or s < 0):
+                    raise ValueError(f"seeds must be non-negative integers or None, got {s!r}")
+            return [None if s is None else int(s) for s in seeds]
+        raise TypeError(f"seed must be an int, a list of ints (one per copy) or None, got {type(seed).__name__}")
+
+    def _check_actions(self, actions: Any) -> np.ndarray:
+        shape = (self.num_envs, self.n_agents, self.layout.action_size)
+        arr = np.asarray(actions)
+        if arr.dtype.kind not in "biuf":
+            raise TypeError(f"actions must be a real numeric array of shape {shape}, got dtype {arr.dtype}")
+        if arr.shape != shape:
+            raise ValueError(f"actions must have shape (num_envs, n_agents, action_size) = {shape}, got {arr.shape}")
+        arr = arr.astype(np.float64)
+        if not np.all(np.isfinite(arr)):
+            raise ValueError("actions contain NaN or inf")
+        return np.clip(arr, -1.0, 1.0)
+
+    def _observations(self) -> dict[str, np.ndarray] | np.ndarray:
+        parts = self.core.observations()
+        named = {k: v[self._rows] for k, v in parts.items()}  # (B, N, ...)
+        if not self.layout.flatten:
+            return named
+        B, N = self._rows.shape
+        flat = [named[k].reshape(B, N, -1) for k in sorted(named)]  # gymnasium.spaces.flatten order for Dict
+        return np.concatenate(flat, axis=2).astype(np.float32)
+
+    def _infos(self) -> dict[str, Any]:
+        core, rows = self.core, self._rows
+        stats = core.frame.stats if core.frame is not None else {}
+        return {
+            "metrics": {k: np.asarray(v, dtype=np.float64).copy() for k, v in core.metrics.items()},
+            "reward_terms": {k: np.asarray(v, dtype=np.float64).copy() for k, v in core.terms.items()},
+            "ground_truth": {
+                "position": core.positions[rows].copy(),
+                "heading": core.headings[rows].copy(),
+                "velocity": core.velocities[rows].copy(),
+            },
+            "sensing": {k: np.asarray(v)[rows] for k, v in stats.items()},
+            "episode_step": core.num_cycles.copy(),
+        }
+
+
+def make_vec(env_id: str, num_envs: int, **kwargs: Any) -> SwarmVectorEnv:
+    """``num_envs`` copies of the registered task ``env_id`` stepped by one batched core.
+
+    Example::
+
+        vec = swarm_envs.make_vec("swarm_envs/Flocking-v0", 64, n_robots=10, sensing="ideal")
+        obs, infos = vec.reset(seed=0)                 # copy b seeded with 0 + b
+        obs, rew, term, trunc, infos = vec.step(np.zeros((64, 10, 2)))
+    """
+    from swarm_envs import ENV_IDS
+
+    if env_id not in ENV_IDS:
+        raise ValueError(f"unknown environment id {env_id!r}; registered: {list(ENV_IDS)}")
+    module = importlib.import_module(ENV_IDS[env_id])
+    return SwarmVectorEnv(module.raw_env, num_envs, **kwargs)
