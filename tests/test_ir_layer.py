@@ -229,3 +229,25 @@ def test_line_of_sight_vectorised_matches_bruteforce():
     expected = ~np.any((d < 0.022) & ~own, axis=1)
     np.testing.assert_array_equal(los, expected)
     assert 0 < expected.sum() < len(expected)
+
+
+@pytest.mark.parametrize("name", ["droplet", "epuck", "rone"])
+def test_ray_clear_mask_matches_occluded_gains(name):
+    """IRLinks.ray_clear: the per-ray occlusion mask, for code that recomputes gains with another model."""
+    platform = get_platform(name)
+    rng = np.random.default_rng(21)
+    pos = []
+    while len(pos) < 60:
+        p = rng.uniform(0, platform.ir_range, 2)
+        if all(np.hypot(*(p - q)) > 2 * platform.radius for q in pos):
+            pos.append(p)
+    pos, hd = np.array(pos), rng.uniform(-np.pi, np.pi, 60)
+    free = compute_links(pos, hd, platform, drop_zero=False, occlusion="none")
+    for drop in (False, True):
+        L = compute_links(pos, hd, platform, drop_zero=drop)
+        sel = np.isin(free.rx * 60 + free.tx, L.rx * 60 + L.tx)
+        lit = free.gains[sel] > 0
+        clear = L.ray_clear(platform)
+        np.testing.assert_array_equal(clear[lit], L.gains[lit] > 0)
+        assert (~clear[lit]).any() and clear[lit].any()
+    assert compute_links(pos, hd, platform, occlusion="centre").ray_clear(platform).all()

@@ -2,7 +2,8 @@
 
 The IR layer's per-step work is a loop over P visible pairs x n_detectors x n_emitters that numpy can
 only do through many (P, n_d, n_e) temporaries (memory-bound). These kernels do the same arithmetic
-pair by pair, skipping dark emitter-detector combinations early. They implement exactly the models of
+pair by pair, skipping dark emitter-detector combinations early, and test each lit ray against the pair's
+candidate occluders (per-ray line of sight, SPEC 2). They implement exactly the models of
 :mod:`swarm_envs.ir.models` (the numpy methods there stay the reference; ``tests/test_ir_kernels.py``
 checks the two agree to 1e-12) and are used only when numba is importable (``pip install numba``, part
 of the ``fast`` extra); otherwise the layer uses the numpy path.

@@ -27,7 +27,7 @@ All public inputs/outputs are SI (metres, radians, angles wrapped to (-pi, pi]).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 import numpy as np
 from scipy.spatial import cKDTree
 
@@ -57,6 +57,9 @@ class IRLinks:
             (units of the platform's IR model: ADC counts for the Droplet, intensity y for the e-puck,
             0/1 for the r-one).
         n_robots: number of robots in the scene the links were computed from.
+        occluders: per-ray occluders of the pairs, ``(offsets, centres in the receiver frame, rows)``:
+            pair p's discs are ``centres[offsets[rows[p]]:offsets[rows[p] + 1]]`` (None: no per-ray
+            occlusion); use :meth:`ray_clear`.
     """
 
     rx: np.ndarray
@@ -66,9 +69,27 @@ class IRLinks:
     rel_heading: np.ndarray
     gains: np.ndarray
     n_robots: int = 0
+    occluders: tuple[np.ndarray, np.ndarray, np.ndarray] | None = field(default=None, repr=False)
 
     def __len__(self) -> int:
         return int(self.rx.shape[0])
+
+    def ray_clear(self, platform: Platform | str) -> np.ndarray:
+        """(P, n_detectors, n_emitters) bool: ray (detector i, emitter j) of each link misses every third
+        robot (SPEC 2), whether lit or not. For code that recomputes gains with another model (e.g. other
+        detector arcs or emitter power) and must keep this step's occlusion: multiply by this mask."""
+        platform = get_platform(platform)
+        clear = np.ones((len(self), platform.n_detectors, platform.n_emitters), dtype=bool)
+        if self.occluders is None or len(self) == 0:
+            return clear
+        offsets, xy, rows = self.occluders
+        counts = np.diff(offsets)[rows]
+        if counts.sum() == 0:
+            return clear
+        sub = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
+        start = np.repeat(offsets[rows], counts)
+        within = np.arange(int(counts.sum())) - np.repeat(sub[:-1], counts)
+        return _clear_rays_numpy(self.rel_position, self.rel_heading, platform, sub, xy[start + within])
 
     @property
     def bearing(self) -> np.ndarray:
@@ -373,13 +394,14 @@ def compute_links(
         occluders = (offsets, xy)
     gains = pair_gains(rel, rel_heading, platform, occluders=occluders)
     distance = np.hypot(d[:, 0], d[:, 1])
+    rows = np.arange(rx.shape[0])
     if drop_zero:
         keep = gains.reshape(gains.shape[0], -1).max(axis=1) > 0
         if not keep.all():
-            rx, tx, rel, rel_heading, gains, distance = (
-                rx[keep], tx[keep], rel[keep], rel_heading[keep], gains[keep], distance[keep]
+            rx, tx, rel, rel_heading, gains, distance, rows = (
+                rx[keep], tx[keep], rel[keep], rel_heading[keep], gains[keep], distance[keep], rows[keep]
             )
-    return IRLinks(rx, tx, distance, rel, rel_heading, gains, N)
+    return IRLinks(rx, tx, distance, rel, rel_heading, gains, N, None if occluders is None else (*occluders, rows))
 
 
 def _empty_links(n_d: int, n_e: int, n_robots: int) -> IRLinks:
