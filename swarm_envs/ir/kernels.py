@@ -22,7 +22,7 @@ try:  # numba is optional: an accelerator, not a requirement
 except ImportError:  # pragma: no cover - exercised only without numba
     HAVE_NUMBA = False
 
-__all__ = ["HAVE_NUMBA", "MODEL_IDS", "model_params", "gains_kernel", "occluders_kernel"]
+__all__ = ["HAVE_NUMBA", "MODEL_IDS", "model_params", "gains_kernel", "occluders_kernel", "occluder_frames_kernel"]
 
 #: model class name -> kernel model id
 MODEL_IDS = {"DropletIR": 0, "EpuckIR": 1, "RoneIR": 2, "DropletLowPowerIR": 3}
@@ -111,8 +111,8 @@ if HAVE_NUMBA:
 
         Per-ray line of sight (SPEC 2): the gain of ray (i, j), from emitter j of the transmitter to detector
         i of the receiver, is zero when that segment crosses an occluding disc (radius ``occ_radius``) of pair
-        p: centres ``occ_xy[occ_offsets[p]:occ_offsets[p + 1]]`` in the receiver's frame. Only lit rays are
-        tested, so pairs without candidate occluders cost nothing extra.
+        p: centres ``occ_xy[occ_offsets[p]:occ_offsets[p + 1]]`` in the receiver's frame; a blocked ray skips
+        the model, pairs without candidate occluders cost nothing extra.
         """
         P, nd, ne = rel_position.shape[0], det_pos.shape[0], em_pos.shape[0]
         r2 = occ_radius * occ_radius
@@ -144,31 +144,33 @@ if HAVE_NUMBA:
                     ux, uy = dx * inv, dy * inv
                     cd = ux * dcos[i] + uy * dsin[i]
                     ce = -(ux * eax[j] + uy * eay[j])
-                    g = _gain(kind, p0, p1, p2, p3, p4, p5, p6, p7, d, cd, ce)
-                    if g > 0.0:
-                        for q in range(occ_offsets[p], occ_offsets[p + 1]):
-                            if _segment_hits_disc(det_pos[i, 0], det_pos[i, 1], ex[j], ey[j], occ_xy[q, 0], occ_xy[q, 1], r2):
-                                g = 0.0
-                                break
-                    out[p, i, j] = g
+                    # rays the model leaves dark (e-puck: behind an emitter or detector; r-one: outside the
+                    # arcs or range; the same zero branches as _gain) need no occlusion test
+                    if (kind == 1 and (cd <= 0.0 or ce <= 0.0)) or (kind == 2 and not (d <= p2 and cd >= p3 and ce >= p4)):
+                        continue
+                    clear = True
+                    for q in range(occ_offsets[p], occ_offsets[p + 1]):
+                        if _segment_hits_disc(det_pos[i, 0], det_pos[i, 1], ex[j], ey[j], occ_xy[q, 0], occ_xy[q, 1], r2):
+                            clear = False
+                            break
+                    if clear:
+                        out[p, i, j] = _gain(kind, p0, p1, p2, p3, p4, p5, p6, p7, d, cd, ce)
         return out
 
     @njit(cache=True, error_model="numpy")
     def occluders_kernel(
         positions: np.ndarray,
-        headings: np.ndarray,
         width: float,
         rx: np.ndarray,
         tx: np.ndarray,
         starts: np.ndarray,
         counts: np.ndarray,
         nbrs: np.ndarray,
-    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    ) -> tuple[np.ndarray, np.ndarray]:
         """Third robots whose centre is closer than ``width`` to the centre segment rx[p]-tx[p], as CSR.
 
         Candidates are the neighbour lists (CSR ``starts``, ``counts``, ``nbrs``) of both ends, which must
-        reach ``|rx tx| / 2 + width``. Returns offsets (P + 1,), robot indices (K,) and their centres in
-        the receiver's body frame (K, 2).
+        reach ``|rx tx| / 2 + width``. Returns offsets (P + 1,) and robot indices (K,), each pair's sorted.
         """
         P, N = rx.shape[0], positions.shape[0]
         stamp = np.full(N, -1, dtype=np.int64)
@@ -199,13 +201,26 @@ if HAVE_NUMBA:
                             idx[q2 - 1], idx[q2] = idx[q2], idx[q2 - 1]
                             q2 -= 1
             offsets[p + 1] = K
-        idx = idx[:K].copy()
-        xy = np.empty((K, 2))
+        return offsets, idx[:K].copy()
+
+    @njit(cache=True, error_model="numpy")
+    def occluder_frames_kernel(
+        positions: np.ndarray, headings: np.ndarray, rx: np.ndarray, pair_of: np.ndarray, offsets: np.ndarray, idx: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Occluders of pair ``pair_of[p]`` (CSR ``offsets``, ``idx``) as centres in receiver rx[p]'s body
+        frame: returns offsets (P + 1,) and centres (K, 2)."""
+        P = rx.shape[0]
+        out_off = np.zeros(P + 1, dtype=np.int64)
         for p in range(P):
-            a = rx[p]
+            out_off[p + 1] = out_off[p] + offsets[pair_of[p] + 1] - offsets[pair_of[p]]
+        xy = np.empty((out_off[P], 2))
+        for p in range(P):
+            a, u = rx[p], pair_of[p]
             c, s = math.cos(headings[a]), math.sin(headings[a])
-            for q in range(offsets[p], offsets[p + 1]):
+            q2 = out_off[p]
+            for q in range(offsets[u], offsets[u + 1]):
                 dx, dy = positions[idx[q], 0] - positions[a, 0], positions[idx[q], 1] - positions[a, 1]
-                xy[q, 0] = c * dx + s * dy
-                xy[q, 1] = -s * dx + c * dy
-        return offsets, idx, xy
+                xy[q2, 0] = c * dx + s * dy
+                xy[q2, 1] = -s * dx + c * dy
+                q2 += 1
+        return out_off, xy

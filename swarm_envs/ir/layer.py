@@ -284,27 +284,33 @@ def pair_occluders(
     headings = np.ascontiguousarray(headings, dtype=float).reshape(-1)
     rx = np.ascontiguousarray(rx, dtype=np.int64).reshape(-1)
     tx = np.ascontiguousarray(tx, dtype=np.int64).reshape(-1)
-    P, N = rx.shape[0], positions.shape[0]
+    offsets, idx = _occluder_lists(positions, rx, tx, width, tree)
+    _, xy = _occluder_frames(positions, headings, rx, np.arange(rx.shape[0]), offsets, idx)
+    return offsets, idx, xy
+
+
+def _occluder_lists(positions: np.ndarray, a: np.ndarray, b: np.ndarray, width: float, tree: cKDTree | None) -> tuple[np.ndarray, np.ndarray]:
+    """CSR (offsets (P + 1,), robots (K,)) of the third robots closer than ``width`` to segment a[p]-b[p]."""
+    P, N = a.shape[0], positions.shape[0]
     if P == 0 or N < 3:
-        return np.zeros(P + 1, dtype=np.int64), np.zeros(0, dtype=np.int64), np.zeros((0, 2))
+        return np.zeros(P + 1, dtype=np.int64), np.zeros(0, dtype=np.int64)
     if tree is None:
         tree = cKDTree(positions)
-    seg = positions[tx] - positions[rx]
+    seg = positions[b] - positions[a]
     length = np.hypot(seg[:, 0], seg[:, 1])
     starts, counts, nbrs = _neighbour_csr(positions, 0.5 * float(length.max()) + float(width), tree)
     if kernels.HAVE_NUMBA:
-        offsets, idx, xy = kernels.occluders_kernel(positions, headings, float(width), rx, tx, starts, counts, nbrs)
-        return offsets, idx, xy
+        return kernels.occluders_kernel(positions, float(width), a, b, starts, counts, nbrs)
     pairs, cands = [], []
     L2 = np.where(length > 0, length * length, 1.0)
-    for end in (rx, tx):  # two vectorised passes: neighbours of rx, then of tx
+    for end in (a, b):  # two vectorised passes: neighbours of a, then of b
         c = counts[end]
         pair = np.repeat(np.arange(P), c)
         offset = np.arange(int(c.sum())) - np.repeat(np.cumsum(c) - c, c)
         cand = nbrs[np.repeat(starts[end], c) + offset]
-        keep = (cand != rx[pair]) & (cand != tx[pair])
+        keep = (cand != a[pair]) & (cand != b[pair])
         cand, pair = cand[keep], pair[keep]
-        ap = positions[cand] - positions[rx[pair]]
+        ap = positions[cand] - positions[a[pair]]
         sp = seg[pair]
         t = np.clip((ap[:, 0] * sp[:, 0] + ap[:, 1] * sp[:, 1]) / L2[pair], 0.0, 1.0)
         qx, qy = ap[:, 0] - t * sp[:, 0], ap[:, 1] - t * sp[:, 1]
@@ -312,12 +318,25 @@ def pair_occluders(
         pairs.append(pair[near])
         cands.append(cand[near])
     key = np.unique(np.concatenate(pairs).astype(np.int64) * N + np.concatenate(cands))
-    pair, idx = key // N, key % N
-    offsets = np.concatenate([[0], np.cumsum(np.bincount(pair, minlength=P))]).astype(np.int64)
-    d = positions[idx] - positions[rx[pair]]
-    c, s = np.cos(headings[rx[pair]]), np.sin(headings[rx[pair]])
-    xy = np.stack([c * d[:, 0] + s * d[:, 1], -s * d[:, 0] + c * d[:, 1]], axis=-1).reshape(-1, 2)
-    return offsets, idx, xy
+    offsets = np.concatenate([[0], np.cumsum(np.bincount(key // N, minlength=P))]).astype(np.int64)
+    return offsets, (key % N).astype(np.int64)
+
+
+def _occluder_frames(
+    positions: np.ndarray, headings: np.ndarray, rx: np.ndarray, pair_of: np.ndarray, offsets: np.ndarray, idx: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """The occluders of pair ``pair_of[p]`` as centres in receiver ``rx[p]``'s frame: (offsets (P + 1,), (K, 2))."""
+    rx = np.ascontiguousarray(rx, dtype=np.int64)
+    pair_of = np.ascontiguousarray(pair_of, dtype=np.int64)
+    if kernels.HAVE_NUMBA:
+        return kernels.occluder_frames_kernel(positions, headings, rx, pair_of, offsets, idx)
+    counts = np.diff(offsets)[pair_of]
+    out = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
+    row = np.repeat(np.arange(rx.shape[0]), counts)
+    k = idx[np.repeat(offsets[pair_of], counts) + np.arange(int(out[-1])) - np.repeat(out[:-1], counts)]
+    d = positions[k] - positions[rx[row]]
+    c, s = np.cos(headings[rx[row]]), np.sin(headings[rx[row]])
+    return out, np.stack([c * d[:, 0] + s * d[:, 1], -s * d[:, 0] + c * d[:, 1]], axis=-1).reshape(-1, 2)
 
 
 def line_of_sight(
@@ -335,7 +354,9 @@ def line_of_sight(
     Returns: (P,) bool mask.
     """
     positions = np.ascontiguousarray(positions, dtype=float).reshape(-1, 2)
-    offsets, _, _ = pair_occluders(positions, np.zeros(positions.shape[0]), i, j, radius, tree)
+    i = np.ascontiguousarray(i, dtype=np.int64).reshape(-1)
+    j = np.ascontiguousarray(j, dtype=np.int64).reshape(-1)
+    offsets, _ = _occluder_lists(positions, i, j, radius, tree)
     return np.diff(offsets) == 0
 
 
@@ -380,6 +401,7 @@ def compute_links(
         return _empty_links(n_d, n_e, N)
     if occlusion == "centre":
         pairs = pairs[line_of_sight(positions, platform.radius, pairs[:, 0], pairs[:, 1], tree)]
+    U = pairs.shape[0]
     rx = np.concatenate([pairs[:, 0], pairs[:, 1]]).astype(np.intp)
     tx = np.concatenate([pairs[:, 1], pairs[:, 0]]).astype(np.intp)
     order = np.lexsort((tx, rx))
@@ -390,8 +412,10 @@ def compute_links(
     rel_heading = wrap_angle(headings[tx] - headings[rx])
     occluders = None
     if occlusion == "ray":
-        offsets, _, xy = pair_occluders(positions, headings, rx, tx, occluder_width(platform), tree)
-        occluders = (offsets, xy)
+        # occluders once per unordered pair, then in each receiver's frame
+        a, b = (np.ascontiguousarray(pairs[:, k], dtype=np.int64) for k in (0, 1))
+        offsets, idx = _occluder_lists(positions, a, b, occluder_width(platform), tree)
+        occluders = _occluder_frames(positions, headings, rx, order % U, offsets, idx)
     gains = pair_gains(rel, rel_heading, platform, occluders=occluders)
     distance = np.hypot(d[:, 0], d[:, 1])
     rows = np.arange(rx.shape[0])
