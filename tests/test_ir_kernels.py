@@ -26,7 +26,7 @@ def test_gains_kernel_equals_numpy_reference(name):
     np.testing.assert_allclose(fast, reference, rtol=1e-9, atol=1e-12)
 
 
-def test_occlusion_kernel_equals_numpy_reference(monkeypatch):
+def test_centre_line_of_sight_kernel_equals_numpy_reference(monkeypatch):
     rng = np.random.default_rng(12)
     pos = rng.uniform(0, 2.0, (150, 2))
     tree = cKDTree(pos)
@@ -36,3 +36,45 @@ def test_occlusion_kernel_equals_numpy_reference(monkeypatch):
     reference = layer.line_of_sight(pos, 0.035, pairs[:, 0], pairs[:, 1], tree)
     assert 0.05 < reference.mean() < 0.95
     np.testing.assert_array_equal(fast, reference)
+
+
+def _dense_scene(platform, n, side, rng):
+    pos = []
+    while len(pos) < n:
+        p = rng.uniform(0, side, 2)
+        if all(np.hypot(*(p - q)) > 2 * platform.radius for q in pos):
+            pos.append(p)
+    return np.array(pos), rng.uniform(-np.pi, np.pi, n)
+
+
+@pytest.mark.parametrize("name", ["droplet", "epuck", "rone"])
+def test_per_ray_occlusion_kernel_equals_numpy_reference(name, monkeypatch):
+    """Occluder lists and per-ray occluded gains: compiled kernels == the numpy fallback."""
+    platform = get_platform(name)
+    rng = np.random.default_rng(13)
+    pos, hd = _dense_scene(platform, 120, 1.5 * platform.ir_range, rng)
+    tree = cKDTree(pos)
+    pairs = tree.query_pairs(platform.ir_range, output_type="ndarray")
+    rx, tx = np.concatenate([pairs[:, 0], pairs[:, 1]]), np.concatenate([pairs[:, 1], pairs[:, 0]])
+    w = layer.occluder_width(platform)
+    fast_occ = layer.pair_occluders(pos, hd, rx, tx, w, tree)
+    fast_links = layer.compute_links(pos, hd, platform)
+    monkeypatch.setattr(kernels, "HAVE_NUMBA", False)
+    ref_occ = layer.pair_occluders(pos, hd, rx, tx, w, tree)
+    ref_links = layer.compute_links(pos, hd, platform)
+    np.testing.assert_array_equal(fast_occ[0], ref_occ[0])
+    np.testing.assert_array_equal(fast_occ[1], ref_occ[1])
+    np.testing.assert_allclose(fast_occ[2], ref_occ[2], rtol=0, atol=1e-15)
+    assert np.diff(ref_occ[0]).max() >= 2 and (np.diff(ref_occ[0]) == 0).any()
+    np.testing.assert_array_equal(fast_links.rx, ref_links.rx)
+    np.testing.assert_array_equal(fast_links.tx, ref_links.tx)
+    # the same rays are lit; values to 1e-12 (numpy computes the gains from cosines with other roundings)
+    np.testing.assert_array_equal(fast_links.gains > 0, ref_links.gains > 0)
+    np.testing.assert_allclose(fast_links.gains, ref_links.gains, rtol=1e-9, atol=1e-12)
+    free = layer.compute_links(pos, hd, platform, occlusion="none", drop_zero=False)
+    assert len(free) > len(ref_links)  # some pairs are fully occluded ...
+    # ... and some kept links lose only part of their rays
+    key = free.rx * len(pos) + free.tx
+    sel = np.isin(key, ref_links.rx * len(pos) + ref_links.tx)
+    lost = (free.gains[sel] > 0) & (ref_links.gains == 0)
+    assert lost.reshape(len(ref_links), -1).any(axis=1).sum() > 0

@@ -171,7 +171,9 @@ def test_contention_never_two_linked_robots_fire_and_is_maximal():
     s2 = RangeBearingSensor("droplet", 40, np.random.default_rng(1), schedule="every_step")
     r = s2.step(links)
     assert s2.last_fired.all() and np.all(r.age == 0)
-    assert len(r) >= 0.95 * len(links)
+    # links with signal: per-ray occlusion (SPEC 2) also keeps links that get only faint grazing light
+    signal = links.gains.reshape(len(links), -1).max(axis=1) >= get_platform("droplet").ir_model.no_reading_floor
+    assert len(r) >= 0.95 * signal.sum()
 
 
 def test_readings_age_and_drop_after_max_age():
@@ -296,7 +298,8 @@ def test_every_step_schedule_reads_all_links_each_step():
     sensor = RangeBearingSensor(DROPLET, len(pos), np.random.default_rng(0), schedule="every_step")
     r = sensor.step(links)
     assert np.all(r.age == 0)
-    assert len(r) >= 0.9 * len(links)
+    signal = links.gains.reshape(len(links), -1).max(axis=1) >= DROPLET.ir_model.no_reading_floor  # see above
+    assert len(r) >= 0.9 * signal.sum()
 
 
 def test_low_power_near_model_matches_the_firmware_fit_and_inverts():

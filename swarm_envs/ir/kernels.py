@@ -2,7 +2,8 @@
 
 The IR layer's per-step work is a loop over P visible pairs x n_detectors x n_emitters that numpy can
 only do through many (P, n_d, n_e) temporaries (memory-bound). These kernels do the same arithmetic
-pair by pair, skipping dark emitter-detector combinations early. They implement exactly the models of
+pair by pair, skipping dark emitter-detector combinations early, and test each lit ray against the pair's
+candidate occluders (per-ray line of sight, SPEC 2). They implement exactly the models of
 :mod:`swarm_envs.ir.models` (the numpy methods there stay the reference; ``tests/test_ir_kernels.py``
 checks the two agree to 1e-12) and are used only when numba is importable (``pip install numba``, part
 of the ``fast`` extra); otherwise the layer uses the numpy path.
@@ -21,7 +22,7 @@ try:  # numba is optional: an accelerator, not a requirement
 except ImportError:  # pragma: no cover - exercised only without numba
     HAVE_NUMBA = False
 
-__all__ = ["HAVE_NUMBA", "MODEL_IDS", "model_params", "gains_kernel", "occluded_kernel"]
+__all__ = ["HAVE_NUMBA", "MODEL_IDS", "model_params", "gains_kernel", "occluders_kernel", "occluder_frames_kernel"]
 
 #: model class name -> kernel model id
 MODEL_IDS = {"DropletIR": 0, "EpuckIR": 1, "RoneIR": 2, "DropletLowPowerIR": 3}
@@ -80,6 +81,17 @@ if HAVE_NUMBA:
         amp = max(amp, 0.0)
         return _droplet_sensor(a, p0) * _droplet_emitter(b, p1) * amp
 
+    @njit(cache=True, inline="always", error_model="numpy")
+    def _segment_hits_disc(x0: float, y0: float, x1: float, y1: float, cx: float, cy: float, r2: float) -> bool:
+        """Whether the segment (x0, y0)-(x1, y1) passes closer than sqrt(r2) to (cx, cy) (open disc)."""
+        sx, sy = x1 - x0, y1 - y0
+        px, py = cx - x0, cy - y0
+        L2 = sx * sx + sy * sy
+        t = (px * sx + py * sy) / L2 if L2 > 0.0 else 0.0
+        t = min(1.0, max(0.0, t))
+        qx, qy = px - t * sx, py - t * sy
+        return qx * qx + qy * qy < r2
+
     @njit(cache=True, error_model="numpy")
     def gains_kernel(
         rel_position: np.ndarray,
@@ -91,9 +103,19 @@ if HAVE_NUMBA:
         kind: int,
         params: np.ndarray,
         ir_range: float,
+        occ_offsets: np.ndarray,
+        occ_xy: np.ndarray,
+        occ_radius: float,
     ) -> np.ndarray:
-        """(P, n_d, n_e) gains; same geometry as ``pair_cosines`` (SPEC 2), same models."""
+        """(P, n_d, n_e) gains; same geometry as ``pair_cosines`` (SPEC 2), same models.
+
+        Per-ray line of sight (SPEC 2): the gain of ray (i, j), from emitter j of the transmitter to detector
+        i of the receiver, is zero when that segment crosses an occluding disc (radius ``occ_radius``) of pair
+        p: centres ``occ_xy[occ_offsets[p]:occ_offsets[p + 1]]`` in the receiver's frame; a blocked ray skips
+        the model, pairs without candidate occluders cost nothing extra.
+        """
         P, nd, ne = rel_position.shape[0], det_pos.shape[0], em_pos.shape[0]
+        r2 = occ_radius * occ_radius
         out = np.zeros((P, nd, ne))
         dcos, dsin = np.cos(det_dir), np.sin(det_dir)
         ecos, esin = np.cos(em_dir), np.sin(em_dir)
@@ -122,35 +144,83 @@ if HAVE_NUMBA:
                     ux, uy = dx * inv, dy * inv
                     cd = ux * dcos[i] + uy * dsin[i]
                     ce = -(ux * eax[j] + uy * eay[j])
-                    out[p, i, j] = _gain(kind, p0, p1, p2, p3, p4, p5, p6, p7, d, cd, ce)
+                    # rays the model leaves dark (e-puck: behind an emitter or detector; r-one: outside the
+                    # arcs or range; the same zero branches as _gain) need no occlusion test
+                    if (kind == 1 and (cd <= 0.0 or ce <= 0.0)) or (kind == 2 and not (d <= p2 and cd >= p3 and ce >= p4)):
+                        continue
+                    clear = True
+                    for q in range(occ_offsets[p], occ_offsets[p + 1]):
+                        if _segment_hits_disc(det_pos[i, 0], det_pos[i, 1], ex[j], ey[j], occ_xy[q, 0], occ_xy[q, 1], r2):
+                            clear = False
+                            break
+                    if clear:
+                        out[p, i, j] = _gain(kind, p0, p1, p2, p3, p4, p5, p6, p7, d, cd, ce)
         return out
 
     @njit(cache=True, error_model="numpy")
-    def occluded_kernel(
-        positions: np.ndarray, radius: float, i: np.ndarray, j: np.ndarray, starts: np.ndarray, counts: np.ndarray, nbrs: np.ndarray
-    ) -> np.ndarray:
-        """(P,) True where a third robot's disc crosses the centre segment i-j (candidates: CSR lists)."""
-        P = i.shape[0]
-        blocked = np.zeros(P, dtype=np.bool_)
-        r2 = radius * radius
+    def occluders_kernel(
+        positions: np.ndarray,
+        width: float,
+        rx: np.ndarray,
+        tx: np.ndarray,
+        starts: np.ndarray,
+        counts: np.ndarray,
+        nbrs: np.ndarray,
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Third robots whose centre is closer than ``width`` to the centre segment rx[p]-tx[p], as CSR.
+
+        Candidates are the neighbour lists (CSR ``starts``, ``counts``, ``nbrs``) of both ends, which must
+        reach ``|rx tx| / 2 + width``. Returns offsets (P + 1,) and robot indices (K,), each pair's sorted.
+        """
+        P, N = rx.shape[0], positions.shape[0]
+        stamp = np.full(N, -1, dtype=np.int64)
+        offsets = np.zeros(P + 1, dtype=np.int64)
+        idx = np.empty(max(16, 2 * P), dtype=np.int64)
+        K = 0
+        w2 = width * width
         for p in range(P):
-            a, b = i[p], j[p]
+            a, b = rx[p], tx[p]
             ax, ay = positions[a, 0], positions[a, 1]
             sx, sy = positions[b, 0] - ax, positions[b, 1] - ay
             L2 = sx * sx + sy * sy
-            if L2 <= 0.0:
-                L2 = 1.0
             for end in (a, b):
                 for q in range(starts[end], starts[end] + counts[end]):
                     k = nbrs[q]
-                    if k == a or k == b:
+                    if k == a or k == b or stamp[k] == p:
                         continue
-                    px, py = positions[k, 0] - ax, positions[k, 1] - ay
-                    t = min(1.0, max(0.0, (px * sx + py * sy) / L2))
-                    qx, qy = px - t * sx, py - t * sy
-                    if qx * qx + qy * qy < r2:
-                        blocked[p] = True
-                        break
-                if blocked[p]:
-                    break
-        return blocked
+                    stamp[k] = p
+                    if _segment_hits_disc(ax, ay, ax + sx, ay + sy, positions[k, 0], positions[k, 1], w2):
+                        if K == idx.shape[0]:
+                            grown = np.empty(2 * K, dtype=np.int64)
+                            grown[:K] = idx
+                            idx = grown
+                        idx[K] = k
+                        K += 1
+                        q2 = K - 1  # insertion sort: each pair's occluders in robot order
+                        while q2 > offsets[p] and idx[q2 - 1] > idx[q2]:
+                            idx[q2 - 1], idx[q2] = idx[q2], idx[q2 - 1]
+                            q2 -= 1
+            offsets[p + 1] = K
+        return offsets, idx[:K].copy()
+
+    @njit(cache=True, error_model="numpy")
+    def occluder_frames_kernel(
+        positions: np.ndarray, headings: np.ndarray, rx: np.ndarray, pair_of: np.ndarray, offsets: np.ndarray, idx: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Occluders of pair ``pair_of[p]`` (CSR ``offsets``, ``idx``) as centres in receiver rx[p]'s body
+        frame: returns offsets (P + 1,) and centres (K, 2)."""
+        P = rx.shape[0]
+        out_off = np.zeros(P + 1, dtype=np.int64)
+        for p in range(P):
+            out_off[p + 1] = out_off[p] + offsets[pair_of[p] + 1] - offsets[pair_of[p]]
+        xy = np.empty((out_off[P], 2))
+        for p in range(P):
+            a, u = rx[p], pair_of[p]
+            c, s = math.cos(headings[a]), math.sin(headings[a])
+            q2 = out_off[p]
+            for q in range(offsets[u], offsets[u + 1]):
+                dx, dy = positions[idx[q], 0] - positions[a, 0], positions[idx[q], 1] - positions[a, 1]
+                xy[q2, 0] = c * dx + s * dy
+                xy[q2, 1] = -s * dx + c * dy
+                q2 += 1
+        return out_off, xy

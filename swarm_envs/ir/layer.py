@@ -3,8 +3,16 @@
 Computed once per env step, vectorised over all pairs (no Python loop over robot pairs):
 
 1. candidate pairs: centres closer than the IR range, from ``scipy.spatial.cKDTree.query_pairs``;
-2. line of sight: the segment between the two centres must not cross a *third* robot's disc
-   (radius ``platform.radius``); occluded pairs exchange no light at all;
+2. line of sight, per ray (SPEC 2): light from emitter j of w reaches detector i of u only if the
+   segment from the emitter point to the detector point crosses no *third* robot's disc (radius
+   ``platform.radius``) [T20 Fig. 3: "due to occlusion, not all emitter-detector pairs are relevant"].
+   Blocked rays get zero gain, so a partially occluded pair gets partial light and a pair whose every
+   ray is blocked is no link. Candidate occluders of a pair are the robots whose centre lies within
+   ``platform.radius + rho`` of the centre segment (rho = the largest emitter / detector offset from a
+   robot's centre: every ray lies within rho of the centre segment), taken from the KD-tree neighbour
+   lists of the pair's two ends (:func:`pair_occluders`); the rays are tested inside the compiled gain
+   kernel. ``occlusion="centre"`` keeps the first version's rule (one centre-to-centre segment per pair)
+   for comparison;
 3. for each ordered pair (receiver u, transmitter w), every detector i of u and emitter j of w:
    ``r_ij = R + Rot(psi) e_j - d_i`` (vector from detector i to emitter j in u's body frame, R = w's
    centre in u's frame, psi = w's heading in u's frame, e_j / d_i the emitter / detector positions in
@@ -19,7 +27,7 @@ All public inputs/outputs are SI (metres, radians, angles wrapped to (-pi, pi]).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 import numpy as np
 from scipy.spatial import cKDTree
 
@@ -27,7 +35,12 @@ from swarm_envs.geometry import wrap_angle
 from swarm_envs.ir import kernels
 from swarm_envs.platforms import Platform, get_platform
 
-__all__ = ["IRLinks", "compute_links", "pair_geometry", "pair_cosines", "pair_gains", "line_of_sight", "wrap_angle"]
+__all__ = [
+    "IRLinks", "compute_links", "pair_geometry", "pair_cosines", "pair_gains", "pair_occluders", "line_of_sight",
+    "occluder_width", "wrap_angle",
+]
+
+OCCLUSION_RULES = ("ray", "centre", "none")
 
 
 @dataclass
@@ -44,6 +57,9 @@ class IRLinks:
             (units of the platform's IR model: ADC counts for the Droplet, intensity y for the e-puck,
             0/1 for the r-one).
         n_robots: number of robots in the scene the links were computed from.
+        occluders: per-ray occluders of the pairs, ``(offsets, centres in the receiver frame, rows)``:
+            pair p's discs are ``centres[offsets[rows[p]]:offsets[rows[p] + 1]]`` (None: no per-ray
+            occlusion); use :meth:`ray_clear`.
     """
 
     rx: np.ndarray
@@ -53,9 +69,27 @@ class IRLinks:
     rel_heading: np.ndarray
     gains: np.ndarray
     n_robots: int = 0
+    occluders: tuple[np.ndarray, np.ndarray, np.ndarray] | None = field(default=None, repr=False)
 
     def __len__(self) -> int:
         return int(self.rx.shape[0])
+
+    def ray_clear(self, platform: Platform | str) -> np.ndarray:
+        """(P, n_detectors, n_emitters) bool: ray (detector i, emitter j) of each link misses every third
+        robot (SPEC 2), whether lit or not. For code that recomputes gains with another model (e.g. other
+        detector arcs or emitter power) and must keep this step's occlusion: multiply by this mask."""
+        platform = get_platform(platform)
+        clear = np.ones((len(self), platform.n_detectors, platform.n_emitters), dtype=bool)
+        if self.occluders is None or len(self) == 0:
+            return clear
+        offsets, xy, rows = self.occluders
+        counts = np.diff(offsets)[rows]
+        if counts.sum() == 0:
+            return clear
+        sub = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
+        start = np.repeat(offsets[rows], counts)
+        within = np.arange(int(counts.sum())) - np.repeat(sub[:-1], counts)
+        return _clear_rays_numpy(self.rel_position, self.rel_heading, platform, sub, xy[start + within])
 
     @property
     def bearing(self) -> np.ndarray:
@@ -128,34 +162,181 @@ def pair_cosines(
 
 
 def pair_gains(
-    rel_position: np.ndarray, rel_heading: np.ndarray, platform: Platform | str, model: object | None = None
+    rel_position: np.ndarray,
+    rel_heading: np.ndarray,
+    platform: Platform | str,
+    model: object | None = None,
+    occluders: tuple[np.ndarray, np.ndarray] | None = None,
 ) -> np.ndarray:
     """Noiseless gains (P, n_detectors, n_emitters) of the platform's IR model for P pairs.
 
     Equal to ``model.gain(*pair_geometry(...))``: a compiled kernel (:mod:`swarm_envs.ir.kernels`) when
-    numba is installed, else numpy from cosines (:func:`pair_cosines`, ``model.gain_from_cos``). Line of sight is assumed (occlusion is :func:`line_of_sight`'s
-    job). Pairs whose centre distance exceeds ``platform.ir_range`` get zero gain (the platform's
-    "no infrared beyond" cut-off). ``model`` overrides the platform's IR model (e.g. the Droplet's
-    low-power emitters, :class:`swarm_envs.ir.models.DropletLowPowerIR`).
+    numba is installed, else numpy from cosines (:func:`pair_cosines`, ``model.gain_from_cos``). Pairs whose
+    centre distance exceeds ``platform.ir_range`` get zero gain (the platform's "no infrared beyond"
+    cut-off). ``model`` overrides the platform's IR model (e.g. the Droplet's low-power emitters,
+    :class:`swarm_envs.ir.models.DropletLowPowerIR`).
+
+    Args:
+        occluders: optional ``(offsets (P + 1,), centres (K, 2))``: the discs (radius ``platform.radius``)
+            that may block pair p's rays, centres in the receiver's body frame (m), rows
+            ``offsets[p]:offsets[p + 1]`` (from :func:`pair_occluders`). A ray, the segment from emitter j
+            of the transmitter to detector i of the receiver, that crosses one of them gets zero gain
+            (SPEC 2, per-ray line of sight). Default: no occluders (line of sight assumed).
     """
     platform = get_platform(platform)
     model = platform.ir_model if model is None else model
     R = np.ascontiguousarray(rel_position, dtype=float).reshape(-1, 2)
     psi = np.ascontiguousarray(rel_heading, dtype=float).reshape(-1)
+    if occluders is None:
+        offsets, xy = np.zeros(R.shape[0] + 1, dtype=np.int64), np.zeros((0, 2))
+    else:
+        offsets = np.ascontiguousarray(occluders[0], dtype=np.int64).reshape(-1)
+        xy = np.ascontiguousarray(occluders[1], dtype=float).reshape(-1, 2)
+        if offsets.shape[0] != R.shape[0] + 1 or offsets[0] != 0 or offsets[-1] != xy.shape[0] or np.any(np.diff(offsets) < 0):
+            raise ValueError(f"occluders: offsets must be non-decreasing, length P + 1 = {R.shape[0] + 1}, from 0 to len(centres)")
     if kernels.HAVE_NUMBA and type(model).__name__ in kernels.MODEL_IDS:
         kind, params = kernels.model_params(model)
         return kernels.gains_kernel(
             R, psi, platform.detector_positions, platform.detector_directions,
             platform.emitter_positions, platform.emitter_directions, kind, params, float(platform.ir_range),
+            offsets, xy, float(platform.radius),
         )
-    return _pair_gains_numpy(R, psi, platform, model)
+    g = _pair_gains_numpy(R, psi, platform, model)
+    if xy.shape[0]:
+        g = g * _clear_rays_numpy(R, psi, platform, offsets, xy)
+    return g
 
 
 def _pair_gains_numpy(R: np.ndarray, psi: np.ndarray, platform: Platform, model: object) -> np.ndarray:
-    """The numpy reference of :func:`pair_gains` (used without numba, and to test the kernel)."""
+    """The numpy reference of :func:`pair_gains` without occluders (used without numba, and to test the kernel)."""
     distance, cos_det, cos_em = pair_cosines(R, psi, platform)
     g = np.asarray(model.gain_from_cos(distance, cos_det, cos_em), dtype=float)
     return g * (np.hypot(R[:, 0], R[:, 1]) <= platform.ir_range)[:, None, None]
+
+
+def _clear_rays_numpy(R: np.ndarray, psi: np.ndarray, platform: Platform, offsets: np.ndarray, xy: np.ndarray) -> np.ndarray:
+    """(P, n_d, n_e) True where the ray detector i - emitter j misses every occluding disc of its pair (numpy
+    fallback of the kernel's per-ray test; rows are (pair, occluder) combinations, no Python loop)."""
+    P = R.shape[0]
+    counts = np.diff(offsets)
+    pair = np.repeat(np.arange(P), counts)
+    c, s = np.cos(psi[pair])[:, None], np.sin(psi[pair])[:, None]
+    ex, ey = platform.emitter_positions[:, 0][None, :], platform.emitter_positions[:, 1][None, :]
+    emx = (R[pair, 0:1] + c * ex - s * ey)[:, None, :]  # (K, 1, n_e), receiver frame
+    emy = (R[pair, 1:2] + s * ex + c * ey)[:, None, :]
+    dtx = platform.detector_positions[None, :, 0, None]  # (1, n_d, 1)
+    dty = platform.detector_positions[None, :, 1, None]
+    sx, sy = emx - dtx, emy - dty
+    px, py = xy[:, 0, None, None] - dtx, xy[:, 1, None, None] - dty
+    L2 = sx * sx + sy * sy
+    t = np.clip(np.where(L2 > 0, (px * sx + py * sy) / np.where(L2 > 0, L2, 1.0), 0.0), 0.0, 1.0)
+    qx, qy = px - t * sx, py - t * sy
+    hit = (qx * qx + qy * qy < platform.radius**2).astype(np.int64)  # (K, n_d, n_e)
+    clear = np.ones((P, platform.n_detectors, platform.n_emitters), dtype=bool)
+    has = counts > 0
+    if hit.shape[0]:
+        clear[has] = np.add.reduceat(hit, offsets[:-1][has], axis=0) == 0
+    return clear
+
+
+def occluder_width(platform: Platform | str) -> float:
+    """Distance (m) from a pair's centre segment within which a third robot's centre can block a ray:
+    ``radius + rho``, rho the largest emitter / detector distance from a robot's centre (every ray lies
+    within rho of the centre segment, so a disc farther than ``radius + rho`` misses all of them)."""
+    platform = get_platform(platform)
+    rho = max(np.hypot(*platform.emitter_positions.T).max(), np.hypot(*platform.detector_positions.T).max())
+    return float(platform.radius + rho)
+
+
+def _neighbour_csr(positions: np.ndarray, reach: float, tree: cKDTree) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Neighbour lists within ``reach`` (m) of every robot from one KD-tree ``query_pairs``, as CSR
+    (starts, counts, neighbours)."""
+    near = tree.query_pairs(reach, output_type="ndarray")
+    N = positions.shape[0]
+    src = np.concatenate([near[:, 0], near[:, 1]])
+    dst = np.concatenate([near[:, 1], near[:, 0]])
+    order = np.argsort(src, kind="stable")
+    counts = np.bincount(src, minlength=N)
+    starts = np.cumsum(counts) - counts
+    return starts.astype(np.int64), counts.astype(np.int64), dst[order].astype(np.int64)
+
+
+def pair_occluders(
+    positions: np.ndarray,
+    headings: np.ndarray,
+    rx: np.ndarray,
+    tx: np.ndarray,
+    width: float,
+    tree: cKDTree | None = None,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Candidate occluders of P (receiver, transmitter) pairs: third robots whose centre is closer than
+    ``width`` (m) to the segment between the two centres.
+
+    Vectorised over pairs: such a robot lies within ``|rx tx| / 2 + width`` of one end, so the candidates
+    are the neighbours of both ends within that distance (one KD-tree ``query_pairs`` in CSR form), tested
+    by a compiled kernel (numba), or as flat (pair, candidate) numpy arrays without numba.
+
+    Returns:
+        offsets (P + 1,) int, robots (K,) int, centres (K, 2) in the receiver's body frame (m): pair p's
+        occluders are rows ``offsets[p]:offsets[p + 1]``, sorted by robot index.
+    """
+    positions = np.ascontiguousarray(positions, dtype=float).reshape(-1, 2)
+    headings = np.ascontiguousarray(headings, dtype=float).reshape(-1)
+    rx = np.ascontiguousarray(rx, dtype=np.int64).reshape(-1)
+    tx = np.ascontiguousarray(tx, dtype=np.int64).reshape(-1)
+    offsets, idx = _occluder_lists(positions, rx, tx, width, tree)
+    _, xy = _occluder_frames(positions, headings, rx, np.arange(rx.shape[0]), offsets, idx)
+    return offsets, idx, xy
+
+
+def _occluder_lists(positions: np.ndarray, a: np.ndarray, b: np.ndarray, width: float, tree: cKDTree | None) -> tuple[np.ndarray, np.ndarray]:
+    """CSR (offsets (P + 1,), robots (K,)) of the third robots closer than ``width`` to segment a[p]-b[p]."""
+    P, N = a.shape[0], positions.shape[0]
+    if P == 0 or N < 3:
+        return np.zeros(P + 1, dtype=np.int64), np.zeros(0, dtype=np.int64)
+    if tree is None:
+        tree = cKDTree(positions)
+    seg = positions[b] - positions[a]
+    length = np.hypot(seg[:, 0], seg[:, 1])
+    starts, counts, nbrs = _neighbour_csr(positions, 0.5 * float(length.max()) + float(width), tree)
+    if kernels.HAVE_NUMBA:
+        return kernels.occluders_kernel(positions, float(width), a, b, starts, counts, nbrs)
+    pairs, cands = [], []
+    L2 = np.where(length > 0, length * length, 1.0)
+    for end in (a, b):  # two vectorised passes: neighbours of a, then of b
+        c = counts[end]
+        pair = np.repeat(np.arange(P), c)
+        offset = np.arange(int(c.sum())) - np.repeat(np.cumsum(c) - c, c)
+        cand = nbrs[np.repeat(starts[end], c) + offset]
+        keep = (cand != a[pair]) & (cand != b[pair])
+        cand, pair = cand[keep], pair[keep]
+        ap = positions[cand] - positions[a[pair]]
+        sp = seg[pair]
+        t = np.clip((ap[:, 0] * sp[:, 0] + ap[:, 1] * sp[:, 1]) / L2[pair], 0.0, 1.0)
+        qx, qy = ap[:, 0] - t * sp[:, 0], ap[:, 1] - t * sp[:, 1]
+        near = qx * qx + qy * qy < width * width
+        pairs.append(pair[near])
+        cands.append(cand[near])
+    key = np.unique(np.concatenate(pairs).astype(np.int64) * N + np.concatenate(cands))
+    offsets = np.concatenate([[0], np.cumsum(np.bincount(key // N, minlength=P))]).astype(np.int64)
+    return offsets, (key % N).astype(np.int64)
+
+
+def _occluder_frames(
+    positions: np.ndarray, headings: np.ndarray, rx: np.ndarray, pair_of: np.ndarray, offsets: np.ndarray, idx: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """The occluders of pair ``pair_of[p]`` as centres in receiver ``rx[p]``'s frame: (offsets (P + 1,), (K, 2))."""
+    rx = np.ascontiguousarray(rx, dtype=np.int64)
+    pair_of = np.ascontiguousarray(pair_of, dtype=np.int64)
+    if kernels.HAVE_NUMBA:
+        return kernels.occluder_frames_kernel(positions, headings, rx, pair_of, offsets, idx)
+    counts = np.diff(offsets)[pair_of]
+    out = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
+    row = np.repeat(np.arange(rx.shape[0]), counts)
+    k = idx[np.repeat(offsets[pair_of], counts) + np.arange(int(out[-1])) - np.repeat(out[:-1], counts)]
+    d = positions[k] - positions[rx[row]]
+    c, s = np.cos(headings[rx[row]]), np.sin(headings[rx[row]])
+    return out, np.stack([c * d[:, 0] + s * d[:, 1], -s * d[:, 0] + c * d[:, 1]], axis=-1).reshape(-1, 2)
 
 
 def line_of_sight(
@@ -165,55 +346,18 @@ def line_of_sight(
     j: np.ndarray,
     tree: cKDTree | None = None,
 ) -> np.ndarray:
-    """True where the segment between centres ``positions[i]`` and ``positions[j]`` crosses no third
-    robot's disc (open disc of ``radius`` m around every other centre).
-
-    Vectorised over pairs without Python lists: a robot k within ``radius`` of the segment lies within
-    ``|ij| / 2 + radius`` of the nearer endpoint, so the candidates are the neighbours of i and of j
-    within that distance, gathered from one KD-tree ``query_pairs`` in CSR form and tested by a compiled
-    kernel (numba), or as flat (pair, candidate) numpy arrays without numba.
+    """Centre-line rule (the first version's line of sight, kept for comparison): True where the segment
+    between centres ``positions[i]`` and ``positions[j]`` crosses no third robot's disc (open disc of
+    ``radius`` m around every other centre). The simulator itself decides line of sight per ray
+    (:func:`compute_links`).
 
     Returns: (P,) bool mask.
     """
-    positions = np.ascontiguousarray(positions, dtype=float)
-    i = np.asarray(i, dtype=np.intp).reshape(-1)
-    j = np.asarray(j, dtype=np.intp).reshape(-1)
-    P = i.shape[0]
-    if P == 0:
-        return np.zeros(0, dtype=bool)
-    if tree is None:
-        tree = cKDTree(positions)
-    a = positions[i]
-    seg = positions[j] - a
-    length = np.hypot(seg[:, 0], seg[:, 1])
-    reach = 0.5 * float(length.max()) + radius
-    near = tree.query_pairs(reach, output_type="ndarray")
-    if near.shape[0] == 0:
-        return np.ones(P, dtype=bool)
-    src = np.concatenate([near[:, 0], near[:, 1]])
-    dst = np.concatenate([near[:, 1], near[:, 0]])
-    order = np.argsort(src, kind="stable")
-    dst = dst[order]
-    counts = np.bincount(src, minlength=positions.shape[0])
-    starts = np.cumsum(counts) - counts
-    if kernels.HAVE_NUMBA:
-        return ~kernels.occluded_kernel(positions, float(radius), i, j, starts, counts, dst)
-    blocked = np.zeros(P, dtype=bool)
-    L2 = np.where(length > 0, length * length, 1.0)
-    for end in (i, j):  # two vectorised passes: neighbours of i, then of j
-        c = counts[end]
-        pair = np.repeat(np.arange(P), c)
-        offset = np.arange(int(c.sum())) - np.repeat(np.cumsum(c) - c, c)
-        cand = dst[np.repeat(starts[end], c) + offset]
-        keep = (cand != i[pair]) & (cand != j[pair])
-        cand, pair = cand[keep], pair[keep]
-        ap = positions[cand] - a[pair]
-        sp = seg[pair]
-        t = np.clip((ap[:, 0] * sp[:, 0] + ap[:, 1] * sp[:, 1]) / L2[pair], 0.0, 1.0)
-        rx_ = ap[:, 0] - t * sp[:, 0]
-        ry_ = ap[:, 1] - t * sp[:, 1]
-        blocked[pair[rx_ * rx_ + ry_ * ry_ < radius * radius]] = True
-    return ~blocked
+    positions = np.ascontiguousarray(positions, dtype=float).reshape(-1, 2)
+    i = np.ascontiguousarray(i, dtype=np.int64).reshape(-1)
+    j = np.ascontiguousarray(j, dtype=np.int64).reshape(-1)
+    offsets, _ = _occluder_lists(positions, i, j, radius, tree)
+    return np.diff(offsets) == 0
 
 
 def compute_links(
@@ -222,6 +366,7 @@ def compute_links(
     platform: Platform | str,
     max_range: float | None = None,
     drop_zero: bool = True,
+    occlusion: str = "ray",
     copy: np.ndarray | None = None,
 ) -> IRLinks:
     """All directed IR links of a scene (SPEC 2), vectorised.
@@ -231,16 +376,21 @@ def compute_links(
         headings: (N,) robot headings, world frame (rad).
         platform: platform of all robots.
         max_range: candidate cut-off on centre distance (m); default ``platform.ir_range``.
-        drop_zero: drop pairs whose gain matrix is all zero (e.g. beyond the range, or r-one pairs outside
-            each other's cones). Default True.
+        drop_zero: drop pairs whose gain matrix is all zero (e.g. beyond the range, every ray occluded, or
+            r-one pairs outside each other's cones). Default True.
+        occlusion: ``"ray"`` (SPEC 2, default): each emitter-detector ray is blocked by a third robot's disc
+            it crosses; ``"centre"``: the first version's rule, a pair is blocked entirely when its centre
+            segment crosses a third robot's disc, else all its rays are clear; ``"none"``: no occlusion
+            (comparison / ablation only).
         copy: (N,) env copy of each robot (batched engine): no pair and no occluder crosses copies (the
             KD-tree gets a third coordinate that puts copies out of each other's range; 0 within a copy, so
             every distance and link equals that of the copy alone).
 
     Returns:
-        :class:`IRLinks` with both directions (u, w) and (w, u) of every candidate pair in line of sight,
-        sorted by (rx, tx).
+        :class:`IRLinks` with both directions (u, w) and (w, u) of every candidate pair, sorted by (rx, tx).
     """
+    if occlusion not in OCCLUSION_RULES:
+        raise ValueError(f"occlusion must be one of {OCCLUSION_RULES}, got {occlusion!r}")
     platform = get_platform(platform)
     positions = np.asarray(positions, dtype=float).reshape(-1, 2)
     headings = np.asarray(headings, dtype=float).reshape(-1)
@@ -257,8 +407,9 @@ def compute_links(
     pairs = tree.query_pairs(r, output_type="ndarray")
     if pairs.shape[0] == 0:
         return _empty_links(n_d, n_e, N)
-    los = line_of_sight(positions, platform.radius, pairs[:, 0], pairs[:, 1], tree)
-    pairs = pairs[los]
+    if occlusion == "centre":
+        pairs = pairs[line_of_sight(positions, platform.radius, pairs[:, 0], pairs[:, 1], tree)]
+    U = pairs.shape[0]
     rx = np.concatenate([pairs[:, 0], pairs[:, 1]]).astype(np.intp)
     tx = np.concatenate([pairs[:, 1], pairs[:, 0]]).astype(np.intp)
     order = np.lexsort((tx, rx))
@@ -267,15 +418,22 @@ def compute_links(
     c, s = np.cos(headings[rx]), np.sin(headings[rx])
     rel = np.stack([c * d[:, 0] + s * d[:, 1], -s * d[:, 0] + c * d[:, 1]], axis=-1)
     rel_heading = wrap_angle(headings[tx] - headings[rx])
-    gains = pair_gains(rel, rel_heading, platform)
+    occluders = None
+    if occlusion == "ray":
+        # occluders once per unordered pair, then in each receiver's frame
+        a, b = (np.ascontiguousarray(pairs[:, k], dtype=np.int64) for k in (0, 1))
+        offsets, idx = _occluder_lists(positions, a, b, occluder_width(platform), tree)
+        occluders = _occluder_frames(positions, headings, rx, order % U, offsets, idx)
+    gains = pair_gains(rel, rel_heading, platform, occluders=occluders)
     distance = np.hypot(d[:, 0], d[:, 1])
+    rows = np.arange(rx.shape[0])
     if drop_zero:
         keep = gains.reshape(gains.shape[0], -1).max(axis=1) > 0
         if not keep.all():
-            rx, tx, rel, rel_heading, gains, distance = (
-                rx[keep], tx[keep], rel[keep], rel_heading[keep], gains[keep], distance[keep]
+            rx, tx, rel, rel_heading, gains, distance, rows = (
+                rx[keep], tx[keep], rel[keep], rel_heading[keep], gains[keep], distance[keep], rows[keep]
             )
-    return IRLinks(rx, tx, distance, rel, rel_heading, gains, N)
+    return IRLinks(rx, tx, distance, rel, rel_heading, gains, N, None if occluders is None else (*occluders, rows))
 
 
 def _empty_links(n_d: int, n_e: int, n_robots: int) -> IRLinks:

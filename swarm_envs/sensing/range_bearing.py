@@ -267,6 +267,7 @@ def read(
     if sat.size:
         low = DropletLowPowerIR(platform)
         lam = pair_gains(np.asarray(rel_position)[sat], np.asarray(rel_heading)[sat], platform, model=low)
+        lam = lam * (np.asarray(brightness)[sat] > 0)  # rays occluded at full power stay dark (the Droplet lights every clear ray)
         meas_low, _ = measure(lam, rng, sigma, platform, (1.0,), None if row_copy is None else row_copy[sat])
         R[sat], th[sat], ph[sat] = estimate(meas_low, platform, model=low)
         p = p.copy()

@@ -146,6 +146,7 @@ def edge_error_experiment(
                 (np.abs(det_ang) <= half_arc[links.rx][:, :, None])
                 & (np.abs(em_ang) <= em_half)
                 & (links.distance <= plat.ir_range)[:, None, None]
+                & links.ray_clear(plat)  # keep the IR layer's per-ray occlusion
             ).astype(float)
         rd = sense_bearings(links, plat)
         ok = rd.valid

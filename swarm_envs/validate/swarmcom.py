@@ -6,8 +6,10 @@
     threshold m_tr (75, 25, 10 -> 21, 33, 45 cm [T20 Sec. 6.2.4, Fig. 12a]) and bit error probability vs
     distance (reliable, P_e < 0.01, up to 61 cm with m_tr = 5 [T20 Sec. 7, Fig. 11]);
 (b) channels per robot n_C vs density: a centre robot, range 61 cm, 1..272 others at random in that disc
-    (n_C bounded, max ~15, 6 at hexagonal packing [T20 Sec. 6.2.6, Fig. 20a]) and the 72 x 72 cm arena
-    with 10, 20, 30 robots (n_C ~ 4, 6, 9 [Fig. 21]);
+    (n_C bounded by ~15, 6 at hexagonal packing [T20 Sec. 6.2.6, Fig. 20a]) and the 72 x 72 cm arena
+    with 10, 20, 30 robots (n_C = 4, 6, 9 in single snapshots [Fig. 21]; ours: the distribution over
+    random-walk snapshots); per-ray line of sight (SPEC 2) beside the first version's centre-line rule,
+    and the detection threshold m_tr swept over the paper's 61/45/33/21 cm settings;
 (c) local broadcast vs flooding: 2..7 robots doing the random walk of [T20 Alg. 1] (t_m = 2 s) in the
     72 x 72 cm arena, 310 bps, m_tr = 10; message loss P_l (a message is lost for a robot that has not
     received it 2 s after it was queued) [T20 Sec. 6.2.2, Fig. 16b]; flooding is run with the network's
@@ -34,9 +36,9 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from swarm_envs.comm.bch import error_free_probability
-from swarm_envs.comm.channel import detector_intensity
+from swarm_envs.comm.channel import M_MAX, M_MIN, gain_to_intensity
 from swarm_envs.comm.network import Network
-from swarm_envs.ir.layer import compute_links, line_of_sight
+from swarm_envs.ir.layer import compute_links, line_of_sight, occluder_width, pair_gains, pair_occluders, wrap_angle
 from swarm_envs.platforms import get_platform
 
 PLATFORM = "epuck"
@@ -46,6 +48,10 @@ PAPER_RELIABLE_CM = 61.0  # [T20 Sec. 7]
 PAPER_ARENA_NC = {10: 4, 20: 6, 30: 9}  # [T20 Fig. 21]
 ARENA = 0.72  # m [T20 Sec. 6.1]
 DISC_R = 0.61  # m, communication range used for Fig. 20a
+OCC_RULES = ("ray", "centre")  # per-ray line of sight (SPEC 2, simulated) and the first version's centre line
+PAPER_MTR = 5  # Fig. 20a: the 61 cm range of m_tr = 5 [T20 Sec. 6.2.6, Table 12a]
+M_TR_SWEEP = (5, 10, 25, 75)  # relative thresholds of the paper's ranges 61, 45, 33, 21 cm [Sec. 6.2.4, 7]
+PAPER_FIG20A = {"bound": 15, "densest": 6}  # [T20 Sec. 6.2.6]
 
 
 # ---------------------------------------------------------------------------------------------- (a), (d)
@@ -212,29 +218,49 @@ def disc_configuration(n_others: int, rng: np.random.Generator, radius: float = 
     return _hex_disc(n_others, rng, radius, dmin, sweeps=60)
 
 
-def channels_of_centre(
-    pos: np.ndarray, head: np.ndarray, relative_threshold: float = 5, max_range: float = DISC_R, block_factor: float = 1.0
-) -> int:
-    """n_C: robots that can tell s1 from s0 when robot 0 transmits: line of sight to robot 0, centre
-    distance within ``max_range``, and noiseless min-over-detectors ADC value below m_t = 4080 - m_tr
-    [T20 Sec. 6.2.6].
+def centre_amplitude(pos: np.ndarray, head: np.ndarray, max_range: float = DISC_R, occlusion: str = "ray") -> np.ndarray:
+    """Noiseless received amplitude (ADC counts below ambient, m_max - min over detectors of m) at every
+    robot when robot 0 transmits s1 with all emitters on; 0 for robots farther than ``max_range`` (m).
 
-    Line of sight as in the simulator (SPEC 2: the centre segment must not cross a third robot's disc)
-    for ``block_factor = 1``; ``block_factor = 1.5`` widens the blocking disc to 1.5 radii (a beam of
-    half-width 0.5 r), a sensitivity check on the occlusion criterion."""
+    Same physics as the simulator (:func:`swarm_envs.ir.layer.pair_gains` with the occluders of
+    :func:`swarm_envs.ir.layer.pair_occluders`, [T20 Eqs. (7)-(22)] without noise), computed only for
+    the pairs (receiver k, transmitter 0). ``occlusion``: ``"ray"`` (SPEC 2, per-ray line of sight, as
+    simulated) or ``"centre"`` (the first version's centre-segment rule).
+    """
     p = get_platform(PLATFORM)
+    amp = np.zeros(pos.shape[0])
     others = np.arange(1, pos.shape[0])
-    dist = np.hypot(*(pos[others] - pos[0]).T)
-    others = others[dist <= max_range + 1e-12]
+    others = others[np.hypot(*(pos[others] - pos[0]).T) <= max_range + 1e-12]
     if others.size == 0:
-        return 0
-    los = line_of_sight(pos, block_factor * p.radius, np.zeros(others.size, dtype=np.intp), others)
-    others = others[los]
-    if others.size == 0:
-        return 0
-    y = detector_intensity(pos[0], head[0], pos[others], head[others], PLATFORM)
-    m = np.floor((4080.0 - 150.0) * (1.0 - y) + 150.0).min(axis=1)
-    return int((m < 4080.0 - relative_threshold).sum())
+        return amp
+    tx = np.zeros(others.size, dtype=np.intp)
+    occluders = None
+    if occlusion == "centre":
+        others = others[line_of_sight(pos, p.radius, tx, others)]
+        tx = tx[: others.size]
+    elif occlusion == "ray":
+        off, _, xy = pair_occluders(pos, head, others, tx, occluder_width(p))
+        occluders = (off, xy)
+    else:
+        raise ValueError(f"occlusion must be 'ray' or 'centre', got {occlusion!r}")
+    d = pos[0] - pos[others]
+    c, s = np.cos(head[others]), np.sin(head[others])
+    rel = np.stack([c * d[:, 0] + s * d[:, 1], -s * d[:, 0] + c * d[:, 1]], axis=-1)
+    g = pair_gains(rel, wrap_angle(head[0] - head[others]), p, occluders=occluders)
+    y = gain_to_intensity(g.sum(axis=-1), p)
+    m = np.floor((M_MAX - M_MIN) * (1.0 - y) + M_MIN).min(axis=1)
+    amp[others] = M_MAX - m
+    return amp
+
+
+def channels_of_centre(
+    pos: np.ndarray, head: np.ndarray, relative_threshold: float = 5, max_range: float = DISC_R, occlusion: str = "ray"
+) -> int:
+    """n_C: robots that can tell s1 from s0 when robot 0 transmits [T20 Sec. 6.2.6]: centre distance within
+    ``max_range`` and noiseless min-over-detectors ADC value below m_t = m_max - m_tr (i.e. received
+    amplitude above m_tr; with one transmitter the dynamic threshold of Eq. (36) lies halfway between m_t
+    and the signal, so "below m_t,dyn" is the same test)."""
+    return int((centre_amplitude(pos, head, max_range, occlusion) > relative_threshold).sum())
 
 
 def arena_configuration(n: int, rng: np.random.Generator, side: float = ARENA) -> np.ndarray:
@@ -245,66 +271,86 @@ def arena_configuration(n: int, rng: np.random.Generator, side: float = ARENA) -
     return _rsa(n - 1, rng, lambda q: np.ones(len(q), bool), lambda m: rng.uniform(r, side - r, (m, 2)), 2 * r, c)
 
 
+def arena_walk_snapshots(n: int, rng: np.random.Generator, replicas: int, snapshots: int, period_s: float = 30.0) -> list[tuple[np.ndarray, np.ndarray]]:
+    """Snapshots like [T20 Fig. 21]: robot 0 static at the centre of the 72 x 72 cm arena, the others doing
+    the random walk of [T20 Alg. 1]; ``replicas`` arenas side by side, one snapshot of each every
+    ``period_s`` (the paper counts lit robots every 30 s), after a first ``period_s`` of walking."""
+    p = get_platform(PLATFORM)
+    scene = np.repeat(np.arange(replicas), n)
+    origin = np.stack([SEP * np.arange(replicas), np.zeros(replicas)], -1)
+    pos = np.vstack([arena_configuration(n, rng) for _ in range(replicas)]) + origin[scene]
+    head = rng.uniform(-np.pi, np.pi, n * replicas)
+    static = np.zeros(n * replicas, dtype=bool)
+    static[::n] = True
+    walk = RandomWalk(n * replicas, rng)
+    out = []
+    steps = int(round(period_s / walk.dt))
+    for _ in range(snapshots):
+        for _ in range(steps):
+            walk.step(pos, head, scene, origin, ARENA, p.radius, static)
+        for r in range(replicas):
+            out.append((pos[r * n : (r + 1) * n] - origin[r], head[r * n : (r + 1) * n].copy()))
+    return out
+
+
 def experiment_b(rng: np.random.Generator, quick: bool) -> dict[str, Any]:
     if quick:
         counts = [1, 5, 10, 20, 40, 80, 120, 160, 200, 240, 272]
         trials = 20
-        arena_trials = 100
+        arena_trials, replicas, snapshots = 100, 25, 4
     else:
         counts = [1, 2, 5, 10, 15, 20, 30, 40, 50, 60, 70, 80, 90, 100, 110, 120, 140, 160, 180, 200, 220, 240, 255, 265, 272]
         trials = 300
-        arena_trials = 1000
+        arena_trials, replicas, snapshots = 1000, 100, 10
     area = np.pi * DISC_R**2
     curve = []
     for n in counts:
-        nc = np.empty(trials)
-        nc15 = np.empty(trials)
+        ncs = {(rule, m_tr): np.empty(trials) for rule in OCC_RULES for m_tr in M_TR_SWEEP}
+        placed = np.empty(trials)
         for t in range(trials):
             pos = disc_configuration(n, rng)
             head = rng.uniform(-np.pi, np.pi, pos.shape[0])
-            nc[t] = channels_of_centre(pos, head)
-            nc15[t] = channels_of_centre(pos, head, block_factor=1.5)
-            placed = pos.shape[0] - 1
-        curve.append(
-            {
-                "n_others": n,
-                "n_placed": placed,
-                "density_per_m2": (placed + 1) / area,
-                "mean": nc.mean(),
-                "max": nc.max(),
-                "min": nc.min(),
-                "std": nc.std(),
-                "mean_block1.5": nc15.mean(),
-                "max_block1.5": nc15.max(),
-            }
-        )
-    arena = {}
+            placed[t] = pos.shape[0] - 1
+            for rule in OCC_RULES:
+                amp = centre_amplitude(pos, head, DISC_R, rule)
+                for m_tr in M_TR_SWEEP:
+                    ncs[rule, m_tr][t] = (amp > m_tr).sum()
+        row: dict[str, Any] = {"n_others": n, "n_placed": placed.mean(), "density_per_m2": (placed.mean() + 1) / area}
+        for rule in OCC_RULES:
+            for m_tr in M_TR_SWEEP:
+                nc = ncs[rule, m_tr]
+                row[f"{rule}_mtr{m_tr}"] = {"mean": nc.mean(), "max": float(nc.max()), "min": float(nc.min()), "std": nc.std()}
+        curve.append(row)
+    arena: dict[int, Any] = {}
+    kmax = get_platform(PLATFORM).ir_range
     for n in (10, 20, 30):
-        nc = np.empty(arena_trials)
-        nc15 = np.empty(arena_trials)
-        for t in range(arena_trials):
-            pos = arena_configuration(n, rng)
-            head = rng.uniform(-np.pi, np.pi, n)
-            nc[t] = channels_of_centre(pos, head, max_range=get_platform(PLATFORM).ir_range)
-            nc15[t] = channels_of_centre(pos, head, max_range=get_platform(PLATFORM).ir_range, block_factor=1.5)
-        q = np.percentile(nc, [25, 50, 75])
-        arena[n] = {
-            "mean": nc.mean(),
-            "median": q[1],
-            "q25": q[0],
-            "q75": q[2],
-            "mean_block1.5": nc15.mean(),
-            "paper": PAPER_ARENA_NC[n],
-            "density_per_m2": n / ARENA**2,
+        scenes = {
+            "uniform": [(q, rng.uniform(-np.pi, np.pi, n)) for q in (arena_configuration(n, rng) for _ in range(arena_trials))],
+            "walk": arena_walk_snapshots(n, rng, replicas, snapshots),
         }
+        arena[n] = {"paper": PAPER_ARENA_NC[n], "density_per_m2": n / ARENA**2}
+        for placement, sc in scenes.items():
+            for rule in OCC_RULES:
+                a = np.array([centre_amplitude(q, h, kmax, rule) for q, h in sc])
+                for m_tr in M_TR_SWEEP:
+                    nc = (a > m_tr).sum(axis=1)
+                    q = np.percentile(nc, [10, 25, 50, 75, 90])
+                    arena[n][f"{placement}_{rule}_mtr{m_tr}"] = {
+                        "mean": nc.mean(), "p10": q[0], "q25": q[1], "median": q[2], "q75": q[3], "p90": q[4],
+                        "P(=paper)": float(np.mean(nc == PAPER_ARENA_NC[n])), "snapshots": int(nc.size),
+                    }
+    key = f"ray_mtr{PAPER_MTR}"
     return {
         "curve": curve,
         "trials_per_density": trials,
         "arena": arena,
-        "overall_max": max(c["max"] for c in curve),
-        "densest_mean": curve[-1]["mean"],
-        "overall_max_block1.5": max(c["max_block1.5"] for c in curve),
-        "densest_mean_block1.5": curve[-1]["mean_block1.5"],
+        "arena_snapshots": {"uniform": arena_trials, "walk": replicas * snapshots},
+        "rules": list(OCC_RULES),
+        "m_tr_sweep": list(M_TR_SWEEP),
+        "peak_mean": max(c[key]["mean"] for c in curve),
+        "overall_max": max(c[key]["max"] for c in curve),
+        "densest_mean": curve[-1][key]["mean"],
+        "densest_max": curve[-1][key]["max"],
     }
 
 
@@ -473,19 +519,21 @@ def _plots(results: dict[str, Any], out_dir: str) -> list[str]:
         b = results["b"]
         fig, ax = plt.subplots(1, 2, figsize=(11, 4))
         x = [c["density_per_m2"] for c in b["curve"]]
-        ax[0].plot(x, [c["mean"] for c in b["curve"]], "o-", label="mean")
-        ax[0].plot(x, [c["max"] for c in b["curve"]], "s--", label="max")
-        ax[0].plot(x, [c["mean_block1.5"] for c in b["curve"]], "^-", label="mean, blocking x1.5")
-        ax[0].plot(x, [c["max_block1.5"] for c in b["curve"]], "v--", label="max, blocking x1.5")
-        ax[0].axhline(15, color="gray", ls=":", label="paper max ~15")
-        ax[0].axhline(6, color="gray", ls="--", label="paper densest 6")
-        ax[0].set(xlabel="robot density (1/m^2)", ylabel="n_C", title="channels of the centre robot (61 cm disc)")
+        for rule, col in (("ray", "C0"), ("centre", "C1")):
+            key = f"{rule}_mtr{PAPER_MTR}"
+            ax[0].plot(x, [c[key]["mean"] for c in b["curve"]], "o-", color=col, label=f"{rule}: mean")
+            ax[0].plot(x, [c[key]["max"] for c in b["curve"]], "s--", color=col, label=f"{rule}: max")
+        ax[0].axhline(PAPER_FIG20A["bound"], color="gray", ls=":", label="paper bound ~15")
+        ax[0].axhline(PAPER_FIG20A["densest"], color="gray", ls="--", label="paper densest 6")
+        ax[0].set(xlabel="robot density (1/m^2)", ylabel="n_C", title=f"channels of the centre robot (61 cm disc, m_tr={PAPER_MTR})")
         ax[0].legend(fontsize=7)
         ns = sorted(b["arena"])
-        ax[1].errorbar(ns, [b["arena"][n]["median"] for n in ns], yerr=[[b["arena"][n]["median"] - b["arena"][n]["q25"] for n in ns], [b["arena"][n]["q75"] - b["arena"][n]["median"] for n in ns]], fmt="o", label="ours median, IQR")
-        ax[1].plot(ns, [b["arena"][n]["mean"] for n in ns], "x", label="ours mean")
-        ax[1].plot(ns, [b["arena"][n]["paper"] for n in ns], "r*", ms=10, label="paper Fig. 21")
-        ax[1].set(xlabel="robots in 72x72 cm", ylabel="n_C", title="arena")
+        for k, (m_tr, col) in enumerate(zip(M_TR_SWEEP, ("C0", "C1", "C2", "C3"))):
+            st = [b["arena"][n][f"walk_ray_mtr{m_tr}"] for n in ns]
+            xs = np.array(ns) + 0.6 * (k - 1.5)
+            ax[1].errorbar(xs, [q["median"] for q in st], yerr=[[q["median"] - q["p10"] for q in st], [q["p90"] - q["median"] for q in st]], fmt="o", color=col, label=f"m_tr={m_tr}: median, 10-90%")
+        ax[1].plot(ns, [b["arena"][n]["paper"] for n in ns], "r*", ms=10, label="paper Fig. 21 (one snapshot each)")
+        ax[1].set(xlabel="robots in 72x72 cm", ylabel="n_C", title="arena, random-walk snapshots, per-ray occlusion")
         ax[1].legend(fontsize=7)
         files.append(_save(fig, out_dir, "swarmcom_b_channels.png"))
     if "c" in results:
@@ -525,18 +573,39 @@ def _print(results: dict[str, Any]) -> None:
         print("  P_e / P_l vs distance (m_tr = 5): " + ", ".join(f"{c5['distance_cm'][i]:.0f}cm {c5['P_e'][i]:.1e}/{c5['P_l'][i]:.2f}" for i in sel))
     if "b" in results:
         b = results["b"]
-        print(f"(b) channels n_C of the centre robot, 61 cm disc, {b['trials_per_density']} trials per density")
-        print("  (LOS = SPEC 2 centre segment, as simulated; 'x1.5' = blocking disc widened to 1.5 radii, sensitivity)")
-        print(f"  {'others':>6} | {'placed':>6} | {'rho/m^2':>7} | {'mean':>5} | {'max':>4} | {'mean x1.5':>9} | {'max x1.5':>8}")
+        print(f"(b) channels n_C of the centre robot, 61 cm disc, {b['trials_per_density']} trials per density, m_tr = {PAPER_MTR}")
+        print("  a channel: noiseless received amplitude above m_tr (m < m_t); 'ray' = per-ray line of sight (SPEC 2, as")
+        print("  simulated), 'centre' = the first version's centre-segment rule")
+        print(f"  {'others':>6} | {'placed':>6} | {'rho/m^2':>7} | {'ray mean':>8} | {'ray max':>7} | {'centre mean':>11} | {'centre max':>10}")
+        k = f"mtr{PAPER_MTR}"
         for c in b["curve"]:
-            print(f"  {c['n_others']:>6} | {c['n_placed']:>6} | {c['density_per_m2']:7.1f} | {c['mean']:5.2f} | {c['max']:4.0f} | {c['mean_block1.5']:9.2f} | {c['max_block1.5']:8.0f}")
-        print(
-            f"  overall max: ours {b['overall_max']:.0f} (x1.5: {b['overall_max_block1.5']:.0f}), paper ~15; "
-            f"densest: ours mean {b['densest_mean']:.2f} (x1.5: {b['densest_mean_block1.5']:.2f}), paper 6"
-        )
-        print("  72 x 72 cm arena:   robots | ours mean | ours median [IQR] | mean x1.5 | paper")
+            print(f"  {c['n_others']:>6} | {c['n_placed']:6.0f} | {c['density_per_m2']:7.1f} | {c['ray_' + k]['mean']:8.2f} | {c['ray_' + k]['max']:7.0f} | {c['centre_' + k]['mean']:11.2f} | {c['centre_' + k]['max']:10.0f}")
+        print(f"  Fig. 20a, bound: paper ~{PAPER_FIG20A['bound']} (its curve; the text reads as a per-density average, see README)")
+        for rule in OCC_RULES:
+            key = f"{rule}_{k}"
+            print(
+                f"    {rule:>6}: peak of the mean curve {max(c[key]['mean'] for c in b['curve']):.1f}, max over all trials "
+                f"{max(c[key]['max'] for c in b['curve']):.0f}; densest: mean {b['curve'][-1][key]['mean']:.1f}, max {b['curve'][-1][key]['max']:.0f} (paper 6)"
+            )
+        print("  other detection thresholds (per ray): peak mean / densest mean, by m_tr: " + ", ".join(
+            f"{m}: {max(c[f'ray_mtr{m}']['mean'] for c in b['curve']):.1f} / {b['curve'][-1][f'ray_mtr{m}']['mean']:.1f}" for m in M_TR_SWEEP
+        ))
+        sn = b["arena_snapshots"]
+        print(f"  72 x 72 cm arena [Fig. 21]: the paper's values are single snapshots; ours = distribution over {sn['walk']} random-walk")
+        print(f"  snapshots [Alg. 1, one per 30 s] and {sn['uniform']} uniform static placements: median [10%, 90%] (mean)")
+        print(f"  {'robots':>6} | {'paper':>5} | " + " | ".join(f"{f'{pl} {rule} m_tr={m}':>24}" for pl in ("walk", "uniform") for rule in OCC_RULES for m in (PAPER_MTR,)))
         for n, r in b["arena"].items():
-            print(f"                      {n:>6} | {r['mean']:9.2f} | {r['median']:4.0f} [{r['q25']:.0f}, {r['q75']:.0f}]    | {r['mean_block1.5']:9.2f} | {r['paper']}")
+            cells = []
+            for pl in ("walk", "uniform"):
+                for rule in OCC_RULES:
+                    q = r[f"{pl}_{rule}_mtr{PAPER_MTR}"]
+                    cells.append(f"{q['median']:4.0f} [{q['p10']:.0f}, {q['p90']:.0f}] ({q['mean']:.1f})")
+            print(f"  {n:>6} | {r['paper']:>5} | " + " | ".join(f"{c:>24}" for c in cells))
+        print("  detection threshold sweep, walk snapshots, per ray: median [10%, 90%] (mean) by m_tr (paper ranges 61/45/33/21 cm)")
+        for n, r in b["arena"].items():
+            print(f"  {n:>6} | {r['paper']:>5} | " + " | ".join(
+                f"m_tr={m}: {r[f'walk_ray_mtr{m}']['median']:.0f} [{r[f'walk_ray_mtr{m}']['p10']:.0f}, {r[f'walk_ray_mtr{m}']['p90']:.0f}] ({r[f'walk_ray_mtr{m}']['mean']:.1f})" for m in M_TR_SWEEP
+            ))
     if "c" in results:
         c = results["c"]
         print("(c) message loss P_l, 2..7 robots, random walk [Alg. 1], 72 x 72 cm, 310 bps, m_tr = 10")
