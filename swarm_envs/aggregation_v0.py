@@ -2,7 +2,7 @@
 
 Reward (global, default) = decrease of the swarm's spread (mean distance to the centroid) this step,
 normalised by the arena size; ``reward_mode="local"`` rewards each robot for the decrease of its own
-distance to the centroid. Metrics in ``infos[agent]["metrics"]``: largest-cluster fraction (clusters =
+distance to the centroid. Metrics in ``infos[agent]["metrics", name]``: largest-cluster fraction (clusters =
 robots whose centres are within 1.5 diameters, chained), number of clusters, mean distance to centroid (m).
 """
 

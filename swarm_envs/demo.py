@@ -13,6 +13,8 @@ import sys
 
 import numpy as np
 
+from swarm_envs.env import info_group
+
 TASKS = {"aggregation": "swarm_envs/Aggregation-v0", "flocking": "swarm_envs/Flocking-v0", "centroid_seeking": "swarm_envs/CentroidSeeking-v0"}
 
 
@@ -57,7 +59,7 @@ def main(argv: list[str] | None = None) -> int:
         frames.append(env.render())
     env.close()
     imageio.mimsave(args.out, frames, duration=0.1, loop=0)
-    metrics = next(iter(infos.values()))["metrics"] if infos else {}
+    metrics = info_group(next(iter(infos.values())), "metrics") if infos else {}
     print(f"wrote {args.out}: {len(frames)} frames; final metrics: " + ", ".join(f"{k}={v:.3f}" for k, v in metrics.items()))
     return 0
 

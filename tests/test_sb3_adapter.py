@@ -68,7 +68,7 @@ def test_rewards_match_an_independent_env_per_row():
                 row = vec.row_of(c, a)
                 assert rewards[row] == pytest.approx(ref_rew[a], abs=1e-7)
                 np.testing.assert_array_equal(obs[row], ref_obs[a])
-                assert infos[row]["reward_terms"]["own_distance_decrease"] == pytest.approx(ref_rew[a], abs=1e-7)
+                assert infos[row]["reward_terms", "own_distance_decrease"] == pytest.approx(ref_rew[a], abs=1e-7)
         assert np.ptp(rewards) > 0  # per-robot rewards really differ between rows
 
 
