@@ -9,11 +9,12 @@
 scale-free coordinates, rigidity, proprioception). RLlib's default RLModule has no encoder for a
 ``Dict`` (``No default encoder config for obs space=Dict(...)``), so the env-to-module pipeline gets
 RLlib's own :class:`~ray.rllib.connectors.env_to_module.FlattenObservations` connector
-(``multi_agent=True``), which flattens each robot's Dict into one vector before the MLP. Why this
-and not the env's ``flatten=True``: the same env (and the same episodes, infos and metrics) serve
-every library; the flattening happens where RLlib documents it, on the env runners, and it also
-works for a policy served from a checkpoint (the connector is part of the saved pipeline).
-(``flatten=True`` works too: pass ``--env-flatten`` to skip the connector.)
+(``multi_agent=True``), which flattens each robot's Dict into one vector before the MLP. Why a
+connector and not the env's ``flatten=True``: the env stays exactly the one every other library
+and the suite's own tools see (same observation, infos and metrics), and the flattening is declared
+in the algorithm config, RLlib's documented place for observation preprocessing, so it travels
+with the config to every env runner. (``flatten=True`` works too: ``--env-flatten`` skips the
+connector and flattens in the env instead.)
 
 **Shared policy.** Every robot maps to one module ``"shared"`` (``policy_mapping_fn``): the robots
 are interchangeable, and all their experience trains the same weights.
