@@ -13,6 +13,8 @@ import sys
 
 import numpy as np
 
+from swarm_envs.env import info_group
+
 TASKS = {"aggregation": "swarm_envs/Aggregation-v0", "flocking": "swarm_envs/Flocking-v0", "centroid_seeking": "swarm_envs/CentroidSeeking-v0"}
 
 
@@ -60,7 +62,7 @@ def main(argv: list[str] | None = None) -> int:
     # one control step per frame, shown at the env's render_fps (10 fps = 100 ms per frame).
     frame_ms = 1000.0 / env.metadata["render_fps"]
     iio.imwrite(args.out, np.stack(frames), plugin="pillow", extension=".gif", duration=frame_ms, loop=0)
-    metrics = next(iter(infos.values()))["metrics"] if infos else {}
+    metrics = info_group(next(iter(infos.values())), "metrics") if infos else {}
     print(f"wrote {args.out}: {len(frames)} frames; final metrics: " + ", ".join(f"{k}={v:.3f}" for k, v in metrics.items()))
     return 0
 

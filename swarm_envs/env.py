@@ -3,11 +3,16 @@
 Data flows one way each control step (``DT`` = 0.1 s):
 physics (:mod:`swarm_envs.world`) -> sensing stack (IR channel -> range & bearing, messages,
 scale-free coordinates) -> observation (:mod:`swarm_envs.observation`) -> reward (the task subclass).
-Ground truth goes to ``infos[agent]["ground_truth"]`` only.
+Ground truth goes to ``infos`` (keys ``("ground_truth", ...)``) and :meth:`SwarmEnv.state` only.
+
+``infos[agent]`` is a flat dict keyed by ``(group, name)`` tuples with fixed-shape numeric values,
+e.g. ``infos["robot_0"]["metrics", "polarisation"]``: the same key paths TensorDict uses, so TorchRL's
+``PettingZooWrapper`` turns them into nested tensors. :func:`info_group` gives one group as a dict.
 """
 
 from __future__ import annotations
 
+import functools
 import numbers
 from typing import Any
 
@@ -22,7 +27,7 @@ from swarm_envs.sensing.base import SensorFrame
 from swarm_envs.task import Task
 from swarm_envs.world import Arena, World
 
-__all__ = ["SwarmEnv", "DT", "COMMON_DEFAULTS", "resolve_config", "make_layout"]
+__all__ = ["SwarmEnv", "DT", "COMMON_DEFAULTS", "INFO_GROUPS", "STATE_ROBOT_FIELDS", "info_group", "resolve_config", "make_layout"]
 
 #: Keyword arguments every task accepts, with their defaults (see README "Environments").
 COMMON_DEFAULTS: dict[str, Any] = {
@@ -71,6 +76,10 @@ _CHOICES: dict[str, tuple] = {
 _POSITIVE_INTS = ("n_robots", "max_cycles", "n_neighbours", "n_messages", "rb_max_age", "scale_free_k", "physics_substeps")
 _NON_NEGATIVE_INTS = ("message_bits",)
 
+#: The groups of ``infos[agent]``; every key is ``(group, name)``.
+INFO_GROUPS = ("ground_truth", "reward_terms", "metrics", "sensing")
+#: Per-robot fields of :meth:`SwarmEnv.state`, in order (arena frame, SI units).
+STATE_ROBOT_FIELDS = ("x", "y", "cos_heading", "sin_heading", "vx", "vy", "angular_velocity")
 
 
 def _validate(cfg: dict[str, Any]) -> None:
@@ -188,7 +197,9 @@ class SwarmEnv(ParallelEnv):
         return self.core.frame
 
     def _markers(self) -> dict[str, np.ndarray]:
-        """Task markers to draw (name -> world point)."""
+        """Task markers (name -> world point (2,) m): drawn by the renderer and part of :meth:`state`.
+
+        A task must return the same names every step (the state has a fixed size)."""
         return self.task.markers(self.world.positions)
 
     # -- spaces ----------------------------------------------------------------------------------------
@@ -199,6 +210,30 @@ class SwarmEnv(ParallelEnv):
     def action_space(self, agent: str) -> spaces.Box:
         self._check_agent(agent)
         return self._act_space
+
+    @property
+    def observation_spaces(self) -> dict[str, spaces.Space]:
+        """Every possible agent's observation space (PettingZoo API); all agents share one space."""
+        return {a: self._obs_space for a in self.possible_agents}
+
+    @property
+    def action_spaces(self) -> dict[str, spaces.Box]:
+        """Every possible agent's action space (PettingZoo API); all agents share one space."""
+        return {a: self._act_space for a in self.possible_agents}
+
+    @functools.cached_property
+    def state_space(self) -> spaces.Box:
+        """Space of :meth:`state`: ``Box`` of shape ``(7 n_world + 2 n_markers + 1,)``, float32.
+
+        Bounds are hard limits, not typical ranges: positions within the arena's half size (m),
+        velocities at most the arena size per control step (m/s), angular velocity at most pi per step
+        (rad/s, headings are wrapped), progress in [0, 1].
+        """
+        half, v, w = self.arena.half, self.arena.size / DT, np.pi / DT
+        robot_high = np.array([half, half, 1.0, 1.0, v, v, w])
+        high = np.concatenate([np.tile(robot_high, self.n_world), np.full(2 * len(self._markers()), half), [1.0]])
+        low = np.concatenate([-high[:-1], [0.0]])
+        return spaces.Box(low.astype(np.float32), high.astype(np.float32), dtype=np.float32)
 
     def _check_agent(self, agent: str) -> int:
         try:
@@ -281,7 +316,28 @@ class SwarmEnv(ParallelEnv):
         batched = self.batched_observations()
         return {a: self.layout.per_robot(batched, self.agent_robots[i]) for i, a in enumerate(self.agents)}
 
+    def state(self) -> np.ndarray:
+        """Global ground-truth state for centralised critics (never part of any observation).
+
+        Float32 vector: for every robot in world order (static robots such as anchors first, then the
+        agents) ``STATE_ROBOT_FIELDS`` = x, y (m), cos, sin heading, vx, vy (m/s, achieved over the last
+        step), angular velocity (rad/s), all in the arena frame; then the task's markers (x, y in m,
+        sorted by name, e.g. the centroid); then episode progress ``num_cycles / max_cycles``.
+        Lies in :attr:`state_space`. Call after :meth:`reset`.
+        """
+        if self._frame is None:
+            raise RuntimeError("state() needs a started episode; call reset() first")
+        w = self.world
+        robots = np.column_stack(
+            [w.positions, np.cos(w.headings), np.sin(w.headings), w.velocities, w.angular_velocities]
+        ).ravel()
+        markers = self._markers()
+        points = np.concatenate([np.asarray(markers[name], float).reshape(2) for name in sorted(markers)]) if markers else np.zeros(0)
+        progress = min(self.num_cycles / self.max_cycles, 1.0)
+        return np.concatenate([robots, points, [progress]]).astype(np.float32)
+
     def _infos(self) -> dict[str, dict]:
+        """Per agent, a flat dict keyed by ``(group, name)``; values are numbers or fixed-shape arrays."""
         core = self.core
         world = self.world
         stats = core.frame.stats if core.frame is not None else {}
@@ -289,16 +345,15 @@ class SwarmEnv(ParallelEnv):
         infos = {}
         for i, agent in enumerate(self.agents):
             r = self.agent_robots[i]
-            infos[agent] = {
-                "ground_truth": {
-                    "position": world.positions[r].copy(),
-                    "heading": float(world.headings[r]),
-                    "velocity": world.velocities[r].copy(),
-                },
-                "reward_terms": {name: float(v[0, i]) for name, v in core.terms.items()},
-                "metrics": dict(metrics),
-                "sensing": {name: (v[r].item() if np.ndim(v) == 1 else v[r].copy()) for name, v in stats.items()},
+            info: dict[tuple[str, str], Any] = {
+                ("ground_truth", "position"): world.positions[r].copy(),
+                ("ground_truth", "heading"): float(world.headings[r]),
+                ("ground_truth", "velocity"): world.velocities[r].copy(),
             }
+            info.update({("reward_terms", name): float(v[0, i]) for name, v in core.terms.items()})
+            info.update({("metrics", name): float(v) for name, v in metrics.items()})
+            info.update({("sensing", name): (v[r].item() if np.ndim(v) == 1 else v[r].copy()) for name, v in stats.items()})
+            infos[agent] = info
         return infos
 
     # -- rendering -----------------------------------------------------------------------------------
@@ -324,5 +379,14 @@ class SwarmEnv(ParallelEnv):
 
     def __repr__(self) -> str:
         return f"{type(self).__name__}(n_robots={self.n_agents}, platform={self.platform.name!r}, sensing={self.config['sensing']!r})"
+
+
+
+def info_group(info: dict, group: str) -> dict[str, Any]:
+    """One group of an agent's info as a plain dict, e.g. ``info_group(infos["robot_0"], "metrics")``."""
+    if group not in INFO_GROUPS:
+        raise KeyError(f"unknown info group {group!r}; groups: {list(INFO_GROUPS)}")
+    return {key[1]: value for key, value in info.items() if isinstance(key, tuple) and key[0] == group}
+
 
 from swarm_envs.task import bump_any  # noqa: E402,F401  (kept importable from here)

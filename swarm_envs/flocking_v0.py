@@ -150,9 +150,9 @@ def parallel_env(
     bumping)``, with polarisation = norm of the mean unit heading weighted by speed / max speed (in
     [0, 1]) and cohesion = size of the largest connected component of the IR graph (centres within the
     platform's ``ir_range``) / N. ``"local"``: each robot's polarisation is taken over itself and its IR
-    neighbours and only its own bump is penalised. Terms in ``infos[agent]["reward_terms"]``:
+    neighbours and only its own bump is penalised. Terms in ``infos[agent]["reward_terms", name]``:
     ``polarisation``, ``local_polarisation``, ``cohesion``, ``collision``. Metrics in
-    ``infos[agent]["metrics"]``: ``polarisation``, ``cohesion``, ``collision_fraction``.
+    ``infos[agent]["metrics", name]``: ``polarisation``, ``cohesion``, ``collision_fraction``.
 
     ## Starting State
 

@@ -20,7 +20,7 @@ Each control step, in this order (data flows one way):
    (``exchange="network"``) or instantly (``exchange="ideal"``); the 2-hop algorithm turns what each
    robot knows into neighbour coordinates up to scale.
 
-Channel and sensor statistics go to ``infos[agent]["sensing"]``.
+Channel and sensor statistics go to ``infos[agent]["sensing", name]``.
 """
 
 from __future__ import annotations
