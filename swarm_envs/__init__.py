@@ -5,6 +5,9 @@ Importing the package registers the tasks in PettingZoo's registry::
     import pettingzoo, swarm_envs
     env = pettingzoo.make("parallel", "swarm_envs/Aggregation-v0", n_robots=10)
     env = swarm_envs.make("swarm_envs/Flocking-v0", platform="rone")   # same, parallel API
+
+``swarm_envs.make`` passes every keyword to the env unchanged (``max_cycles=-1`` raises), whereas
+``pettingzoo.make`` drops ``max_cycles=-1`` and uses the env's default.
 """
 
 from __future__ import annotations
@@ -50,6 +53,8 @@ def make(env_id: str, **kwargs: Any) -> ParallelEnv:
     """Create a parallel environment by registered id, e.g. ``make("swarm_envs/Aggregation-v0", n_robots=20)``."""
     if env_id not in ENV_IDS:
         raise ValueError(f"unknown environment id {env_id!r}; registered: {list_envs()}")
-    import pettingzoo
+    import importlib
 
-    return pettingzoo.make("parallel", env_id, **kwargs)
+    # the registry's own entry point, called directly: pettingzoo.make treats max_cycles=-1 as "not
+    # given" (its spec default), which would silently turn an invalid -1 into 500-step episodes
+    return importlib.import_module(ENV_IDS[env_id]).parallel_env(**kwargs)

@@ -4,7 +4,9 @@
 agents but still emit infrared and talk, so seekers can sense them. The agents are the ``n_robots``
 seekers (default 1). Reward = -distance of the seeker to the anchors' centroid / arena size.
 Metric ``mean_distance_second_half`` = mean seeker-centroid distance (m) over the second half of the
-episode so far (compare [L] 14.03 cm with d_step = 11 cm).
+episode so far, i.e. over steps ceil(t/2) .. t at step t (just the current distance at reset; never NaN),
+which at the last step is the mean over the episode's second half (compare [L] 14.03 cm with
+d_step = 11 cm).
 """
 
 from __future__ import annotations
@@ -16,6 +18,7 @@ from pettingzoo.utils.conversions import parallel_to_aec
 from scipy.spatial import cKDTree
 
 from swarm_envs.env import SwarmEnv
+from swarm_envs.settings import SettingsError
 from swarm_envs.world import Arena, spawn_positions
 
 __all__ = ["CentroidSeekingEnv", "raw_env", "parallel_env", "env"]
@@ -37,6 +40,22 @@ class CentroidSeekingEnv(SwarmEnv):
         # room for an anchor polygon of radius ~0.3 IR ranges plus seekers around it
         return max(super()._default_arena_size(), 0.9 * self.platform.ir_range)
 
+    def _anchor_min_angle(self) -> float:
+        """Smallest angle (rad) between neighbouring anchors on their circle: a chord of 2.1 radii."""
+        ratio = 1.05 * self.platform.radius / self.polygon_radius
+        return 2 * float(np.arcsin(ratio)) if ratio < 1 else np.inf
+
+    def _check_layout(self) -> None:
+        n_a, angle = self.n_static, self._anchor_min_angle()
+        if n_a * angle >= 2 * np.pi:
+            fit = int(np.ceil(2 * np.pi / angle)) - 1 if np.isfinite(angle) else 0
+            raise SettingsError(
+                "n_anchors",
+                f"n_anchors={n_a} anchors of diameter {2 * self.platform.radius:.3f} m do not fit on the anchor circle "
+                f"of radius {self.polygon_radius:.3f} m (0.3 x min(IR range, arena size)): at most {fit} fit; "
+                "use fewer anchors",
+            )
+
     @property
     def polygon_radius(self) -> float:
         """Radius (m) of the circle the anchors stand on: within IR range of each other."""
@@ -45,11 +64,20 @@ class CentroidSeekingEnv(SwarmEnv):
     def _spawn(self, rng: np.random.Generator):
         n_a, radius = self.n_static, self.platform.radius
         # points on a circle are in convex position; keep corners apart by at least a diameter + margin
+        min_gap = max(2 * np.pi / n_a * 0.4, self._anchor_min_angle())
         for _ in range(1000):
             angles = np.sort(rng.uniform(-np.pi, np.pi, n_a))
             gaps = np.diff(np.concatenate([angles, angles[:1] + 2 * np.pi]))
-            if gaps.min() > 2 * np.pi / n_a * 0.4 and gaps.max() < np.pi * 0.95:
+            if gaps.min() > min_gap and gaps.max() < np.pi * 0.95:
                 break
+        else:  # many anchors: rejection rarely succeeds, so draw the gaps directly (min_gap + a random share)
+            for _ in range(1000):
+                gaps = min_gap + (2 * np.pi - n_a * min_gap) * rng.dirichlet(np.ones(n_a))
+                if gaps.max() < np.pi * 0.95:
+                    break
+            else:
+                raise ValueError(f"could not place {n_a} anchors in convex position; use fewer anchors")
+            angles = np.sort((rng.uniform(-np.pi, np.pi) + np.cumsum(gaps) + np.pi) % (2 * np.pi) - np.pi)
         anchors = self.polygon_radius * np.stack([np.cos(angles), np.sin(angles)], -1)
         seekers = np.empty((0, 2))
         for _ in range(200):
@@ -72,16 +100,17 @@ class CentroidSeekingEnv(SwarmEnv):
         seekers = self.world.positions[self.agent_robots]
         dist = np.linalg.norm(seekers - self.centroid, axis=1)
         if first:
-            self._second_half_sum, self._second_half_steps = 0.0, 0
-        if self.num_cycles >= self.max_cycles / 2:
-            self._second_half_sum += float(dist.mean())
-            self._second_half_steps += 1
+            self._distance_cumsum = [0.0]  # cumulative sum of the mean distance over steps 0 .. t
+        self._distance_cumsum.append(self._distance_cumsum[-1] + float(dist.mean()))
+        # steps t/2 .. t (num_cycles >= t/2): at the end of an episode, its second half
+        start = -(-self.num_cycles // 2)
+        second_half = (self._distance_cumsum[-1] - self._distance_cumsum[start]) / (self.num_cycles + 1 - start)
         rewards = -dist / self.arena.size
         if self.reward_mode == "global":
             rewards = np.full(self.n_agents, rewards.mean())
         metrics = {
             "mean_distance_to_centroid": float(dist.mean()),
-            "mean_distance_second_half": (self._second_half_sum / self._second_half_steps) if self._second_half_steps else float("nan"),
+            "mean_distance_second_half": second_half,
         }
         return rewards, {"distance_to_centroid": dist}, metrics
 

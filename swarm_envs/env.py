@@ -9,6 +9,7 @@ Ground truth goes to ``infos[agent]["ground_truth"]`` only.
 from __future__ import annotations
 
 import numbers
+from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
@@ -16,96 +17,17 @@ from gymnasium import spaces
 from pettingzoo import ParallelEnv
 
 from swarm_envs.observation import ObservationLayout, pack_nearest
-from swarm_envs.platforms import PLATFORMS, Platform, get_platform
+from swarm_envs.platforms import Platform, get_platform
 from swarm_envs.sensing.base import SensorFrame
-from swarm_envs.world import N_BUMP_SECTORS, Arena, World, spawn_positions
+from swarm_envs.settings import COMMON_DEFAULTS, validate_settings
+from swarm_envs.world import N_BUMP_SECTORS, Arena, World, as_real_array, check_capacity, spawn_positions
 
 __all__ = ["SwarmEnv", "DT", "COMMON_DEFAULTS"]
 
 DT = 0.1  # s, one control step = the Droplet R&B update rate [F14 Sec. V]
 
-#: Keyword arguments every task accepts, with their defaults (see README "Environments").
-COMMON_DEFAULTS: dict[str, Any] = {
-    "n_robots": 10,
-    "platform": "epuck",
-    "sensing": "full",
-    "max_cycles": 500,
-    "render_mode": None,
-    "arena": "square",
-    "arena_size": None,  # m; None = platform spacing * sqrt(number of robots)
-    "reward_mode": "global",
-    "flatten": False,
-    "n_neighbours": 8,
-    "n_messages": 8,
-    "message_bits": 0,
-    # SwarmCom messaging [T20]
-    "bitrate": 310,
-    "relative_threshold": None,  # m_tr (ADC counts); None = the platform's: 5 e-puck/r-one [T20], 8 droplet
-    "code": (15, 15),
-    "comm_mode": "broadcast",
-    # range & bearing [F14]
-    "rb_schedule": "contention",
-    "rb_max_age": 10,
-    "rb_noise": None,  # ADC counts; None = the platform model's documented default
-    "rb_near_model": False,  # Droplet: firmware low-power fit instead of the power ladder when saturated
-    # bearing-only sensing and scale-free coordinates [L]
-    "bearing_source": None,  # None = "sectors" on rone, "range_bearing" elsewhere
-    "exchange": "network",
-    "scale_free_method": "two_hop",
-    "scale_free_k": 1,
-    "physics_substeps": 8,
-}
-
-_CHOICES: dict[str, tuple] = {
-    "sensing": ("full", "ideal"),
-    "render_mode": (None, "rgb_array", "human"),
-    "arena": Arena.SHAPES,
-    "reward_mode": ("global", "local"),
-    "comm_mode": ("broadcast", "flooding"),
-    "rb_schedule": ("contention", "every_step"),
-    "bearing_source": (None, "sectors", "range_bearing"),
-    "exchange": ("network", "ideal"),
-    "scale_free_method": ("two_hop", "null_space"),
-    "bitrate": (310, 650, 1080, 1160, 1670, 1800),
-}
-_POSITIVE_INTS = ("n_robots", "max_cycles", "n_neighbours", "n_messages", "rb_max_age", "scale_free_k", "physics_substeps")
-_NON_NEGATIVE_INTS = ("message_bits",)
-
 # default centre spacing (m) used to size the arena when arena_size is None
 _SPACING = {"droplet": 0.15, "epuck": 0.25, "rone": 0.45}
-
-
-def _validate(cfg: dict[str, Any]) -> None:
-    for key, allowed in _CHOICES.items():
-        if key in cfg and cfg[key] not in allowed:
-            raise ValueError(f"{key}={cfg[key]!r} is not allowed; allowed values: {list(allowed)}")
-    for key in _POSITIVE_INTS + _NON_NEGATIVE_INTS:
-        if key not in cfg:
-            continue
-        value = cfg[key]
-        low = 1 if key in _POSITIVE_INTS else 0
-        if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < low:
-            raise ValueError(f"{key} must be an integer >= {low}, got {value!r}")
-    if not isinstance(cfg["platform"], Platform) and cfg["platform"] not in PLATFORMS:
-        raise ValueError(f"unknown platform {cfg['platform']!r}; allowed values: {sorted(PLATFORMS)}")
-    size = cfg["arena_size"]
-    if size is not None and (isinstance(size, bool) or not isinstance(size, numbers.Real) or not np.isfinite(size) or size <= 0):
-        raise ValueError(f"arena_size must be a positive number of metres or None, got {size!r}")
-    if not isinstance(cfg["rb_near_model"], bool):
-        raise ValueError(f"rb_near_model must be True or False, got {cfg['rb_near_model']!r}")
-    if cfg["rb_near_model"] and get_platform(cfg["platform"]).name != "droplet":
-        raise ValueError("rb_near_model=True is the Droplet firmware's low-power fit; use platform='droplet'")
-    if not isinstance(cfg["flatten"], bool):
-        raise ValueError(f"flatten must be True or False, got {cfg['flatten']!r}")
-    threshold = cfg["relative_threshold"]
-    if threshold is not None and (isinstance(threshold, bool) or not isinstance(threshold, numbers.Real) or threshold <= 0):
-        raise ValueError(f"relative_threshold (m_tr, ADC counts) must be a positive number or None, got {threshold!r}")
-    noise = cfg["rb_noise"]
-    if noise is not None and (not isinstance(noise, numbers.Real) or noise < 0):
-        raise ValueError(f"rb_noise must be a non-negative number of ADC counts or None, got {noise!r}")
-    code = cfg["code"]
-    if not (isinstance(code, (tuple, list)) and len(code) == 2 and tuple(code)[0] == 15):
-        raise ValueError(f"code must be a BCH (n, k) pair with n = 15, e.g. (15, 15), (15, 11), (15, 1); got {code!r}")
 
 
 class SwarmEnv(ParallelEnv):
@@ -123,14 +45,8 @@ class SwarmEnv(ParallelEnv):
     TASK_DEFAULTS: dict[str, Any] = {}
 
     def __init__(self, **kwargs: Any) -> None:
-        defaults = {**COMMON_DEFAULTS, **self.TASK_DEFAULTS}
-        unknown = sorted(set(kwargs) - set(defaults))
-        if unknown:
-            raise TypeError(
-                f"{type(self).__name__} got unknown keyword argument(s) {unknown}; allowed: {sorted(defaults)}"
-            )
-        cfg = {**defaults, **kwargs}
-        _validate(cfg)
+        # every setting is checked here, whatever the sensing mode (swarm_envs.settings)
+        cfg = validate_settings(type(self), kwargs)
         self.config = cfg
         self.platform: Platform = get_platform(cfg["platform"])
         self.render_mode = cfg["render_mode"]
@@ -141,6 +57,10 @@ class SwarmEnv(ParallelEnv):
         self.n_world = self.n_static + self.n_agents
         size = cfg["arena_size"] if cfg["arena_size"] is not None else self._default_arena_size()
         self.arena = Arena(cfg["arena"], float(size))
+        # robots that cannot fit even touching fail here; the random spawner also keeps a gap of 0.1
+        # radius, so an arena within ~10 % of a full packing can still fail at reset (without positions)
+        check_capacity(self.n_world, self.platform.radius, self.arena, gap=0.0)
+        self._check_layout()
         self.possible_agents = [f"robot_{i}" for i in range(self.n_agents)]
         self.agents: list[str] = []
         self._agent_index = {a: i for i, a in enumerate(self.possible_agents)}
@@ -167,6 +87,10 @@ class SwarmEnv(ParallelEnv):
     def _n_static(self) -> int:
         """Number of non-agent (static) robots; they sense and emit but are never commanded."""
         return 0
+
+    def _check_layout(self) -> None:
+        """Task hook, run by the constructor once the arena is built: raise ``ValueError`` when the
+        task's initial layout cannot fit (e.g. too many anchors on their circle)."""
 
     def _default_arena_size(self) -> float:
         """Arena size (m) when ``arena_size=None``: the platform's spacing times sqrt(robots)."""
@@ -219,31 +143,35 @@ class SwarmEnv(ParallelEnv):
 
     # -- reset / step ------------------------------------------------------------------------------------
     def reset(self, seed: int | None = None, options: dict | None = None):
+        """Start an episode. ``seed`` (int >= 0) reseeds the env's generator; ``None`` continues its stream.
+
+        ``options`` (dict or None): ``"positions"`` (n, 2) m places the robots there and the task's
+        spawner does not run; ``"headings"`` (n,) rad sets the headings. Positions alone: headings drawn
+        uniformly from the spawn stream. Headings alone: the task spawns the positions as usual and its
+        headings are replaced. Anything wrong (seed, options, placement) raises ``TypeError`` or
+        ``ValueError`` before the env changes. Every reset builds a new physics space and new sensing
+        state, so ``reset(seed=s)`` behaves the same on a fresh env and on a reused one.
+        """
+        seed = _check_seed(seed)
+        given_positions, given_headings = self._check_options(options)
         if seed is not None:
             self._rng = np.random.default_rng(seed)
         # independent child streams: spawn, and sensing (which splits it into noise, channel and MAC)
         streams = np.random.SeedSequence(int(self._rng.integers(2**63))).spawn(2)
         self._spawn_rng, sensing_rng = (np.random.default_rng(s) for s in streams)
-        options = dict(options or {})
-        unknown = sorted(set(options) - {"positions", "headings"})
-        if unknown:  # a warning, not an error: PettingZoo's API test passes arbitrary options
-            import gymnasium
-
-            gymnasium.logger.warn(f"ignoring unknown reset option(s) {unknown}; allowed: ['headings', 'positions']")
-        positions, headings = self._spawn(self._spawn_rng)
-        if "positions" in options:
-            positions = np.asarray(options["positions"], dtype=float)
-            if positions.shape != (self.n_world, 2):
-                raise ValueError(f"options['positions'] must have shape ({self.n_world}, 2) metres, got {positions.shape}")
-        if "headings" in options:
-            headings = np.asarray(options["headings"], dtype=float)
-            if headings.shape != (self.n_world,):
-                raise ValueError(f"options['headings'] must have shape ({self.n_world},) radians, got {headings.shape}")
+        if given_positions is None:
+            positions, headings = self._spawn(self._spawn_rng)
+        else:
+            positions, headings = given_positions, None
+        if given_headings is not None:
+            headings = given_headings
+        elif headings is None:
+            headings = self._spawn_rng.uniform(-np.pi, np.pi, self.n_world)
         self.world.place(positions, headings)
         self.sensing.reset(sensing_rng)
         self.agents = list(self.possible_agents)
         self.num_cycles = 0
-        self._last_actions[:] = 0.0
+        self._last_actions = np.zeros((self.n_world, self.layout.action_size))
         self._frame = self.sensing.step(self.world.positions, self.world.headings, None)
         _, terms, metrics = self._rewards(first=True)
         obs = self._observations()
@@ -251,6 +179,33 @@ class SwarmEnv(ParallelEnv):
         if self.render_mode == "human":
             self.render()
         return obs, infos
+
+    def _check_options(self, options: Any) -> tuple[np.ndarray | None, np.ndarray | None]:
+        """Validated (positions, headings) from reset ``options`` (None where not given); changes nothing."""
+        if options is None:
+            return None, None
+        if not isinstance(options, Mapping):
+            raise TypeError(
+                f"reset options must be a dict (keys 'positions', 'headings') or None, got {type(options).__name__}: {options!r:.80}"
+            )
+        unknown = sorted((k for k in options if k not in ("positions", "headings")), key=str)
+        if unknown:  # a warning, not an error: PettingZoo's API test passes arbitrary options
+            import gymnasium
+
+            gymnasium.logger.warn(f"ignoring unknown reset option(s) {unknown}; allowed: ['headings', 'positions']")
+        positions = headings = None
+        if "headings" in options:
+            headings = as_real_array(options["headings"], "options['headings']")
+            if headings.shape != (self.n_world,):
+                raise ValueError(f"options['headings'] must have shape ({self.n_world},) radians, got {headings.shape}")
+            if not np.all(np.isfinite(headings)):
+                raise ValueError("options['headings'] must be finite")
+        if "positions" in options:
+            positions = as_real_array(options["positions"], "options['positions']")
+            if positions.shape != (self.n_world, 2):
+                raise ValueError(f"options['positions'] must have shape ({self.n_world}, 2) metres, got {positions.shape}")
+            positions, _ = self.world.check_placement(positions, np.zeros(self.n_world) if headings is None else headings)
+        return positions, headings
 
     def _action_array(self, actions: dict[str, Any]) -> np.ndarray:
         if not isinstance(actions, dict):
@@ -265,9 +220,15 @@ class SwarmEnv(ParallelEnv):
         out = np.zeros((self.n_world, size))
         for agent, action in actions.items():
             try:
-                arr = np.asarray(action, dtype=np.float64)
+                arr = np.asarray(action)
             except (TypeError, ValueError):
-                raise TypeError(f"action for {agent} must be a numeric array of shape ({size},), got {action!r}") from None
+                arr = np.asarray(None)
+            if arr.dtype.kind not in "iuf":  # not bool, complex, strings (even of digits) or objects
+                raise TypeError(
+                    f"action for {agent} must be a real-valued numeric array of shape ({size},) "
+                    f"(int or float dtype), got {action!r:.80} of dtype {arr.dtype}"
+                )
+            arr = arr.astype(np.float64)
             if arr.shape != (size,):
                 raise ValueError(
                     f"action for {agent} has shape {arr.shape}; expected ({size},) = (linear, angular"
@@ -372,6 +333,17 @@ class SwarmEnv(ParallelEnv):
 
     def __repr__(self) -> str:
         return f"{type(self).__name__}(n_robots={self.n_agents}, platform={self.platform.name!r}, sensing={self.config['sensing']!r})"
+
+
+def _check_seed(seed: Any) -> int | None:
+    """``seed`` as an int (or None); ``ValueError`` for a negative, ``TypeError`` for a non-integer seed."""
+    if seed is None:
+        return None
+    if isinstance(seed, (bool, np.bool_)) or not isinstance(seed, numbers.Integral):
+        raise TypeError(f"seed must be a non-negative integer or None, got {seed!r} ({type(seed).__name__})")
+    if seed < 0:
+        raise ValueError(f"seed must be a non-negative integer or None, got {seed}")
+    return int(seed)
 
 
 def bump_any(bumps: np.ndarray) -> np.ndarray:

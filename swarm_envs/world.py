@@ -22,7 +22,7 @@ from scipy.spatial import cKDTree
 from swarm_envs.geometry import wrap_angle
 from swarm_envs.platforms import Platform
 
-__all__ = ["Arena", "World", "spawn_positions", "wrap_angle", "N_BUMP_SECTORS"]
+__all__ = ["Arena", "World", "spawn_positions", "check_capacity", "lattice_lower_bound", "as_real_array", "wrap_angle", "N_BUMP_SECTORS"]
 
 N_BUMP_SECTORS = 8  # bump sensor: one flag per 45-degree sector of the body (sector 0 centred ahead)
 _ROBOT, _WALL = 1, 2
@@ -103,6 +103,35 @@ def _best_lattice(arena: Arena, radius: float, gap: float) -> np.ndarray:
     return max((_lattice_points(arena, radius, gap, s) for s in shifts), key=len)
 
 
+def lattice_lower_bound(region: Arena, radius: float, gap: float) -> int:
+    """A lower bound on how many discs any shifted hexagonal lattice (pitch 2 radius + gap) fits in
+    ``region``, in O(1): rows x points per row inside the largest inscribed square."""
+    pitch = 2 * radius + gap
+    inner = region.half - radius - 0.5 * gap  # centres stay within this distance of the middle
+    if region.shape == "circle":
+        inner /= np.sqrt(2.0)  # the inscribed square of the disc of centres
+    if inner <= 0:
+        return 0
+    # an arithmetic progression with step s has at least floor(L / s) points in any interval of length L
+    return int(np.floor(2 * inner / (pitch * np.sqrt(3) / 2))) * int(np.floor(2 * inner / pitch))
+
+
+def check_capacity(n: int, radius: float, region: Arena, gap: float | None = None) -> None:
+    """Raise ``ValueError`` when ``n`` discs of ``radius`` (m) plus ``gap`` (default 0.1 radius) cannot fit
+    in ``region`` as a hexagonal packing. O(1) when the region is roomy (:func:`lattice_lower_bound`);
+    otherwise the lattices are enumerated, which costs O(n) because the region is then small."""
+    gap = 0.1 * radius if gap is None else gap
+    if n <= lattice_lower_bound(region, radius, gap):
+        return
+    fit = len(_best_lattice(region, radius, gap))
+    if n > fit:
+        raise ValueError(
+            f"cannot place {n} robots of diameter {2 * radius:.3f} m in a {region.shape} region of size "
+            f"{region.size:.3f} m: at most {fit} fit (hexagonal packing with a {gap * 1e3:.1f} mm gap); "
+            "use fewer robots or a larger arena_size"
+        )
+
+
 def spawn_positions(
     rng: np.random.Generator,
     n: int,
@@ -114,20 +143,15 @@ def spawn_positions(
 ) -> np.ndarray:
     """Seeded non-overlapping disc positions (n, 2) in metres inside ``region`` (default: the arena).
 
-    Random sequential placement (batched candidates, KD-tree checks); for densities where that stalls,
-    a randomly shifted hexagonal lattice subset. Raises ``ValueError`` when ``n`` discs of ``radius``
-    (plus ``gap``) cannot fit at all.
+    Random sequential placement (batched candidates, KD-tree checks): cost O(n log n), independent of the
+    region's area. For densities where that stalls, a random subset of a randomly shifted hexagonal
+    lattice (enumerated only then, when the region is small). Raises ``ValueError`` when ``n`` discs of
+    ``radius`` (plus ``gap``) cannot fit at all (:func:`check_capacity`).
     """
     region = region or arena
     gap = 0.1 * radius if gap is None else gap
     min_dist = 2 * radius + gap
-    lattice = _best_lattice(region, radius, gap)
-    if n > len(lattice):
-        raise ValueError(
-            f"cannot place {n} robots of diameter {2 * radius:.3f} m in a {region.shape} region of size "
-            f"{region.size:.3f} m: at most {len(lattice)} fit (hexagonal packing with a {gap * 1e3:.1f} mm gap); "
-            "use fewer robots or a larger arena_size"
-        )
+    check_capacity(n, radius, region, gap)
     placed = np.empty((0, 2))
     for _ in range(max_tries):
         need = n - len(placed)
@@ -158,7 +182,19 @@ def spawn_positions(
         pts = _lattice_points(region, radius, gap, rng.uniform(0, 2 * radius + gap, 2))
         if len(pts) >= n:
             return pts[rng.choice(len(pts), n, replace=False)]
+    lattice = _best_lattice(region, radius, gap)
     return lattice[rng.choice(len(lattice), n, replace=False)]
+
+
+def as_real_array(values: object, name: str) -> np.ndarray:
+    """``values`` as a float array; raises ``ValueError`` for non-real (string, complex, object) input."""
+    try:
+        arr = np.asarray(values)
+    except (TypeError, ValueError) as err:
+        raise ValueError(f"{name} must be a real-valued array, got {values!r}") from err
+    if arr.dtype.kind not in "iuf":
+        raise ValueError(f"{name} must be a real-valued (int or float) array, got dtype {arr.dtype}")
+    return arr.astype(float)
 
 
 class World:
@@ -175,6 +211,18 @@ class World:
         self.n = int(n_robots)
         self.arena = arena
         self.substeps = int(substeps)
+        self._build_space()
+        self.positions = np.zeros((self.n, 2))
+        self.headings = np.zeros(self.n)
+        self.velocities = np.zeros((self.n, 2))
+        self.angular_velocities = np.zeros(self.n)
+        self.bumps = np.zeros((self.n, N_BUMP_SECTORS), dtype=bool)
+        self._contacts: list[tuple[int, float, float]] = []
+
+    def _build_space(self) -> None:
+        """A new pymunk space with every robot at the origin and the walls: no contact, arbiter or
+        solver cache from an earlier episode survives (a reused world behaves like a fresh one)."""
+        platform, arena = self.platform, self.arena
         self.space = pymunk.Space()
         self.space.gravity = (0.0, 0.0)
         self.space.collision_slop = 1e-4  # m: allowed interpenetration before the solver pushes apart
@@ -207,18 +255,13 @@ class World:
         self._index = {body: i for i, body in enumerate(self.bodies)}
         self.space.on_collision(_ROBOT, _ROBOT, post_solve=self._on_contact)
         self.space.on_collision(_ROBOT, _WALL, post_solve=self._on_contact)
-        self.positions = np.zeros((self.n, 2))
-        self.headings = np.zeros(self.n)
-        self.velocities = np.zeros((self.n, 2))
-        self.angular_velocities = np.zeros(self.n)
-        self.bumps = np.zeros((self.n, N_BUMP_SECTORS), dtype=bool)
-        self._contacts: list[tuple[int, float, float]] = []
 
     # -- state -----------------------------------------------------------------------------------
-    def place(self, positions: np.ndarray, headings: np.ndarray) -> None:
-        """Put robots exactly at ``positions`` (n, 2) m with ``headings`` (n,) rad, at rest."""
-        positions = np.asarray(positions, dtype=float)
-        headings = np.asarray(headings, dtype=float)
+    def check_placement(self, positions: np.ndarray, headings: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """``positions`` (n, 2) m and ``headings`` (n,) rad as float arrays; raises ``ValueError`` when they
+        have the wrong shape, are not finite, leave the arena or overlap. Changes nothing."""
+        positions = as_real_array(positions, "positions")
+        headings = as_real_array(headings, "headings")
         if positions.shape != (self.n, 2) or headings.shape != (self.n,):
             raise ValueError(
                 f"positions must have shape ({self.n}, 2) and headings ({self.n},); "
@@ -235,6 +278,14 @@ class World:
         overlap = cKDTree(positions).query_pairs(2 * self.platform.radius - 1e-9, output_type="ndarray")
         if len(overlap):
             raise ValueError(f"robots overlap: pairs {overlap[:5].tolist()} are closer than one diameter")
+        return positions, headings
+
+    def place(self, positions: np.ndarray, headings: np.ndarray) -> None:
+        """Put robots exactly at ``positions`` (n, 2) m with ``headings`` (n,) rad, at rest, in a new
+        physics space (nothing of the previous episode survives). Raises like :meth:`check_placement`."""
+        positions, headings = self.check_placement(positions, headings)
+        self._build_space()
+        self._contacts.clear()
         for body, control, p, h in zip(self.bodies, self.controls, positions, headings):
             body.position = control.position = (float(p[0]), float(p[1]))
             body.angle = control.angle = float(h)
