@@ -86,8 +86,10 @@ class CentroidSeekingEnv(SwarmEnv):
             if np.all(d > 2.2 * radius):
                 seekers = cand
                 break
-        else:
-            raise ValueError("could not place the seekers away from the anchors; use a larger arena_size")
+        else:  # crowded: place the seekers around the anchors directly
+            seekers = spawn_positions(
+                rng, self.n_agents, radius, self.arena, gap=0.2 * radius, avoid=anchors, avoid_distance=2.2 * radius * (1 + 1e-9)
+            )
         positions = np.concatenate([anchors, seekers])
         return positions, rng.uniform(-np.pi, np.pi, self.n_world)
 

@@ -140,8 +140,11 @@ def spawn_positions(
     region: Arena | None = None,
     gap: float | None = None,
     max_tries: int = 200,
+    avoid: np.ndarray | None = None,
+    avoid_distance: float = 0.0,
 ) -> np.ndarray:
-    """Seeded non-overlapping disc positions (n, 2) in metres inside ``region`` (default: the arena).
+    """Seeded non-overlapping disc positions (n, 2) in metres inside ``region`` (default: the arena),
+    each at least ``avoid_distance`` (m) from every point of ``avoid`` (k, 2) m (e.g. robots already placed).
 
     Random sequential placement (batched candidates, KD-tree checks): cost O(n log n), independent of the
     region's area. For densities where that stalls, a random subset of a randomly shifted hexagonal
@@ -158,6 +161,8 @@ def spawn_positions(
         if need == 0:
             return placed
         cand = region.sample(rng, 4 * need + 8, radius + 0.5 * gap)
+        if avoid is not None and len(avoid):
+            cand = cand[_far_from(cand, avoid, avoid_distance)]
         if len(placed):
             d, _ = cKDTree(placed).query(cand, k=1)
             cand = cand[d >= min_dist]
@@ -180,10 +185,22 @@ def spawn_positions(
     # dense: random subset of a randomly shifted lattice that still fits
     for _ in range(50):
         pts = _lattice_points(region, radius, gap, rng.uniform(0, 2 * radius + gap, 2))
+        if avoid is not None and len(avoid):
+            pts = pts[_far_from(pts, avoid, avoid_distance)]
         if len(pts) >= n:
             return pts[rng.choice(len(pts), n, replace=False)]
     lattice = _best_lattice(region, radius, gap)
+    if avoid is not None and len(avoid):
+        lattice = lattice[_far_from(lattice, avoid, avoid_distance)]
+    if len(lattice) < n:
+        raise ValueError(f"could not place {n} robots of radius {radius:.3f} m away from the {len(avoid)} given points; use a larger arena_size")
     return lattice[rng.choice(len(lattice), n, replace=False)]
+
+
+def _far_from(points: np.ndarray, others: np.ndarray, distance: float) -> np.ndarray:
+    """(len(points),) bool: the point is at least ``distance`` from every one of ``others``."""
+    d, _ = cKDTree(others).query(points, k=1)
+    return d >= distance
 
 
 def as_real_array(values: object, name: str) -> np.ndarray:
