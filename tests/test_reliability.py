@@ -16,7 +16,7 @@ import pytest
 import swarm_envs
 from swarm_envs import aggregation_v0, centroid_seeking_v0, flocking_v0
 from swarm_envs.platforms import PLATFORMS
-from swarm_envs.world import Arena, _best_lattice, lattice_lower_bound, spawn_positions
+from swarm_envs.world import Arena, _best_lattice, spawn_positions
 from tests.conftest import assert_tree_equal
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -115,6 +115,8 @@ def test_headings_alone_keep_the_task_spawn_and_positions_alone_are_seeded():
 @pytest.mark.parametrize("shape", Arena.SHAPES)
 @pytest.mark.parametrize("size", [0.05, 0.1, 0.2, 0.33, 0.75, 1.5, 3.0])
 def test_capacity_lower_bound_is_a_lower_bound(shape, size):
+    from swarm_envs.world import lattice_lower_bound
+
     arena = Arena(shape, size)
     for radius, gap in ((0.035, 0.0035), (0.022, 0.0), (0.055, 0.011)):
         assert lattice_lower_bound(arena, radius, gap) <= len(_best_lattice(arena, radius, gap))
