@@ -3,7 +3,8 @@
 A config has five sections besides ``task``, ``seed`` and ``output_dir`` (see ``configs/*.yaml``):
 
 - ``env``: keyword arguments of the task's env (any key of ``swarm_envs.env.COMMON_DEFAULTS`` or the task's
-  ``TASK_DEFAULTS``; values are validated by the env itself);
+  ``TASK_DEFAULTS``; values are checked by the env's own validator, ``swarm_envs.settings.validate_settings``,
+  for the env train.py would build, whatever its ``sensing``);
 - ``agent``: PPO hyper-parameters (stable-baselines3 names) and the scripted baseline;
 - ``train``: budget (``total_timesteps`` counts robot-steps: one per robot per env step), env copies,
   torch threads, checkpoints;
@@ -170,26 +171,35 @@ def validate(cfg: dict[str, Any]) -> dict[str, Any]:
         raise ConfigError(f"unknown env key(s) {['env.' + k for k in unknown]} for task {cfg['task']!r}; allowed: {sorted(allowed)}")
     if "flatten" in cfg["env"] or "render_mode" in cfg["env"]:
         raise ConfigError("env.flatten and env.render_mode are set by train.py; remove them from the config")
-    # let the env check its own values (cheap: building an env does not step it)
-    from swarm_envs.agents.evaluation import make_env
-
-    env_kwargs = dict(cfg["env"])
-    if isinstance(env_kwargs.get("code"), list):
-        env_kwargs["code"] = tuple(env_kwargs["code"])
-    try:
-        if env_kwargs.get("sensing", "full") == "full":
-            env_kwargs_check = {**env_kwargs, "sensing": "ideal"}  # the full stack is validated when training starts
-        else:
-            env_kwargs_check = env_kwargs
-        make_env(cfg["task"], **env_kwargs_check).close()
-    except (ValueError, TypeError) as err:
-        raise ConfigError(f"bad env settings: {err}") from err
+    _check_env_settings(cfg["task"], cfg["env"])
     if cfg["agent"]["batch_size"] > cfg["agent"]["n_steps"] * cfg["train"]["n_envs"] * _n_agents(cfg):
         raise ConfigError(
             "agent.batch_size must not exceed the rollout size n_steps * n_envs * n_robots "
             f"({cfg['agent']['n_steps']} * {cfg['train']['n_envs']} * {_n_agents(cfg)})"
         )
     return cfg
+
+
+def _check_env_settings(task: str, env: dict[str, Any]) -> None:
+    """Run the env's own validator (:func:`swarm_envs.settings.validate_settings`) on the settings train.py
+    would build the env with (YAML lists as tuples, ``flatten=True``), then build that env once (cheap: no
+    reset) for the checks that need its arena (robots and anchors fit). Raises :class:`ConfigError`."""
+    import importlib
+
+    from swarm_envs.agents.evaluation import TASKS
+    from swarm_envs.settings import SettingsError, validate_settings
+
+    kwargs = {**env, "flatten": True}
+    if isinstance(kwargs.get("code"), list):
+        kwargs["code"] = tuple(kwargs["code"])
+    env_cls = importlib.import_module(TASKS[task]).raw_env
+    try:
+        validate_settings(env_cls, kwargs)
+        env_cls(**kwargs).close()
+    except SettingsError as err:
+        raise ConfigError(f"bad env settings: {err} (config key 'env.{err.key}')") from None
+    except (ValueError, TypeError) as err:
+        raise ConfigError(f"bad env settings: {err}") from None
 
 
 def _n_agents(cfg: dict[str, Any]) -> int:

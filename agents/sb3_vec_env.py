@@ -21,7 +21,6 @@ Also :class:`SB3Policy`, which wraps a trained SB3 model as an :class:`agents.ba
 
 from __future__ import annotations
 
-import importlib
 import sys
 import time
 from collections.abc import Callable, Sequence
@@ -31,6 +30,7 @@ import numpy as np
 from stable_baselines3.common.vec_env import VecEnv
 
 from swarm_envs.agents.base import Policy, flatten_batch
+from swarm_envs.registry import env_class
 
 __all__ = ["SwarmVecEnv", "SB3Policy"]
 
@@ -38,11 +38,7 @@ __all__ = ["SwarmVecEnv", "SB3Policy"]
 def _env_class(env: str | type | Callable[..., Any]) -> type:
     """The task's env class from an env id, the class itself, or a task module's ``parallel_env``."""
     if isinstance(env, str):
-        from swarm_envs import ENV_IDS
-
-        if env not in ENV_IDS:
-            raise ValueError(f"unknown environment id {env!r}; registered: {list(ENV_IDS)}")
-        return importlib.import_module(ENV_IDS[env]).raw_env
+        return env_class(env)
     if isinstance(env, type):
         return env
     module = sys.modules.get(getattr(env, "__module__", ""), None)

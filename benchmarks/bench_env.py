@@ -28,11 +28,11 @@ def measure(task: str, n: int, platform: str, sensing: str, steps: int, seed: in
         t0 = time.perf_counter()
         world.step(act[:, 0] * env.platform.max_speed, act[:, 1] * env.platform.max_angular_speed, 0.1)
         t1 = time.perf_counter()
-        env._frame = sensing_stack.step(world.positions, world.headings, None)
+        env.core.frame = sensing_stack.step(world.positions, world.headings, None)
         t2 = time.perf_counter()
         env._observations()
         t3 = time.perf_counter()
-        env._rewards(first=False)
+        env.task.rewards(env.core.state(), np.zeros(1, dtype=bool))
         t4 = time.perf_counter()
         for key, dt in zip(timings, (t1 - t0, t2 - t1, t3 - t2, t4 - t3)):
             timings[key] += dt

@@ -43,7 +43,7 @@ def main(argv: list[str] | None = None) -> int:
             t0 = time.perf_counter()
             env.world.step(act[:, 0] * env.platform.max_speed, act[:, 1] * env.platform.max_angular_speed, 0.1)
             t1 = time.perf_counter()
-            env._frame = env.sensing.step(env.world.positions, env.world.headings, None)
+            env.core.frame = env.sensing.step(env.world.positions, env.world.headings, None)
             env._observations()
             t2 = time.perf_counter()
             links = compute_links(env.world.positions, env.world.headings, env.platform, occlusion=occlusion)

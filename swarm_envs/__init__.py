@@ -5,6 +5,9 @@ Importing the package registers the tasks in PettingZoo's registry::
     import pettingzoo, swarm_envs
     env = pettingzoo.make("parallel", "swarm_envs/Aggregation-v0", n_robots=10)
     env = swarm_envs.make("swarm_envs/Flocking-v0", platform="rone")   # same, parallel API
+
+``swarm_envs.make`` passes every keyword to the env unchanged (``max_cycles=-1`` raises), whereas
+``pettingzoo.make`` drops ``max_cycles=-1`` and uses the env's default.
 """
 
 from __future__ import annotations
@@ -15,6 +18,7 @@ from pettingzoo import ParallelEnv, register
 
 from swarm_envs import aggregation_v0, centroid_seeking_v0, flocking_v0
 from swarm_envs.platforms import PLATFORMS, Platform, get_platform
+from swarm_envs.registry import ENV_IDS, list_envs
 
 __version__ = "0.1.0"
 __all__ = [
@@ -30,30 +34,20 @@ __all__ = [
     "get_platform",
 ]
 
-#: Registered id -> task module.
-ENV_IDS = {
-    "swarm_envs/Aggregation-v0": "swarm_envs.aggregation_v0",
-    "swarm_envs/Flocking-v0": "swarm_envs.flocking_v0",
-    "swarm_envs/CentroidSeeking-v0": "swarm_envs.centroid_seeking_v0",
-}
-
 for _id, _module in ENV_IDS.items():
     register("parallel", _id, entry_point=f"{_module}:parallel_env")
     register("aec", _id, entry_point=f"{_module}:env")
-
-
-def list_envs() -> list[str]:
-    """The registered environment ids."""
-    return list(ENV_IDS)
 
 
 def make(env_id: str, **kwargs: Any) -> ParallelEnv:
     """Create a parallel environment by registered id, e.g. ``make("swarm_envs/Aggregation-v0", n_robots=20)``."""
     if env_id not in ENV_IDS:
         raise ValueError(f"unknown environment id {env_id!r}; registered: {list_envs()}")
-    import pettingzoo
+    import importlib
 
-    return pettingzoo.make("parallel", env_id, **kwargs)
+    # the registry's own entry point, called directly: pettingzoo.make treats max_cycles=-1 as "not
+    # given" (its spec default), which would silently turn an invalid -1 into 500-step episodes
+    return importlib.import_module(ENV_IDS[env_id]).parallel_env(**kwargs)
 
 
 def make_vec(env_id: str, num_envs: int, **kwargs: Any):

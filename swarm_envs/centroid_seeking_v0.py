@@ -4,7 +4,9 @@
 agents but still emit infrared and talk, so seekers can sense them. The agents are the ``n_robots``
 seekers (default 1). Reward = -distance of the seeker to the anchors' centroid / arena size.
 Metric ``mean_distance_second_half`` = mean seeker-centroid distance (m) over the second half of the
-episode so far (compare [L] 14.03 cm with d_step = 11 cm).
+episode so far, i.e. over steps ceil(t/2) .. t at step t (just the current distance at reset; never NaN),
+which at the last step is the mean over the episode's second half (compare [L] 14.03 cm with
+d_step = 11 cm).
 """
 
 from __future__ import annotations
@@ -21,6 +23,7 @@ from swarm_envs.factories import reports_unknown_kwargs
 from swarm_envs.platforms import Platform
 from swarm_envs.task import BatchState, Task
 from swarm_envs.world import spawn_positions
+from swarm_envs.settings import SettingsError
 
 __all__ = ["CentroidSeekingTask", "CentroidSeekingEnv", "raw_env", "parallel_env", "env"]
 
@@ -32,8 +35,8 @@ class CentroidSeekingTask(Task):
 
     def __init__(self, config: dict[str, Any], platform, n_copies: int = 1) -> None:
         super().__init__(config, platform, n_copies)
-        self._second_half_sum = np.zeros(self.n_copies)
-        self._second_half_steps = np.zeros(self.n_copies, dtype=np.int64)
+        # per copy, the cumulative sum of the mean seeker distance over steps 0 .. t (index t + 1)
+        self._distance_cumsum = np.zeros((self.n_copies, self.max_cycles + 2))
 
     def _n_static(self) -> int:
         n = self.config["n_anchors"]
@@ -45,6 +48,22 @@ class CentroidSeekingTask(Task):
         # room for an anchor polygon of radius ~0.3 IR ranges plus seekers around it
         return max(super().default_arena_size(), 0.9 * self.platform.ir_range)
 
+    def _anchor_min_angle(self) -> float:
+        """Smallest angle (rad) between neighbouring anchors on their circle: a chord of 2.1 radii."""
+        ratio = 1.05 * self.platform.radius / self.polygon_radius
+        return 2 * float(np.arcsin(ratio)) if ratio < 1 else np.inf
+
+    def _check_layout(self) -> None:
+        n_a, angle = self.n_static, self._anchor_min_angle()
+        if n_a * angle >= 2 * np.pi:
+            fit = int(np.ceil(2 * np.pi / angle)) - 1 if np.isfinite(angle) else 0
+            raise SettingsError(
+                "n_anchors",
+                f"n_anchors={n_a} anchors of diameter {2 * self.platform.radius:.3f} m do not fit on the anchor circle "
+                f"of radius {self.polygon_radius:.3f} m (0.3 x min(IR range, arena size)): at most {fit} fit; "
+                "use fewer anchors",
+            )
+
     @property
     def polygon_radius(self) -> float:
         """Radius (m) of the circle the anchors stand on: within IR range of each other."""
@@ -53,11 +72,20 @@ class CentroidSeekingTask(Task):
     def spawn(self, rng: np.random.Generator):
         n_a, radius = self.n_static, self.platform.radius
         # points on a circle are in convex position; keep corners apart by at least a diameter + margin
+        min_gap = max(2 * np.pi / n_a * 0.4, self._anchor_min_angle())
         for _ in range(1000):
             angles = np.sort(rng.uniform(-np.pi, np.pi, n_a))
             gaps = np.diff(np.concatenate([angles, angles[:1] + 2 * np.pi]))
-            if gaps.min() > 2 * np.pi / n_a * 0.4 and gaps.max() < np.pi * 0.95:
+            if gaps.min() > min_gap and gaps.max() < np.pi * 0.95:
                 break
+        else:  # many anchors: rejection rarely succeeds, so draw the gaps directly (min_gap + a random share)
+            for _ in range(1000):
+                gaps = min_gap + (2 * np.pi - n_a * min_gap) * rng.dirichlet(np.ones(n_a))
+                if gaps.max() < np.pi * 0.95:
+                    break
+            else:
+                raise ValueError(f"could not place {n_a} anchors in convex position; use fewer anchors")
+            angles = np.sort((rng.uniform(-np.pi, np.pi) + np.cumsum(gaps) + np.pi) % (2 * np.pi) - np.pi)
         anchors = self.polygon_radius * np.stack([np.cos(angles), np.sin(angles)], -1)
         seekers = np.empty((0, 2))
         for _ in range(200):
@@ -66,8 +94,10 @@ class CentroidSeekingTask(Task):
             if np.all(d > 2.2 * radius):
                 seekers = cand
                 break
-        else:
-            raise ValueError("could not place the seekers away from the anchors; use a larger arena_size")
+        else:  # crowded: place the seekers around the anchors directly
+            seekers = spawn_positions(
+                rng, self.n_agents, radius, self.arena, gap=0.2 * radius, avoid=anchors, avoid_distance=2.2 * radius * (1 + 1e-9)
+            )
         positions = np.concatenate([anchors, seekers])
         return positions, rng.uniform(-np.pi, np.pi, self.n_world)
 
@@ -79,16 +109,16 @@ class CentroidSeekingTask(Task):
         seekers = self.agents_of(state.positions)  # (B, A, 2)
         dist = np.linalg.norm(seekers - self.centroids(state.positions)[:, None, :], axis=2)  # (B, A)
         mean_dist = dist.mean(axis=1)
-        self._second_half_sum[first] = 0.0
-        self._second_half_steps[first] = 0
-        late = state.num_cycles >= self.max_cycles / 2
-        self._second_half_sum[late] += mean_dist[late]
-        self._second_half_steps[late] += 1
+        copies = np.arange(self.n_copies)
+        t = np.minimum(state.num_cycles, self.max_cycles)
+        self._distance_cumsum[first, 0] = 0.0
+        self._distance_cumsum[copies, t + 1] = self._distance_cumsum[copies, t] + mean_dist
+        # steps ceil(t/2) .. t: at the end of an episode, its second half (never NaN)
+        start = -(-t // 2)
+        second = (self._distance_cumsum[copies, t + 1] - self._distance_cumsum[copies, start]) / (t + 1 - start)
         rewards = -dist / self.arena.size
         if self.reward_mode == "global":
             rewards = np.repeat(rewards.mean(axis=1)[:, None], self.n_agents, axis=1)
-        with np.errstate(invalid="ignore", divide="ignore"):
-            second = np.where(self._second_half_steps > 0, self._second_half_sum / np.maximum(self._second_half_steps, 1), np.nan)
         metrics = {"mean_distance_to_centroid": mean_dist, "mean_distance_second_half": second}
         return rewards, {"distance_to_centroid": dist}, metrics
 

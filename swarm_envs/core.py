@@ -73,40 +73,35 @@ class SwarmCore:
         if seed is not None:
             self.generators[copy] = np.random.default_rng(seed)
 
-    def start(self, copies: Sequence[int], options: Sequence[dict | None] | None = None) -> None:
-        """Begin new episodes in ``copies``: spawn (or place from ``options``), fresh sensing state.
-
-        The copies' first observation comes from the next :meth:`step` (which does not move them).
-        ``options[k]`` may hold ``"positions"`` (n_world, 2) m and ``"headings"`` (n_world,) rad.
+    def start(self, copies: Sequence[int], poses: Sequence[tuple[np.ndarray | None, np.ndarray | None]] | None = None) -> None:
+        """Begin new episodes in ``copies``: fresh physics and sensing state, robots spawned by the task or
+        placed from ``poses[k] = (positions (n_world, 2) m or None, headings (n_world,) rad or None)``
+        (checked by :func:`swarm_envs.env.check_reset_options`). Given positions skip the task's spawner
+        (headings then come from the spawn stream unless given); given headings alone replace the spawned
+        ones. The copies' first observation comes from the next :meth:`step` (which does not move them).
         """
         copies = np.asarray(copies, dtype=np.int64).reshape(-1)
-        options = list(options) if options is not None else [None] * len(copies)
+        poses = list(poses) if poses is not None else [(None, None)] * len(copies)
         sensing_rngs = []
-        for b, opt in zip(copies, options):
+        for b, (given_positions, given_headings) in zip(copies, poses):
             # independent child streams: spawn, and sensing (which splits it into noise, channel and MAC)
             streams = np.random.SeedSequence(int(self.generators[b].integers(2**63))).spawn(2)
             spawn_rng, sensing_rng = (np.random.default_rng(s) for s in streams)
-            positions, headings = self._initial_pose(spawn_rng, opt or {})
-            self.worlds[b].place(positions, headings)
+            if given_positions is None:
+                positions, headings = self.task.spawn(spawn_rng)
+            else:
+                positions, headings = given_positions, None
+            if given_headings is not None:
+                headings = given_headings
+            elif headings is None:
+                headings = spawn_rng.uniform(-np.pi, np.pi, self.n_world)
+            self.worlds[b].place(positions, headings)  # a new physics space: nothing survives a reset
             sensing_rngs.append(sensing_rng)
         self.sensing.reset(copies, sensing_rngs)
         rows = np.flatnonzero(np.isin(self.copy_of_robot, copies))
         self.last_actions[rows] = 0.0
         self.num_cycles[copies] = 0
         self._starting[copies] = True
-
-    def _initial_pose(self, rng: np.random.Generator, options: dict[str, Any]) -> tuple[np.ndarray, np.ndarray]:
-        n = self.n_world
-        positions, headings = self.task.spawn(rng)
-        if "positions" in options:
-            positions = np.asarray(options["positions"], dtype=float)
-            if positions.shape != (n, 2):
-                raise ValueError(f"options['positions'] must have shape ({n}, 2) metres, got {positions.shape}")
-        if "headings" in options:
-            headings = np.asarray(options["headings"], dtype=float)
-            if headings.shape != (n,):
-                raise ValueError(f"options['headings'] must have shape ({n},) radians, got {headings.shape}")
-        return positions, headings
 
     # -- stepping ------------------------------------------------------------------------------------
     def step(self, actions: np.ndarray | None) -> None:

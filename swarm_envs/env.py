@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import functools
 import numbers
+from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
@@ -22,59 +23,16 @@ from pettingzoo import ParallelEnv
 
 from swarm_envs.core import DT, SwarmCore
 from swarm_envs.observation import ObservationLayout
-from swarm_envs.platforms import PLATFORMS, Platform, get_platform
+from swarm_envs.platforms import Platform, get_platform
 from swarm_envs.sensing.base import SensorFrame
+from swarm_envs.settings import COMMON_DEFAULTS, validate_settings
 from swarm_envs.task import Task
-from swarm_envs.world import Arena, World
+from swarm_envs.world import World, as_real_array
 
-__all__ = ["SwarmEnv", "DT", "COMMON_DEFAULTS", "INFO_GROUPS", "STATE_ROBOT_FIELDS", "info_group", "resolve_config", "make_layout"]
-
-#: Keyword arguments every task accepts, with their defaults (see README "Environments").
-COMMON_DEFAULTS: dict[str, Any] = {
-    "n_robots": 10,
-    "platform": "epuck",
-    "sensing": "full",
-    "max_cycles": 500,
-    "render_mode": None,
-    "arena": "square",
-    "arena_size": None,  # m; None = platform spacing * sqrt(number of robots)
-    "reward_mode": "global",
-    "flatten": False,
-    "n_neighbours": 8,
-    "n_messages": 8,
-    "message_bits": 0,
-    # SwarmCom messaging [T20]
-    "bitrate": 310,
-    "relative_threshold": None,  # m_tr (ADC counts); None = the platform's: 5 e-puck/r-one [T20], 8 droplet
-    "code": (15, 15),
-    "comm_mode": "broadcast",
-    # range & bearing [F14]
-    "rb_schedule": "contention",
-    "rb_max_age": 10,
-    "rb_noise": None,  # ADC counts; None = the platform model's documented default
-    "rb_near_model": False,  # Droplet: firmware low-power fit instead of the power ladder when saturated
-    # bearing-only sensing and scale-free coordinates [L]
-    "bearing_source": None,  # None = "sectors" on rone, "range_bearing" elsewhere
-    "exchange": "network",
-    "scale_free_method": "two_hop",
-    "scale_free_k": 1,
-    "physics_substeps": 8,
-}
-
-_CHOICES: dict[str, tuple] = {
-    "sensing": ("full", "ideal"),
-    "render_mode": (None, "rgb_array", "human"),
-    "arena": Arena.SHAPES,
-    "reward_mode": ("global", "local"),
-    "comm_mode": ("broadcast", "flooding"),
-    "rb_schedule": ("contention", "every_step"),
-    "bearing_source": (None, "sectors", "range_bearing"),
-    "exchange": ("network", "ideal"),
-    "scale_free_method": ("two_hop", "null_space"),
-    "bitrate": (310, 650, 1080, 1160, 1670, 1800),
-}
-_POSITIVE_INTS = ("n_robots", "max_cycles", "n_neighbours", "n_messages", "rb_max_age", "scale_free_k", "physics_substeps")
-_NON_NEGATIVE_INTS = ("message_bits",)
+__all__ = [
+    "SwarmEnv", "DT", "COMMON_DEFAULTS", "INFO_GROUPS", "STATE_ROBOT_FIELDS", "info_group", "resolve_config", "make_layout",
+    "check_seed", "check_reset_options",
+]
 
 #: The groups of ``infos[agent]``; every key is ``(group, name)``.
 INFO_GROUPS = ("ground_truth", "reward_terms", "metrics", "sensing")
@@ -82,48 +40,10 @@ INFO_GROUPS = ("ground_truth", "reward_terms", "metrics", "sensing")
 STATE_ROBOT_FIELDS = ("x", "y", "cos_heading", "sin_heading", "vx", "vy", "angular_velocity")
 
 
-def _validate(cfg: dict[str, Any]) -> None:
-    for key, allowed in _CHOICES.items():
-        if key in cfg and cfg[key] not in allowed:
-            raise ValueError(f"{key}={cfg[key]!r} is not allowed; allowed values: {list(allowed)}")
-    for key in _POSITIVE_INTS + _NON_NEGATIVE_INTS:
-        if key not in cfg:
-            continue
-        value = cfg[key]
-        low = 1 if key in _POSITIVE_INTS else 0
-        if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < low:
-            raise ValueError(f"{key} must be an integer >= {low}, got {value!r}")
-    if not isinstance(cfg["platform"], Platform) and cfg["platform"] not in PLATFORMS:
-        raise ValueError(f"unknown platform {cfg['platform']!r}; allowed values: {sorted(PLATFORMS)}")
-    size = cfg["arena_size"]
-    if size is not None and (isinstance(size, bool) or not isinstance(size, numbers.Real) or not np.isfinite(size) or size <= 0):
-        raise ValueError(f"arena_size must be a positive number of metres or None, got {size!r}")
-    if not isinstance(cfg["rb_near_model"], bool):
-        raise ValueError(f"rb_near_model must be True or False, got {cfg['rb_near_model']!r}")
-    if cfg["rb_near_model"] and get_platform(cfg["platform"]).name != "droplet":
-        raise ValueError("rb_near_model=True is the Droplet firmware's low-power fit; use platform='droplet'")
-    if not isinstance(cfg["flatten"], bool):
-        raise ValueError(f"flatten must be True or False, got {cfg['flatten']!r}")
-    threshold = cfg["relative_threshold"]
-    if threshold is not None and (isinstance(threshold, bool) or not isinstance(threshold, numbers.Real) or threshold <= 0):
-        raise ValueError(f"relative_threshold (m_tr, ADC counts) must be a positive number or None, got {threshold!r}")
-    noise = cfg["rb_noise"]
-    if noise is not None and (not isinstance(noise, numbers.Real) or noise < 0):
-        raise ValueError(f"rb_noise must be a non-negative number of ADC counts or None, got {noise!r}")
-    code = cfg["code"]
-    if not (isinstance(code, (tuple, list)) and len(code) == 2 and tuple(code)[0] == 15):
-        raise ValueError(f"code must be a BCH (n, k) pair with n = 15, e.g. (15, 15), (15, 11), (15, 1); got {code!r}")
-
-
-def resolve_config(task: type[Task], kwargs: dict[str, Any], owner: str = "env") -> dict[str, Any]:
-    """Defaults + ``kwargs`` for ``task``, checked: unknown names raise ``TypeError``, bad values ``ValueError``."""
-    defaults = {**COMMON_DEFAULTS, **task.TASK_DEFAULTS}
-    unknown = sorted(set(kwargs) - set(defaults))
-    if unknown:
-        raise TypeError(f"{owner} got unknown keyword argument(s) {unknown}; allowed: {sorted(defaults)}")
-    cfg = {**defaults, **kwargs}
-    _validate(cfg)
-    return cfg
+def resolve_config(env_cls: type, kwargs: dict[str, Any]) -> dict[str, Any]:
+    """Every setting of ``env_cls``'s task filled in and checked (:func:`swarm_envs.settings.validate_settings`):
+    unknown names raise ``TypeError``, bad values ``SettingsError`` (a ``ValueError``) naming the key."""
+    return validate_settings(env_cls, kwargs)
 
 
 def make_layout(cfg: dict[str, Any], platform: Platform) -> ObservationLayout:
@@ -136,6 +56,50 @@ def make_layout(cfg: dict[str, Any], platform: Platform) -> ObservationLayout:
         max_age=cfg["rb_max_age"],
         flatten=cfg["flatten"],
     )
+
+
+def check_seed(seed: Any) -> int | None:
+    """``seed`` as an int (or None); ``ValueError`` for a negative, ``TypeError`` for a non-integer seed."""
+    if seed is None:
+        return None
+    if isinstance(seed, (bool, np.bool_)) or not isinstance(seed, numbers.Integral):
+        raise TypeError(f"seed must be a non-negative integer or None, got {seed!r} ({type(seed).__name__})")
+    if seed < 0:
+        raise ValueError(f"seed must be a non-negative integer or None, got {seed}")
+    return int(seed)
+
+
+def check_reset_options(options: Any, world: World) -> tuple[np.ndarray | None, np.ndarray | None]:
+    """Validated (positions (n, 2) m, headings (n,) rad) from reset ``options`` (None where not given).
+
+    Raises ``TypeError``/``ValueError`` for anything wrong (not a dict, shapes, non-finite values, overlap,
+    outside the arena); changes nothing. Unknown keys only warn (PettingZoo's API test passes some).
+    """
+    if options is None:
+        return None, None
+    if not isinstance(options, Mapping):
+        raise TypeError(
+            f"reset options must be a dict (keys 'positions', 'headings') or None, got {type(options).__name__}: {options!r:.80}"
+        )
+    unknown = sorted((k for k in options if k not in ("positions", "headings")), key=str)
+    if unknown:
+        import gymnasium
+
+        gymnasium.logger.warn(f"ignoring unknown reset option(s) {unknown}; allowed: ['headings', 'positions']")
+    n = world.n
+    positions = headings = None
+    if "headings" in options:
+        headings = as_real_array(options["headings"], "options['headings']")
+        if headings.shape != (n,):
+            raise ValueError(f"options['headings'] must have shape ({n},) radians, got {headings.shape}")
+        if not np.all(np.isfinite(headings)):
+            raise ValueError("options['headings'] must be finite")
+    if "positions" in options:
+        positions = as_real_array(options["positions"], "options['positions']")
+        if positions.shape != (n, 2):
+            raise ValueError(f"options['positions'] must have shape ({n}, 2) metres, got {positions.shape}")
+        positions, _ = world.check_placement(positions, np.zeros(n) if headings is None else headings)
+    return positions, headings
 
 
 class SwarmEnv(ParallelEnv):
@@ -159,7 +123,8 @@ class SwarmEnv(ParallelEnv):
         cls.TASK_DEFAULTS = dict(cls.TASK.TASK_DEFAULTS)
 
     def __init__(self, **kwargs: Any) -> None:
-        cfg = resolve_config(self.TASK, kwargs, type(self).__name__)
+        # every setting is checked here, whatever the sensing mode (swarm_envs.settings)
+        cfg = resolve_config(type(self), kwargs)
         self.config = cfg
         self.platform: Platform = get_platform(cfg["platform"])
         self.render_mode = cfg["render_mode"]
@@ -245,14 +210,19 @@ class SwarmEnv(ParallelEnv):
 
     # -- reset / step ------------------------------------------------------------------------------------
     def reset(self, seed: int | None = None, options: dict | None = None):
-        self.core.seed(0, seed)
-        options = dict(options or {})
-        unknown = sorted(set(options) - {"positions", "headings"})
-        if unknown:  # a warning, not an error: PettingZoo's API test passes arbitrary options
-            import gymnasium
+        """Start an episode. ``seed`` (int >= 0) reseeds the env's generator; ``None`` continues its stream.
 
-            gymnasium.logger.warn(f"ignoring unknown reset option(s) {unknown}; allowed: ['headings', 'positions']")
-        self.core.start([0], [options])
+        ``options`` (dict or None): ``"positions"`` (n, 2) m places the robots there and the task's
+        spawner does not run; ``"headings"`` (n,) rad sets the headings. Positions alone: headings drawn
+        uniformly from the spawn stream. Headings alone: the task spawns the positions as usual and its
+        headings are replaced. Anything wrong (seed, options, placement) raises ``TypeError`` or
+        ``ValueError`` before the env changes. Every reset builds a new physics space and new sensing
+        state, so ``reset(seed=s)`` behaves the same on a fresh env and on a reused one.
+        """
+        seed = check_seed(seed)
+        pose = check_reset_options(options, self.world)
+        self.core.seed(0, seed)
+        self.core.start([0], [pose])
         self.core.step(None)
         self.agents = list(self.possible_agents)
         self.num_cycles = 0
@@ -275,9 +245,15 @@ class SwarmEnv(ParallelEnv):
         out = np.zeros((self.n_world, size))
         for agent, action in actions.items():
             try:
-                arr = np.asarray(action, dtype=np.float64)
+                arr = np.asarray(action)
             except (TypeError, ValueError):
-                raise TypeError(f"action for {agent} must be a numeric array of shape ({size},), got {action!r}") from None
+                arr = np.asarray(None)
+            if arr.dtype.kind not in "iuf":  # not bool, complex, strings (even of digits) or objects
+                raise TypeError(
+                    f"action for {agent} must be a real-valued numeric array of shape ({size},) "
+                    f"(int or float dtype), got {action!r:.80} of dtype {arr.dtype}"
+                )
+            arr = arr.astype(np.float64)
             if arr.shape != (size,):
                 raise ValueError(
                     f"action for {agent} has shape {arr.shape}; expected ({size},) = (linear, angular"

@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 
 from swarm_envs.platforms import Platform
-from swarm_envs.world import N_BUMP_SECTORS, Arena, spawn_positions
+from swarm_envs.world import N_BUMP_SECTORS, Arena, check_capacity, spawn_positions
 
 __all__ = ["BatchState", "Task", "SPACING"]
 
@@ -65,11 +65,18 @@ class Task:
         size = config["arena_size"] if config["arena_size"] is not None else self.default_arena_size()
         self.arena = Arena(config["arena"], float(size))
         self.agent_robots = np.arange(self.n_static, self.n_world)
+        # robots that cannot fit even touching fail here; the random spawner also keeps a gap of 0.1
+        # radius, so an arena within ~10 % of a full packing can still fail at reset (without positions)
+        check_capacity(self.n_world, platform.radius, self.arena, gap=0.0)
+        self._check_layout()
 
     # -- hooks -----------------------------------------------------------------------------------
     def _n_static(self) -> int:
         """Number of non-agent (static) robots; they sense and emit but are never commanded."""
         return 0
+
+    def _check_layout(self) -> None:
+        """Raise ``ValueError`` when the task's initial layout cannot fit (e.g. too many anchors)."""
 
     def default_arena_size(self) -> float:
         """Arena size (m) when ``arena_size=None``: the platform's spacing times sqrt(robots)."""

@@ -21,7 +21,6 @@ truncation, while the other copies step on. Seeding: ``reset(seed=s)`` seeds cop
 
 from __future__ import annotations
 
-import importlib
 from collections.abc import Sequence
 from typing import Any
 
@@ -30,8 +29,9 @@ from gymnasium import spaces
 from gymnasium.vector import AutoresetMode, VectorEnv
 
 from swarm_envs.core import SwarmCore
-from swarm_envs.env import make_layout, resolve_config
+from swarm_envs.env import check_reset_options, check_seed, make_layout, resolve_config
 from swarm_envs.platforms import get_platform
+from swarm_envs.registry import env_class
 
 __all__ = ["SwarmVectorEnv", "make_vec"]
 
@@ -58,7 +58,7 @@ class SwarmVectorEnv(VectorEnv):
             raise ValueError(f"num_envs must be an integer >= 1, got {num_envs!r}")
         if kwargs.get("render_mode") is not None:
             raise ValueError("make_vec does not render; use the single env (swarm_envs.make) with render_mode")
-        cfg = resolve_config(env_cls.TASK, kwargs, "make_vec")
+        cfg = resolve_config(env_cls, kwargs)
         self.config = cfg
         self.platform = get_platform(cfg["platform"])
         self.task = env_cls.TASK(cfg, self.platform, n_copies=int(num_envs))
@@ -89,11 +89,10 @@ class SwarmVectorEnv(VectorEnv):
     def reset(self, *, seed: int | Sequence[int | None] | None = None, options: dict[str, Any] | None = None):
         """Reset every copy; returns (observations, infos). ``options`` as for the single env, applied to all."""
         seeds = self._seeds(seed)
-        if options is not None and not isinstance(options, dict):
-            raise TypeError(f"options must be a dict or None, got {type(options).__name__}")
+        pose = check_reset_options(options, self.core.worlds[0])
         for b, s in enumerate(seeds):
             self.core.seed(b, s)
-        self.core.start(np.arange(self.num_envs), [options] * self.num_envs)
+        self.core.start(np.arange(self.num_envs), [pose] * self.num_envs)
         self.core.step(None)
         self._needs_reset[:] = False
         self._started = True
@@ -128,23 +127,18 @@ class SwarmVectorEnv(VectorEnv):
         if seed is None:
             return [None] * B
         if isinstance(seed, (int, np.integer)) and not isinstance(seed, bool):
-            if seed < 0:
-                raise ValueError(f"seed must be a non-negative integer, got {seed}")
-            return [int(seed) + b for b in range(B)]
+            return [check_seed(seed) + b for b in range(B)]
         if isinstance(seed, Sequence) and not isinstance(seed, (str, bytes)):
             seeds = list(seed)
             if len(seeds) != B:
                 raise ValueError(f"seed list must have one entry per copy ({B}), got {len(seeds)}")
-            for s in seeds:
-                if s is not None and (isinstance(s, bool) or not isinstance(s, (int, np.integer)) or s < 0):
-                    raise ValueError(f"seeds must be non-negative integers or None, got {s!r}")
-            return [None if s is None else int(s) for s in seeds]
+            return [check_seed(s) for s in seeds]
         raise TypeError(f"seed must be an int, a list of ints (one per copy) or None, got {type(seed).__name__}")
 
     def _check_actions(self, actions: Any) -> np.ndarray:
         shape = (self.num_envs, self.n_agents, self.layout.action_size)
         arr = np.asarray(actions)
-        if arr.dtype.kind not in "biuf":
+        if arr.dtype.kind not in "iuf":  # not bool, complex, strings or objects
             raise TypeError(f"actions must be a real numeric array of shape {shape}, got dtype {arr.dtype}")
         if arr.shape != shape:
             raise ValueError(f"actions must have shape (num_envs, n_agents, action_size) = {shape}, got {arr.shape}")
@@ -187,9 +181,4 @@ def make_vec(env_id: str, num_envs: int, **kwargs: Any) -> SwarmVectorEnv:
         obs, infos = vec.reset(seed=0)                 # copy b seeded with 0 + b
         obs, rew, term, trunc, infos = vec.step(np.zeros((64, 10, 2)))
     """
-    from swarm_envs import ENV_IDS
-
-    if env_id not in ENV_IDS:
-        raise ValueError(f"unknown environment id {env_id!r}; registered: {list(ENV_IDS)}")
-    module = importlib.import_module(ENV_IDS[env_id])
-    return SwarmVectorEnv(module.raw_env, num_envs, **kwargs)
+    return SwarmVectorEnv(env_class(env_id), num_envs, **kwargs)

@@ -27,7 +27,7 @@ from scipy.spatial import cKDTree
 from swarm_envs.geometry import wrap_angle
 from swarm_envs.platforms import Platform
 
-__all__ = ["Arena", "World", "spawn_positions", "wrap_angle", "N_BUMP_SECTORS"]
+__all__ = ["Arena", "World", "spawn_positions", "check_capacity", "lattice_lower_bound", "as_real_array", "wrap_angle", "N_BUMP_SECTORS"]
 
 N_BUMP_SECTORS = 8  # bump sensor: one flag per 45-degree sector of the body (sector 0 centred ahead)
 _ROBOT, _WALL = 1, 2
@@ -108,6 +108,35 @@ def _best_lattice(arena: Arena, radius: float, gap: float) -> np.ndarray:
     return max((_lattice_points(arena, radius, gap, s) for s in shifts), key=len)
 
 
+def lattice_lower_bound(region: Arena, radius: float, gap: float) -> int:
+    """A lower bound on how many discs any shifted hexagonal lattice (pitch 2 radius + gap) fits in
+    ``region``, in O(1): rows x points per row inside the largest inscribed square."""
+    pitch = 2 * radius + gap
+    inner = region.half - radius - 0.5 * gap  # centres stay within this distance of the middle
+    if region.shape == "circle":
+        inner /= np.sqrt(2.0)  # the inscribed square of the disc of centres
+    if inner <= 0:
+        return 0
+    # an arithmetic progression with step s has at least floor(L / s) points in any interval of length L
+    return int(np.floor(2 * inner / (pitch * np.sqrt(3) / 2))) * int(np.floor(2 * inner / pitch))
+
+
+def check_capacity(n: int, radius: float, region: Arena, gap: float | None = None) -> None:
+    """Raise ``ValueError`` when ``n`` discs of ``radius`` (m) plus ``gap`` (default 0.1 radius) cannot fit
+    in ``region`` as a hexagonal packing. O(1) when the region is roomy (:func:`lattice_lower_bound`);
+    otherwise the lattices are enumerated, which costs O(n) because the region is then small."""
+    gap = 0.1 * radius if gap is None else gap
+    if n <= lattice_lower_bound(region, radius, gap):
+        return
+    fit = len(_best_lattice(region, radius, gap))
+    if n > fit:
+        raise ValueError(
+            f"cannot place {n} robots of diameter {2 * radius:.3f} m in a {region.shape} region of size "
+            f"{region.size:.3f} m: at most {fit} fit (hexagonal packing with a {gap * 1e3:.1f} mm gap); "
+            "use fewer robots or a larger arena_size"
+        )
+
+
 def spawn_positions(
     rng: np.random.Generator,
     n: int,
@@ -116,29 +145,29 @@ def spawn_positions(
     region: Arena | None = None,
     gap: float | None = None,
     max_tries: int = 200,
+    avoid: np.ndarray | None = None,
+    avoid_distance: float = 0.0,
 ) -> np.ndarray:
-    """Seeded non-overlapping disc positions (n, 2) in metres inside ``region`` (default: the arena).
+    """Seeded non-overlapping disc positions (n, 2) in metres inside ``region`` (default: the arena),
+    each at least ``avoid_distance`` (m) from every point of ``avoid`` (k, 2) m (e.g. robots already placed).
 
-    Random sequential placement (batched candidates, KD-tree checks); for densities where that stalls,
-    a randomly shifted hexagonal lattice subset. Raises ``ValueError`` when ``n`` discs of ``radius``
-    (plus ``gap``) cannot fit at all.
+    Random sequential placement (batched candidates, KD-tree checks): cost O(n log n), independent of the
+    region's area. For densities where that stalls, a random subset of a randomly shifted hexagonal
+    lattice (enumerated only then, when the region is small). Raises ``ValueError`` when ``n`` discs of
+    ``radius`` (plus ``gap``) cannot fit at all (:func:`check_capacity`).
     """
     region = region or arena
     gap = 0.1 * radius if gap is None else gap
     min_dist = 2 * radius + gap
-    lattice = _best_lattice(region, radius, gap)
-    if n > len(lattice):
-        raise ValueError(
-            f"cannot place {n} robots of diameter {2 * radius:.3f} m in a {region.shape} region of size "
-            f"{region.size:.3f} m: at most {len(lattice)} fit (hexagonal packing with a {gap * 1e3:.1f} mm gap); "
-            "use fewer robots or a larger arena_size"
-        )
+    check_capacity(n, radius, region, gap)
     placed = np.empty((0, 2))
     for _ in range(max_tries):
         need = n - len(placed)
         if need == 0:
             return placed
         cand = region.sample(rng, 4 * need + 8, radius + 0.5 * gap)
+        if avoid is not None and len(avoid):
+            cand = cand[_far_from(cand, avoid, avoid_distance)]
         if len(placed):
             d, _ = cKDTree(placed).query(cand, k=1)
             cand = cand[d >= min_dist]
@@ -161,9 +190,33 @@ def spawn_positions(
     # dense: random subset of a randomly shifted lattice that still fits
     for _ in range(50):
         pts = _lattice_points(region, radius, gap, rng.uniform(0, 2 * radius + gap, 2))
+        if avoid is not None and len(avoid):
+            pts = pts[_far_from(pts, avoid, avoid_distance)]
         if len(pts) >= n:
             return pts[rng.choice(len(pts), n, replace=False)]
+    lattice = _best_lattice(region, radius, gap)
+    if avoid is not None and len(avoid):
+        lattice = lattice[_far_from(lattice, avoid, avoid_distance)]
+    if len(lattice) < n:
+        raise ValueError(f"could not place {n} robots of radius {radius:.3f} m away from the {len(avoid)} given points; use a larger arena_size")
     return lattice[rng.choice(len(lattice), n, replace=False)]
+
+
+def _far_from(points: np.ndarray, others: np.ndarray, distance: float) -> np.ndarray:
+    """(len(points),) bool: the point is at least ``distance`` from every one of ``others``."""
+    d, _ = cKDTree(others).query(points, k=1)
+    return d >= distance
+
+
+def as_real_array(values: object, name: str) -> np.ndarray:
+    """``values`` as a float array; raises ``ValueError`` for non-real (string, complex, object) input."""
+    try:
+        arr = np.asarray(values)
+    except (TypeError, ValueError) as err:
+        raise ValueError(f"{name} must be a real-valued array, got {values!r}") from err
+    if arr.dtype.kind not in "iuf":
+        raise ValueError(f"{name} must be a real-valued (int or float) array, got dtype {arr.dtype}")
+    return arr.astype(float)
 
 
 class World:
@@ -180,6 +233,18 @@ class World:
         self.n = int(n_robots)
         self.arena = arena
         self.substeps = int(substeps)
+        self._build_space()
+        self.positions = np.zeros((self.n, 2))
+        self.headings = np.zeros(self.n)
+        self.velocities = np.zeros((self.n, 2))
+        self.angular_velocities = np.zeros(self.n)
+        self.bumps = np.zeros((self.n, N_BUMP_SECTORS), dtype=bool)
+        self._contacts: list[tuple[int, float, float]] = []
+
+    def _build_space(self) -> None:
+        """A new pymunk space with every robot at the origin and the walls: no contact, arbiter or
+        solver cache from an earlier episode survives (a reused world behaves like a fresh one)."""
+        platform, arena = self.platform, self.arena
         self.space = pymunk.Space()
         self.space.gravity = (0.0, 0.0)
         self.space.collision_slop = 1e-4  # m: allowed interpenetration before the solver pushes apart
@@ -212,18 +277,13 @@ class World:
         self._index = {body: i for i, body in enumerate(self.bodies)}
         self.space.on_collision(_ROBOT, _ROBOT, post_solve=self._on_contact)
         self.space.on_collision(_ROBOT, _WALL, post_solve=self._on_contact)
-        self.positions = np.zeros((self.n, 2))
-        self.headings = np.zeros(self.n)
-        self.velocities = np.zeros((self.n, 2))
-        self.angular_velocities = np.zeros(self.n)
-        self.bumps = np.zeros((self.n, N_BUMP_SECTORS), dtype=bool)
-        self._contacts: list[tuple[int, float, float]] = []
 
     # -- state -----------------------------------------------------------------------------------
-    def place(self, positions: np.ndarray, headings: np.ndarray) -> None:
-        """Put robots exactly at ``positions`` (n, 2) m with ``headings`` (n,) rad, at rest."""
-        positions = np.asarray(positions, dtype=float)
-        headings = np.asarray(headings, dtype=float)
+    def check_placement(self, positions: np.ndarray, headings: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """``positions`` (n, 2) m and ``headings`` (n,) rad as float arrays; raises ``ValueError`` when they
+        have the wrong shape, are not finite, leave the arena or overlap. Changes nothing."""
+        positions = as_real_array(positions, "positions")
+        headings = as_real_array(headings, "headings")
         if positions.shape != (self.n, 2) or headings.shape != (self.n,):
             raise ValueError(
                 f"positions must have shape ({self.n}, 2) and headings ({self.n},); "
@@ -240,6 +300,14 @@ class World:
         overlap = cKDTree(positions).query_pairs(2 * self.platform.radius - 1e-9, output_type="ndarray")
         if len(overlap):
             raise ValueError(f"robots overlap: pairs {overlap[:5].tolist()} are closer than one diameter")
+        return positions, headings
+
+    def place(self, positions: np.ndarray, headings: np.ndarray) -> None:
+        """Put robots exactly at ``positions`` (n, 2) m with ``headings`` (n,) rad, at rest, in a new
+        physics space (nothing of the previous episode survives). Raises like :meth:`check_placement`."""
+        positions, headings = self.check_placement(positions, headings)
+        self._build_space()
+        self._contacts.clear()
         for body, control, p, h in zip(self.bodies, self.controls, positions, headings):
             body.position = control.position = (float(p[0]), float(p[1]))
             body.angle = control.angle = float(h)

@@ -16,7 +16,7 @@ import math
 import numpy as np
 
 try:  # numba is optional: an accelerator, not a requirement
-    from numba import njit
+    from swarm_envs._numba import njit  # numba.njit whose cache recovers from corrupted files
 
     HAVE_NUMBA = True
 except ImportError:  # pragma: no cover - exercised only without numba
