@@ -44,7 +44,7 @@ import numpy as np
 
 from swarm_envs.comm.bch import BCHCode, code as bch_code
 from swarm_envs.comm.channel import ADCModel, adc_model_for
-from swarm_envs.comm.kernels import COUNTERS, DELIVERY_FIELDS, HAVE_NUMBA, PER_ROBOT, StepDraws, draw_step, slot_loop
+from swarm_envs.comm.kernels import COUNTERS, DELIVERY_FIELDS, HAVE_NUMBA, PER_ROBOT, StepDraws, draw_step, link_tables, slot_loop
 from swarm_envs.comm.protocol import (
     CSMA,
     IDLE,
@@ -363,21 +363,27 @@ class Network:
         if links is None or len(links.rx) == 0:
             rx = np.zeros(0, dtype=np.int64)
             tx = np.zeros(0, dtype=np.int64)
-            G = np.zeros((0, nd))
+            gains = np.zeros((0, nd, 1))
         else:
             rx = np.asarray(links.rx, dtype=np.int64)
             tx = np.asarray(links.tx, dtype=np.int64)
-            G = a.intensity_scale * np.asarray(links.gains, dtype=float).sum(axis=-1)  # (P, nd) all emitters on
-        order = np.argsort(tx, kind="stable")
-        rx, tx, G = rx[order], tx[order], G[order]
-        tx_ptr = np.searchsorted(tx, np.arange(n + 1))
-        flat = (rx[:, None] * nd + np.arange(nd)[None, :]).ravel()
-        strength = G.max(axis=1) if G.size else np.zeros(0)
-        significant = strength * (self.ambient[rx] - a.m_min) > self.m_tr
-        sig_tx = tx[significant]
-        sig_rx = rx[significant]
-        sig_str = strength[significant]
-        sig_ptr = np.searchsorted(sig_tx, np.arange(n + 1))
+            gains = np.asarray(links.gains, dtype=np.float64)
+        if self.backend == "numba":
+            tx_ptr, rx, G, sig_ptr, sig_rx = link_tables(n, rx, tx, gains, float(a.intensity_scale), self.ambient, float(a.m_min), self.m_tr)
+        else:
+            # all emitters on, summed in emitter order (as the kernel); links grouped by transmitter
+            acc = gains[..., 0].copy() if gains.shape[-1] else np.zeros(gains.shape[:2])
+            for e in range(1, gains.shape[-1]):
+                acc += gains[..., e]
+            G = a.intensity_scale * acc  # (P, nd)
+            order = np.argsort(tx, kind="stable")
+            rx, tx, G = rx[order], tx[order], G[order]
+            tx_ptr = np.searchsorted(tx, np.arange(n + 1))
+            flat = (rx[:, None] * nd + np.arange(nd)[None, :]).ravel()
+            strength = G.max(axis=1) if G.size else np.zeros(0)
+            significant = strength * (self.ambient[rx] - a.m_min) > self.m_tr
+            sig_rx = rx[significant]
+            sig_ptr = np.searchsorted(tx[significant], np.arange(n + 1))
 
         total = self.carry + self.bitrate * self.dt
         S = int(np.floor(total + 1e-9))
@@ -412,7 +418,7 @@ class Network:
         state = det.state.view(np.int8)
         D = slot_loop(
             S, self.slot, self.n_det, float(a.m_min), int(a.m_sup), self.m_tr, det.alpha, fmt.first_check_slots,
-            tx_ptr, rx, np.ascontiguousarray(G, dtype=np.float64), sig_ptr, sig_rx, self.ambient,
+            tx_ptr, rx, G, sig_ptr, sig_rx, self.ambient,
             draws.noise, draws.intensity_noise, draws.backoff,
             self.q_bits, self.q_slots, self.q_head, self.q_count, self.cur_bits, self.cur_slots, self.cur_pos, self.cur_id,
             self.sending, fc, self.csma.backoff,
