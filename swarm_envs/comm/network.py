@@ -10,10 +10,17 @@ step boundaries). In every slot, vectorised over all robots:
    line of sight, ``y = min(1, sum gains)`` [T20 Eqs. (10),(11)], accumulated with ``np.bincount`` over
    the links of the emitting robots (links sorted by transmitter once per step);
 4. the 12-bit ADC turns y into counts with Gaussian noise [T20 Eqs. (20)-(22)]
-   (:func:`swarm_envs.comm.channel.adc`, same formula inlined here with noise drawn once per step);
+   (:func:`swarm_envs.comm.channel.adc`, same formula inlined here);
 5. the detectors (:class:`~swarm_envs.comm.protocol.DetectorBank`) take ``min`` over their detectors,
    detect start symbols, apply the dynamic threshold and store bits; at check points the header is
    decoded (BCH) and the frame is aborted, continued or delivered.
+
+Backends: ``backend="numba"`` (default when numba imports) runs all slots of a step in one compiled call
+(:func:`swarm_envs.comm.kernels.slot_loop`); ``backend="numpy"`` runs the vectorised loop below, the
+tested reference. Every random number of a step (ADC and intensity noise, CSMA access delays and backoffs)
+is drawn before the slot loop by :func:`swarm_envs.comm.kernels.draw_step` in arrays indexed by robot, so
+both backends consume the same numbers and the stream does not depend on the robots' activity. Deliveries
+are returned in a canonical order (by completion slot, then receiver).
 
 Bit errors, collisions (superposed frames), losses (aborted / undecodable frames) and hidden terminals
 thus all arise from the channel model; nothing is drawn from a fitted error rate.
@@ -132,7 +139,8 @@ class Network:
     Args:
         platform: robot platform (its IR model gives the gains, :func:`adc_model_for` the ADC).
         n_robots: swarm size N.
-        rng: random generator (ADC noise, CSMA backoff, start-up ambient samples).
+        rng: random generator (start-up ambient samples at reset, then :func:`~swarm_envs.comm.kernels.draw_step`
+            once per step).
         bitrate: bits per second (e-puck: 310 default, 650, 1080, 1160, 1670, 1800 [T20 Sec. 5]).
         relative_threshold: m_tr (counts) [T20 Eq. (33)], default 5.
         code: BCH code (n, k): (15, 15) default, (15, 11), (15, 7), (15, 5), (15, 1).
