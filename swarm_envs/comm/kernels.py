@@ -319,7 +319,7 @@ def slot_loop(
                     backoff[r] = 1 + pool[r, s]
                 else:  # start sending the head of the queue
                     h = q_head[r]
-                    for i in range(Fq):
+                    for i in range(min(q_slots[r, h], Fq)):  # bits beyond the frame are never read
                         cur_bits[r, i] = q_bits[r, h, i]
                     cur_slots[r] = q_slots[r, h]
                     cur_pos[r] = 0
