@@ -39,7 +39,7 @@ try:  # numba is optional: an accelerator, not a requirement
 except ImportError:  # pragma: no cover - exercised only without numba
     HAVE_NUMBA = False
 
-__all__ = ["HAVE_NUMBA", "COUNTERS", "PER_ROBOT", "DELIVERY_FIELDS", "StepDraws", "draw_step", "slot_loop", "decode_words"]
+__all__ = ["HAVE_NUMBA", "COUNTERS", "PER_ROBOT", "DELIVERY_FIELDS", "StepDraws", "draw_step", "link_tables", "slot_loop", "decode_words"]
 
 COUNTERS = (
     "slots",
@@ -127,6 +127,55 @@ def _identity(f):  # pragma: no cover - used only without numba
 
 
 _jit = njit(cache=True) if HAVE_NUMBA else _identity
+
+
+@_jit
+def link_tables(n, rx, tx, gains, scale, ambient, m_min, m_tr):
+    """Links grouped by transmitter (a stable counting sort, as ``argsort(tx, kind="stable")``), with the
+    all-emitters-on gain per detector ``G = scale * sum_e gains[..., e]`` (summed in emitter order) and
+    the significant links (``max_d G * (ambient[rx] - m_min) > m_tr``: at least m_tr counts of light).
+
+    Returns (tx_ptr (n+1,), rx (P,), G (P, n_det), sig_ptr (n+1,), sig_rx (Ps,)); the links of
+    transmitter t are ``tx_ptr[t]:tx_ptr[t+1]`` (same for ``sig_ptr``). ``Network`` does the same in
+    numpy for the reference backend."""
+    P, nd, ne = gains.shape
+    tx_ptr = np.zeros(n + 1, dtype=np.int64)
+    for p in range(P):
+        tx_ptr[tx[p] + 1] += 1
+    for t in range(n):
+        tx_ptr[t + 1] += tx_ptr[t]
+    nxt = tx_ptr[:n].copy()
+    lrx = np.empty(P, dtype=np.int64)
+    G = np.empty((P, nd))
+    sig = np.zeros(P, dtype=np.bool_)
+    sig_ptr = np.zeros(n + 1, dtype=np.int64)
+    for p in range(P):
+        t = tx[p]
+        q = nxt[t]
+        nxt[t] += 1
+        r = rx[p]
+        lrx[q] = r
+        st = -np.inf
+        for d in range(nd):
+            acc = 0.0
+            for e in range(ne):
+                acc += gains[p, d, e]
+            g = scale * acc
+            G[q, d] = g
+            if g > st:
+                st = g
+        if P > 0 and st * (ambient[r] - m_min) > m_tr:
+            sig[q] = True
+            sig_ptr[t + 1] += 1
+    for t in range(n):
+        sig_ptr[t + 1] += sig_ptr[t]
+    sig_rx = np.empty(sig_ptr[n], dtype=np.int64)
+    k = 0
+    for q in range(P):
+        if sig[q]:
+            sig_rx[k] = lrx[q]
+            k += 1
+    return tx_ptr, lrx, G, sig_ptr, sig_rx
 
 
 @_jit
@@ -271,7 +320,7 @@ def slot_loop(
                     backoff[r] = 1 + pool[r, s]
                 else:  # start sending the head of the queue
                     h = q_head[r]
-                    for i in range(Fq):
+                    for i in range(min(q_slots[r, h], Fq)):  # bits beyond the frame are never read
                         cur_bits[r, i] = q_bits[r, h, i]
                     cur_slots[r] = q_slots[r, h]
                     cur_pos[r] = 0

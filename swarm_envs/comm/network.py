@@ -10,10 +10,17 @@ step boundaries). In every slot, vectorised over all robots:
    line of sight, ``y = min(1, sum gains)`` [T20 Eqs. (10),(11)], accumulated with ``np.bincount`` over
    the links of the emitting robots (links sorted by transmitter once per step);
 4. the 12-bit ADC turns y into counts with Gaussian noise [T20 Eqs. (20)-(22)]
-   (:func:`swarm_envs.comm.channel.adc`, same formula inlined here with noise drawn once per step);
+   (:func:`swarm_envs.comm.channel.adc`, same formula inlined here);
 5. the detectors (:class:`~swarm_envs.comm.protocol.DetectorBank`) take ``min`` over their detectors,
    detect start symbols, apply the dynamic threshold and store bits; at check points the header is
    decoded (BCH) and the frame is aborted, continued or delivered.
+
+Backends: ``backend="numba"`` (default when numba imports) runs all slots of a step in one compiled call
+(:func:`swarm_envs.comm.kernels.slot_loop`); ``backend="numpy"`` runs the vectorised loop below, the
+tested reference. Every random number of a step (ADC and intensity noise, CSMA access delays and backoffs)
+is drawn before the slot loop by :func:`swarm_envs.comm.kernels.draw_step` in arrays indexed by robot, so
+both backends consume the same numbers and the stream does not depend on the robots' activity. Deliveries
+are returned in a canonical order (by completion slot, then receiver).
 
 Bit errors, collisions (superposed frames), losses (aborted / undecodable frames) and hidden terminals
 thus all arise from the channel model; nothing is drawn from a fitted error rate.
@@ -45,7 +52,7 @@ import numpy as np
 from swarm_envs.copies import CopyRandom
 from swarm_envs.comm.bch import BCHCode, code as bch_code
 from swarm_envs.comm.channel import ADCModel, adc_model_for
-from swarm_envs.comm.kernels import COUNTERS, DELIVERY_FIELDS, HAVE_NUMBA, PER_ROBOT, StepDraws, draw_step, slot_loop
+from swarm_envs.comm.kernels import COUNTERS, DELIVERY_FIELDS, HAVE_NUMBA, PER_ROBOT, StepDraws, draw_step, link_tables, slot_loop
 from swarm_envs.comm.protocol import (
     CSMA,
     IDLE,
@@ -133,7 +140,8 @@ class Network:
     Args:
         platform: robot platform (its IR model gives the gains, :func:`adc_model_for` the ADC).
         n_robots: swarm size N.
-        rng: random generator (ADC noise, CSMA backoff, start-up ambient samples).
+        rng: random generator (start-up ambient samples at reset, then :func:`~swarm_envs.comm.kernels.draw_step`
+            once per step).
         bitrate: bits per second (e-puck: 310 default, 650, 1080, 1160, 1670, 1800 [T20 Sec. 5]).
         relative_threshold: m_tr (counts) [T20 Eq. (33)], default 5.
         code: BCH code (n, k): (15, 15) default, (15, 11), (15, 7), (15, 5), (15, 1).
@@ -413,21 +421,27 @@ class Network:
         if links is None or len(links.rx) == 0:
             rx = np.zeros(0, dtype=np.int64)
             tx = np.zeros(0, dtype=np.int64)
-            G = np.zeros((0, nd))
+            gains = np.zeros((0, nd, 1))
         else:
             rx = np.asarray(links.rx, dtype=np.int64)
             tx = np.asarray(links.tx, dtype=np.int64)
-            G = a.intensity_scale * np.asarray(links.gains, dtype=float).sum(axis=-1)  # (P, nd) all emitters on
-        order = np.argsort(tx, kind="stable")
-        rx, tx, G = rx[order], tx[order], G[order]
-        tx_ptr = np.searchsorted(tx, np.arange(n + 1))
-        flat = (rx[:, None] * nd + np.arange(nd)[None, :]).ravel()
-        strength = G.max(axis=1) if G.size else np.zeros(0)
-        significant = strength * (self.ambient[rx] - a.m_min) > self.m_tr
-        sig_tx = tx[significant]
-        sig_rx = rx[significant]
-        sig_str = strength[significant]
-        sig_ptr = np.searchsorted(sig_tx, np.arange(n + 1))
+            gains = np.asarray(links.gains, dtype=np.float64)
+        if self.backend == "numba":
+            tx_ptr, rx, G, sig_ptr, sig_rx = link_tables(n, rx, tx, gains, float(a.intensity_scale), self.ambient, float(a.m_min), self.m_tr)
+        else:
+            # all emitters on, summed in emitter order (as the kernel); links grouped by transmitter
+            acc = gains[..., 0].copy() if gains.shape[-1] else np.zeros(gains.shape[:2])
+            for e in range(1, gains.shape[-1]):
+                acc += gains[..., e]
+            G = a.intensity_scale * acc  # (P, nd)
+            order = np.argsort(tx, kind="stable")
+            rx, tx, G = rx[order], tx[order], G[order]
+            tx_ptr = np.searchsorted(tx, np.arange(n + 1))
+            flat = (rx[:, None] * nd + np.arange(nd)[None, :]).ravel()
+            strength = G.max(axis=1) if G.size else np.zeros(0)
+            significant = strength * (self.ambient[rx] - a.m_min) > self.m_tr
+            sig_rx = rx[significant]
+            sig_ptr = np.searchsorted(tx[significant], np.arange(n + 1))
 
         total = self.carry + self.bitrate * self.dt
         S = int(np.floor(total + 1e-9))
@@ -474,7 +488,7 @@ class Network:
         state = det.state.view(np.int8)
         D = slot_loop(
             S, self.slot, self.n_det, float(a.m_min), int(a.m_sup), self.m_tr, det.alpha, fmt.first_check_slots,
-            tx_ptr, rx, np.ascontiguousarray(G, dtype=np.float64), sig_ptr, sig_rx, self.ambient,
+            tx_ptr, rx, G, sig_ptr, sig_rx, self.ambient,
             draws.noise, draws.intensity_noise, draws.backoff,
             self.q_bits, self.q_slots, self.q_head, self.q_count, self.cur_bits, self.cur_slots, self.cur_pos, self.cur_id,
             self.sending, fc, self.csma.backoff,
