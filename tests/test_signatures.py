@@ -9,7 +9,7 @@ import typing
 import pytest
 
 from swarm_envs import aggregation_v0, centroid_seeking_v0, flocking_v0
-from swarm_envs.env import _CHOICES, COMMON_DEFAULTS
+from swarm_envs.settings import _CHOICES, COMMON_DEFAULTS
 from swarm_envs.platforms import PLATFORMS
 
 TASK_MODULES = [aggregation_v0, flocking_v0, centroid_seeking_v0]
