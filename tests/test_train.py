@@ -153,6 +153,14 @@ def test_learning_curve_csv_and_progress(trained):
     assert "1024/1024" in stderr and "/1000 " not in stderr
 
 
+def test_tensorboard_events_exactly_when_tensorboard_is_installed(trained):
+    import importlib.util
+
+    out, _, _ = trained
+    events = list((out / "tensorboard").glob("events.out.tfevents.*"))
+    assert bool(events) == (importlib.util.find_spec("tensorboard") is not None)
+
+
 def test_eval_only_writes_its_own_directory(trained):
     out, _, _ = trained
     before = {name: (out / name).read_bytes() for name in ("results.csv", "results.md", "per_seed.json", "config.yaml")}
