@@ -45,7 +45,9 @@ def test_ctrl_c_saves_model_and_config(tmp_path):
     cmd = [sys.executable, str(ROOT / "train.py"), "--config", str(ROOT / "configs" / "aggregation.yaml"), "--output", str(out)]
     cmd += [x for o in TINY for x in ("--set", o)]
     env = {**os.environ, "PYTHONUNBUFFERED": "1", "PYTHONPATH": str(ROOT)}
-    proc = subprocess.Popen(cmd, cwd=ROOT, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    # a shell starts background jobs with SIGINT ignored, and children inherit that: give the child the default
+    proc = subprocess.Popen(cmd, cwd=ROOT, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     try:
         deadline = time.monotonic() + 180
         # training has started once PPO has logged two iterations (header + 2 rows of progress.csv)
