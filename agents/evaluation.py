@@ -60,6 +60,8 @@ PRIMARY_METRIC: dict[str, tuple[str, int]] = {
 }
 
 RESULT_COLUMNS = ("policy", "metric", "mean", "ci_low", "ci_high", "n")
+#: below this many seeds the tables warn that bootstrap intervals under-cover (tests/test_confidence_intervals.py)
+FEW_SEEDS = 10
 
 
 def make_env(task: str, **env_kwargs: Any):
@@ -217,4 +219,7 @@ def markdown_table(rows: list[dict[str, Any]], n_seeds: int | None = None) -> st
         note = f"\n\nmean over {n_text} (one seed: no confidence interval)"
     else:
         note = f"\n\nmean [95 % bootstrap percentile interval of the mean] over {n_text}"
+        if min(ns or [n_seeds or 0]) < FEW_SEEDS:
+            note += (f"; with fewer than {FEW_SEEDS} seeds these intervals are too narrow (real coverage of a nominal "
+                     "95 % bootstrap interval, normal data: ~52 % at n=2, ~71 % at n=3, ~85 % at n=5)")
     return "\n".join(lines) + note + "\n"
