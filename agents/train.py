@@ -424,7 +424,8 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         where = {"setup": "before training started; nothing saved",
                  "train": "while setting up training; nothing saved",
-                 "eval": f"during evaluation; the model is saved in {state.get('model', '?')}"}[state["phase"]]
+                 "eval": f"during evaluation; the model is saved in {state.get('model', '?')}",
+                 "eval-only": f"during the evaluation of {state.get('model', '?')}; results are incomplete"}[state["phase"]]
         print(f"interrupted by Ctrl-C {where}", file=sys.stderr)
         return EXIT_INTERRUPTED
 
@@ -462,6 +463,7 @@ def _run(args: argparse.Namespace, state: dict[str, Any]) -> int:
 
     timing: dict[str, float] = {}
     if checkpoint is not None:
+        state.update(phase="eval-only", model=checkpoint)
         print(f"loaded {checkpoint}; writing results to {out}")
     else:
         state["phase"] = "train"
