@@ -267,6 +267,7 @@ def plot_learning_curve(csv_path: str | Path, png_path: str | Path, title: str) 
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    from matplotlib.ticker import EngFormatter
 
     panels = [("rollout/ep_rew_mean", "mean episode return (per robot)"), ("rollout/ep_len_mean", "mean episode length (steps)"),
               ("train/value_loss", "value loss"), ("train/policy_gradient_loss", "policy-gradient loss")]
@@ -276,7 +277,8 @@ def plot_learning_curve(csv_path: str | Path, png_path: str | Path, title: str) 
     fig, axes = plt.subplots(1, len(panels), figsize=(3.3 * len(panels), 3.0), squeeze=False)
     for ax, (key, label) in zip(axes[0], panels):
         ok = np.isfinite(steps) & np.isfinite(data[key])
-        ax.plot(steps[ok], data[key][ok], marker=".", lw=1)
+        ax.plot(steps[ok], data[key][ok], marker="." if ok.sum() <= 30 else None, lw=1)
+        ax.xaxis.set_major_formatter(EngFormatter(sep=""))  # 50k, not 50000 (labels would overlap)
         ax.set_xlabel("robot-steps", fontsize=8)
         ax.set_title(label, fontsize=9)
         ax.tick_params(labelsize=7)
