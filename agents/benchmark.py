@@ -79,7 +79,7 @@ def parse_tasks(values: list[str]) -> list[str]:
 
 def main(argv: list[str] | None = None) -> int:
     """Command line of ``python -m agents.benchmark``; returns the exit code."""
-    parser = argparse.ArgumentParser(prog="python -m agents.benchmark", description="Scripted swarm baselines vs random, with bootstrap 95% CIs")
+    parser = argparse.ArgumentParser(description="Scripted swarm baselines vs random, with bootstrap 95% CIs")
     parser.add_argument("--task", action="append", default=[], metavar="TASK",
                         help=f"task to run, repeatable or a comma list; one of {', '.join(TASK_SCRIPTED)} (default: all)")
     parser.add_argument("--episodes", type=int, default=30, help="seeds per policy and task (default 30)")

@@ -401,7 +401,7 @@ def _size(shape: tuple[int, ...] | None) -> str:
 
 
 def _parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="train.py", description=__doc__.split("\n\n")[0])
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--config", required=True, help="YAML config, e.g. configs/aggregation.yaml")
     parser.add_argument("--output", default=None,
                         help="output directory (default: the config's output_dir; with --eval-only: a new "
