@@ -1,24 +1,28 @@
-"""train.py and its config handling: validation errors, overrides, a tiny end-to-end run, eval-only."""
+"""train.py (agents.train) and its config handling: validation errors, overrides, a tiny end-to-end run with its
+learning curve, eval-only into its own directory, one-line errors on bad output directories and checkpoints."""
 
 from __future__ import annotations
 
 import csv
 import json
+import os
+import zipfile
 from pathlib import Path
 
 import pytest
 import yaml
 
-import train
+from swarm_envs.agents import train
 from swarm_envs.agents.config import DEFAULTS, ConfigError, apply_overrides, load_config
 
 ROOT = Path(__file__).resolve().parents[1]
 CONFIGS = sorted((ROOT / "configs").glob("*.yaml"))
+AGG = str(ROOT / "configs" / "aggregation.yaml")
 TINY = [
     "env.sensing=ideal",
     "env.n_robots=4",
     "env.max_cycles=20",
-    "train.total_timesteps=1024",
+    "train.total_timesteps=1000",  # rollouts of 64 steps x 4 robots: PPO runs 1024
     "train.n_envs=1",
     "train.checkpoint_freq=512",
     "train.progress_bar=false",
@@ -77,39 +81,194 @@ def test_overrides():
 
 
 def test_cli_reports_config_errors(tmp_path, capsys):
-    assert train.main(["--config", str(ROOT / "configs" / "aggregation.yaml"), "--set", "train.nope=1", "--output", str(tmp_path)]) == 2
+    assert train.main(["--config", AGG, "--set", "train.nope=1", "--output", str(tmp_path)]) == 2
     assert "unknown config key 'train.nope'" in capsys.readouterr().err
 
 
-def test_train_end_to_end_then_eval_only(tmp_path):
-    out = tmp_path / "run"
-    args = ["--config", str(ROOT / "configs" / "aggregation.yaml"), "--output", str(out), "--render"]
-    assert train.main(args + [x for o in TINY for x in ("--set", o)]) == 0
-    with open(out / "results.csv") as fh:
+def _tiny(*extra: str) -> list[str]:
+    return [x for o in (*TINY, *extra) for x in ("--set", o)]
+
+
+
+@pytest.fixture(scope="module")
+def trained(tmp_path_factory):
+    """One tiny training run (with the progress bar on), shared by the tests below: (out dir, stdout, stderr)."""
+    import contextlib
+    import io
+
+    out = tmp_path_factory.mktemp("train") / "run"
+    stdout, stderr = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(stdout), contextlib.redirect_stderr(stderr):
+        code = train.main(["--config", AGG, "--output", str(out), "--render"] + _tiny("train.progress_bar=true"))
+    assert code == 0, stderr.getvalue()
+    return out, stdout.getvalue(), stderr.getvalue()
+
+
+def _read_csv(path: Path) -> tuple[list[str], list[list[str]]]:
+    with open(path) as fh:
         reader = csv.reader(fh)
-        header = next(reader)
-        rows = list(reader)
-    assert header == ["policy", "metric", "mean", "ci_low", "ci_high"]
+        return next(reader), list(reader)
+
+
+def test_planned_timesteps_rounds_up_to_whole_rollouts():
+    assert train.planned_timesteps(200_000, 128, 20) == 202_240  # the default config
+    assert train.planned_timesteps(1000, 64, 4) == 1024
+    assert train.planned_timesteps(1024, 64, 4) == 1024
+
+
+def test_train_end_to_end(trained):
+    out, stdout, stderr = trained
+    header, rows = _read_csv(out / "results.csv")
+    assert header == ["policy", "metric", "mean", "ci_low", "ci_high", "n"]
     assert {r[0] for r in rows} == {"ppo", "scripted", "random"}
     assert {"largest_cluster_fraction", "n_clusters", "mean_distance_to_centroid"} <= {r[1] for r in rows}
     for r in rows:
-        assert float(r[3]) <= float(r[2]) <= float(r[4])
-    for name in ("results.md", "results.png", "model.zip", "config.yaml", "episode.gif", "timing.json"):
+        assert float(r[3]) <= float(r[2]) <= float(r[4]) and int(r[5]) == 3
+        if r[1] == "largest_cluster_fraction":
+            assert 0.0 <= float(r[3]) and float(r[4]) <= 1.0
+    for name in ("results.md", "results.png", "model.zip", "config.yaml", "episode.gif", "timing.json",
+                 "progress.csv", "learning_curve.png"):
         assert (out / name).exists(), name
     assert list((out / "checkpoints").glob("ppo_*_steps.zip"))
     saved = yaml.safe_load((out / "config.yaml").read_text())
-    assert saved["train"]["total_timesteps"] == 1024 and saved["agent"]["scripted"] == "bearing_aggregation"
-    assert "| largest_cluster_fraction |" in (out / "results.md").read_text()
+    assert saved["train"]["total_timesteps"] == 1000 and saved["agent"]["scripted"] == "bearing_aggregation"
+    md = (out / "results.md").read_text()
+    assert "| largest_cluster_fraction |" in md and "n=3 seeds" in md and "bootstrap" in md
     assert len(json.loads((out / "per_seed.json").read_text())["ppo"]["n_clusters"]) == 3
+    assert json.loads((out / "timing.json").read_text())["robot_steps"] == 1024
 
-    # re-evaluate the checkpoint: deterministic PPO on the same seeds gives the same numbers
-    out2 = tmp_path / "eval"
-    assert train.main(["--config", str(ROOT / "configs" / "aggregation.yaml"), "--output", str(out2),
-                       "--eval-only", str(out / "model.zip")] + [x for o in TINY for x in ("--set", o)]) == 0
+
+def test_learning_curve_csv_and_progress(trained):
+    out, stdout, stderr = trained
+    header, rows = _read_csv(out / "progress.csv")
+    for key in ("time/total_timesteps", "rollout/ep_rew_mean", "rollout/ep_len_mean", "time/fps", "train/loss", "train/value_loss"):
+        assert key in header, key
+    steps = [int(r[header.index("time/total_timesteps")]) for r in rows]
+    assert steps == [256, 512, 768, 1024]  # one row per rollout of 64 steps x 4 robots, up to the real total
+    lengths = {float(r[header.index("rollout/ep_len_mean")]) for r in rows}
+    assert lengths == {20.0}  # max_cycles=20 episodes
+    assert "the budget 1000 rounded up to 4 whole rollouts" in stdout
+    assert "PPO 1024/1024 robot-steps (100%)" in stdout and "ep_rew_mean" in stdout
+    # the progress bar's total is what really runs, and it ends there
+    assert "1024/1024" in stderr and "/1000 " not in stderr
+
+
+def test_tensorboard_events_exactly_when_tensorboard_is_installed(trained):
+    import importlib.util
+
+    out, _, _ = trained
+    events = list((out / "tensorboard").glob("events.out.tfevents.*"))
+    assert bool(events) == (importlib.util.find_spec("tensorboard") is not None)
+
+
+def test_eval_only_writes_its_own_directory(trained):
+    out, _, _ = trained
+    before = {name: (out / name).read_bytes() for name in ("results.csv", "results.md", "per_seed.json", "config.yaml")}
+    assert train.main(["--config", AGG, "--eval-only", str(out / "model.zip")] + _tiny()) == 0
+    evals = sorted(out.glob("eval-*"))
+    assert len(evals) == 1 and (evals[0] / "results.csv").exists()
+    assert {name: (out / name).read_bytes() for name in before} == before  # the training run's results are untouched
+    # deterministic PPO on the same seeds gives the same numbers as at the end of training
     first = json.loads((out / "per_seed.json").read_text())
-    second = json.loads((out2 / "per_seed.json").read_text())
+    second = json.loads((evals[0] / "per_seed.json").read_text())
     assert first["ppo"] == second["ppo"] and first["scripted"] == second["scripted"]
-    assert not (out2 / "model.zip").exists()
+    assert not (evals[0] / "model.zip").exists()
+    # a second eval-only (same second or not) gets another directory
+    assert train.main(["--config", AGG, "--eval-only", str(out / "checkpoints" / "ppo_512_steps.zip")] + _tiny("eval.n_seeds=1")) == 0
+    assert len(sorted(out.glob("eval-*"))) == 2
+    assert {name: (out / name).read_bytes() for name in before} == before
+
+
+def test_eval_only_refuses_to_overwrite_without_force(trained, tmp_path, capsys):
+    out, _, _ = trained
+    target = tmp_path / "copy"
+    target.mkdir()
+    (target / "results.csv").write_text("keep me\n")
+    args = ["--config", AGG, "--eval-only", str(out / "model.zip"), "--output", str(target)] + _tiny("eval.n_seeds=1")
+    assert train.main(args) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "already holds results (results.csv)" in err and "--force" in err
+    assert (target / "results.csv").read_text() == "keep me\n"
+    assert train.main(args + ["--force"]) == 0
+    assert (target / "results.csv").read_text().startswith("policy,metric,mean,ci_low,ci_high,n")
+    md = (target / "results.md").read_text()
+    assert "(n=1)" in md and "one seed: no confidence interval" in md
+
+
+def _one_line_error(capsys, *needles: str) -> str:
+    err = capsys.readouterr().err
+    assert err.endswith("\n") and err.count("\n") == 1, err
+    assert "Traceback" not in err
+    for needle in needles:
+        assert needle in err, (needle, err)
+    return err
+
+
+def test_output_dir_that_is_a_file_or_below_a_file(tmp_path, capsys):
+    afile = tmp_path / "afile"
+    afile.write_text("x")
+    assert train.main(["--config", AGG, "--output", str(afile)] + _tiny()) == 2
+    _one_line_error(capsys, "error: output directory", str(afile), "is a file")
+    assert train.main(["--config", AGG, "--output", str(afile / "sub")] + _tiny()) == 2
+    _one_line_error(capsys, "error: output directory", str(afile / "sub"), "not writable")
+    assert afile.read_text() == "x"
+
+
+@pytest.mark.skipif(not hasattr(os, "geteuid") or os.geteuid() == 0, reason="root may write into any directory")
+def test_output_dir_not_writable(tmp_path, capsys):
+    locked = tmp_path / "locked"
+    locked.mkdir(mode=0o500)
+    try:
+        assert train.main(["--config", AGG, "--output", str(locked / "run")] + _tiny()) == 2
+    finally:
+        locked.chmod(0o700)
+    _one_line_error(capsys, "error: output directory", str(locked / "run"), "not writable")
+
+
+@pytest.mark.skipif(not Path("/sys/kernel").is_dir(), reason="needs Linux sysfs (not writable even by root)")
+def test_output_dir_on_a_read_only_filesystem(capsys):
+    assert train.main(["--config", AGG, "--output", "/sys/kernel/swarm_envs_run"] + _tiny()) == 2
+    _one_line_error(capsys, "error: output directory '/sys/kernel/swarm_envs_run' is not writable")
+
+
+def test_eval_only_missing_checkpoint(tmp_path, capsys):
+    missing = tmp_path / "nope.zip"
+    assert train.main(["--config", AGG, "--eval-only", str(missing)] + _tiny()) == 2
+    err = _one_line_error(capsys, f"error: checkpoint '{missing}' not found")
+    assert "nope.zip.zip" not in err
+    assert not list(tmp_path.iterdir())  # no eval directory left behind
+
+
+@pytest.mark.parametrize("kind, problem", [
+    ("truncated_end", "not a zip archive"),  # the zip directory at the end is gone
+    ("truncated_half", "cannot be loaded as a PPO model"),  # SB3's zip holds zips (torch files): one may still be found
+    ("text", "not a zip archive"),
+    ("other_zip", "cannot be loaded as a PPO model"),
+])
+def test_eval_only_bad_checkpoint_files(trained, tmp_path, capsys, kind, problem):
+    out, _, _ = trained
+    bad = tmp_path / f"{kind}.zip"
+    data = (out / "model.zip").read_bytes()
+    if kind == "truncated_end":
+        bad.write_bytes(data[:-10])
+    elif kind == "truncated_half":
+        bad.write_bytes(data[: len(data) // 2])
+    elif kind == "text":
+        bad.write_text("not a model\n")
+    else:
+        with zipfile.ZipFile(bad, "w") as zf:
+            zf.writestr("hello.txt", "a zip, but not an SB3 model")
+    assert train.main(["--config", AGG, "--eval-only", str(bad)] + _tiny()) == 2
+    _one_line_error(capsys, f"error: checkpoint '{bad}'", problem)
+    assert not list(tmp_path.glob("eval-*"))
+
+
+def test_eval_only_checkpoint_for_another_observation_size(trained, capsys):
+    out, _, _ = trained
+    # 4 message bits add 4 action entries and message-bit observations: not the env the model was trained on
+    assert train.main(["--config", AGG, "--eval-only", str(out / "model.zip")] + _tiny("env.message_bits=4")) == 2
+    _one_line_error(capsys, f"error: checkpoint '{out / 'model.zip'}' expects observations of size 107",
+                    "gives 143", "config.yaml")
 
 
 def test_empty_sections_take_defaults(tmp_path):

@@ -1,0 +1,74 @@
+"""Ctrl-C during ``python train.py``: the current model and the resolved config are saved, and the command
+exits with code 130 and a one-line message (no traceback). Runs train.py in a subprocess and sends SIGINT."""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from swarm_envs.agents.config import load_config
+
+ROOT = Path(__file__).resolve().parents[1]
+TINY = [
+    "env.sensing=ideal",
+    "env.n_robots=4",
+    "env.max_cycles=20",
+    "train.total_timesteps=10000000",  # far more than the test waits for
+    "train.n_envs=1",
+    "train.checkpoint_freq=0",
+    "train.progress_bar=false",
+    "agent.n_steps=64",
+    "agent.batch_size=128",
+    "agent.n_epochs=1",
+]
+
+
+def _rows(path: Path) -> int:
+    try:
+        return len(path.read_text().splitlines())
+    except FileNotFoundError:
+        return 0
+
+
+@pytest.mark.skipif(sys.platform == "win32", reason="SIGINT to a child process is POSIX")
+def test_ctrl_c_saves_model_and_config(tmp_path):
+    from stable_baselines3 import PPO
+
+    out = tmp_path / "run"
+    cmd = [sys.executable, str(ROOT / "train.py"), "--config", str(ROOT / "configs" / "aggregation.yaml"), "--output", str(out)]
+    cmd += [x for o in TINY for x in ("--set", o)]
+    env = {**os.environ, "PYTHONUNBUFFERED": "1", "PYTHONPATH": str(ROOT)}
+    # a shell starts background jobs with SIGINT ignored, and children inherit that: give the child the default
+    proc = subprocess.Popen(cmd, cwd=ROOT, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    try:
+        deadline = time.monotonic() + 180
+        # training has started once PPO has logged two iterations (header + 2 rows of progress.csv)
+        while _rows(out / "progress.csv") < 3:
+            assert proc.poll() is None, proc.communicate()
+            assert time.monotonic() < deadline, "training did not start within 180 s"
+            time.sleep(0.2)
+        proc.send_signal(signal.SIGINT)
+        stdout, stderr = proc.communicate(timeout=120)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.communicate()
+    assert proc.returncode == 130, (stdout, stderr)
+    lines = stderr.strip().splitlines()
+    assert len(lines) == 1 and "Traceback" not in stderr, stderr
+    assert lines[0].startswith("interrupted by Ctrl-C after ") and str(out / "model.zip") in lines[0]
+    assert str(out / "config.yaml") in lines[0]
+    model = PPO.load(out / "model.zip", device="cpu")
+    assert 512 <= model.num_timesteps < 10_000_000
+    cfg = load_config(out / "config.yaml")  # the resolved config is a valid config again
+    assert cfg["train"]["total_timesteps"] == 10_000_000 and cfg["agent"]["scripted"] == "bearing_aggregation"
+    assert json.loads((out / "timing.json").read_text())["interrupted"] is True
+    assert not (out / "results.csv").exists()
