@@ -1,0 +1,109 @@
+"""Rollout throughput of the batched core (``swarm_envs.make_vec``), and VMAS in the same run.
+
+Prints agent-steps/s (robots x env copies x steps per second) with random actions, flocking, e-puck at the
+default density, for N in {10, 100} x B in {1, 16, 64, 256} and N = 1000 x B = 1, sensing full and ideal;
+each figure is the median over timed steps after warm-up (the machine is shared: medians, and same-run
+ratios). When ``vmas`` is importable, VMAS's flocking scenario with N = 10 and 1024 envs on the CPU
+(torch with 1 thread) is timed in the same run and printed beside, as a ratio.
+
+    python benchmarks/bench_vec.py                     # the full table (several minutes)
+    python benchmarks/bench_vec.py --quick             # N = 10 only
+    python benchmarks/bench_vec.py --n 10 --copies 64 --sensing full
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import statistics
+import time
+
+import numpy as np
+
+os.environ.setdefault("OMP_NUM_THREADS", "1")
+
+import swarm_envs  # noqa: E402
+
+GRID = [(10, 1), (10, 16), (10, 64), (10, 256), (100, 1), (100, 16), (100, 64), (100, 256), (1000, 1)]
+
+
+def time_swarm(n: int, copies: int, sensing: str, min_steps: int, min_seconds: float) -> float:
+    """Median seconds per vector step (B copies of N robots)."""
+    vec = swarm_envs.make_vec("swarm_envs/Flocking-v0", copies, n_robots=n, sensing=sensing, max_cycles=10**6)
+    vec.reset(seed=0)
+    rng = np.random.default_rng(0)
+    shape = (copies, n, vec.layout.action_size)
+    for _ in range(3):  # warm-up (numba kernels load, caches fill)
+        vec.step(rng.uniform(-1, 1, shape))
+    times: list[float] = []
+    start = time.perf_counter()
+    while len(times) < min_steps or time.perf_counter() - start < min_seconds:
+        action = rng.uniform(-1, 1, shape)
+        t0 = time.perf_counter()
+        vec.step(action)
+        times.append(time.perf_counter() - t0)
+        if len(times) >= 200:
+            break
+    return statistics.median(times)
+
+
+def time_vmas(n: int, num_envs: int, steps: int) -> float | None:
+    """Median seconds per VMAS flocking step (num_envs envs of n agents, CPU, 1 torch thread), or None."""
+    try:
+        import torch
+        import vmas
+    except ImportError:
+        return None
+    torch.set_num_threads(1)
+    env = vmas.make_env(scenario="flocking", num_envs=num_envs, device="cpu", continuous_actions=True, n_agents=n, seed=0)
+    env.reset()
+    for _ in range(3):
+        env.step([env.get_random_action(agent) for agent in env.agents])
+    times = []
+    for _ in range(steps):
+        actions = [env.get_random_action(agent) for agent in env.agents]
+        t0 = time.perf_counter()
+        env.step(actions)
+        times.append(time.perf_counter() - t0)
+    return statistics.median(times)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--quick", action="store_true", help="N = 10 rows only")
+    parser.add_argument("--n", type=int, help="one swarm size")
+    parser.add_argument("--copies", type=int, help="one copy count")
+    parser.add_argument("--sensing", choices=["full", "ideal"], help="one sensing mode")
+    parser.add_argument("--min-steps", type=int, default=5)
+    parser.add_argument("--min-seconds", type=float, default=3.0)
+    parser.add_argument("--no-vmas", action="store_true")
+    args = parser.parse_args()
+    grid = [(n, b) for n, b in GRID if not args.quick or n == 10]
+    if args.n:
+        grid = [(n, b) for n, b in grid if n == args.n] or [(args.n, args.copies or 1)]
+    if args.copies:
+        grid = [(n, b) for n, b in grid if b == args.copies] or [(args.n or 10, args.copies)]
+    modes = [args.sensing] if args.sensing else ["full", "ideal"]
+    print(f"load average at start: {os.getloadavg()[0]:.2f} on {os.cpu_count()} cores")
+    vmas_rate = None
+    if not args.no_vmas:
+        t = time_vmas(10, 1024, 20)
+        if t is None:
+            print("VMAS: not installed (pip install vmas) - no VMAS column")
+        else:
+            vmas_rate = 10 * 1024 / t
+            print(f"VMAS 1024 envs x 10 agents flocking (cpu, 1 torch thread): {t * 1e3:.1f} ms/step, {vmas_rate:,.0f} agent-steps/s")
+    print()
+    print("| N | B | sensing | ms / vector step | agent-steps/s | env steps/s (per copy) | vs VMAS N=10 x 1024 |")
+    print("|---|---|---|---|---|---|---|")
+    for sensing in modes:
+        for n, b in grid:
+            t = time_swarm(n, b, sensing, args.min_steps, args.min_seconds)
+            rate = n * b / t
+            ratio = f"{rate / vmas_rate:.2f}x" if vmas_rate else "-"
+            print(f"| {n} | {b} | {sensing} | {t * 1e3:.1f} | {rate:,.0f} | {1 / t:,.1f} | {ratio} |", flush=True)
+    print(f"\nload average at end: {os.getloadavg()[0]:.2f}")
+
+
+if __name__ == "__main__":
+    main()
