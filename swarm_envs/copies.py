@@ -46,10 +46,6 @@ class CopyRandom:
         kids = [g.spawn(n_children) for g in self.generators]
         return [CopyRandom([k[j] for k in kids]) for j in range(n_children)]
 
-    def subset(self, copies: Sequence[int]) -> "CopyRandom":
-        """The streams of some copies (shared generators, not copies of them)."""
-        return CopyRandom([self.generators[int(b)] for b in copies])
-
     def _draw(self, counts: np.ndarray, draw) -> list[np.ndarray]:
         return [draw(g, int(c)) for g, c in zip(self.generators, counts) if c > 0]
 

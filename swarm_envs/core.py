@@ -23,7 +23,6 @@ from typing import Any
 
 import numpy as np
 
-from swarm_envs.copies import CopyRandom
 from swarm_envs.observation import ObservationLayout, pack_nearest
 from swarm_envs.sensing.base import SensorFrame
 from swarm_envs.task import BatchState, Task
@@ -192,8 +191,3 @@ def _make_sensing(cfg: dict[str, Any], platform, n_world: int, n_copies: int):
     from swarm_envs.sensing.full import FullSensing
 
     return FullSensing(platform, n_world, cfg, n_copies)
-
-
-def copy_random(generators: Sequence[np.random.Generator]) -> CopyRandom:
-    """Per-copy streams for a sensing module (one generator per copy)."""
-    return CopyRandom(list(generators))
