@@ -56,6 +56,7 @@ DEFAULTS: dict[str, Any] = {
     "train": {
         "total_timesteps": 100_000,
         "n_envs": 2,  # env copies in the VecEnv
+        "n_workers": 1,  # worker processes the copies are split over (one batched core each); <= n_envs
         "torch_threads": 1,  # benchmarks/bench_torch_threads.py: 2 is <=5 % faster idle, 4-8x slower with a busy core
         "checkpoint_freq": 50_000,  # robot-steps between checkpoints (0 = only the final model)
         "progress_bar": True,
@@ -69,7 +70,7 @@ DEFAULTS: dict[str, Any] = {
 }
 
 _CHOICES = {"agent.activation": ("tanh", "relu")}
-_POSITIVE_INT = {"agent.n_steps", "agent.batch_size", "agent.n_epochs", "train.total_timesteps", "train.n_envs",
+_POSITIVE_INT = {"agent.n_steps", "agent.batch_size", "agent.n_epochs", "train.total_timesteps", "train.n_envs", "train.n_workers",
                  "train.torch_threads", "eval.n_seeds"}
 _NON_NEGATIVE_INT = {"train.checkpoint_freq", "seed", "eval.seed_start"}
 _POSITIVE_FLOAT = {"agent.learning_rate", "agent.clip_range", "agent.max_grad_norm", "agent.reward_scale"}
@@ -172,6 +173,8 @@ def validate(cfg: dict[str, Any]) -> dict[str, Any]:
     if "flatten" in cfg["env"] or "render_mode" in cfg["env"]:
         raise ConfigError("env.flatten and env.render_mode are set by train.py; remove them from the config")
     _check_env_settings(cfg["task"], cfg["env"])
+    if cfg["train"]["n_workers"] > cfg["train"]["n_envs"]:
+        raise ConfigError(f"train.n_workers ({cfg['train']['n_workers']}) must not exceed train.n_envs ({cfg['train']['n_envs']})")
     if cfg["agent"]["batch_size"] > cfg["agent"]["n_steps"] * cfg["train"]["n_envs"] * _n_agents(cfg):
         raise ConfigError(
             "agent.batch_size must not exceed the rollout size n_steps * n_envs * n_robots "

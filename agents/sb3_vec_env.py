@@ -14,7 +14,10 @@ copies here).
   ``"episode" = {"r", "l", "t"}`` (what SB3's ``Monitor`` adds, so ``ep_rew_mean`` is logged);
 - the vector env's array infos of the last step (metrics, reward terms, ground truth) are in
   :attr:`SwarmVecEnv.last_infos` rather than in per-row dicts;
-- seeding: :meth:`seed` (SB3) gives each row a seed; copy ``c`` resets with the seed of its first row.
+- seeding: :meth:`seed` (SB3) gives each row a seed; copy ``c`` resets with the seed of its first row;
+- ``n_workers > 1`` splits the copies over that many worker processes (SB3 ``SubprocVecEnv``-style, one
+  batched core each, contiguous blocks of copies), for machines with several cores. Each copy keeps its own
+  streams, so the rows are the same as with one process.
 
 Also :class:`SB3Policy`, which wraps a trained SB3 model as an :class:`agents.base.Policy`.
 """
@@ -56,14 +59,19 @@ class SwarmVecEnv(VecEnv):
         env_kwargs: env settings (``flatten`` is forced to True).
     """
 
-    def __init__(self, env: str | type | Callable[..., Any], n_copies: int = 1, env_kwargs: dict[str, Any] | None = None) -> None:
+    def __init__(
+        self, env: str | type | Callable[..., Any], n_copies: int = 1, env_kwargs: dict[str, Any] | None = None, n_workers: int = 1
+    ) -> None:
         from swarm_envs.vector import SwarmVectorEnv
 
         if isinstance(n_copies, bool) or not isinstance(n_copies, (int, np.integer)) or n_copies < 1:
             raise ValueError(f"n_copies must be an integer >= 1, got {n_copies!r}")
+        if isinstance(n_workers, bool) or not isinstance(n_workers, (int, np.integer)) or not 1 <= n_workers <= n_copies:
+            raise ValueError(f"n_workers must be an integer in [1, n_copies={n_copies}], got {n_workers!r}")
         kwargs = dict(env_kwargs or {})
         kwargs["flatten"] = True
-        self.vec = SwarmVectorEnv(_env_class(env), int(n_copies), **kwargs)
+        env_cls = _env_class(env)
+        self.vec = SwarmVectorEnv(env_cls, int(n_copies), **kwargs) if n_workers == 1 else _WorkerVec(env_cls, int(n_copies), kwargs, int(n_workers))
         self.agents = list(self.vec.possible_agents)
         self.n_agents = len(self.agents)
         self.n_copies = int(n_copies)
@@ -150,6 +158,82 @@ class SwarmVecEnv(VecEnv):
 
     def get_images(self) -> Sequence[np.ndarray | None]:
         return [None for _ in range(self.n_copies)]
+
+
+def _merge(parts: list[Any]) -> Any:
+    """Join the array infos of consecutive copy blocks (dicts of arrays, leading axis = copy)."""
+    if isinstance(parts[0], dict):
+        return {k: _merge([p[k] for p in parts]) for k in parts[0]}
+    return np.concatenate(parts, axis=0)
+
+
+def _worker(conn, env_cls: type, n_copies: int, kwargs: dict[str, Any]) -> None:  # pragma: no cover - runs in a child
+    from swarm_envs.vector import SwarmVectorEnv
+
+    vec = SwarmVectorEnv(env_cls, n_copies, **kwargs)
+    while True:
+        cmd, arg = conn.recv()
+        if cmd == "reset":
+            conn.send(vec.reset(seed=arg[0], options=arg[1]))
+        elif cmd == "step":
+            conn.send(vec.step(arg))
+        elif cmd == "attr":
+            conn.send(getattr(vec, arg))
+        elif cmd == "close":
+            vec.close()
+            conn.close()
+            return
+
+
+class _WorkerVec:
+    """``n_copies`` copies split over ``n_workers`` processes, each a :class:`swarm_envs.vector.SwarmVectorEnv`
+    of a contiguous block of copies; the same reset/step interface as one vector env."""
+
+    def __init__(self, env_cls: type, n_copies: int, kwargs: dict[str, Any], n_workers: int) -> None:
+        import multiprocessing as mp
+
+        from swarm_envs.vector import SwarmVectorEnv
+
+        ctx = mp.get_context("forkserver" if "forkserver" in mp.get_all_start_methods() else "spawn")
+        self.blocks = np.array_split(np.arange(n_copies), n_workers)
+        self.conns, self.procs = [], []
+        for block in self.blocks:
+            parent, child = ctx.Pipe()
+            proc = ctx.Process(target=_worker, args=(child, env_cls, len(block), kwargs), daemon=True)
+            proc.start()
+            child.close()
+            self.conns.append(parent)
+            self.procs.append(proc)
+        probe = SwarmVectorEnv(env_cls, 1, **kwargs)  # spaces and layout, without stepping
+        self.possible_agents, self.layout, self.platform = probe.possible_agents, probe.layout, probe.platform
+        self.agent_observation_space, self.agent_action_space = probe.agent_observation_space, probe.agent_action_space
+        self.max_cycles, self.config = probe.max_cycles, probe.config
+
+    def _gather(self, cmd: str, args: list[Any]):
+        for conn, arg in zip(self.conns, args):
+            conn.send((cmd, arg))
+        return [conn.recv() for conn in self.conns]
+
+    def reset(self, *, seed: list[int | None] | None = None, options: dict | None = None):
+        seeds = [None] * sum(len(b) for b in self.blocks) if seed is None else list(seed)
+        out = self._gather("reset", [([seeds[c] for c in block], options) for block in self.blocks])
+        return np.concatenate([o for o, _ in out], axis=0), _merge([i for _, i in out])
+
+    def step(self, actions: np.ndarray):
+        out = self._gather("step", [actions[block] for block in self.blocks])
+        cat = [np.concatenate([o[k] for o in out], axis=0) for k in range(4)]
+        return (*cat, _merge([o[4] for o in out]))
+
+    def close(self) -> None:
+        for conn in self.conns:
+            try:
+                conn.send(("close", None))
+            except (BrokenPipeError, OSError):
+                pass
+        for proc in self.procs:
+            proc.join(timeout=5)
+            if proc.is_alive():
+                proc.terminate()
 
 
 class SB3Policy(Policy):

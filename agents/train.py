@@ -217,7 +217,7 @@ def train(cfg: dict[str, Any], out: Path) -> tuple[Any, float, bool]:
     from swarm_envs.agents.sb3_vec_env import SwarmVecEnv
 
     module = __import__(TASKS[cfg["task"]], fromlist=["parallel_env"])
-    venv = SwarmVecEnv(module.parallel_env, cfg["train"]["n_envs"], env_kwargs_of(cfg))
+    venv = SwarmVecEnv(module.parallel_env, cfg["train"]["n_envs"], env_kwargs_of(cfg), n_workers=cfg["train"]["n_workers"])
     venv.seed(cfg["seed"])
     wrapped = venv if cfg["agent"]["reward_scale"] == 1.0 else _ScaledRewards(venv, cfg["agent"]["reward_scale"])
     model = build_model(cfg, wrapped)

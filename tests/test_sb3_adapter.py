@@ -155,3 +155,24 @@ def test_adapter_with_full_sensing():
     for _ in range(3):
         obs, rewards, dones, infos = vec.step(np.zeros((6, 2), np.float32))
     assert dones.all() and all(np.all(np.isfinite(i["terminal_observation"])) for i in infos)
+
+
+def test_worker_processes_give_the_same_rows():
+    """Copies split over 2 worker processes equal one process bit for bit, across an episode end."""
+    kw = {"sensing": "full", "n_robots": 3, "max_cycles": 4, "message_bits": 2}
+    one = SwarmVecEnv("swarm_envs/Flocking-v0", 3, kw)
+    two = SwarmVecEnv("swarm_envs/Flocking-v0", 3, kw, n_workers=2)
+    try:
+        one.seed(5)
+        two.seed(5)
+        np.testing.assert_array_equal(one.reset(), two.reset())
+        rng = np.random.default_rng(0)
+        for _ in range(7):  # crosses the auto-reset after 4 steps
+            act = rng.uniform(-1, 1, (9, 4)).astype(np.float32)
+            for a, b in zip(one.step(act)[:3], two.step(act)[:3]):
+                np.testing.assert_array_equal(a, b)
+            np.testing.assert_array_equal(one.last_infos["ground_truth"]["position"], two.last_infos["ground_truth"]["position"])
+    finally:
+        two.close()
+    with pytest.raises(ValueError):
+        SwarmVecEnv("swarm_envs/Flocking-v0", 2, kw, n_workers=3)
