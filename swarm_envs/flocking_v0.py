@@ -20,7 +20,7 @@ from swarm_envs.factories import reports_unknown_kwargs
 from swarm_envs.metrics import largest_component_fraction
 from swarm_envs.platforms import Platform
 from swarm_envs.task import BatchState, Task, bump_any
-from swarm_envs.sensing.ideal import neighbour_pairs
+from swarm_envs.sensing.ideal import candidate_pairs, directed_pairs
 
 __all__ = ["FlockingTask", "FlockingEnv", "raw_env", "parallel_env", "env"]
 
@@ -43,14 +43,15 @@ class FlockingTask(Task):
         speed = np.linalg.norm(self.agents_of(state.velocities), axis=2)  # (B, A)
         vmax = self.platform.max_speed
         ir_range = self.platform.ir_range
-        cohesion, _ = largest_component_fraction(pos, ir_range)
+        # IR-range links of every copy, once, for cohesion and local polarisation (never across copies)
+        pairs = candidate_pairs(pos.reshape(B * A, 2), ir_range, np.repeat(np.arange(B), A))
+        cohesion, _ = largest_component_fraction(pos, ir_range, pairs)
         weight = np.clip(speed / vmax, 0.0, 1.0)
         vec = np.stack([np.cos(head), np.sin(head)], -1) * weight[..., None]  # (B, A, 2)
         pol = np.linalg.norm(vec.mean(axis=1), axis=1)  # (B,) [polarisation]
         bumped = bump_any(self.agents_of(state.bumps)).astype(float)  # (B, A)
-        # local polarisation over each robot and its IR neighbours (pairs never cross copies)
-        copy = np.repeat(np.arange(B), A)
-        rx, tx = neighbour_pairs(pos.reshape(B * A, 2), ir_range, copy)
+        # local polarisation over each robot and its IR neighbours
+        rx, tx = directed_pairs(pairs)
         flat = vec.reshape(B * A, 2)
         sums = flat.copy()
         np.add.at(sums, rx, flat[tx])

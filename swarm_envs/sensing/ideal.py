@@ -15,7 +15,7 @@ from swarm_envs.observation import pack_nearest, relative_pose
 from swarm_envs.platforms import Platform
 from swarm_envs.sensing.base import MessageReadings, NeighbourReadings, ScaleFreeReadings, SensorFrame
 
-__all__ = ["IdealSensing", "candidate_pairs", "neighbour_pairs"]
+__all__ = ["IdealSensing", "candidate_pairs", "directed_pairs", "neighbour_pairs"]
 
 
 def candidate_pairs(positions: np.ndarray, max_range: float, copy: np.ndarray | None = None) -> np.ndarray:
@@ -44,7 +44,11 @@ def neighbour_pairs(positions: np.ndarray, max_range: float, copy: np.ndarray | 
 
     ``copy`` as in :func:`candidate_pairs` (no pair crosses copies).
     """
-    pairs = candidate_pairs(positions, max_range, copy)
+    return directed_pairs(candidate_pairs(positions, max_range, copy))
+
+
+def directed_pairs(pairs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Both directions (rx, tx) of (P, 2) undirected index pairs, sorted by (rx, tx)."""
     if len(pairs) == 0:
         empty = np.zeros(0, dtype=np.int64)
         return empty, empty
