@@ -10,7 +10,7 @@ from swarm_envs.ir.layer import compute_links
 
 pytestmark = pytest.mark.skipif(not HAVE_NUMBA, reason="numba not installed")
 
-FIELDS = ("receiver", "origin", "sender", "seq", "detector", "kind", "length", "slot", "corrupt")
+FIELDS = ("receiver", "origin", "sender", "seq", "detector", "kind", "length", "slot", "corrupt", "transmitter")
 
 
 def _scene(rng, n, density):

@@ -76,7 +76,7 @@ PER_ROBOT = (
     "block_errors",
 )
 #: integer columns of the kernel's delivery records
-DELIVERY_FIELDS = ("receiver", "origin", "sender", "seq", "type", "length", "detector", "slot", "corrupt", "done_slot")
+DELIVERY_FIELDS = ("receiver", "origin", "sender", "seq", "type", "length", "detector", "slot", "corrupt", "done_slot", "transmitter")
 
 # counter indices (compile-time constants in the kernel)
 _C_TX_STARTED, _C_TX_COMPLETED, _C_DEFERRALS = COUNTERS.index("tx_started"), COUNTERS.index("tx_completed"), COUNTERS.index("deferrals")
@@ -288,7 +288,7 @@ def slot_loop(
     n_ids, counts, per_robot, d_int, d_pay,
 ):  # fmt: skip
     """All S bit slots of one control step for all robots (module docstring). State arrays are updated in
-    place; ``frame_counter`` is a (1,) array. Deliveries are written to ``d_int`` (D, 10) with columns
+    place; ``frame_counter`` is a (1,) array. Deliveries are written to ``d_int`` (D, 11) with columns
     :data:`DELIVERY_FIELDS` and ``d_pay`` (D, >= 255) bool; returns the number written. Header ids are a
     copy's own robot numbers, valid below ``n_ids`` (the robots per env copy)."""
     n = sending.shape[0]
@@ -523,6 +523,7 @@ def slot_loop(
                         d_int[nd_out, 7] = start_slot[r]
                         d_int[nd_out, 8] = 1 if corrupt else 0
                         d_int[nd_out, 9] = slot
+                        d_int[nd_out, 10] = gt_tx[r]
                         for i in range(length):
                             d_pay[nd_out, i] = info[header_bits + i]
                         nd_out += 1

@@ -94,6 +94,10 @@ class Deliveries:
         slot: (D,) global bit slot at which the frame's start symbol was received.
         corrupt: (D,) ground truth: the decoded header/payload differs from what was sent (possible
             because [15,15], [15,11], [15,1] detect nothing). For metrics only, not an observation.
+        transmitter: (D,) ground truth: the robot whose light started the frame (the strongest transmitter
+            emitting a start symbol at the receiver when it detected the start; -1 for a noise start). Not an
+            observation: a sensor may use it only to know *whose light* lit its receivers (physics), never
+            to name the sender (use ``origin``).
         stats: counters of this step (scalars) and per-robot arrays ``<name>_per_robot`` (N,).
     """
 
@@ -107,6 +111,7 @@ class Deliveries:
     payload: np.ndarray
     slot: np.ndarray
     corrupt: np.ndarray
+    transmitter: np.ndarray | None = None
     stats: dict[str, Any] = field(default_factory=dict)
 
     def __len__(self) -> int:
@@ -120,6 +125,7 @@ class Deliveries:
         m = self.kind == kind
         return Deliveries(
             *(getattr(self, f)[m] for f in ("receiver", "origin", "sender", "seq", "detector", "kind", "length", "payload", "slot", "corrupt")),
+            transmitter=None if self.transmitter is None else self.transmitter[m],
             stats=self.stats,
         )
 
@@ -480,7 +486,7 @@ class Network:
         if self.gt_buf.shape[1] < det.buf.shape[1]:
             self.gt_buf = np.concatenate([self.gt_buf, np.zeros((self.n, det.buf.shape[1] - self.gt_buf.shape[1]), bool)], axis=1)
         dcap = self.n * (1 + S // (fmt.header_blocks * c.n + 1))  # completions per robot and step are bounded
-        d_int = np.zeros((dcap, 10), dtype=np.int64)
+        d_int = np.zeros((dcap, len(DELIVERY_FIELDS)), dtype=np.int64)
         d_pay = np.zeros((dcap, MAX_PAYLOAD), dtype=bool)
         counts = np.zeros(len(_COUNTERS), dtype=np.int64)
         per_robot = np.zeros((len(_PER_ROBOT), self.n), dtype=np.int64)
@@ -512,7 +518,7 @@ class Network:
         cols = {f: d_int[:D, i] for i, f in enumerate(DELIVERY_FIELDS)}
         L = cols["length"]
         Lmax = int(L.max())
-        out = {k: cols[k] for k in ("receiver", "origin", "sender", "seq", "type", "length", "detector", "slot", "done_slot")}
+        out = {k: cols[k] for k in ("receiver", "origin", "sender", "seq", "type", "length", "detector", "slot", "done_slot", "transmitter")}
         out["corrupt"] = cols["corrupt"].astype(bool)
         out["payload"] = d_pay[:D, :Lmax].copy()
         return [out]
@@ -734,7 +740,7 @@ class Network:
         det, fmt, c = self.det, self.fmt, self.code
         self._score_bits(robots)
         nbits = det.nbits[robots]
-        out: dict[str, list] = {k: [] for k in ("receiver", "origin", "sender", "seq", "type", "length", "payload", "detector", "slot", "corrupt", "done_slot")}
+        out: dict[str, list] = {k: [] for k in ("receiver", "origin", "sender", "seq", "type", "length", "payload", "detector", "slot", "corrupt", "done_slot", "transmitter")}
         for nb in np.unique(nbits):
             R = robots[nbits == nb]
             info, ok = c.decode_stream(det.buf[R, :nb])
@@ -775,6 +781,7 @@ class Network:
             out["slot"].append(det.start_slot[R[g]])
             out["corrupt"].append(corrupt[g])
             out["done_slot"].append(np.full(int(g.sum()), self.slot, dtype=np.int64))
+            out["transmitter"].append(self.gt_tx[R[g]])
         det.finish(robots)
         if not out["receiver"]:
             return None
@@ -787,7 +794,7 @@ class Network:
         if parts:
             d = {k: (np.concatenate([p[k] for p in parts]) if k != "payload" else _cat_pad_list([p[k] for p in parts])) for k in parts[0]}
         else:
-            d = {k: np.zeros(0, dtype=np.int64) for k in ("receiver", "origin", "sender", "seq", "type", "length", "detector", "slot", "done_slot")}
+            d = {k: np.zeros(0, dtype=np.int64) for k in ("receiver", "origin", "sender", "seq", "type", "length", "detector", "slot", "done_slot", "transmitter")}
             d["corrupt"] = np.zeros(0, dtype=bool)
             d["payload"] = np.zeros((0, 0), dtype=bool)
         # canonical order: by the slot the frame was completed in, then by receiver (one per robot and slot)
@@ -829,6 +836,7 @@ class Network:
             payload=d["payload"][keep],
             slot=d["slot"][keep],
             corrupt=d["corrupt"][keep],
+            transmitter=d["transmitter"][keep],
         )
         if len(out):
             self._count("rx_delivered", out.receiver)
