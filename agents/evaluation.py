@@ -31,6 +31,7 @@ __all__ = [
     "make_env",
     "run_episode",
     "evaluate",
+    "run_batch",
     "confidence_interval",
     "summarise",
     "write_csv",
@@ -119,20 +120,72 @@ def evaluate(
     seeds: Sequence[int],
     progress: bool = False,
     desc: str = "",
+    max_copies: int = 32,
 ) -> dict[str, np.ndarray]:
-    """Metrics per seed ``{metric: (n_seeds,)}`` for the policy built by ``policy_factory(env)``."""
-    env = make_env(task, **env_kwargs)
-    policy = policy_factory(env)
+    """Metrics per seed ``{metric: (n_seeds,)}`` for the policy built by ``policy_factory(env)``.
+
+    The seeds run side by side as copies of one batched core (:func:`swarm_envs.make_vec`), at most
+    ``max_copies`` at a time, each copy with its own policy instance; copy b seeded with ``s`` equals a single
+    env reset with ``s`` bit for bit, so the numbers are exactly those of :func:`run_episode` per seed
+    (``tests/test_scripted.py::test_batched_evaluation_equals_sequential``). ``max_copies=1`` runs one
+    seed at a time.
+    """
+    if max_copies < 1:
+        raise ValueError(f"max_copies must be >= 1, got {max_copies}")
+    seeds = [int(s) for s in seeds]
+    if not seeds:
+        raise ValueError("evaluate() needs at least one seed")
     rows: list[dict[str, float]] = []
-    iterator = seeds
+    chunks = [seeds[i : i + max_copies] for i in range(0, len(seeds), max_copies)]
+    bar = None
     if progress:
         from tqdm import tqdm
 
-        iterator = tqdm(seeds, desc=desc or f"eval {policy.name}", leave=False)
-    for seed in iterator:
-        rows.append(run_episode(env, policy, int(seed), task))
-    env.close()
+        bar = tqdm(total=len(seeds), desc=desc or "eval", leave=False)
+    for chunk in chunks:
+        rows.extend(run_batch(task, env_kwargs, policy_factory, chunk))
+        if bar is not None:
+            bar.update(len(chunk))
+    if bar is not None:
+        bar.close()
     return {name: np.array([r[name] for r in rows]) for name in rows[0]}
+
+
+def run_batch(task: str, env_kwargs: dict[str, Any], policy_factory: Callable[[Any], Policy], seeds: Sequence[int]) -> list[dict[str, float]]:
+    """One episode per seed, all seeds as copies of one vector env; returns reduced metrics per seed
+    (as :func:`run_episode`). Episodes end at ``max_cycles`` (the tasks never terminate early)."""
+    from swarm_envs.registry import ENV_IDS
+    from swarm_envs.vector import make_vec
+
+    reductions = TASK_METRICS[task]
+    env_id = {module: env_id for env_id, module in ENV_IDS.items()}[TASKS[task]]
+    vec = make_vec(env_id, len(seeds), **env_kwargs)
+    policies = [policy_factory(vec) for _ in seeds]
+    for policy, seed in zip(policies, seeds):
+        policy.reset(vec.n_agents, rng=np.random.default_rng([seed, 7919]))
+    obs, _ = vec.reset(seed=list(seeds))
+    B = len(seeds)
+    sums = {name: np.zeros(B) for name in reductions}
+    returns = np.zeros((B, vec.n_agents))
+    steps = 0
+    metrics: dict[str, np.ndarray] = {}
+    for _ in range(vec.max_cycles):
+        actions = np.stack([np.asarray(p.act_batch({k: v[b] for k, v in obs.items()}), dtype=np.float64) for b, p in enumerate(policies)])
+        obs, _, _, truncations, infos = vec.step(actions)
+        returns += vec.core.rewards  # float64, as the single env reports them
+        metrics = infos["metrics"]
+        for name in reductions:
+            sums[name] += metrics[name]
+        steps += 1
+        if truncations.all():
+            break
+    vec.close()
+    out = []
+    for b in range(B):
+        row = {name: (metrics[name][b] if how == "final" else sums[name][b] / max(steps, 1)) for name, how in reductions.items()}
+        row["episode_return"] = returns[b].mean()
+        out.append({k: float(v) for k, v in row.items()})
+    return out
 
 
 def random_factory(env) -> Policy:

@@ -189,3 +189,30 @@ def test_scripted_beats_random_with_full_sensing(task):
     random = evaluate(task, kw, random_factory, seeds)[metric]
     diff = sign * (scripted - random)
     assert diff.mean() > 0 and stats.ttest_1samp(diff, 0.0, alternative="greater").pvalue < 0.01, (scripted, random)
+
+
+@pytest.mark.parametrize(
+    "task, kwargs, factory",
+    [
+        ("aggregation", {"sensing": "full", "max_cycles": 40}, "scripted"),
+        ("flocking", {"sensing": "full", "max_cycles": 30}, "random"),
+        ("centroid_seeking", {"sensing": "full", "max_cycles": 40}, "scripted"),
+    ],
+)
+def test_batched_evaluation_equals_sequential(task, kwargs, factory):
+    """Evaluating seeds as copies of one vector env gives exactly the per-seed numbers of run_episode
+    (copies are bit-identical to single envs; each copy has its own policy instance and generator)."""
+    make = (lambda env: make_scripted(TASK_SCRIPTED[task], env)) if factory == "scripted" else random_factory
+    seeds = [3, 11, 4]
+    batched = evaluate(task, kwargs, make, seeds, max_copies=2)  # two chunks: 2 + 1 copies
+    env = make_env(task, **kwargs)
+    for i, seed in enumerate(seeds):
+        single = run_episode(env, make(env), seed, task)
+        assert {k: v[i] for k, v in batched.items()} == single
+
+
+def test_evaluate_rejects_bad_arguments():
+    with pytest.raises(ValueError, match="max_copies"):
+        evaluate("aggregation", {}, random_factory, [0], max_copies=0)
+    with pytest.raises(ValueError, match="at least one seed"):
+        evaluate("aggregation", {}, random_factory, [])
