@@ -171,18 +171,40 @@ def decode_ids(
     G = int(len(starts))
     if G == 0:
         return np.zeros(0, dtype=np.int64)
-    level = light[:, :, None] * frames[:, None, :]  # (L, n_d, n_bits)
-    level = np.add.reduceat(level, starts, axis=0) if G < L else level
-    counts = level * float(model.adc_scale)
-    if sigma > 0:
-        counts = counts + _noise(rng, sigma, counts.shape, row_copy)
-    counts = np.clip(np.round(counts), 0.0, float(model.adc_max))
-    bit = counts / float(model.adc_scale) >= float(model.no_reading_floor)  # (G, n_d, n_bits)
-    ident = bit[:, :, 1 : 1 + ID_BITS].astype(np.int64) @ _WEIGHTS
-    crc = bit[:, :, 1 + ID_BITS :].astype(np.int64) @ _WEIGHTS
-    ok = bit[:, :, 0]
+    sizes = np.diff(np.r_[starts, L])
+    group = np.repeat(np.arange(G), sizes)
+
+    def read_bits(level: np.ndarray, rows: np.ndarray) -> np.ndarray:  # ADC + floor, as the matrix
+        counts = level * float(model.adc_scale)
+        if sigma > 0:
+            counts = counts + _noise(rng, sigma, counts.shape, None if row_copy is None else row_copy[rows])
+        counts = np.clip(np.round(counts), 0.0, float(model.adc_max))
+        return counts / float(model.adc_scale) >= float(model.no_reading_floor)
+
+    # start bit (1 in every frame): which channels hear a frame at all
+    start = np.add.reduceat(light, starts, axis=0) if G < L else light
+    heard = read_bits(start[:, :, None], np.arange(G))[:, :, 0]  # (G, n_d)
+    # the rest of the frame, only on channels that heard a start bit (draws: per copy, after the start bits)
+    hg, hi = np.nonzero(heard)
+    H = hg.size
+    row_of = np.full((G, n_d), -1, dtype=np.int64)
+    row_of[hg, hi] = np.arange(H)
+    ll, li = np.nonzero(heard[group])  # (link, detector) pairs that feed a heard channel
+    rows = row_of[group[ll], li]
+    order = np.argsort(rows, kind="stable")  # every heard channel gets >= 1 link of its group
+    level = light[ll, li, None] * frames[ll, 1:]
+    if ll.size > H:  # light adds: colliding bits OR
+        level = np.add.reduceat(level[order], np.flatnonzero(np.r_[True, np.diff(rows[order]) != 0]), axis=0)
+    else:
+        level = level[order]
+    bits = read_bits(level, hg)
+    ident = np.zeros((G, n_d), dtype=np.int64)
+    crc = np.zeros((G, n_d), dtype=np.int64)
+    ident[hg, hi] = bits[:, :ID_BITS].astype(np.int64) @ _WEIGHTS
+    crc[hg, hi] = bits[:, ID_BITS:].astype(np.int64) @ _WEIGHTS
+    ok = heard
     if id_check:
-        ok &= _CRC16[ident] == crc
+        ok = ok & (_CRC16[ident] == crc)
     big = np.int64(2**ID_BITS)
     lo = np.where(ok, ident, big).min(axis=1)
     hi = np.where(ok, ident, -1).max(axis=1)
