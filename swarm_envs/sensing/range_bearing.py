@@ -85,6 +85,8 @@ __all__ = [
     "ID_BITS",
     "id_frames",
     "decode_ids",
+    "NOT_HEARD",
+    "CONFLICT",
     "RangeBearingReadings",
     "RangeBearingSensor",
 ]
@@ -207,9 +209,8 @@ def decode_ids(
         ok = ok & (_CRC16[ident] == crc)
     big = np.int64(2**ID_BITS)
     lo = np.where(ok, ident, big).min(axis=1)
-    hi = np.where(ok, ident, -1).max(axis=1)
-    return np.where(lo == big, NOT_HEARD, np.where(lo == hi, lo, CONFLICT))
-
+    top = np.where(ok, ident, -1).max(axis=1)
+    return np.where(lo == big, NOT_HEARD, np.where(lo == top, lo, CONFLICT))
 
 
 def _model(platform: Platform):
