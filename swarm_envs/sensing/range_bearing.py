@@ -41,7 +41,8 @@ of the receiver's matrix. Light adds. So, at a receiver u:
 
 - **id message** (:func:`decode_ids`): each firing TX w sends ``frame(w)`` = a start bit (1), its 16 id
   bits (LSB first; a copy's own robot number) and the 16 bits of ``CRC-16(id)`` (avr-libc
-  ``_crc16_update``, polynomial 0xA001, init 0xFFFF, over the two id bytes), on-off keyed with all its
+  ``_crc16_update``, polynomial 0xA001, over the two id bytes; the init 0xFFFF is our choice: firmware
+  versions differ on whether the header CRC covers the sender id), on-off keyed with all its
   emitters on. Detector i of u sees, in bit slot k, ``sum_w frame_k(w) sum_j lambda_ij(w)`` (a bit of
   colliding frames is the OR of their bits), read through the same ADC as the matrix (noise sigma,
   rounding, clipping) and taken as 1 at or above the firmware's 7-count floor (``no_reading_floor``;
