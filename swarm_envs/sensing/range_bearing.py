@@ -22,6 +22,49 @@ paper's claims of SPEC 3.4 with margin (range |mean| + std well below one diamet
 bearing error a few degrees, heading error larger and 60-degree periodic). The sweep also reports
 sigma = 0, 1, 4, 8 counts so the sensitivity to this choice is visible. For the e-puck the ADC noise of
 [T20] (variance 2.5 counts^2) is used.
+
+Hardware bearing error. [F14 Sec. V] finds its bearing error "uniformly below 0" and attributes it to
+an asymmetry of the real sensors (Fig. 4a) that its model does not include; it gives no magnitude, and
+its conclusion notes that sensors and emitters differ from robot to robot (also without numbers). With no
+measured asymmetry to cite, we add no bias or per-robot gain spread: the brightness noise above *is*
+the hardware error model (see the README for what it gives beside Figs. 6-7).
+
+Collisions and the decoded transmitter (SPEC 3.3). A measurement starts with a message: [F14 Sec. II]
+"RX ... requests R&B information from a specific robot TX"; in the Droplet firmware the TX broadcasts an
+``rnb_r`` command (a UART frame on the 38 kHz carrier whose header holds the 16-bit sender id and a
+CRC-16) and, a fixed delay after it, lights emitter 0..5 in turn for fixed times; a receiver that decodes
+the command samples its 6 sensors in the same fixed slots [F14 Sec. II: "predetermined duration and
+sequence"]. Two transmitters that fire in the same control step (hidden from each other, so contention
+does not stop them) are modelled with *aligned slots*: the step is one slot of the schedule, both
+commands start at its beginning, so bit k of both frames coincide and emitter j of both lands in column j
+of the receiver's matrix. Light adds. So, at a receiver u:
+
+- **id message** (:func:`decode_ids`): each firing TX w sends ``frame(w)`` = a start bit (1), its 16 id
+  bits (LSB first; a copy's own robot number) and the 16 bits of ``CRC-16(id)`` (avr-libc
+  ``_crc16_update``, polynomial 0xA001, over the two id bytes; the init 0xFFFF is our choice: firmware
+  versions differ on whether the header CRC covers the sender id), on-off keyed with all its
+  emitters on. Detector i of u sees, in bit slot k, ``sum_w frame_k(w) sum_j lambda_ij(w)`` (a bit of
+  colliding frames is the OR of their bits), read through the same ADC as the matrix (noise sigma,
+  rounding, clipping) and taken as 1 at or above the firmware's 7-count floor (``no_reading_floor``;
+  the demodulating receiver's own threshold is not published, so the message is heard where the R&B
+  light is above the floor). Each detector is a separate UART channel (the Droplet has one per
+  direction): a channel *hears* a frame when its start bit is 1, and the frame *checks* when its CRC
+  bits equal the CRC of its id bits (``id_check=True``; ``False`` models a firmware whose CRC covers
+  only the payload, identical for every ``rnb_r``, so the sender id is unchecked).
+- **rule**: the receiver measures only if at least one channel's frame checks and all checking channels
+  name the same id; it attributes the reading to that *decoded* id. Nothing checks: no request heard,
+  no reading. Checking channels that disagree (two senders heard in one slot): the light cannot be
+  attributed, the receiver discards the slot. A decoded id that is not a robot of the receiver's own
+  env copy, or is the receiver itself, is rejected. OR-ed ids almost never pass a CRC, so two colliding
+  TXs that both reach a channel are rejected; a TX too weak to corrupt any channel's frame still adds
+  its light to the matrix (a *corrupted* reading attributed to the stronger one).
+- **matrix**: the receiver's matrix is the sum of all firing TXs' noiseless brightness matrices it
+  sees, then power selection, ADC noise and clipping (:func:`measure`) and :func:`estimate`. With one
+  firing TX in view this is exactly the single-pair reading (bit for bit: the id noise comes from its
+  own child stream).
+
+The true transmitter (the one contributing the brightest entry) and the number of overlapping firings
+are kept as ground truth (``RangeBearingReadings.true_tx``, ``.n_overlap``) for infos and metrics only.
 """
 
 from __future__ import annotations
@@ -40,6 +83,11 @@ __all__ = [
     "measure",
     "estimate",
     "read",
+    "ID_BITS",
+    "id_frames",
+    "decode_ids",
+    "NOT_HEARD",
+    "CONFLICT",
     "RangeBearingReadings",
     "RangeBearingSensor",
 ]
@@ -49,6 +97,121 @@ __all__ = [
 #: power, so 1/256 is needed to stay below 255 (the Droplet sets LED current with a 7-bit digital
 #: potentiometer [F14 Sec. III], so a ~1/100 dynamic range is plausible).
 POWER_LADDER: tuple[float, ...] = tuple(2.0**-k for k in range(9))
+
+#: Bits of a robot id in the ``rnb_r`` command header (the Droplet firmware's ``uint16_t`` sender id).
+ID_BITS = 16
+_CRC_BITS = 16
+#: Decode outcomes of :func:`decode_ids` (besides a decoded id >= 0).
+NOT_HEARD, CONFLICT = -1, -2
+
+
+def _crc16_table() -> np.ndarray:
+    """CRC-16 of every 16-bit id: avr-libc ``_crc16_update`` (poly 0xA001) over the low then high byte,
+    init 0xFFFF (the Droplet firmware's header check)."""
+    ids = np.arange(2**ID_BITS, dtype=np.uint32)
+    crc = np.full(ids.size, 0xFFFF, dtype=np.uint32)
+    for byte in (ids & 0xFF, ids >> 8):
+        crc ^= byte
+        for _ in range(8):
+            crc = np.where(crc & 1, (crc >> 1) ^ 0xA001, crc >> 1)
+    return crc.astype(np.int64)
+
+
+_CRC16 = _crc16_table()
+_WEIGHTS = 1 << np.arange(ID_BITS, dtype=np.int64)
+
+
+def id_frames(ids: np.ndarray) -> np.ndarray:
+    """(K, 1 + 16 + 16) bool on-off-keyed frames of robot ids: start bit, id bits (LSB first), CRC-16 bits.
+
+    Args:
+        ids: (K,) ints in [0, 2**16) (a copy's own robot numbers).
+    """
+    ids = np.asarray(ids, dtype=np.int64).reshape(-1)
+    if ids.size and (ids.min() < 0 or ids.max() >= 2**ID_BITS):
+        raise ValueError(f"robot ids must be in [0, {2**ID_BITS}) to fit the {ID_BITS}-bit id field")
+    bits = np.arange(ID_BITS)
+    return np.concatenate(
+        [np.ones((ids.size, 1), bool), (ids[:, None] >> bits) & 1 == 1, (_CRC16[ids][:, None] >> bits) & 1 == 1], axis=1
+    )
+
+
+def decode_ids(
+    light: np.ndarray,
+    frames: np.ndarray,
+    starts: np.ndarray,
+    rng: np.random.Generator | CopyRandom,
+    sigma: float,
+    platform: Platform | str = "droplet",
+    id_check: bool = True,
+    row_copy: np.ndarray | None = None,
+) -> np.ndarray:
+    """Ids that receivers decode from the (possibly colliding) ``rnb_r`` frames of the TXs they see.
+
+    Links are grouped by receiving event: group g is links ``starts[g]:starts[g+1]`` (one link = no
+    collision). Per group, detector i's level in bit slot k is ``sum_links frames[l, k] * light[l, i]``
+    (light adds, so colliding bits OR), read as ``clip(round(level * s + n), 0, adc_max)`` counts with
+    n ~ N(0, sigma^2) and taken as a 1 at or above ``no_reading_floor`` (module docstring). Each detector is
+    a channel: it hears a frame when its start bit reads 1; the frame checks when its CRC bits equal the
+    CRC-16 of its id bits (always, with ``id_check=False``).
+
+    Args:
+        light: (L, n_d) light of each link on each RX detector with all TX emitters on (model units).
+        frames: (L, n_bits) bool frame of each link's TX (:func:`id_frames`).
+        starts: (G,) sorted first link of each group (``starts[0] = 0``).
+        rng, row_copy: noise stream(s); ``row_copy`` (G,) the env copy of each group, as in :func:`measure`.
+        sigma: ADC noise (counts).
+        platform: platform of the robots (ADC constants and floor).
+        id_check: apply the CRC check.
+
+    Returns:
+        (G,) decoded id (a copy's own robot number), or :data:`NOT_HEARD` (-1: no channel's frame checks)
+        or :data:`CONFLICT` (-2: checking channels name different ids).
+    """
+    model = get_platform(platform).ir_model
+    light = np.asarray(light, dtype=float)
+    L, n_d = light.shape
+    G = int(len(starts))
+    if G == 0:
+        return np.zeros(0, dtype=np.int64)
+    sizes = np.diff(np.r_[starts, L])
+    group = np.repeat(np.arange(G), sizes)
+
+    def read_bits(level: np.ndarray, rows: np.ndarray) -> np.ndarray:  # ADC + floor, as the matrix
+        counts = level * float(model.adc_scale)
+        if sigma > 0:
+            counts = counts + _noise(rng, sigma, counts.shape, None if row_copy is None else row_copy[rows])
+        counts = np.clip(np.round(counts), 0.0, float(model.adc_max))
+        return counts / float(model.adc_scale) >= float(model.no_reading_floor)
+
+    # start bit (1 in every frame): which channels hear a frame at all
+    start = np.add.reduceat(light, starts, axis=0) if G < L else light
+    heard = read_bits(start[:, :, None], np.arange(G))[:, :, 0]  # (G, n_d)
+    # the rest of the frame, only on channels that heard a start bit (draws: per copy, after the start bits)
+    hg, hi = np.nonzero(heard)
+    H = hg.size
+    row_of = np.full((G, n_d), -1, dtype=np.int64)
+    row_of[hg, hi] = np.arange(H)
+    ll, li = np.nonzero(heard[group])  # (link, detector) pairs that feed a heard channel
+    rows = row_of[group[ll], li]
+    order = np.argsort(rows, kind="stable")  # every heard channel gets >= 1 link of its group
+    level = light[ll, li, None] * frames[ll, 1:]
+    if ll.size > H:  # light adds: colliding bits OR
+        level = np.add.reduceat(level[order], np.flatnonzero(np.r_[True, np.diff(rows[order]) != 0]), axis=0)
+    else:
+        level = level[order]
+    bits = read_bits(level, hg)
+    ident = np.zeros((G, n_d), dtype=np.int64)
+    crc = np.zeros((G, n_d), dtype=np.int64)
+    ident[hg, hi] = bits[:, :ID_BITS].astype(np.int64) @ _WEIGHTS
+    crc[hg, hi] = bits[:, ID_BITS:].astype(np.int64) @ _WEIGHTS
+    ok = heard
+    if id_check:
+        ok = ok & (_CRC16[ident] == crc)
+    big = np.int64(2**ID_BITS)
+    lo = np.where(ok, ident, big).min(axis=1)
+    top = np.where(ok, ident, -1).max(axis=1)
+    return np.where(lo == big, NOT_HEARD, np.where(lo == top, lo, CONFLICT))
 
 
 def _model(platform: Platform):
@@ -246,14 +409,17 @@ def read(
     ladder: tuple[float, ...] = POWER_LADDER,
     near_model: bool = False,
     row_copy: np.ndarray | None = None,
+    low_brightness: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Measure and estimate P pairs with power control: (range m, bearing rad, heading rad, power).
+    """Measure and estimate P matrices with power control: (range m, bearing rad, heading rad, power).
 
     Default: :func:`measure` on the power ladder, then :func:`estimate` divided by the chosen power.
     ``near_model=True`` (Droplet firmware style): one full-power reading; a saturated one is measured
     again with the emitters at the firmware's low power (brightness from the pair geometry with
     :class:`swarm_envs.ir.models.DropletLowPowerIR`) and inverted with that low-power amplitude fit;
     its power is reported as NaN (a different fit, not a factor). ``rng``/``row_copy`` as in :func:`measure`.
+    ``low_brightness`` (P, n, n): the low-power matrices to use instead (e.g. summed over colliding TXs);
+    ``rel_position``/``rel_heading`` are then unused.
     """
     platform = get_platform(platform)
     if not near_model:
@@ -266,8 +432,11 @@ def read(
     sat = np.flatnonzero(meas.reshape(len(meas), -1).max(axis=1) >= float(platform.ir_model.adc_max))
     if sat.size:
         low = DropletLowPowerIR(platform)
-        lam = pair_gains(np.asarray(rel_position)[sat], np.asarray(rel_heading)[sat], platform, model=low)
-        lam = lam * (np.asarray(brightness)[sat] > 0)  # rays occluded at full power stay dark (the Droplet lights every clear ray)
+        if low_brightness is not None:
+            lam = np.asarray(low_brightness)[sat]
+        else:
+            lam = pair_gains(np.asarray(rel_position)[sat], np.asarray(rel_heading)[sat], platform, model=low)
+            lam = lam * (np.asarray(brightness)[sat] > 0)  # rays occluded at full power stay dark (the Droplet lights every clear ray)
         meas_low, _ = measure(lam, rng, sigma, platform, (1.0,), None if row_copy is None else row_copy[sat])
         R[sat], th[sat], ph[sat] = estimate(meas_low, platform, model=low)
         p = p.copy()
@@ -281,11 +450,16 @@ class RangeBearingReadings:
 
     Attributes:
         rx: (K,) int receiving robot.
-        tx: (K,) int transmitting (sensed) robot.
+        tx: (K,) int robot the reading is attributed to: the id the receiver *decoded* from the request
+            (module docstring), as a row index of the receiver's own env copy.
         range: (K,) estimated centre distance (m).
         bearing: (K,) estimated bearing of tx in rx's frame (rad).
         heading: (K,) estimated heading of tx in rx's frame (rad).
         age: (K,) int control steps since the reading was measured (0 = this step).
+        true_tx: (K,) int ground truth, never an observation: the firing robot whose light gave the
+            brightest entry of the reading's matrix (``!= tx``: misattributed).
+        n_overlap: (K,) int ground truth: number of firing robots whose light superposed in the matrix
+            (1 = a clean single firing).
     """
 
     rx: np.ndarray
@@ -294,6 +468,8 @@ class RangeBearingReadings:
     bearing: np.ndarray
     heading: np.ndarray
     age: np.ndarray
+    true_tx: np.ndarray | None = None
+    n_overlap: np.ndarray | None = None
 
     def __len__(self) -> int:
         return int(self.rx.shape[0])
@@ -307,20 +483,25 @@ class RangeBearingSensor:
     - power control: a saturated matrix is re-measured on the power ladder (SPEC 3.1), or with
       ``near_model=True`` (Droplet) once at the firmware's low power and inverted with its own amplitude
       fit (:class:`swarm_envs.ir.models.DropletLowPowerIR`).
-    - ``schedule="contention"``: every robot draws a random priority; a robot *fires* (its TX emits the
-      R&B sequence) iff no robot it shares an IR link with and of higher priority fires. This is the
-      greedy maximal independent set in priority order, computed with vectorised Luby rounds over the
+    - ``schedule="contention"``: every robot draws a random priority; a robot *fires* (sends the request
+      and its R&B sequence) iff no robot it shares an IR link with and of higher priority fires. This is
+      the greedy maximal independent set in priority order, computed with vectorised Luby rounds over the
       link pairs. Neighbours are the robots it shares a link with this step (in range, in line of
-      sight), so two robots hidden from each other by a third may fire together (hidden terminals; the
-      shared receiver then gets both readings: superposition is not modelled).
-      ``schedule="every_step"``: every robot fires every step (idealised).
-    - every robot with a link to a firing TX gets a fresh reading of it (age 0): the link's noiseless
-      gains -> :func:`measure` (noise, power selection, clipping) -> :func:`estimate`. Matrices below the
-      no-reading floor give nothing.
+      sight), so two robots hidden from each other by a third may fire together (hidden terminals): at a
+      receiver that sees both their frames and light superpose (module docstring).
+      ``schedule="every_step"``: every robot fires every step, measured one at a time as on the paper's
+      gantry (idealised: no superposition).
+    - every robot with a link to a firing TX decodes the request id (:func:`decode_ids`) and, when that
+      names a robot of its own copy other than itself, gets a fresh reading attributed to that id (age 0):
+      the summed noiseless gains of the firing TXs it sees -> :func:`measure` (noise, power selection,
+      clipping) -> :func:`estimate`. Matrices below the no-reading floor give nothing.
     - earlier readings persist with ``age + 1`` until refreshed, and are dropped once older than
       ``max_age`` steps.
 
-    Nothing here reads ground truth except through the links' gains (the brightness matrices).
+    ``collisions=False`` measures every firing as if alone and attributes it to the true TX (the model
+    before collisions; a baseline for validation). ``id_check=False``: the sender id is not CRC-checked.
+    Nothing here reads ground truth except through the links' gains (the brightness matrices); the
+    true transmitter goes only to the ground-truth fields of the readings.
     """
 
     def __init__(
@@ -333,6 +514,8 @@ class RangeBearingSensor:
         max_age: int = 10,
         ladder: tuple[float, ...] = POWER_LADDER,
         near_model: bool = False,
+        collisions: bool = True,
+        id_check: bool = True,
     ) -> None:
         self.platform = get_platform(platform)
         _model(self.platform)
@@ -343,12 +526,19 @@ class RangeBearingSensor:
             raise ValueError(f"schedule must be 'contention' or 'every_step', got {schedule!r}")
         self.rng = rng if isinstance(rng, CopyRandom) else CopyRandom([rng])
         self.copy_size = int(n_robots)
+        if collisions and self.copy_size > 2**ID_BITS:
+            raise ValueError(f"n_robots={self.copy_size} does not fit the {ID_BITS}-bit id of the R&B request")
         self.n_robots = self.copy_size * self.rng.n_copies
         self.copy_of = np.repeat(np.arange(self.rng.n_copies), self.copy_size)
         self.noise_sigma = float(self.platform.ir_model.default_noise_sigma if noise_sigma is None else noise_sigma)
         self.schedule = schedule
         self.max_age = int(max_age)
         self.ladder = tuple(ladder)
+        self.collisions = bool(collisions)
+        self.id_check = bool(id_check)
+        self._frames = id_frames(np.arange(self.copy_size)) if self.collisions else None
+        # id-decoding noise: a child of each copy's stream, so the matrix noise draws are as without ids
+        self.id_rng = CopyRandom([g.spawn(1)[0] for g in self.rng.generators])
         self.last_fired = np.zeros(self.n_robots, dtype=bool)
         self.reset()
 
@@ -360,15 +550,19 @@ class RangeBearingSensor:
             self._bearing = np.zeros(0)
             self._heading = np.zeros(0)
             self._age = np.zeros(0, dtype=np.int64)
+            self._true = np.zeros(0, dtype=np.int64)
+            self._overlap = np.zeros(0, dtype=np.int64)
             self.last_fired = np.zeros(self.n_robots, dtype=bool)
             return
         copies = np.asarray(copies, dtype=np.int64).reshape(-1)
         if rngs is not None:
             for b, g in zip(copies, rngs):
                 self.rng.generators[b] = g
+                self.id_rng.generators[b] = g.spawn(1)[0]
         keep = ~np.isin((self._key // self.n_robots) // self.copy_size, copies)
         self._key, self._range, self._bearing = self._key[keep], self._range[keep], self._bearing[keep]
         self._heading, self._age = self._heading[keep], self._age[keep]
+        self._true, self._overlap = self._true[keep], self._overlap[keep]
         self.last_fired[np.isin(self.copy_of, copies)] = False
 
     # -- scheduling ------------------------------------------------------------------------------------
@@ -395,22 +589,68 @@ class RangeBearingSensor:
         return fired
 
     # -- one control step ------------------------------------------------------------------------------
-    def step(self, links: IRLinks) -> RangeBearingReadings:
-        """Advance one control step with this step's links; return all current readings."""
+    def step(self, links: IRLinks, fired: np.ndarray | None = None) -> RangeBearingReadings:
+        """Advance one control step with this step's links; return all current readings.
+
+        ``fired``: optional (N,) bool robots that fire this step instead of the schedule's choice (for
+        validation and tests; no priorities are drawn then)."""
         N = self.n_robots
-        fired = self.fire_mask(links)
+        if fired is None:
+            fired = self.fire_mask(links)
+        else:
+            fired = np.asarray(fired, dtype=bool).reshape(-1)
+            if fired.shape != (N,):
+                raise ValueError(f"fired must have shape ({N},), got {fired.shape}")
         self.last_fired = fired
-        sel = np.nonzero(fired[links.tx])[0]
-        if sel.size:
-            R, th, ph, _ = read(
-                links.gains[sel], links.rel_position[sel], links.rel_heading[sel], self.rng, self.noise_sigma,
-                self.platform, self.ladder, self.near_model, self.copy_of[links.rx[sel]],
+        sel = np.nonzero(fired[links.tx])[0]  # links from firing TXs, sorted by (rx, tx)
+        rx_sel = links.rx[sel]
+        superpose = self.collisions and self.schedule == "contention"
+        if superpose and sel.size:
+            starts = np.flatnonzero(np.r_[True, rx_sel[1:] != rx_sel[:-1]])
+        else:
+            starts = np.arange(sel.size)
+        grx = rx_sel[starts]
+        n_over = np.diff(np.r_[starts, sel.size]).astype(np.int64)
+        gains = links.gains[sel]
+        lam = np.add.reduceat(gains, starts, axis=0) if starts.size < sel.size else gains
+        # ground truth: the firing TX with the brightest entry of each group
+        if starts.size == sel.size:
+            true = links.tx[sel]
+        else:
+            true = _group_argmax(gains.reshape(sel.size, -1).max(axis=1), starts, links.tx[sel])
+
+        if self.collisions and sel.size:
+            local = np.asarray(links.tx[sel], dtype=np.int64) % self.copy_size
+            dec = decode_ids(
+                gains.sum(axis=2), self._frames[local], starts, self.id_rng, self.noise_sigma, self.platform,
+                self.id_check, self.copy_of[grx],
             )
-            ok = np.isfinite(R)
-            sel, R, th, ph = sel[ok], R[ok], th[ok], ph[ok]
+            base = self.copy_of[grx].astype(np.int64) * self.copy_size
+            ok = (dec >= 0) & (dec < self.copy_size) & (base + dec != grx)
+            tx_dec = base + dec
+        else:
+            ok = np.ones(starts.size, dtype=bool)
+            tx_dec = true.astype(np.int64)
+        g = np.flatnonzero(ok)
+        if g.size:
+            low = None
+            if self.near_model:
+                from swarm_envs.ir.models import DropletLowPowerIR
+
+                low_l = pair_gains(links.rel_position[sel], links.rel_heading[sel], self.platform, model=DropletLowPowerIR(self.platform))
+                low_l = low_l * (gains > 0)  # rays occluded at full power stay dark
+                low = (np.add.reduceat(low_l, starts, axis=0) if starts.size < sel.size else low_l)[g]
+            single = starts.size == sel.size
+            R, th, ph, _ = read(
+                lam[g], links.rel_position[sel][starts[g]] if single else None,
+                links.rel_heading[sel][starts[g]] if single else None, self.rng, self.noise_sigma,
+                self.platform, self.ladder, self.near_model, self.copy_of[grx[g]], low,
+            )
+            fin = np.isfinite(R)
+            g, R, th, ph = g[fin], R[fin], th[fin], ph[fin]
         else:
             R = th = ph = np.zeros(0)
-        new_key = links.rx[sel].astype(np.int64) * N + links.tx[sel].astype(np.int64)
+        new_key = grx[g].astype(np.int64) * N + tx_dec[g]
 
         age = self._age + 1
         keep = (age <= self.max_age) & ~np.isin(self._key, new_key)
@@ -421,6 +661,8 @@ class RangeBearingSensor:
         self._bearing = np.concatenate([self._bearing[keep], th])[order]
         self._heading = np.concatenate([self._heading[keep], ph])[order]
         self._age = np.concatenate([age[keep], np.zeros(new_key.size, dtype=np.int64)])[order]
+        self._true = np.concatenate([self._true[keep], true[g].astype(np.int64)])[order]
+        self._overlap = np.concatenate([self._overlap[keep], n_over[g]])[order]
         return self.readings()
 
     def readings(self) -> RangeBearingReadings:
@@ -428,5 +670,14 @@ class RangeBearingSensor:
         rx, tx = np.divmod(self._key, self.n_robots)
         return RangeBearingReadings(
             rx.astype(np.intp), tx.astype(np.intp), self._range.copy(), self._bearing.copy(),
-            self._heading.copy(), self._age.copy(),
+            self._heading.copy(), self._age.copy(), self._true.astype(np.intp), self._overlap.copy(),
         )
+
+
+def _group_argmax(values: np.ndarray, starts: np.ndarray, labels: np.ndarray) -> np.ndarray:
+    """Per contiguous group (``starts``), the label of the row with the largest value (first on ties)."""
+    n = values.size
+    group = np.repeat(np.arange(starts.size), np.diff(np.r_[starts, n]))
+    order = np.lexsort((-values, group))  # within each group, largest first
+    first = order[starts]
+    return labels[first]

@@ -14,6 +14,11 @@ are those of its text (SPEC 3.4):
 - bearing error a few degrees [Fig. 6];
 - heading error larger than the bearing error, periodic with the 60-degree channel spacing [Fig. 7];
 - usable down to one robot radius of gap.
+
+Then the collision rows (:func:`collisions`, issue 11): fractions of clean, corrupted, misattributed and
+lost readings (i) for two transmitters hidden from each other firing in the same step at a receiver that
+sees both, and (ii) in a dense random swarm under the contention schedule, each beside the model without
+collisions (every firing measured alone and attributed to the true transmitter).
 """
 
 from __future__ import annotations
@@ -25,9 +30,10 @@ import time
 
 import numpy as np
 
-from swarm_envs.ir.layer import wrap_angle
+from swarm_envs.copies import CopyRandom
+from swarm_envs.ir.layer import IRLinks, compute_links, pair_gains, wrap_angle
 from swarm_envs.platforms import get_platform
-from swarm_envs.sensing.range_bearing import brightness, read
+from swarm_envs.sensing.range_bearing import RangeBearingSensor, brightness, read
 
 DROPLET_DIAMETER_CM = 4.4
 
@@ -173,6 +179,101 @@ def _sensitivity(platform_name, sigmas, seed, near_model=False):
     return rows
 
 
+def _classify(r, links, n_expected):
+    """Fresh readings (age 0) against ground truth: (clean, corrupted, misattributed, lost) fractions of
+    ``n_expected`` readings. Misattributed: attributed to a robot other than the one whose light gave the
+    matrix's brightest entry (``true_tx``). Corrupted: attributed right, but range error > 25 % of the
+    distance or bearing error > 15 deg w.r.t. that robot. Lost: expected readings that did not arrive."""
+    fresh = r.age == 0
+    idx = {(int(u), int(w)): k for k, (u, w) in enumerate(zip(links.rx, links.tx))}
+    clean = corrupted = mis = 0
+    for u, w, t, R, b in zip(r.rx[fresh], r.tx[fresh], r.true_tx[fresh], r.range[fresh], r.bearing[fresh]):
+        p = idx.get((int(u), int(w)))
+        if w != t or p is None:
+            mis += 1
+        elif abs(R - links.distance[p]) > 0.25 * links.distance[p] or abs(wrap_angle(b - links.bearing[p])) > np.radians(15):
+            corrupted += 1
+        else:
+            clean += 1
+    n = max(int(n_expected), 1)
+    return np.array([clean, corrupted, mis, max(n_expected - clean - corrupted - mis, 0)]) / n
+
+
+def _hidden_pairs(platform, trials, sigma, seed, collisions, id_check, swarm=10):
+    """Two TXs hidden from each other (no link between them, by construction: an obstacle or distance)
+    fire in the same step; the RX (robot 0 of a swarm of ``swarm``) sees both with line of sight. Each
+    trial is its own env copy; TX ids are random robots 1..swarm-1, other robots far away."""
+    rng = np.random.default_rng(seed)
+    scale = platform.diameter * 100.0 / DROPLET_DIAMETER_CM
+    d = rng.uniform(6.6, 20.0, (trials, 2)) * scale / 100.0
+    b = rng.uniform(-np.pi, np.pi, (trials, 2))
+    h = rng.uniform(-np.pi, np.pi, (trials, 2))
+    ids = np.stack([rng.choice(np.arange(1, swarm), 2, replace=False) for _ in range(trials)])
+    rel = d[..., None] * np.stack([np.cos(b), np.sin(b)], -1)  # (T, 2, 2) TX centres in the RX frame
+    apart = np.hypot(*(rel[:, 0] - rel[:, 1]).T) > platform.diameter
+    rel, h, ids = rel[apart], h[apart], ids[apart]
+    T = len(ids)
+    base = np.arange(T)[:, None] * swarm
+    rx = np.repeat(np.arange(T) * swarm, 2)
+    tx = (base + ids).reshape(-1)
+    order = np.lexsort((tx, rx))
+    rx, tx = rx[order], tx[order]
+    relp, relh = rel.reshape(-1, 2)[order], h.reshape(-1)[order]
+    links = IRLinks(rx, tx, np.hypot(*relp.T), relp, relh, pair_gains(relp, relh, platform), T * swarm)
+    fired = np.zeros(T * swarm, bool)
+    fired[tx] = True
+    sensor = RangeBearingSensor(platform, swarm, CopyRandom([np.random.default_rng([seed, k]) for k in range(T)]),
+                                noise_sigma=sigma, collisions=collisions, id_check=id_check)
+    r = sensor.step(links, fired=fired)
+    return _classify(r, links, 2 * T), T
+
+
+def _dense_swarm(platform, n, side, scenes, steps, sigma, seed, collisions, id_check):
+    """Contention-scheduled steps in random static scenes of ``n`` robots in a ``side`` x ``side`` square
+    (per-ray occlusion). Expected readings per step: links from firing robots whose noiseless brightest
+    entry reaches the no-reading floor."""
+    rng = np.random.default_rng(seed)
+    floor = platform.ir_model.no_reading_floor
+    totals = np.zeros(4)
+    n_expected = 0
+    overlap = []
+    for k in range(scenes):
+        pos = []
+        while len(pos) < n:
+            p = rng.uniform(0, side, 2)
+            if all(np.hypot(*(p - q)) > 1.05 * platform.diameter for q in pos):
+                pos.append(p)
+        hd = rng.uniform(-np.pi, np.pi, n)
+        links = compute_links(np.array(pos), hd, platform)
+        lit = links.gains.reshape(len(links), -1).max(axis=1) >= floor
+        sensor = RangeBearingSensor(platform, n, np.random.default_rng([seed, k]), noise_sigma=sigma,
+                                    collisions=collisions, id_check=id_check)
+        for _ in range(steps):
+            r = sensor.step(links)
+            expected = int((lit & sensor.last_fired[links.tx]).sum())
+            totals += _classify(r, links, expected) * max(expected, 1)
+            n_expected += expected
+            overlap.append(r.n_overlap[r.age == 0])
+    ov = np.concatenate(overlap)
+    return totals / max(n_expected, 1), n_expected / (scenes * steps * n), float(np.mean(ov > 1)) if ov.size else 0.0
+
+
+def collisions(platform_name="droplet", sigma=None, seed=0, trials=2000, n=50, side=0.45, scenes=4, steps=20):
+    """Collision rows: hidden pair and dense swarm, with collisions (CRC on / off) beside the baseline."""
+    platform = get_platform(platform_name)
+    sigma = float(platform.ir_model.default_noise_sigma if sigma is None else sigma)
+    scale = platform.diameter / (DROPLET_DIAMETER_CM / 100.0)
+    rows = []
+    for label, col, chk in (("no collisions (before)", False, True), ("collisions, CRC id check", True, True),
+                            ("collisions, id unchecked", True, False)):
+        hp, T = _hidden_pairs(platform, trials, sigma, seed, col, chk)
+        ds, per_robot, ov = _dense_swarm(platform, n, side * scale, scenes, steps, sigma, seed + 1, col, chk)
+        rows.append({"model": label, "hidden_pair": dict(zip(("clean", "corrupted", "misattributed", "lost"), hp.tolist())),
+                     "dense": dict(zip(("clean", "corrupted", "misattributed", "lost"), ds.tolist())),
+                     "dense_expected_per_robot_step": per_robot, "dense_fresh_overlapped": ov, "hidden_trials": T})
+    return {"platform": platform.name, "sigma_counts": sigma, "dense_n": n, "dense_side_m": side * scale, "rows": rows}
+
+
 def _plots(res, out_dir):
     import matplotlib
 
@@ -234,6 +335,7 @@ def main(argv: list[str]) -> int:
     res = run(args.platform, args.noise, args.repeats, args.seed, near_model=args.near_model)
     res["near_model"] = args.near_model
     res["sigma_sensitivity"] = _sensitivity(args.platform, [0.0, 1.0, 2.0, 4.0, 8.0], args.seed + 1, args.near_model)
+    res["collisions"] = collisions(args.platform, args.noise, args.seed + 2)
     if not args.no_plots:
         res["plots"] = _plots(res, args.out)
     if args.json:
@@ -264,6 +366,20 @@ def main(argv: list[str]) -> int:
     for r in res["sigma_sensitivity"]:
         print(f"  {r['sigma']:5.1f}                              {r['worst_range_bound']:7.2f}           "
               f"{r['bearing_std']:7.2f}      {r['heading_std']:7.2f}     {100 * r['no_reading']:5.1f}%")
+    col = res["collisions"]
+    print(f"\ncollisions (issue 11): fractions of the readings a receiver would get if every firing were alone;"
+          f"\n  hidden pair: 2 TXs hidden from each other fire in one step, RX sees both ({col['rows'][0]['hidden_trials']} trials);"
+          f"\n  dense swarm: N={col['dense_n']} in a {100 * col['dense_side_m']:.0f} cm square, contention schedule;"
+          f"\n  corrupted = right id but |range err| > 25% of range or |bearing err| > 15 deg; lost = rejected or below floor"
+          f"\n  (fractions of the readings expected from lit links: noise can add a reading of a link below the floor, so a"
+          f"\n  row may sum past 100%; without collisions the dense swarm's corrupted readings come from per-ray partial occlusion)")
+    print("  model                        scene         clean  corrupted  misattributed   lost   (dense: fresh readings overlapped)")
+    for r in col["rows"]:
+        for scene, key in (("hidden pair", "hidden_pair"), ("dense swarm", "dense")):
+            f = r[key]
+            extra = f"   ({100 * r['dense_fresh_overlapped']:.0f}%)" if key == "dense" else ""
+            print(f"  {r['model']:28s} {scene:12s} {100 * f['clean']:5.1f}%    {100 * f['corrupted']:5.1f}%        "
+                  f"{100 * f['misattributed']:5.2f}%   {100 * f['lost']:5.1f}%{extra}")
     if "plots" in res:
         print("\nplots: " + ", ".join(res["plots"]))
     return 0
