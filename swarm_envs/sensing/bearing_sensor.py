@@ -54,6 +54,7 @@ __all__ = [
     "RONE_TX_ANGLES",
     "RONE_ARC_RANGE_DEG",
     "link_masks",
+    "draw_half_arcs",
     "MessageBearings",
 ]
 
@@ -224,7 +225,9 @@ def link_masks(
     return _bits_to_mask(g.any(axis=2)), _bits_to_mask(g.any(axis=1))
 
 
-def sense_bearings(links, platform: Platform | str = "rone", threshold: float = 0.0) -> BearingReadings:
+def sense_bearings(
+    links, platform: Platform | str = "rone", threshold: float = 0.0, half_arcs: np.ndarray | None = None
+) -> BearingReadings:
     """Sector bearings and orientations for every link [L Sec. 3.2.1, 3.2.3; SPEC 5.1].
 
     The nominal, per-link geometry of the sensor (what a receiver *would* measure on a message from each
@@ -236,12 +239,24 @@ def sense_bearings(links, platform: Platform | str = "rone", threshold: float = 
             platform with at most 16 channels works, e.g. the Droplet's 6 for a coarse ablation).
         threshold: a receiver hears / a transmitter is heard where the gain exceeds this (the r-one's
             gains are 0/1).
+        half_arcs: optional (P, n_d + n_e) receiver-arc / transmitter-cone half-widths (rad) per link, the
+            hardware-noise model (:func:`link_masks`); None = the IR layer's nominal gains.
 
     Returns: :class:`BearingReadings` (vectorised, no loop over links).
     """
     platform = get_platform(platform)
-    rx_mask, tx_mask = link_masks(links, platform, threshold=threshold)
+    rx_mask, tx_mask = link_masks(links, platform, half_arcs=half_arcs, threshold=threshold)
     return _readings(links.rx, links.tx, rx_mask, tx_mask, platform)
+
+
+def draw_half_arcs(
+    rng: np.random.Generator, n: int, platform: Platform | str = "rone", arc_range: tuple[float, float] = RONE_ARC_RANGE_DEG
+) -> np.ndarray:
+    """(n, n_d + n_e) half-widths (rad) of receiver arcs and transmitter cones, each uniform in ``arc_range``
+    (deg; default the r-one's measured 63-74 degrees [L Sec. 3.2.1, Fig. 3.9(b)]): one draw per reading."""
+    platform = get_platform(platform)
+    lo, hi = arc_range
+    return 0.5 * np.deg2rad(lo + (hi - lo) * rng.random((int(n), platform.n_detectors + platform.n_emitters)))
 
 
 class MessageBearings:
