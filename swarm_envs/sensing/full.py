@@ -44,10 +44,10 @@ from swarm_envs.comm.channel import recommended_relative_threshold
 from swarm_envs.comm.network import Network
 from swarm_envs.copies import CopyRandom
 from swarm_envs.ir.layer import compute_links
+from swarm_envs.ir.models import RoneIR
 from swarm_envs.observation import pack_nearest
 from swarm_envs.platforms import Platform
 from swarm_envs.sensing.base import MessageReadings, NeighbourReadings, ScaleFreeReadings, SensorFrame
-from swarm_envs.ir.models import RoneIR
 from swarm_envs.sensing.bearing_sensor import RONE_ARC_RANGE_DEG, MessageBearings
 from swarm_envs.sensing.exchange import BearingExchange, thesis_round_time
 from swarm_envs.sensing.range_bearing import RangeBearingSensor
@@ -170,8 +170,10 @@ class FullSensing:
             neighbours = sectors
         bearing_readings = sectors if self.bearing_source == "sectors" else neighbours
         app = deliveries.for_kind("app")
-        # an uncoded header can decode to a wrong length: such a frame is not a well-formed message
-        well_formed = (app.length == self.message_bits) & (app.origin < self.n)
+        # an uncoded header can decode to a wrong length or an id outside the receiver's swarm: such a frame is
+        # not a well-formed message
+        base = self.copy_of[app.receiver] * self.copy_size
+        well_formed = (app.length == self.message_bits) & (app.origin >= base) & (app.origin < base + self.copy_size)
         if self.message_bits > 0 and well_formed.any():
             payload = np.zeros((len(app), self.message_bits))
             width = min(self.message_bits, app.payload.shape[1])
