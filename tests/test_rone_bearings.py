@@ -258,3 +258,28 @@ def test_exchange_rejects_an_origin_outside_the_receivers_copy():
     d = frames([0], [4], [1], kind=np.array(["bearing_exchange"], object), length=np.array([L]), payload=np.zeros((1, L), bool))
     kn = ex.step(readings, d)
     assert (kn.ids < 0).all() and ex.stats["rejected"] == 1
+
+
+@pytest.mark.parametrize("exchange", ["ideal", "network"])
+def test_vector_copies_equal_single_envs_with_beacons_and_noise(exchange):
+    """Each copy's message-borne readings (beacons or exchange lists, arc noise on) equal a single env's."""
+    import swarm_envs
+
+    seeds, steps = [3, 8], 2 * BEACON_PERIOD
+    kw = dict(n_robots=5, platform="rone", sensing="full", exchange=exchange, message_bits=2, max_cycles=steps)
+    vec = swarm_envs.make_vec("swarm_envs/Aggregation-v0", len(seeds), **kw)
+    actions = np.random.default_rng(0).uniform(-1, 1, (steps, len(seeds), vec.n_agents, vec.layout.action_size))
+    vec.reset(seed=seeds)
+    singles = [swarm_envs.make("swarm_envs/Aggregation-v0", **kw) for _ in seeds]
+    for env, s in zip(singles, seeds):
+        env.reset(seed=s)
+    valid = 0
+    for t in range(steps):
+        obs, *_ = vec.step(actions[t])
+        for b, env in enumerate(singles):
+            o, *_ = env.step({a: actions[t, b, i] for i, a in enumerate(env.possible_agents)})
+            for i, a in enumerate(env.possible_agents):
+                np.testing.assert_array_equal(obs["range_bearing"][b, i], o[a]["range_bearing"])
+                np.testing.assert_array_equal(obs["scale_free"][b, i], o[a]["scale_free"])
+                valid += int(o[a]["range_bearing"][:, 0].sum())
+    assert valid > 0

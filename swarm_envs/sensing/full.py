@@ -59,6 +59,8 @@ __all__ = ["FullSensing", "BEACON_PERIOD"]
 #: thesis round 2 (1 + 5)^2 x 32.8 ms = 2.36 s [L Sec. 3.2.1] in 0.1 s control steps, rounded up
 BEACON_PERIOD = int(np.ceil(round(thesis_round_time(5) / 0.1, 9)))
 
+BEACON_KIND = "bearing_beacon"  # SwarmCom system kind of the header-only beacons
+
 _STAT_NAMES = ("tx_started", "deferrals", "rx_delivered", "rx_lost", "collisions", "bits_checked", "bit_errors")
 
 
@@ -123,6 +125,12 @@ class FullSensing:
         self.exchange = BearingExchange(
             self.copy_size, mode=config["exchange"], network=self.network, rng=streams[2], n_copies=self.n_copies, **extra
         )
+        # register the system kinds now: the network numbers kinds on first use and accepts only registered type
+        # codes, so registering when the first copy sends would make a copy's decoding depend on the others
+        if self.exchange.mode == "network":
+            self.network.kinds.code(self.exchange.kind)
+        elif self.bearings is not None:
+            self.network.kinds.code(BEACON_KIND)
 
     def reset(self, copies: np.ndarray, rngs: list[np.random.Generator]) -> None:
         """Fresh sensor, channel and exchange state of env ``copies``, from independent child streams
@@ -162,7 +170,7 @@ class FullSensing:
         if self.exchange.mode == "network":
             self.exchange.send(net)
         elif self.bearings is not None:
-            self.bearings.send_beacons(net)
+            self.bearings.send_beacons(net, BEACON_KIND)
         deliveries = net.step(links)
         # sector bearings measured on the decoded frames (any kind)
         sectors = self.bearings.step(deliveries, links) if self.bearings is not None else None
