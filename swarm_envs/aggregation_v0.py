@@ -91,6 +91,7 @@ def parallel_env(
     rb_noise: float | None = None,
     rb_near_model: bool = False,
     bearing_source: Literal["sectors", "range_bearing"] | None = None,
+    bearing_noise: bool = True,
     exchange: Literal["network", "ideal"] = "network",
     scale_free_method: Literal["two_hop", "null_space"] = "two_hop",
     scale_free_k: int = 1,
@@ -177,6 +178,7 @@ def parallel_env(
     | ``rb_noise`` | ``None`` | ADC noise sigma (counts); ``None``: 2 on the Droplet, sqrt(2.5) on the e-puck |
     | ``rb_near_model`` | ``False`` | Droplet only: the firmware's low-power near-range fit instead of the power ladder |
     | ``bearing_source`` | ``None`` | ``"sectors"`` (r-one) or ``"range_bearing"``; ``None``: sectors on the r-one, R&B elsewhere |
+    | ``bearing_noise`` | ``True`` | r-one: sector readings with the measured 63-74 degree receiver-arc spread [L Sec. 3.2.1] |
     | ``exchange`` | ``"network"`` | bearing lists for scale-free coordinates over SwarmCom (``"network"``) or ``"ideal"`` |
     | ``scale_free_method`` | ``"two_hop"`` | ``"two_hop"`` [L Algs. 1-4] or ``"null_space"`` [L Eq. (5.1)] (slow) |
     | ``scale_free_k`` | 1 | hops k of the null-space method |

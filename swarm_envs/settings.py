@@ -50,6 +50,7 @@ COMMON_DEFAULTS: dict[str, Any] = {
     "rb_near_model": False,  # Droplet: firmware low-power fit instead of the power ladder when saturated
     # bearing-only sensing and scale-free coordinates [L]
     "bearing_source": None,  # None = "sectors" on rone, "range_bearing" elsewhere
+    "bearing_noise": True,  # r-one sector readings with the measured receiver-arc spread [L Sec. 3.2.1]
     "exchange": "network",
     "scale_free_method": "two_hop",
     "scale_free_k": 1,
@@ -89,7 +90,7 @@ _REALS: dict[str, tuple[str, bool, bool]] = {
     "rb_noise": ("a non-negative number of ADC counts", True, True),
     "collision_penalty": ("a non-negative number", False, True),  # Flocking
 }
-_BOOLS = ("flatten", "rb_near_model")
+_BOOLS = ("flatten", "rb_near_model", "bearing_noise")
 
 
 class SettingsError(ValueError):

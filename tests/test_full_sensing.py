@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 
 import swarm_envs
+from swarm_envs.sensing.full import BEACON_PERIOD
 from swarm_envs.observation import relative_pose
 
 
@@ -67,7 +68,9 @@ def test_full_observation_differs_from_ideal_but_tracks_it():
 def test_rone_reports_sector_bearings_without_range():
     env = swarm_envs.make("swarm_envs/Flocking-v0", n_robots=6, platform="rone", sensing="full")
     obs, _ = env.reset(seed=2)
-    obs, *_ = env.step({a: np.zeros(2, np.float32) for a in env.agents})
+    # readings are measured on decoded frames (one broadcast per robot per beacon period), not every step
+    for _ in range(BEACON_PERIOD + 5):
+        obs, *_ = env.step({a: np.zeros(2, np.float32) for a in env.agents})
     rb = obs["robot_0"]["range_bearing"]
     valid = rb[:, 0] > 0
     assert valid.any()

@@ -16,12 +16,16 @@ neighbour's current row instantly and losslessly (ages 0). For ablations.
 its own random phase, drawn from the generator passed in) a robot queues one message with
 ``network.queue_system(robot, bits, kind)``; the env advances the network
 (``network.step(links) -> Deliveries``) and hands the deliveries back to :meth:`BearingExchange.receive`.
-A robot's own neighbour table holds the robots it *received a message from*, with the sector bearing
-measured on that reception (the link's current reading), so a lost message means a missing own bearing
-and a missing row. Entries and rows older than ``max_age`` steps are dropped. Losses therefore remove
+A robot's own neighbour table holds the robots it *received a message from*, with the receiver's own
+bearing of the robot the frame *says* sent it: the header's decoded ``origin`` looked up in the receiver's
+readings (``readings.rx``/``readings.tx`` are what the receiver believes: on the sector source the
+message-borne table of :class:`swarm_envs.sensing.bearing_sensor.MessageBearings`, keyed by decoded ids,
+which has just measured this very frame). No lookup uses the true sender: a frame whose origin decodes to
+another robot's id is matched to the receiver's bearing of that other robot (if it has one). A lost
+message means a missing own bearing and a missing row. Entries and rows older than ``max_age`` steps are dropped. Losses therefore remove
 information (fewer triangles, fewer rigid robots) but never mix up whose bearing is whose. A decoded
-frame is rejected when its content is inconsistent (announced count vs payload length, an id >= N or the
-sender's own id); an uncoded ([15,15]) frame whose bearing bits flipped can still slip through: that is
+frame is rejected when its content is inconsistent (announced count vs payload length, an id or an origin
+outside the receiver's swarm, or a list naming the sender itself); an uncoded ([15,15]) frame whose bearing bits flipped can still slip through: that is
 the channel's corruption and it reaches the coordinates as a bearing error.
 
 Bit encoding of a message (payload, most significant bit first)::
@@ -320,8 +324,9 @@ class BearingExchange:
             deliveries: ``Deliveries`` with ``receiver``, ``origin``, ``payload``, ``kind`` arrays (payload
                 either an (D, L) bit array or a sequence of 1-D bit arrays). Only ``kind == self.kind`` is
                 used.
-            readings: this step's :class:`swarm_envs.sensing.bearing_sensor.BearingReadings`: the bearing of
-                each sender is the receiver's current reading of that link (none if the link is gone).
+            readings: the receiver's current readings (``rx``, ``tx``, ``bearing``, ``valid``), keyed by the ids
+                the receiver believes (decoded); the own bearing of a sender is the reading
+                ``(receiver, decoded origin)`` (none if the receiver has no such reading).
         """
         if deliveries is None:
             return
@@ -349,7 +354,7 @@ class BearingExchange:
         recv, origin = recv[sel], origin[sel]
         ids = np.where(ids >= 0, ids + self.offset[recv][:, None], -1)  # a copy's own numbering -> robot rows
         sane = ~((ids >= self.offset[recv][:, None] + self.copy_size) | (ids == origin[:, None])).any(1)
-        sane &= (origin >= 0) & (origin < self.n)
+        sane &= (origin >= self.offset[recv]) & (origin < self.offset[recv] + self.copy_size)  # a robot of its swarm
         length = getattr(deliveries, "length", None)
         if length is not None:
             length = np.asarray(length, dtype=np.int64).reshape(-1)[sel]
@@ -358,7 +363,7 @@ class BearingExchange:
         ids, th, recv, origin = ids[sane], th[sane], recv[sane], origin[sane]
         if recv.size == 0:
             return
-        # the receiver's bearing of the sender: its current reading of link (recv <- origin)
+        # the receiver's own bearing of the robot the frame says sent it: its reading (recv, decoded origin)
         key_l = np.asarray(readings.rx, np.int64) * self.n + np.asarray(readings.tx, np.int64)
         okl = np.asarray(readings.valid, bool)
         key_l, bear_l = key_l[okl], np.asarray(readings.bearing, float)[okl]

@@ -6,14 +6,25 @@ Each control step, in this order (data flows one way):
    emitter-detector gains of every visible pair, once for everything below.
 2. **Range & bearing** [F14] (:class:`swarm_envs.sensing.range_bearing.RangeBearingSensor`) on the
    ``droplet`` and ``epuck``: contention-scheduled firing, noisy brightness matrices, the estimator,
-   readings that persist with an age. The ``rone`` has no range sensor: its ``range_bearing`` rows hold
-   sector bearings and orientations [L Sec. 3.2] (:func:`swarm_envs.sensing.bearing_sensor.sense_bearings`)
-   with range 0, in neighbour-id order.
+   readings that persist with an age.
 3. **SwarmCom** [T20] (:class:`swarm_envs.comm.network.Network`): bit-slot simulation of the channel.
    With ``message_bits > 0`` each robot queues its current action payload whenever its transmit queue
    is empty (so the newest payload goes out as soon as the radio is free). Decoded application frames
    become the ``messages`` observation; the sender's bearing is the axis of the receiver's brightest
    detector during the frame (a coarse bearing from the detector itself, not from ground truth).
+   **Sector bearings** (``bearing_source="sectors"``, the ``rone`` default, SPEC 5.1) are measured on the
+   decoded frames (:class:`swarm_envs.sensing.bearing_sensor.MessageBearings`): each decoded frame gives
+   its receiver the sector bearing and orientation of the robot its header names, refreshed only then,
+   with the age since; a reading without a decoded frame for ``max_age`` = 1.5 beacon periods disappears
+   (the r-one clears its neighbour table every round [L Sec. 3.2.2]; the half round absorbs channel-access
+   delays). Every robot broadcasts once per beacon period of ``BEACON_PERIOD`` steps, the thesis round
+   ``T_round = 2 (1 + N)^2 t_msg`` for its N = 5 neighbours and 3-byte 32.8 ms messages, 2.36 s
+   [L Sec. 3.2.1] rounded up to whole steps: with ``exchange="network"`` its bearing-list message *is* the
+   beacon ([L Sec. 3.2.3]: the announcement message carries the encoded orientation bit; [L Sec. 5.2.2]
+   step 1 "broadcast id, record bearings" and step 2 share it), otherwise a header-only beacon.
+   ``bearing_noise`` (default on, r-one) draws each frame's receiver arcs and transmitter cones from the
+   measured 63-74 degree spread [L Sec. 3.2.1]. The ``rone`` has no range sensor: its ``range_bearing``
+   rows hold these readings with range 0, in neighbour-id order.
 4. **Bearing exchange and scale-free coordinates** [L] (:class:`swarm_envs.sensing.exchange.BearingExchange`,
    :func:`swarm_envs.sensing.scale_free.coordinates_all`): bearings from ``bearing_source``
    (``"sectors"`` default on ``rone``, ``"range_bearing"`` elsewhere) travel as SwarmCom system traffic
@@ -33,15 +44,22 @@ from swarm_envs.comm.channel import recommended_relative_threshold
 from swarm_envs.comm.network import Network
 from swarm_envs.copies import CopyRandom
 from swarm_envs.ir.layer import compute_links
+from swarm_envs.ir.models import RoneIR
 from swarm_envs.observation import pack_nearest
 from swarm_envs.platforms import Platform
 from swarm_envs.sensing.base import MessageReadings, NeighbourReadings, ScaleFreeReadings, SensorFrame
-from swarm_envs.sensing.bearing_sensor import sense_bearings
-from swarm_envs.sensing.exchange import BearingExchange
+from swarm_envs.sensing.bearing_sensor import RONE_ARC_RANGE_DEG, MessageBearings
+from swarm_envs.sensing.exchange import BearingExchange, thesis_round_time
 from swarm_envs.sensing.range_bearing import RangeBearingSensor
 from swarm_envs.sensing.scale_free import coordinates, coordinates_all
 
-__all__ = ["FullSensing"]
+__all__ = ["FullSensing", "BEACON_PERIOD"]
+
+#: steps between two broadcasts of a robot (bearing beacons / exchange lists on the sector source): the
+#: thesis round 2 (1 + 5)^2 x 32.8 ms = 2.36 s [L Sec. 3.2.1] in 0.1 s control steps, rounded up
+BEACON_PERIOD = int(np.ceil(round(thesis_round_time(5) / 0.1, 9)))
+
+BEACON_KIND = "bearing_beacon"  # SwarmCom system kind of the header-only beacons
 
 _STAT_NAMES = ("tx_started", "deferrals", "rx_delivered", "rx_lost", "collisions", "bits_checked", "bit_errors")
 
@@ -66,7 +84,7 @@ class FullSensing:
         self.hops = int(config["scale_free_k"])
         self.copy_of = np.repeat(np.arange(self.n_copies), self.copy_size)
         # one stack for all copies; each module keeps one generator per copy (placeholders until reset)
-        streams = [CopyRandom([np.random.default_rng(0) for _ in range(self.n_copies)]) for _ in range(3)]
+        streams = [CopyRandom([np.random.default_rng(0) for _ in range(self.n_copies)]) for _ in range(4)]
         self.rb: RangeBearingSensor | None = None
         if self.has_range:
             self.rb = RangeBearingSensor(
@@ -90,19 +108,42 @@ class FullSensing:
             payload_bits=self.message_bits,
             n_copies=self.n_copies,
         )
+        self.bearings: MessageBearings | None = None
+        extra = {}
+        if source == "sectors":
+            noisy = bool(config.get("bearing_noise", True)) and isinstance(platform.ir_model, RoneIR)
+            self.bearings = MessageBearings(
+                platform,
+                self.copy_size,
+                streams[3],
+                n_copies=self.n_copies,
+                max_age=BEACON_PERIOD + BEACON_PERIOD // 2,
+                period=BEACON_PERIOD,
+                arc_range=RONE_ARC_RANGE_DEG if noisy else None,
+            )
+            extra["period"] = BEACON_PERIOD  # the exchange's broadcasts are the beacons
         self.exchange = BearingExchange(
-            self.copy_size, mode=config["exchange"], network=self.network, rng=streams[2], n_copies=self.n_copies
+            self.copy_size, mode=config["exchange"], network=self.network, rng=streams[2], n_copies=self.n_copies, **extra
         )
+        # register the system kinds now: the network numbers kinds on first use and accepts only registered type
+        # codes, so registering when the first copy sends would make a copy's decoding depend on the others
+        if self.exchange.mode == "network":
+            self.network.kinds.code(self.exchange.kind)
+        elif self.bearings is not None:
+            self.network.kinds.code(BEACON_KIND)
 
     def reset(self, copies: np.ndarray, rngs: list[np.random.Generator]) -> None:
         """Fresh sensor, channel and exchange state of env ``copies``, from independent child streams
-        (range & bearing, channel, exchange) of each copy's generator ``rngs[k]``; other copies untouched."""
+        (range & bearing, channel, exchange, sector bearings) of each copy's generator ``rngs[k]``; other
+        copies untouched."""
         copies = np.asarray(copies, dtype=np.int64).reshape(-1)
-        children = [g.spawn(3) for g in rngs]
+        children = [g.spawn(4) for g in rngs]
         if self.rb is not None:
             self.rb.reset(copies, [c[0] for c in children])
         self.network.reset_copies(copies, [c[1] for c in children])
         self.exchange.reset(copies=copies, rngs=[c[2] for c in children])
+        if self.bearings is not None:
+            self.bearings.reset(copies, [c[3] for c in children])
 
     # ------------------------------------------------------------------------------------------------
     def step(
@@ -112,14 +153,10 @@ class FullSensing:
         (N,) bool: robots whose payload may be queued this step (default all)."""
         links = compute_links(positions, headings, self.platform, copy=self.copy_of if self.n_copies > 1 else None)
 
-        # range & bearing (or bearing-only sectors)
-        sectors = _valid_only(sense_bearings(links, self.platform)) if self.bearing_source == "sectors" else None
+        # range & bearing
         if self.has_range:
             rb = self.rb.step(links)
             neighbours = NeighbourReadings(rb.rx, rb.tx, rb.range, rb.bearing, rb.heading, rb.age.astype(float))
-        else:
-            neighbours = sectors
-        bearing_readings = sectors if self.bearing_source == "sectors" else neighbours
 
         # SwarmCom: application payloads and the bearing exchange share the channel
         net = self.network
@@ -132,10 +169,19 @@ class FullSensing:
                 net.send_many(free, payloads[free])
         if self.exchange.mode == "network":
             self.exchange.send(net)
+        elif self.bearings is not None:
+            self.bearings.send_beacons(net, BEACON_KIND)
         deliveries = net.step(links)
+        # sector bearings measured on the decoded frames (any kind)
+        sectors = self.bearings.step(deliveries, links) if self.bearings is not None else None
+        if not self.has_range:
+            neighbours = sectors
+        bearing_readings = sectors if self.bearing_source == "sectors" else neighbours
         app = deliveries.for_kind("app")
-        # an uncoded header can decode to a wrong length: such a frame is not a well-formed message
-        well_formed = (app.length == self.message_bits) & (app.origin < self.n)
+        # an uncoded header can decode to a wrong length or an id outside the receiver's swarm: such a frame is
+        # not a well-formed message
+        base = self.copy_of[app.receiver] * self.copy_size
+        well_formed = (app.length == self.message_bits) & (app.origin >= base) & (app.origin < base + self.copy_size)
         if self.message_bits > 0 and well_formed.any():
             payload = np.zeros((len(app), self.message_bits))
             width = min(self.message_bits, app.payload.shape[1])
@@ -152,6 +198,8 @@ class FullSensing:
 
         stats = {name: np.asarray(deliveries.stats[f"{name}_per_robot"]) for name in _STAT_NAMES if f"{name}_per_robot" in deliveries.stats}
         stats["ir_links"] = np.bincount(links.rx, minlength=self.n)
+        if sectors is not None:
+            stats["bearing_readings"] = np.bincount(sectors.rx, minlength=self.n)
         if self.rb is not None:
             stats["rb_fired"] = self.rb.last_fired.astype(np.int64)
         stats["rigid"] = scale_free.rigid.astype(np.int64)
@@ -189,9 +237,3 @@ class FullSensing:
                     xy[u, slot], valid[u, slot] = pos[v], True
         return xy, valid, rigid
 
-
-def _valid_only(sectors) -> NeighbourReadings:
-    """Sector readings with a bearing, as neighbour readings without range (range 0, age 0)."""
-    ok = sectors.valid
-    zeros = np.zeros(int(ok.sum()))
-    return NeighbourReadings(sectors.rx[ok], sectors.tx[ok], zeros, sectors.bearing[ok], sectors.heading[ok], zeros.copy())
