@@ -202,6 +202,10 @@ class FullSensing:
             stats["bearing_readings"] = np.bincount(sectors.rx, minlength=self.n)
         if self.rb is not None:
             stats["rb_fired"] = self.rb.last_fired.astype(np.int64)
+            # ground truth about the R&B readings (infos only): named by a decoded id that is not the robot
+            # whose light dominated, and fresh readings from overlapping firings
+            stats["rb_misattributed"] = np.bincount(rb.rx[rb.tx != rb.true_tx], minlength=self.n)
+            stats["rb_overlapped"] = np.bincount(rb.rx[(rb.age == 0) & (rb.n_overlap > 1)], minlength=self.n)
         stats["rigid"] = scale_free.rigid.astype(np.int64)
         return SensorFrame(neighbours, messages, scale_free, stats)
 
