@@ -41,6 +41,7 @@ __all__ = [
     "gain_to_intensity",
     "detector_intensity",
     "adc",
+    "detector_response",
     "M_MAX",
     "M_MIN",
     "M_SUP",
@@ -51,6 +52,10 @@ M_MAX = 4080.0  # ambient light value (counts) [T20 Table 1]
 M_MIN = 150.0  # saturation value (counts) [T20 Table 1]
 M_SUP = 4095  # 12-bit ADC full scale, 2^12 - 1 [T20 Sec. 3.3]
 NOISE_VAR = 2.5  # ADC noise variance (counts^2) [T20 Sec. 3.4.1]
+#: e-puck detector response (module docstring "Bit-rate-dependent detector response"): bias intensity b
+#: (chosen, see the fit) and charge constant c (s, fitted to 14 cm at 1800 bps [T20 Sec. 7]).
+RESPONSE_BIAS = 0.01
+RESPONSE_C = 1.32e-5  # s
 
 
 @dataclass(frozen=True)
@@ -63,6 +68,9 @@ class ADCModel:
         m_sup: ADC full scale (counts); measurements are clipped to [0, m_sup].
         noise_var: variance of the additive Gaussian ADC noise n_m (counts^2).
         intensity_scale: multiply a summed model gain by this to get the intensity y (1 = saturation).
+        response_c: charge constant c (s) of the detector response (time constant at photocurrent
+            y + b = 1); 0 = instantaneous detector (no bit-rate dependence), see :func:`detector_response`.
+        response_bias: bias intensity b of the detector response (dimensionless, > 0 when response_c > 0).
     """
 
     m_max: float = M_MAX
@@ -70,6 +78,8 @@ class ADCModel:
     m_sup: int = M_SUP
     noise_var: float = NOISE_VAR
     intensity_scale: float = 1.0
+    response_c: float = RESPONSE_C
+    response_bias: float = RESPONSE_BIAS
 
     @property
     def noise_sigma(self) -> float:
@@ -85,14 +95,16 @@ def adc_model_for(platform: Platform | str) -> ADCModel:
     model = platform.ir_model
     full = float(model.adc_max)
     sigma = float(getattr(model, "default_noise_sigma", 0.0))
+    # the detector response is fitted to the e-puck's circuit only: other platforms sample instantly
     if full <= 1.0:  # binary receivers (r-one): a noiseless 12-bit-like scale so m_tr and Eq. (36) work
-        return ADCModel(noise_var=sigma * sigma, intensity_scale=float(model.adc_scale) / full)
+        return ADCModel(noise_var=sigma * sigma, intensity_scale=float(model.adc_scale) / full, response_c=0.0)
     return ADCModel(
         m_max=full,
         m_min=0.0,
         m_sup=int(np.ceil(full)),
         noise_var=sigma * sigma,
         intensity_scale=float(model.adc_scale) / full,
+        response_c=0.0,
     )
 
 
@@ -180,3 +192,22 @@ def adc(
     if noise_var > 0:
         m = m + rng.normal(0.0, np.sqrt(noise_var), size=y.shape)
     return np.clip(np.floor(m), 0, m_sup).astype(np.int32)
+
+
+def detector_response(v: np.ndarray, y: np.ndarray, slot_s: float, c: float, b: float) -> np.ndarray:
+    """Detector level after one bit slot of ``slot_s`` seconds at constant intensity ``y`` (module docstring).
+
+    Exact solution of ``dv/dt = (y - v)(v + b)/c`` over the slot: with ``u0 = v + b`` and ``Y = y + b``,
+    ``v' = Y u0 / (u0 + (Y - u0) exp(-Y slot_s / c)) - b``. ``y`` is clipped to [0, 1] (no negative
+    photocurrent); a dark detector whose level has decayed below 1e-9 is set to exactly 0. ``c <= 0``
+    returns the instantaneous level ``clip(y, 0, 1)``. Same arithmetic as the compiled slot loop.
+    """
+    y = np.clip(np.asarray(y, dtype=float), 0.0, 1.0)
+    if c <= 0:
+        return y
+    v = np.asarray(v, dtype=float)
+    Y = y + b
+    u0 = v + b
+    E = np.exp(-Y * (slot_s / c))
+    out = Y * u0 / (u0 + (Y - u0) * E) - b
+    return np.where((y == 0.0) & (out < 1e-9), 0.0, out)

@@ -234,6 +234,8 @@ class Network:
         self.startup_samples = int(startup_samples)
         self.dedupe_slots = int(round(dedupe_window * self.bitrate))
         self.intensity_sigma = float(intensity_sigma)
+        # detector response: slot duration / charge constant (0 = instantaneous detector)
+        self.response_kt = (1.0 / self.bitrate) / self.adc_model.response_c if self.adc_model.response_c > 0 else 0.0
         if crc_bits is None:
             crc_bits = 8 if comm_mode == "flooding" else 0
         self.crc_bits = int(crc_bits)
@@ -268,6 +270,7 @@ class Network:
         self.gt_id = np.full(n, -1, dtype=np.int64)
         self.gt_buf = np.zeros((n, F), dtype=bool)
         self.collided = np.zeros(n, dtype=bool)
+        self.rx_level = np.zeros((n, self.n_det))  # detector response state (channel.detector_response)
         self.seen_keys = np.zeros(0, dtype=np.int64)
         self.seen_slot = np.zeros(0, dtype=np.int64)
         self.det.reset(self._startup_ambient(np.arange(n)))
@@ -300,7 +303,7 @@ class Network:
         for arr, value in (
             (self.q_bits, False), (self.q_slots, 0), (self.q_head, 0), (self.q_count, 0), (self.cur_bits, False),
             (self.cur_slots, 0), (self.cur_pos, 0), (self.cur_id, -1), (self.sending, False), (self.seq_next, 0),
-            (self.gt_tx, -1), (self.gt_id, -1), (self.gt_buf, False), (self.collided, False),
+            (self.gt_tx, -1), (self.gt_id, -1), (self.gt_buf, False), (self.collided, False), (self.rx_level, 0.0),
         ):  # fmt: skip
             arr[rows] = value
         det = self.det
@@ -494,7 +497,7 @@ class Network:
         state = det.state.view(np.int8)
         D = slot_loop(
             S, self.slot, self.n_det, float(a.m_min), int(a.m_sup), self.m_tr, det.alpha, fmt.first_check_slots,
-            tx_ptr, rx, G, sig_ptr, sig_rx, self.ambient,
+            tx_ptr, rx, G, sig_ptr, sig_rx, self.ambient, self.rx_level, self.response_kt, float(a.response_bias),
             draws.noise, draws.intensity_noise, draws.backoff,
             self.q_bits, self.q_slots, self.q_head, self.q_count, self.cur_bits, self.cur_slots, self.cur_pos, self.cur_id,
             self.sending, fc, self.csma.backoff,
@@ -546,7 +549,24 @@ class Network:
             bit = self.cur_bits[snd, self.cur_pos[snd]] if snd.size else np.zeros(0, bool)
             on = snd[bit]
             # 3. intensity (superposition over emitting transmitters)
-            if on.size:
+            if self.response_kt > 0:  # detector response across slots (channel.detector_response)
+                if on.size:
+                    li = _ranges(tx_ptr[on], tx_ptr[on + 1])
+                    ysum = np.bincount(flat.reshape(-1, nd)[li].ravel(), weights=G[li].ravel(), minlength=n * nd).reshape(n, nd)
+                else:
+                    ysum = np.zeros((n, nd))
+                if self.intensity_sigma > 0:
+                    ysum = ysum + draws.intensity_noise[s]
+                yt = np.clip(ysum, 0.0, 1.0)
+                v0 = self.rx_level
+                Y = yt + a.response_bias
+                u0 = v0 + a.response_bias
+                v = Y * u0 / (u0 + (Y - u0) * np.exp(-Y * self.response_kt)) - a.response_bias
+                v[(yt == 0.0) & (v < 1e-9)] = 0.0
+                v[(yt == 0.0) & (v0 == 0.0)] = 0.0
+                self.rx_level = v
+                m = np.floor(span * (1.0 - v) + a.m_min + noise[s])
+            elif on.size:
                 li = _ranges(tx_ptr[on], tx_ptr[on + 1])
                 ysum = np.bincount(flat.reshape(-1, nd)[li].ravel(), weights=G[li].ravel(), minlength=n * nd).reshape(n, nd)
                 if self.intensity_sigma > 0:
