@@ -6,8 +6,10 @@
    inside a frame or saw s1 in the last slot) and start or defer (deferral ``1 + draw``) [Sec. 4.4];
 2. emission of the current bit of every sending robot (OOK, all emitters on for an s1);
 3. superposed intensities ``y = min(1, sum gains + n_j)`` over the links of the emitting transmitters
-   [Eqs. (10),(11)], and the 12-bit ADC ``m = floor((m_max - m_min)(1 - y) + m_min + n_m)`` clipped to
-   ``[0, m_sup]`` [Eqs. (20)-(22)] with the noise drawn before the loop;
+   [Eqs. (10),(11)], the detector circuit's response across slots (e-puck; ``v`` follows ``y``,
+   :func:`swarm_envs.comm.channel.detector_response`, [T20 Sec. 5.2]) and the 12-bit ADC
+   ``m = floor((m_max - m_min)(1 - v) + m_min + n_m)`` clipped to ``[0, m_sup]`` [Eqs. (20)-(22)] with the
+   noise drawn before the loop;
 4. the detector state machine: ``min`` over the detectors, start detection ``m < m_t = m_max_est - m_tr``
    [Eqs. (30)-(33)], the dynamic threshold ``floor(|m_t + A| / 2)`` [Eq. (36)], bit storage, run-time
    ambient adaptation on idle s0 samples [Sec. 4.5], half duplex;

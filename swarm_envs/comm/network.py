@@ -9,8 +9,10 @@ step boundaries). In every slot, vectorised over all robots:
 3. the received intensity of every detector is the superposition over the emitting transmitters in
    line of sight, ``y = min(1, sum gains)`` [T20 Eqs. (10),(11)], accumulated with ``np.bincount`` over
    the links of the emitting robots (links sorted by transmitter once per step);
-4. the 12-bit ADC turns y into counts with Gaussian noise [T20 Eqs. (20)-(22)]
-   (:func:`swarm_envs.comm.channel.adc`, same formula inlined here);
+4. the detector circuit follows y with a photocurrent-dependent speed, state carried across slots and
+   steps (``rx_level``; :func:`swarm_envs.comm.channel.detector_response`, the e-puck's bit-rate
+   dependence [T20 Secs. 5.2, 7]), and the 12-bit ADC turns its level into counts with Gaussian noise
+   [T20 Eqs. (20)-(22)] (:func:`swarm_envs.comm.channel.adc`, same formula inlined here);
 5. the detectors (:class:`~swarm_envs.comm.protocol.DetectorBank`) take ``min`` over their detectors,
    detect start symbols, apply the dynamic threshold and store bits; at check points the header is
    decoded (BCH) and the frame is aborted, continued or delivered.
@@ -292,8 +294,8 @@ class Network:
         return np.clip(dark, 0, a.m_sup).mean(axis=1)
 
     def reset_copies(self, copies: np.ndarray, rngs: list[np.random.Generator]) -> None:
-        """Reset the robots of env ``copies`` as a fresh network would be (queues, transceivers, detector,
-        sequence numbers, per-robot statistics), drawing their start-up ambient from ``rngs`` (one per copy,
+        """Reset the robots of env ``copies`` as a fresh network would be (queues, transceivers, detector and
+        its response level ``rx_level``, sequence numbers, per-robot statistics), drawing their start-up ambient from ``rngs`` (one per copy,
         which become those copies' streams). Other copies are untouched."""
         copies = np.asarray(copies, dtype=np.int64).reshape(-1)
         for b, g in zip(copies, rngs):

@@ -1,6 +1,6 @@
 """Validation of the SwarmCom simulation against [T20] (SPEC 4.3).
 
-``python -m swarm_envs.validate swarmcom [--json] [--experiment a|b|c|d|all] [--out DIR] [--quick]``
+``python -m swarm_envs.validate swarmcom [--json] [--experiment a|b|c|d|e|all] [--out DIR] [--quick] [--fit-response]``
 
 (a) two static e-pucks facing each other, 310 bps, dynamic detector: communication range vs relative
     threshold m_tr (75, 25, 10 -> 21, 33, 45 cm [T20 Sec. 6.2.4, Fig. 12a]) and bit error probability vs
@@ -15,13 +15,17 @@
     received it 2 s after it was queued) [T20 Sec. 6.2.2, Fig. 16b]; flooding is run with the network's
     default CRC-8 and without it (then corrupted copies are re-flooded as new messages);
 (d) channel coding: measured 15-bit block (message) error with [15,11] and [15,1] vs the prediction
-    1 - P_f of Eq. (34) from the P_e measured without coding [T20 Sec. 5.4, Fig. 13].
+    1 - P_f of Eq. (34) from the P_e measured without coding [T20 Sec. 5.4, Fig. 13];
+(e) reliable range (P_e < 0.01) and communication range vs bit rate, static facing pair, m_tr = 5: 61 cm
+    at 310 bps, 14 cm at 1800 bps [T20 Sec. 7], the rates between (Figs. 10-12b, values not in the text),
+    and the 21 cm setting of [T20 Sec. 6.2.5] at 310/1080/1670 bps. ``--fit-response`` refits the detector
+    response's charge constant c to 14 cm at 1800 bps (:mod:`swarm_envs.comm.channel` docstring).
 
 Everything runs the bit-level :class:`swarm_envs.comm.network.Network` over the IR links of
 :func:`swarm_envs.ir.layer.compute_links`; independent static pairs (a, d) and independent arenas (c) are
 simulated side by side in one network, 3 m apart (beyond the 1 m IR range), so they cannot interact
 (the id field is then wider than for one pair: 8 bits instead of 6, a few more header bits).
-The default run takes ~3-4 minutes on 2 cores, ``--quick`` ~15 s.
+The default run takes ~3-4 minutes on 2 cores (plus ~1 minute for (e)), ``--quick`` ~15 s.
 """
 
 from __future__ import annotations
@@ -601,6 +605,18 @@ def _plots(results: dict[str, Any], out_dir: str) -> list[str]:
         ax.set(xlabel="robots", ylabel="P_l", title="message loss, random walk, 310 bps, m_tr=10")
         ax.legend()
         files.append(_save(fig, out_dir, "swarmcom_c_flooding.png"))
+    if "e" in results:
+        e = results["e"]
+        fig, ax = plt.subplots(figsize=(6, 4))
+        for br, r in e["ranges"].items():
+            c = r["curve"]
+            ax.semilogy(c["distance_cm"], np.maximum(np.array(c["P_e"], float), 1e-5), label=f"{br} bps")
+        ax.axhline(0.01, color="k", ls=":")
+        for br, x in PAPER_BITRATE_RELIABLE.items():
+            ax.axvline(x, color="gray", ls="--", lw=0.8)
+        ax.set(xlabel="distance (cm)", ylabel="P_e (floored at 1e-5)", title="P_e vs distance and bit rate, m_tr=5 (paper: 61 / 14 cm dashed)")
+        ax.legend(fontsize=7)
+        files.append(_save(fig, out_dir, "swarmcom_e_bitrate.png"))
     if "d" in results:
         d = results["d"]
         fig, ax = plt.subplots(figsize=(6, 4))
