@@ -89,6 +89,8 @@ _C_BIT_ERR, _C_BLOCKS, _C_BLOCK_ERR = COUNTERS.index("bit_errors"), COUNTERS.ind
 _P_TX_STARTED, _P_DEFERRALS, _P_LOST, _P_COLL = PER_ROBOT.index("tx_started"), PER_ROBOT.index("deferrals"), PER_ROBOT.index("rx_lost"), PER_ROBOT.index("collisions")
 _P_BITS, _P_BIT_ERR, _P_BLOCKS, _P_BLOCK_ERR = PER_ROBOT.index("bits_checked"), PER_ROBOT.index("bit_errors"), PER_ROBOT.index("blocks_checked"), PER_ROBOT.index("block_errors")
 _IDLE, _RECV = 0, 1  # detector states (as protocol.IDLE / protocol.RECV)
+#: a dark detector whose response level falls below this is set to 0 (as channel.DARK_LEVEL)
+_DARK_LEVEL = 1e-6
 
 
 class StepDraws(NamedTuple):
@@ -304,6 +306,7 @@ def slot_loop(
     W = buf.shape[1]
     has_inoise = inoise.shape[0] > 0
     filt = resp_kt > 0.0
+    e_dark = np.exp(-resp_b * resp_kt)  # decay factor of a dark detector (y = 0) over one slot
     ysum = np.zeros((n, n_det))
     best_str = np.full(n, -np.inf)
     best_tx = np.full(n, -1, dtype=np.int64)
@@ -382,8 +385,9 @@ def slot_loop(
                         continue
                     Y = y + resp_b
                     u0 = v0 + resp_b
-                    v = Y * u0 / (u0 + (Y - u0) * np.exp(-Y * resp_kt)) - resp_b
-                    if y == 0.0 and v < 1e-9:
+                    E = e_dark if y == 0.0 else np.exp(-Y * resp_kt)
+                    v = Y * u0 / (u0 + (Y - u0) * E) - resp_b
+                    if y == 0.0 and v < _DARK_LEVEL:
                         v = 0.0
                     rx_v[r, d] = v
         # 4./5. ADC [Eqs. (20)-(22)] and detectors [Sec. 4.2, Eq. (36), Sec. 4.5]

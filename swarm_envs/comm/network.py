@@ -53,7 +53,7 @@ import numpy as np
 
 from swarm_envs.copies import CopyRandom
 from swarm_envs.comm.bch import BCHCode, code as bch_code
-from swarm_envs.comm.channel import ADCModel, adc_model_for
+from swarm_envs.comm.channel import ADCModel, adc_model_for, detector_response
 from swarm_envs.comm.kernels import COUNTERS, DELIVERY_FIELDS, HAVE_NUMBA, PER_ROBOT, StepDraws, draw_step, link_tables, slot_loop
 from swarm_envs.comm.protocol import (
     CSMA,
@@ -561,11 +561,7 @@ class Network:
                     ysum = ysum + draws.intensity_noise[s]
                 yt = np.clip(ysum, 0.0, 1.0)
                 v0 = self.rx_level
-                Y = yt + a.response_bias
-                u0 = v0 + a.response_bias
-                v = Y * u0 / (u0 + (Y - u0) * np.exp(-Y * self.response_kt)) - a.response_bias
-                v[(yt == 0.0) & (v < 1e-9)] = 0.0
-                v[(yt == 0.0) & (v0 == 0.0)] = 0.0
+                v = detector_response(v0, yt, 1.0 / self.bitrate, a.response_c, a.response_bias)
                 self.rx_level = v
                 m = np.floor(span * (1.0 - v) + a.m_min + noise[s])
             elif on.size:

@@ -708,7 +708,7 @@ def _print(results: dict[str, Any]) -> None:
 
 def _print_e(e: dict[str, Any]) -> None:
     print(f"(e) reliable range vs bit rate, static facing pair, m_tr = 5, dynamic detector ({e['steps']} steps per distance, {e['step_cm']:.0f} cm grid)")
-    print("  fitted: c of the detector response to 14 cm at 1800 bps; 310 bps (61 cm) and the other rates are predictions")
+    print("  fitted: the response's c to 14 cm at 1800 bps (b: smallest value keeping 61 cm at 310 bps); other rates: predictions")
     print(f"  {'bps':>5} | {'ours P_e<0.01':>13} | {'paper P_e<0.01':>14} | {'ours P_l<=0.5':>13} | {'max P_e within P_l<=0.5':>23}")
     for br, r in e["ranges"].items():
         pp = e["paper"].get(br)
