@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 
 from swarm_envs.comm.bch import SUPPORTED, code as bch_code
+from swarm_envs.comm.channel import ADCModel
 from swarm_envs.comm.kernels import HAVE_NUMBA, decode_words, draw_step
 from swarm_envs.comm.network import Network
 from swarm_envs.ir.layer import compute_links
@@ -56,6 +57,11 @@ CASES = [
     (7, 30, "broadcast", (15, 15), 310, 150.0, {"intensity_sigma": 0.02}),
     (8, 50, "flooding", (15, 15), 310, 300.0, {"crc_bits": 0}),
     (9, 20, "broadcast", (15, 11), 310, 100.0, {"crc_bits": 8, "relative_threshold": 2}),
+    # detector response (channel.detector_response): the e-puck default at high bit rates is in every case
+    # above; these make it dominate (slow circuit, intensity noise clipped at 0) or switch it off
+    (10, 30, "broadcast", (15, 15), 1670, 150.0, {"adc_model": ADCModel(response_c=4e-5), "intensity_sigma": 0.01}),
+    (11, 20, "flooding", (15, 11), 1800, 300.0, {"adc_model": ADCModel(response_c=2.5e-5, response_bias=0.005)}),
+    (4, 40, "flooding", (15, 11), 1800, 100.0, {"adc_model": ADCModel(response_c=0.0)}),  # case 4, instantaneous detector
 ]
 
 
@@ -69,6 +75,7 @@ def test_kernel_equals_numpy_reference(seed, n, mode, code, bitrate, density, kw
     }
     max_len = 40 if code != (15, 1) else 8
     delivered = 0
+    seen_level = 0.0
     for step in range(20):
         for net in nets.values():  # the same traffic for both
             _traffic(net, np.random.default_rng(10_000 * seed + step), 0.4, 0.2, max_len)
@@ -78,11 +85,18 @@ def test_kernel_equals_numpy_reference(seed, n, mode, code, bitrate, density, kw
         d_ref = nets["numpy"].step(links)
         d_k = nets["numba"].step(links)
         _assert_same(d_ref, d_k, step)
+        np.testing.assert_allclose(nets["numpy"].rx_level, nets["numba"].rx_level, rtol=1e-12, atol=1e-15, err_msg=f"step {step}")
+        seen_level = max(seen_level, float(nets["numba"].rx_level.max()))
         delivered += len(d_ref)
     ref, k = nets["numpy"], nets["numba"]
     for name, v in ref.stats.items():
         np.testing.assert_array_equal(v, k.stats[name], err_msg=name)
     np.testing.assert_array_equal(ref.det.m_max_est, k.det.m_max_est)
+    np.testing.assert_allclose(ref.rx_level, k.rx_level, rtol=1e-12, atol=1e-15)
+    if ref.response_kt > 0:  # the detector response was exercised
+        assert seen_level > 0
+    else:
+        assert (ref.rx_level == 0).all()
     np.testing.assert_array_equal(ref.csma.backoff, k.csma.backoff)
     np.testing.assert_array_equal(ref.q_count, k.q_count)
     assert ref.slot == k.slot and ref.frame_counter == k.frame_counter

@@ -6,8 +6,10 @@
    inside a frame or saw s1 in the last slot) and start or defer (deferral ``1 + draw``) [Sec. 4.4];
 2. emission of the current bit of every sending robot (OOK, all emitters on for an s1);
 3. superposed intensities ``y = min(1, sum gains + n_j)`` over the links of the emitting transmitters
-   [Eqs. (10),(11)], and the 12-bit ADC ``m = floor((m_max - m_min)(1 - y) + m_min + n_m)`` clipped to
-   ``[0, m_sup]`` [Eqs. (20)-(22)] with the noise drawn before the loop;
+   [Eqs. (10),(11)], the detector circuit's response across slots (e-puck; ``v`` follows ``y``,
+   :func:`swarm_envs.comm.channel.detector_response`, [T20 Sec. 5.2]) and the 12-bit ADC
+   ``m = floor((m_max - m_min)(1 - v) + m_min + n_m)`` clipped to ``[0, m_sup]`` [Eqs. (20)-(22)] with the
+   noise drawn before the loop;
 4. the detector state machine: ``min`` over the detectors, start detection ``m < m_t = m_max_est - m_tr``
    [Eqs. (30)-(33)], the dynamic threshold ``floor(|m_t + A| / 2)`` [Eq. (36)], bit storage, run-time
    ambient adaptation on idle s0 samples [Sec. 4.5], half duplex;
@@ -87,6 +89,8 @@ _C_BIT_ERR, _C_BLOCKS, _C_BLOCK_ERR = COUNTERS.index("bit_errors"), COUNTERS.ind
 _P_TX_STARTED, _P_DEFERRALS, _P_LOST, _P_COLL = PER_ROBOT.index("tx_started"), PER_ROBOT.index("deferrals"), PER_ROBOT.index("rx_lost"), PER_ROBOT.index("collisions")
 _P_BITS, _P_BIT_ERR, _P_BLOCKS, _P_BLOCK_ERR = PER_ROBOT.index("bits_checked"), PER_ROBOT.index("bit_errors"), PER_ROBOT.index("blocks_checked"), PER_ROBOT.index("block_errors")
 _IDLE, _RECV = 0, 1  # detector states (as protocol.IDLE / protocol.RECV)
+#: a dark detector whose response level falls below this is set to 0 (as channel.DARK_LEVEL)
+_DARK_LEVEL = 1e-6
 
 
 class StepDraws(NamedTuple):
@@ -279,7 +283,7 @@ def _abort(r, state, nbits, buf, gt_buf, gt_id, collided, n, k, table_msg, table
 @_jit
 def slot_loop(
     S, slot0, n_det, m_min, m_sup, m_tr, alpha, first_check,
-    tx_ptr, lrx, G, sig_ptr, sig_rx, ambient,
+    tx_ptr, lrx, G, sig_ptr, sig_rx, ambient, rx_v, resp_kt, resp_b,
     noise, inoise, pool,
     q_bits, q_slots, q_head, q_count, cur_bits, cur_slots, cur_pos, cur_id, sending, frame_counter, backoff,
     state, m_max_est, thr, nbits, expect, phase, buf, best_m, best_det, last_s1, start_slot,
@@ -290,13 +294,19 @@ def slot_loop(
     """All S bit slots of one control step for all robots (module docstring). State arrays are updated in
     place; ``frame_counter`` is a (1,) array. Deliveries are written to ``d_int`` (D, 11) with columns
     :data:`DELIVERY_FIELDS` and ``d_pay`` (D, >= 255) bool; returns the number written. Header ids are a
-    copy's own robot numbers, valid below ``n_ids`` (the robots per env copy)."""
+    copy's own robot numbers, valid below ``n_ids`` (the robots per env copy).
+
+    Detector response: with ``resp_kt = slot duration / c > 0`` every detector's level ``rx_v`` (N, n_det)
+    follows the light through :func:`swarm_envs.comm.channel.detector_response` (same arithmetic) in every
+    slot, also while its robot sends, and the ADC samples the level; ``resp_kt = 0``: instantaneous."""
     n = sending.shape[0]
     Q = q_bits.shape[1]
     F = cur_bits.shape[1]
     Fq = q_bits.shape[2]
     W = buf.shape[1]
     has_inoise = inoise.shape[0] > 0
+    filt = resp_kt > 0.0
+    e_dark = np.exp(-resp_b * resp_kt)  # decay factor of a dark detector (y = 0) over one slot
     ysum = np.zeros((n, n_det))
     best_str = np.full(n, -np.inf)
     best_tx = np.full(n, -1, dtype=np.int64)
@@ -359,6 +369,27 @@ def slot_loop(
                     if st > best_str[r]:
                         best_str[r] = st
                         best_tx[r] = t
+        # detector response across slots (channel.detector_response), every robot
+        if filt:
+            for r in range(n):
+                for d in range(n_det):
+                    y = ysum[r, d]
+                    if has_inoise:
+                        y = y + inoise[s, r, d]
+                    if y > 1.0:
+                        y = 1.0
+                    elif y < 0.0:
+                        y = 0.0
+                    v0 = rx_v[r, d]
+                    if y == 0.0 and v0 == 0.0:
+                        continue
+                    Y = y + resp_b
+                    u0 = v0 + resp_b
+                    E = e_dark if y == 0.0 else np.exp(-Y * resp_kt)
+                    v = Y * u0 / (u0 + (Y - u0) * E) - resp_b
+                    if y == 0.0 and v < _DARK_LEVEL:
+                        v = 0.0
+                    rx_v[r, d] = v
         # 4./5. ADC [Eqs. (20)-(22)] and detectors [Sec. 4.2, Eq. (36), Sec. 4.5]
         for r in range(n):
             listen = not sending[r]
@@ -374,11 +405,14 @@ def slot_loop(
             md = 0
             msum = 0.0
             for d in range(n_det):
-                y = ysum[r, d]
-                if has_inoise:
-                    y = y + inoise[s, r, d]
-                if y > 1.0:
-                    y = 1.0
+                if filt:
+                    y = rx_v[r, d]
+                else:
+                    y = ysum[r, d]
+                    if has_inoise:
+                        y = y + inoise[s, r, d]
+                    if y > 1.0:
+                        y = 1.0
                 m = np.floor(span * (1.0 - y) + m_min + np.float64(noise[s, r, d]))
                 if m < 0.0:
                     m = 0.0

@@ -9,8 +9,10 @@ step boundaries). In every slot, vectorised over all robots:
 3. the received intensity of every detector is the superposition over the emitting transmitters in
    line of sight, ``y = min(1, sum gains)`` [T20 Eqs. (10),(11)], accumulated with ``np.bincount`` over
    the links of the emitting robots (links sorted by transmitter once per step);
-4. the 12-bit ADC turns y into counts with Gaussian noise [T20 Eqs. (20)-(22)]
-   (:func:`swarm_envs.comm.channel.adc`, same formula inlined here);
+4. the detector circuit follows y with a photocurrent-dependent speed, state carried across slots and
+   steps (``rx_level``; :func:`swarm_envs.comm.channel.detector_response`, the e-puck's bit-rate
+   dependence [T20 Secs. 5.2, 7]), and the 12-bit ADC turns its level into counts with Gaussian noise
+   [T20 Eqs. (20)-(22)] (:func:`swarm_envs.comm.channel.adc`, same formula inlined here);
 5. the detectors (:class:`~swarm_envs.comm.protocol.DetectorBank`) take ``min`` over their detectors,
    detect start symbols, apply the dynamic threshold and store bits; at check points the header is
    decoded (BCH) and the frame is aborted, continued or delivered.
@@ -51,7 +53,7 @@ import numpy as np
 
 from swarm_envs.copies import CopyRandom
 from swarm_envs.comm.bch import BCHCode, code as bch_code
-from swarm_envs.comm.channel import ADCModel, adc_model_for
+from swarm_envs.comm.channel import ADCModel, adc_model_for, detector_response
 from swarm_envs.comm.kernels import COUNTERS, DELIVERY_FIELDS, HAVE_NUMBA, PER_ROBOT, StepDraws, draw_step, link_tables, slot_loop
 from swarm_envs.comm.protocol import (
     CSMA,
@@ -148,7 +150,9 @@ class Network:
         n_robots: swarm size N.
         rng: random generator (start-up ambient samples at reset, then :func:`~swarm_envs.comm.kernels.draw_step`
             once per step).
-        bitrate: bits per second (e-puck: 310 default, 650, 1080, 1160, 1670, 1800 [T20 Sec. 5]).
+        bitrate: bits per second (e-puck: 310 default, 650, 1080, 1160, 1670, 1800 [T20 Sec. 5]); with the
+            e-puck's detector response (:func:`swarm_envs.comm.channel.detector_response`) the reliable
+            range shrinks as the rate grows (~60 cm at 310 bps, 14 cm at 1800 bps [T20 Sec. 7]).
         relative_threshold: m_tr (counts) [T20 Eq. (33)], default 5.
         code: BCH code (n, k): (15, 15) default, (15, 11), (15, 7), (15, 5), (15, 1).
         comm_mode: ``"broadcast"`` or ``"flooding"``.
@@ -234,6 +238,8 @@ class Network:
         self.startup_samples = int(startup_samples)
         self.dedupe_slots = int(round(dedupe_window * self.bitrate))
         self.intensity_sigma = float(intensity_sigma)
+        # detector response: slot duration / charge constant (0 = instantaneous detector)
+        self.response_kt = (1.0 / self.bitrate) / self.adc_model.response_c if self.adc_model.response_c > 0 else 0.0
         if crc_bits is None:
             crc_bits = 8 if comm_mode == "flooding" else 0
         self.crc_bits = int(crc_bits)
@@ -246,8 +252,8 @@ class Network:
 
     # ------------------------------------------------------------------ state
     def reset(self) -> None:
-        """Empty all queues, idle all transceivers, zero the statistics, redo the start-up ambient
-        estimate (mean of ``startup_samples`` noisy dark samples per detector) [T20 Sec. 4.5]."""
+        """Empty all queues, idle all transceivers (detector response levels to 0), zero the statistics, redo
+        the start-up ambient estimate (mean of ``startup_samples`` noisy dark samples per detector) [T20 Sec. 4.5]."""
         n = self.n
         F = max(64, self.fmt.header_blocks * self.code.n + 1, self.frame_slots() + 1)
         self.slot = 0
@@ -268,6 +274,7 @@ class Network:
         self.gt_id = np.full(n, -1, dtype=np.int64)
         self.gt_buf = np.zeros((n, F), dtype=bool)
         self.collided = np.zeros(n, dtype=bool)
+        self.rx_level = np.zeros((n, self.n_det))  # detector response state (channel.detector_response)
         self.seen_keys = np.zeros(0, dtype=np.int64)
         self.seen_slot = np.zeros(0, dtype=np.int64)
         self.det.reset(self._startup_ambient(np.arange(n)))
@@ -289,8 +296,8 @@ class Network:
         return np.clip(dark, 0, a.m_sup).mean(axis=1)
 
     def reset_copies(self, copies: np.ndarray, rngs: list[np.random.Generator]) -> None:
-        """Reset the robots of env ``copies`` as a fresh network would be (queues, transceivers, detector,
-        sequence numbers, per-robot statistics), drawing their start-up ambient from ``rngs`` (one per copy,
+        """Reset the robots of env ``copies`` as a fresh network would be (queues, transceivers, detector and
+        its response level ``rx_level``, sequence numbers, per-robot statistics), drawing their start-up ambient from ``rngs`` (one per copy,
         which become those copies' streams). Other copies are untouched."""
         copies = np.asarray(copies, dtype=np.int64).reshape(-1)
         for b, g in zip(copies, rngs):
@@ -300,7 +307,7 @@ class Network:
         for arr, value in (
             (self.q_bits, False), (self.q_slots, 0), (self.q_head, 0), (self.q_count, 0), (self.cur_bits, False),
             (self.cur_slots, 0), (self.cur_pos, 0), (self.cur_id, -1), (self.sending, False), (self.seq_next, 0),
-            (self.gt_tx, -1), (self.gt_id, -1), (self.gt_buf, False), (self.collided, False),
+            (self.gt_tx, -1), (self.gt_id, -1), (self.gt_buf, False), (self.collided, False), (self.rx_level, 0.0),
         ):  # fmt: skip
             arr[rows] = value
         det = self.det
@@ -494,7 +501,7 @@ class Network:
         state = det.state.view(np.int8)
         D = slot_loop(
             S, self.slot, self.n_det, float(a.m_min), int(a.m_sup), self.m_tr, det.alpha, fmt.first_check_slots,
-            tx_ptr, rx, G, sig_ptr, sig_rx, self.ambient,
+            tx_ptr, rx, G, sig_ptr, sig_rx, self.ambient, self.rx_level, self.response_kt, float(a.response_bias),
             draws.noise, draws.intensity_noise, draws.backoff,
             self.q_bits, self.q_slots, self.q_head, self.q_count, self.cur_bits, self.cur_slots, self.cur_pos, self.cur_id,
             self.sending, fc, self.csma.backoff,
@@ -546,7 +553,20 @@ class Network:
             bit = self.cur_bits[snd, self.cur_pos[snd]] if snd.size else np.zeros(0, bool)
             on = snd[bit]
             # 3. intensity (superposition over emitting transmitters)
-            if on.size:
+            if self.response_kt > 0:  # detector response across slots (channel.detector_response)
+                if on.size:
+                    li = _ranges(tx_ptr[on], tx_ptr[on + 1])
+                    ysum = np.bincount(flat.reshape(-1, nd)[li].ravel(), weights=G[li].ravel(), minlength=n * nd).reshape(n, nd)
+                else:
+                    ysum = np.zeros((n, nd))
+                if self.intensity_sigma > 0:
+                    ysum = ysum + draws.intensity_noise[s]
+                yt = np.clip(ysum, 0.0, 1.0)
+                v0 = self.rx_level
+                v = detector_response(v0, yt, 1.0 / self.bitrate, a.response_c, a.response_bias)
+                self.rx_level = v
+                m = np.floor(span * (1.0 - v) + a.m_min + noise[s])
+            elif on.size:
                 li = _ranges(tx_ptr[on], tx_ptr[on + 1])
                 ysum = np.bincount(flat.reshape(-1, nd)[li].ravel(), weights=G[li].ravel(), minlength=n * nd).reshape(n, nd)
                 if self.intensity_sigma > 0:

@@ -1,6 +1,6 @@
 """Validation of the SwarmCom simulation against [T20] (SPEC 4.3).
 
-``python -m swarm_envs.validate swarmcom [--json] [--experiment a|b|c|d|all] [--out DIR] [--quick]``
+``python -m swarm_envs.validate swarmcom [--json] [--experiment a|b|c|d|e|all] [--out DIR] [--quick] [--fit-response]``
 
 (a) two static e-pucks facing each other, 310 bps, dynamic detector: communication range vs relative
     threshold m_tr (75, 25, 10 -> 21, 33, 45 cm [T20 Sec. 6.2.4, Fig. 12a]) and bit error probability vs
@@ -15,13 +15,17 @@
     received it 2 s after it was queued) [T20 Sec. 6.2.2, Fig. 16b]; flooding is run with the network's
     default CRC-8 and without it (then corrupted copies are re-flooded as new messages);
 (d) channel coding: measured 15-bit block (message) error with [15,11] and [15,1] vs the prediction
-    1 - P_f of Eq. (34) from the P_e measured without coding [T20 Sec. 5.4, Fig. 13].
+    1 - P_f of Eq. (34) from the P_e measured without coding [T20 Sec. 5.4, Fig. 13];
+(e) reliable range (P_e < 0.01) and communication range vs bit rate, static facing pair, m_tr = 5: 61 cm
+    at 310 bps, 14 cm at 1800 bps [T20 Sec. 7], the rates between (Figs. 10-12b, values not in the text),
+    and the 21 cm setting of [T20 Sec. 6.2.5] at 310/1080/1670 bps. ``--fit-response`` refits the detector
+    response's charge constant c to 14 cm at 1800 bps (:mod:`swarm_envs.comm.channel` docstring).
 
 Everything runs the bit-level :class:`swarm_envs.comm.network.Network` over the IR links of
 :func:`swarm_envs.ir.layer.compute_links`; independent static pairs (a, d) and independent arenas (c) are
 simulated side by side in one network, 3 m apart (beyond the 1 m IR range), so they cannot interact
 (the id field is then wider than for one pair: 8 bits instead of 6, a few more header bits).
-The default run takes ~3-4 minutes on 2 cores, ``--quick`` ~15 s.
+The default run takes ~3-4 minutes on 2 cores (plus ~1 minute for (e)), ``--quick`` ~15 s.
 """
 
 from __future__ import annotations
@@ -36,7 +40,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from swarm_envs.comm.bch import error_free_probability
-from swarm_envs.comm.channel import M_MAX, M_MIN, gain_to_intensity
+from swarm_envs.comm.channel import M_MAX, M_MIN, RESPONSE_BIAS, ADCModel, gain_to_intensity
 from swarm_envs.comm.network import Network
 from swarm_envs.ir.layer import compute_links, line_of_sight, occluder_width, pair_gains, pair_occluders, wrap_angle
 from swarm_envs.platforms import get_platform
@@ -52,6 +56,8 @@ OCC_RULES = ("ray", "centre")  # per-ray line of sight (SPEC 2, simulated) and t
 PAPER_MTR = 5  # Fig. 20a: the 61 cm range of m_tr = 5 [T20 Sec. 6.2.6, Table 12a]
 M_TR_SWEEP = (5, 10, 25, 75)  # relative thresholds of the paper's ranges 61, 45, 33, 21 cm [Sec. 6.2.4, 7]
 PAPER_FIG20A = {"bound": 15, "densest": 6}  # [T20 Sec. 6.2.6]
+PAPER_BITRATE_RELIABLE = {310: 61.0, 1800: 14.0}  # cm, P_e < 0.01, m_tr = 5 [T20 Sec. 7]
+BITRATE_SWEEP = (310, 650, 1080, 1160, 1670, 1800)  # the e-puck's rates [T20 Sec. 5]; Fig. 10: 310, 650, 1160
 
 
 # ---------------------------------------------------------------------------------------------- (a), (d)
@@ -63,6 +69,7 @@ def run_pairs(
     code: tuple[int, int] = (15, 15),
     bitrate: float = 310,
     payload_range: tuple[int, int] = (1, 40),
+    adc_model: ADCModel | None = None,
 ) -> dict[str, np.ndarray]:
     """Static facing pairs (transmitter 2i at distance d_i from receiver 2i+1), one network.
 
@@ -79,7 +86,7 @@ def run_pairs(
     head = np.zeros(2 * K)
     head[0::2] = np.pi  # transmitters face the receivers
     links = compute_links(pos, head, PLATFORM)
-    net = Network(PLATFORM, 2 * K, rng, bitrate=bitrate, relative_threshold=relative_threshold, code=code)
+    net = Network(PLATFORM, 2 * K, rng, bitrate=bitrate, relative_threshold=relative_threshold, code=code, adc_model=adc_model)
     txs = np.arange(0, 2 * K, 2)
     lo, hi = payload_range
     drain = max(10, steps // 10)
@@ -480,6 +487,59 @@ def experiment_d(rng: np.random.Generator, quick: bool) -> dict[str, Any]:
     return out
 
 
+# ---------------------------------------------------------------------------------------------- (e)
+def bitrate_ranges(
+    rng: np.random.Generator, bitrates: tuple[float, ...], steps: int, step_cm: float, relative_threshold: float = 5,
+    adc_model: ADCModel | None = None, max_cm: float = 80.0,
+) -> dict[float, dict[str, Any]]:
+    """Reliable range (P_e < 0.01) and communication range (P_l <= 0.5) of a static facing pair per bit rate."""
+    dist = np.arange(7.0, max_cm + 1e-9, step_cm) / 100.0
+    out = {}
+    for br in bitrates:
+        res = run_pairs(dist, rng, steps, relative_threshold=relative_threshold, bitrate=br, adc_model=adc_model)
+        pe = np.array(res["P_e"])
+        out[br] = {
+            "reliable_cm_Pe<0.01": reliable_range_cm(res, 0.01),
+            "range_cm_Pl<=0.5": comm_range_cm(res, 0.5),
+            "max_Pe_within_range": float(np.nanmax(pe[res["P_l"] <= 0.5])) if (res["P_l"] <= 0.5).any() else float("nan"),
+            "curve": {k: v.tolist() for k, v in res.items()},
+        }
+    return out
+
+
+def fit_response_c(bias: float = RESPONSE_BIAS, target_cm: float = PAPER_BITRATE_RELIABLE[1800], steps: int = 300, seed: int = 11) -> dict[str, float]:
+    """Fit the detector response's charge constant c (s) for a given bias b (SPEC 4.2, channel module
+    docstring): bisection in log c, on a static facing pair at 1800 bps (7..30 cm, 1 cm steps, ``steps``
+    control steps per distance, fixed seed), for the two edges of the plateau where the reliable range
+    equals ``target_cm`` (14 cm [T20 Sec. 7]); returns both edges and their geometric mean (the fit)."""
+    dist = np.arange(7.0, 30.0 + 1e-9, 1.0) / 100.0
+
+    def rel(c: float) -> float:
+        r = run_pairs(dist, np.random.default_rng(seed), steps, bitrate=1800, adc_model=ADCModel(response_c=c, response_bias=bias))
+        v = reliable_range_cm(r, 0.01)
+        return 0.0 if np.isnan(v) else v
+
+    def edge(level: float) -> float:  # sup{c : reliable(c) >= level}, reliable range falls as c grows
+        lo, hi = 1e-7, 1e-3
+        for _ in range(12):
+            mid = np.sqrt(lo * hi)
+            lo, hi = (mid, hi) if rel(mid) >= level else (lo, mid)
+        return float(np.sqrt(lo * hi))
+
+    c_hi = edge(target_cm)  # largest c still reaching target_cm
+    c_lo = edge(target_cm + 1)  # largest c still reaching target_cm + 1
+    return {"bias": bias, "c_low": c_lo, "c_high": c_hi, "c_fit": float(np.sqrt(c_lo * c_hi))}
+
+
+def experiment_e(rng: np.random.Generator, quick: bool) -> dict[str, Any]:
+    steps = 60 if quick else 300
+    step_cm = 2.0 if quick else 1.0
+    ranges = bitrate_ranges(rng, BITRATE_SWEEP, steps, step_cm)
+    # [T20 Sec. 6.2.5]: with the range restricted to 21 cm (m_tr = 75) the bit rate matters little for P_e
+    restricted = bitrate_ranges(rng, (310, 1080, 1670), steps, step_cm, relative_threshold=75, max_cm=30.0)
+    return {"ranges": ranges, "restricted_mtr75": restricted, "paper": PAPER_BITRATE_RELIABLE, "steps": steps, "step_cm": step_cm}
+
+
 # ---------------------------------------------------------------------------------------------- output
 def _save(fig, out_dir: str, name: str) -> str:
     """Lay out, write and close a matplotlib figure; returns its path."""
@@ -545,6 +605,18 @@ def _plots(results: dict[str, Any], out_dir: str) -> list[str]:
         ax.set(xlabel="robots", ylabel="P_l", title="message loss, random walk, 310 bps, m_tr=10")
         ax.legend()
         files.append(_save(fig, out_dir, "swarmcom_c_flooding.png"))
+    if "e" in results:
+        e = results["e"]
+        fig, ax = plt.subplots(figsize=(6, 4))
+        for br, r in e["ranges"].items():
+            c = r["curve"]
+            ax.semilogy(c["distance_cm"], np.maximum(np.array(c["P_e"], float), 1e-5), label=f"{br} bps")
+        ax.axhline(0.01, color="k", ls=":")
+        for br, x in PAPER_BITRATE_RELIABLE.items():
+            ax.axvline(x, color="gray", ls="--", lw=0.8)
+        ax.set(xlabel="distance (cm)", ylabel="P_e (floored at 1e-5)", title="P_e vs distance and bit rate, m_tr=5 (paper: 61 / 14 cm dashed)")
+        ax.legend(fontsize=7)
+        files.append(_save(fig, out_dir, "swarmcom_e_bitrate.png"))
     if "d" in results:
         d = results["d"]
         fig, ax = plt.subplots(figsize=(6, 4))
@@ -630,6 +702,22 @@ def _print(results: dict[str, Any]) -> None:
         print("  paper: [15,1] predicted 1 - P_f <= 1e-16 up to ~50 cm (Sec. 5.4); coding lowers the error by orders of magnitude")
         blocks = d["15,1"]["blocks"]
         print(f"  ([15,1] blocks checked per distance: {int(min(blocks))}..{int(max(blocks))}; a measured 0 means < ~1/blocks)")
+    if "e" in results:
+        _print_e(results["e"])
+
+
+def _print_e(e: dict[str, Any]) -> None:
+    print(f"(e) reliable range vs bit rate, static facing pair, m_tr = 5, dynamic detector ({e['steps']} steps per distance, {e['step_cm']:.0f} cm grid)")
+    print("  fitted: the response's c to 14 cm at 1800 bps (b: smallest value keeping 61 cm at 310 bps); other rates: predictions")
+    print(f"  {'bps':>5} | {'ours P_e<0.01':>13} | {'paper P_e<0.01':>14} | {'ours P_l<=0.5':>13} | {'max P_e within P_l<=0.5':>23}")
+    for br, r in e["ranges"].items():
+        pp = e["paper"].get(br)
+        paper = f"{pp:.0f} cm" if pp is not None else ("between" if 310 < br < 1800 else "")
+        print(f"  {br:>5} | {r['reliable_cm_Pe<0.01']:>10.0f} cm | {paper:>14} | {r['range_cm_Pl<=0.5']:>10.0f} cm | {r['max_Pe_within_range']:>23.3f}")
+    print("  [T20 Fig. 10] (fixed thresholds, 310/650/1160 bps) and Fig. 12b (minimum m_tr for P_e < 0.01 per bit rate) give")
+    print("  no numbers in the text: only the trend (higher bit rate, shorter reliable range) is compared.")
+    print("  range restricted to 21 cm (m_tr = 75) [T20 Sec. 6.2.5: bit rate matters little for P_e then]:")
+    print("  " + ", ".join(f"{br} bps: range {r['range_cm_Pl<=0.5']:.0f} cm, max P_e {r['max_Pe_within_range']:.3f}" for br, r in e["restricted_mtr75"].items()))
 
 
 def _jsonable(x: Any) -> Any:
@@ -648,15 +736,20 @@ def _jsonable(x: Any) -> Any:
 
 def main(argv: list[str]) -> int:
     ap = argparse.ArgumentParser(prog="python -m swarm_envs.validate swarmcom", description=__doc__.split("\n\n")[0])
-    ap.add_argument("--experiment", default="all", choices=["a", "b", "c", "d", "all"])
+    ap.add_argument("--experiment", default="all", choices=["a", "b", "c", "d", "e", "all"])
+    ap.add_argument("--fit-response", action="store_true", help="refit the detector response's charge constant c (channel module docstring) and exit")
     ap.add_argument("--quick", action="store_true", help="fewer trials/distances (well under a minute)")
     ap.add_argument("--json", action="store_true", help="print results as JSON")
     ap.add_argument("--out", default="validation_output", help="directory for plots")
     ap.add_argument("--seed", type=int, default=2020)
     args = ap.parse_args(argv)
     rng = np.random.default_rng(args.seed)
-    which = ["a", "b", "c", "d"] if args.experiment == "all" else [args.experiment]
-    fns = {"a": experiment_a, "b": experiment_b, "c": experiment_c, "d": experiment_d}
+    if args.fit_response:
+        fit = fit_response_c()
+        print(json.dumps(fit) if args.json else f"detector response fit (b = {fit['bias']}): 14 cm at 1800 bps for c in [{fit['c_low']:.3e}, {fit['c_high']:.3e}] s; c = {fit['c_fit']:.3e} s")
+        return 0
+    which = ["a", "b", "c", "d", "e"] if args.experiment == "all" else [args.experiment]
+    fns = {"a": experiment_a, "b": experiment_b, "c": experiment_c, "d": experiment_d, "e": experiment_e}
     results: dict[str, Any] = {}
     timing = {}
     for w in which:
