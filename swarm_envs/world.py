@@ -44,6 +44,10 @@ MOTOR_ANGULAR_ACCELERATION = 2000.0  # rad/s^2
 # (vx, vy, omega) written in one call; a space's bodies come in insertion order (robot, its control, ...)
 _READ = pymunk.batch.BodyFields.POSITION | pymunk.batch.BodyFields.ANGLE | pymunk.batch.BodyFields.VELOCITY | pymunk.batch.BodyFields.ANGULAR_VELOCITY
 _WRITE = pymunk.batch.BodyFields.VELOCITY | pymunk.batch.BodyFields.ANGULAR_VELOCITY
+try:  # chipmunk's step function, called directly by _substeps (pymunk's Space.step adds only bookkeeping)
+    from pymunk._chipmunk_cffi import lib as _chipmunk
+except ImportError:  # pragma: no cover - another pymunk layout: Space.step is used
+    _chipmunk = None
 
 
 @dataclass(frozen=True)
@@ -352,8 +356,7 @@ class World:
         values[:, 0] = self._body_motion  # robot bodies: written back unchanged
         values[:, 1] = control
         pymunk.batch.set_space_bodies(self.space, _WRITE, self._write_buffer)
-        for _ in range(self.substeps):
-            self.space.step(h)
+        _substeps(self.space, h, self.substeps)
         self._read_buffer.clear()
         pymunk.batch.get_space_bodies(self.space, _READ, self._read_buffer)
         return np.frombuffer(self._read_buffer.float_buf(), dtype=np.float64)[: 12 * self.n].reshape(self.n, 2, 6)[:, 0]
@@ -435,6 +438,31 @@ def step_worlds(worlds: Sequence[World], linear: np.ndarray, angular: np.ndarray
         w.positions, w.headings = positions[a:b], new_headings[a:b]
         w.velocities, w.angular_velocities = velocities[a:b], angular_velocities[a:b]
         w.bumps, w._body_motion = bumps[a:b], motion[a:b]
+
+
+def _substeps(space: pymunk.Space, h: float, count: int) -> None:
+    """``count`` pymunk steps of ``h`` seconds. ``Space.step`` wraps chipmunk's ``cpSpaceStep`` in
+    bookkeeping for bodies added or removed from callbacks and for post-step callbacks, none of which this
+    module uses (the contact callback only records); when that bookkeeping is empty the space is locked
+    once (as ``Space.step`` does) and ``cpSpaceStep`` is called directly, saving the wrapper per sub-step.
+    Otherwise (or with another pymunk layout) ``Space.step`` is used: the same chipmunk call either way."""
+    try:
+        direct = _chipmunk is not None and not (
+            space._bodies_to_check or space._add_later or space._remove_later or space._post_step_callbacks or space.threaded
+        )
+    except AttributeError:  # pragma: no cover - pymunk internals changed
+        direct = False
+    if not direct:
+        for _ in range(count):
+            space.step(h)
+        return
+    handle = space._space
+    space._locked = True
+    try:
+        for _ in range(count):
+            _chipmunk.cpSpaceStep(handle, h)
+    finally:
+        space._locked = False
 
 
 def _bump_flags(worlds: Sequence[World], bounds: np.ndarray, headings: np.ndarray) -> np.ndarray:

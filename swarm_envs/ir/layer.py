@@ -421,10 +421,10 @@ def compute_links(
     U = pairs.shape[0]
     rx = np.concatenate([pairs[:, 0], pairs[:, 1]]).astype(np.intp)
     tx = np.concatenate([pairs[:, 1], pairs[:, 0]]).astype(np.intp)
-    order = np.lexsort((tx, rx))
+    order = np.argsort(rx.astype(np.int64) * N + tx)  # by (rx, tx); the keys are unique, so any sort agrees
     rx, tx = rx[order], tx[order]
     d = positions[tx] - positions[rx]
-    c, s = np.cos(headings[rx]), np.sin(headings[rx])
+    c, s = np.cos(headings)[rx], np.sin(headings)[rx]  # per robot, then per pair
     rel = np.stack([c * d[:, 0] + s * d[:, 1], -s * d[:, 0] + c * d[:, 1]], axis=-1)
     rel_heading = wrap_angle(headings[tx] - headings[rx])
     occluders = None
