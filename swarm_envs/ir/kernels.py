@@ -222,9 +222,26 @@ if HAVE_NUMBA:
         """Third robots whose centre is closer than ``width`` to the centre segment rx[p]-tx[p], as CSR.
 
         Candidates are the neighbour lists (CSR ``starts``, ``counts``, ``nbrs``) of both ends, which must
-        reach ``|rx tx| / 2 + width``. Returns offsets (P + 1,) and robot indices (K,), each pair's sorted.
+        reach ``|rx tx| / 2 + width``: a centre closer than ``width`` to the segment is closer than
+        ``|rx tx| / 2 + width`` to its nearer end, so each end's list, sorted by distance here, is read only
+        up to that pair's own reach. Returns offsets (P + 1,) and robot indices (K,), each pair's sorted.
         """
         P, N = rx.shape[0], positions.shape[0]
+        # each robot's neighbours by increasing distance (insertion sort: the lists are short)
+        near = nbrs.copy()
+        dist2 = np.empty(nbrs.shape[0])
+        for r in range(N):
+            s0 = starts[r]
+            for q in range(s0, s0 + counts[r]):
+                k = near[q]
+                d2 = (positions[k, 0] - positions[r, 0]) ** 2 + (positions[k, 1] - positions[r, 1]) ** 2
+                q2 = q
+                while q2 > s0 and dist2[q2 - 1] > d2:
+                    dist2[q2] = dist2[q2 - 1]
+                    near[q2] = near[q2 - 1]
+                    q2 -= 1
+                dist2[q2] = d2
+                near[q2] = k
         stamp = np.full(N, -1, dtype=np.int64)
         offsets = np.zeros(P + 1, dtype=np.int64)
         idx = np.empty(max(16, 2 * P), dtype=np.int64)
@@ -235,9 +252,13 @@ if HAVE_NUMBA:
             ax, ay = positions[a, 0], positions[a, 1]
             sx, sy = positions[b, 0] - ax, positions[b, 1] - ay
             L2 = sx * sx + sy * sy
+            reach = 0.5 * math.sqrt(L2) + width + 1e-9  # margin far above rounding
+            reach2 = reach * reach
             for end in (a, b):
                 for q in range(starts[end], starts[end] + counts[end]):
-                    k = nbrs[q]
+                    if dist2[q] > reach2:
+                        break
+                    k = near[q]
                     if k == a or k == b or stamp[k] == p:
                         continue
                     stamp[k] = p
