@@ -129,7 +129,7 @@ if HAVE_NUMBA:
         """
         P, nd, ne = rel_position.shape[0], det_pos.shape[0], em_pos.shape[0]
         r2 = occ_radius * occ_radius
-        out = np.zeros((P, nd, ne))
+        out = np.empty((P, nd, ne))  # each row is zeroed just before it is filled (one pass over memory)
         lit = np.empty(P, dtype=np.int64)
         n_lit = 0
         dcos, dsin = np.cos(det_dir), np.sin(det_dir)
@@ -158,6 +158,8 @@ if HAVE_NUMBA:
         dets = np.empty(nd, dtype=np.int64)
         ems = np.empty(ne, dtype=np.int64)
         for p in range(P):
+            row = n_lit if compact else p
+            out[row] = 0.0
             Rx, Ry = rel_position[p, 0], rel_position[p, 1]
             if math.sqrt(Rx * Rx + Ry * Ry) > ir_range:
                 continue
@@ -176,7 +178,6 @@ if HAVE_NUMBA:
                 if not prune_det or Rx * dcos[i] + Ry * dsin[i] + rho_e - det_self[i] >= -margin:
                     dets[n_det] = i
                     n_det += 1
-            row = n_lit if compact else p
             any_lit = False
             for a in range(n_det):
                 i = dets[a]
