@@ -3,7 +3,7 @@
 Prints agent-steps/s (robots x env copies x steps per second) with random actions, flocking, e-puck at the
 default density, for N in {10, 100} x B in {1, 16, 64, 256} and N = 1000 x B = 1, sensing full and ideal;
 each figure is the median over timed steps after warm-up (the machine is shared: medians, and same-run
-ratios). When ``vmas`` is importable, VMAS's flocking scenario with N = 10 and 1024 envs on the CPU
+ratios; the process CPU time per step is printed too, as it depends less on other load). When ``vmas`` is importable, VMAS's flocking scenario with N = 10 and 1024 envs on the CPU
 (torch with 1 thread) is timed in the same run and printed beside, as a ratio.
 
     python benchmarks/bench_vec.py                     # the full table (several minutes)
@@ -27,8 +27,8 @@ import swarm_envs  # noqa: E402
 GRID = [(10, 1), (10, 16), (10, 64), (10, 256), (100, 1), (100, 16), (100, 64), (100, 256), (1000, 1)]
 
 
-def time_swarm(n: int, copies: int, sensing: str, min_steps: int, min_seconds: float) -> float:
-    """Median seconds per vector step (B copies of N robots)."""
+def time_swarm(n: int, copies: int, sensing: str, min_steps: int, min_seconds: float) -> tuple[float, float]:
+    """Median (wall-clock, process CPU) seconds per vector step (B copies of N robots)."""
     vec = swarm_envs.make_vec("swarm_envs/Flocking-v0", copies, n_robots=n, sensing=sensing, max_cycles=10**6)
     vec.reset(seed=0)
     rng = np.random.default_rng(0)
@@ -36,15 +36,17 @@ def time_swarm(n: int, copies: int, sensing: str, min_steps: int, min_seconds: f
     for _ in range(3):  # warm-up (numba kernels load, caches fill)
         vec.step(rng.uniform(-1, 1, shape))
     times: list[float] = []
+    cpu: list[float] = []
     start = time.perf_counter()
     while len(times) < min_steps or time.perf_counter() - start < min_seconds:
         action = rng.uniform(-1, 1, shape)
-        t0 = time.perf_counter()
+        t0, c0 = time.perf_counter(), time.process_time()
         vec.step(action)
         times.append(time.perf_counter() - t0)
+        cpu.append(time.process_time() - c0)
         if len(times) >= 200:
             break
-    return statistics.median(times)
+    return statistics.median(times), statistics.median(cpu)
 
 
 def time_vmas(n: int, num_envs: int, steps: int) -> float | None:
@@ -77,6 +79,7 @@ def main() -> None:
     parser.add_argument("--min-steps", type=int, default=5)
     parser.add_argument("--min-seconds", type=float, default=3.0)
     parser.add_argument("--no-vmas", action="store_true")
+    parser.add_argument("--vmas-steps", type=int, default=20, help="timed VMAS steps (median)")
     args = parser.parse_args()
     grid = [(n, b) for n, b in GRID if not args.quick or n == 10]
     if args.n:
@@ -87,21 +90,21 @@ def main() -> None:
     print(f"load average at start: {os.getloadavg()[0]:.2f} on {os.cpu_count()} cores")
     vmas_rate = None
     if not args.no_vmas:
-        t = time_vmas(10, 1024, 20)
+        t = time_vmas(10, 1024, args.vmas_steps)
         if t is None:
             print("VMAS: not installed (pip install vmas) - no VMAS column")
         else:
             vmas_rate = 10 * 1024 / t
             print(f"VMAS 1024 envs x 10 agents flocking (cpu, 1 torch thread): {t * 1e3:.1f} ms/step, {vmas_rate:,.0f} agent-steps/s")
     print()
-    print("| N | B | sensing | ms / vector step | agent-steps/s | env steps/s (per copy) | vs VMAS N=10 x 1024 |")
-    print("|---|---|---|---|---|---|---|")
+    print("| N | B | sensing | ms / vector step | CPU ms / step | agent-steps/s | env steps/s (per copy) | vs VMAS N=10 x 1024 |")
+    print("|---|---|---|---|---|---|---|---|")
     for sensing in modes:
         for n, b in grid:
-            t = time_swarm(n, b, sensing, args.min_steps, args.min_seconds)
+            t, cpu = time_swarm(n, b, sensing, args.min_steps, args.min_seconds)
             rate = n * b / t
             ratio = f"{rate / vmas_rate:.2f}x" if vmas_rate else "-"
-            print(f"| {n} | {b} | {sensing} | {t * 1e3:.1f} | {rate:,.0f} | {1 / t:,.1f} | {ratio} |", flush=True)
+            print(f"| {n} | {b} | {sensing} | {t * 1e3:.1f} | {cpu * 1e3:.1f} | {rate:,.0f} | {1 / t:,.1f} | {ratio} |", flush=True)
     print(f"\nload average at end: {os.getloadavg()[0]:.2f}")
 
 

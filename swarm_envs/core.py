@@ -2,7 +2,7 @@
 
 Every per-step array covers all ``B x n_world`` robots (robot ``b * n_world + i`` is robot ``i`` of copy
 ``b``). Data flows one way each control step (``DT`` = 0.1 s): physics (one pymunk ``Space`` per copy,
-:mod:`swarm_envs.world`) -> sensing stack over all robots at once (IR links, range & bearing, SwarmCom,
+:func:`swarm_envs.world.step_worlds`) -> sensing stack over all robots at once (IR links, range & bearing, SwarmCom,
 bearing exchange, scale-free coordinates; no link, message or random draw crosses copies) -> observation
 arrays -> rewards (the task, on ``(B, ...)`` views).
 
@@ -26,7 +26,7 @@ import numpy as np
 from swarm_envs.observation import ObservationLayout, pack_nearest
 from swarm_envs.sensing.base import SensorFrame
 from swarm_envs.task import BatchState, Task
-from swarm_envs.world import N_BUMP_SECTORS, World
+from swarm_envs.world import N_BUMP_SECTORS, World, step_worlds
 
 __all__ = ["SwarmCore", "DT"]
 
@@ -116,10 +116,8 @@ class SwarmCore:
         act = np.zeros((self.n_total, size)) if actions is None else np.asarray(actions, dtype=float).reshape(self.n_total, size)
         act = np.where(self.static[:, None], 0.0, act)
         p = self.platform
-        for b in np.flatnonzero(moving):
-            rows = slice(b * self.n_world, (b + 1) * self.n_world)
-            self.worlds[b].step(act[rows, 0] * p.max_speed, act[rows, 1] * p.max_angular_speed, DT)
         row_moving = moving[self.copy_of_robot]
+        step_worlds([self.worlds[b] for b in np.flatnonzero(moving)], act[row_moving, 0] * p.max_speed, act[row_moving, 1] * p.max_angular_speed, DT)
         self.last_actions[row_moving] = act[row_moving]
         self._gather()
         payloads = None

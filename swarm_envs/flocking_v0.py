@@ -20,7 +20,7 @@ from swarm_envs.factories import reports_unknown_kwargs
 from swarm_envs.metrics import largest_component_fraction
 from swarm_envs.platforms import Platform
 from swarm_envs.task import BatchState, Task, bump_any
-from swarm_envs.sensing.ideal import candidate_pairs, directed_pairs
+from swarm_envs.sensing.ideal import candidate_pairs
 
 __all__ = ["FlockingTask", "FlockingEnv", "raw_env", "parallel_env", "env"]
 
@@ -50,8 +50,11 @@ class FlockingTask(Task):
         vec = np.stack([np.cos(head), np.sin(head)], -1) * weight[..., None]  # (B, A, 2)
         pol = np.linalg.norm(vec.mean(axis=1), axis=1)  # (B,) [polarisation]
         bumped = bump_any(self.agents_of(state.bumps)).astype(float)  # (B, A)
-        # local polarisation over each robot and its IR neighbours
-        rx, tx = directed_pairs(pairs)
+        # local polarisation over each robot and its IR neighbours: both directions of every pair, in
+        # (rx, tx) order as directed_pairs gives them (one integer sort key; the keys are unique)
+        rx, tx = np.concatenate([pairs[:, 0], pairs[:, 1]]), np.concatenate([pairs[:, 1], pairs[:, 0]])
+        order = np.argsort(rx * (B * A) + tx)
+        rx, tx = rx[order], tx[order]
         flat = vec.reshape(B * A, 2)
         sums = flat.copy()
         np.add.at(sums, rx, flat[tx])

@@ -56,8 +56,27 @@ def pack_nearest(
     """Scatter per-link ``values`` (P, F) into ``(n_rows, k, F)`` slots, the ``k`` smallest ``key`` per row.
 
     Returns ``(packed, order)``: ``packed`` zero-filled where a row has fewer than k entries, and
-    ``order`` (n_rows, k) with the link index in each slot (-1 where empty). Fully vectorised.
+    ``order`` (n_rows, k) with the link index in each slot (-1 where empty). Slots are in increasing
+    ``key`` order (NaN last), equal keys in link order. A compiled one-pass selection (numba) when
+    installed, else :func:`_pack_nearest_numpy` (the reference it is tested against).
     """
+    values = np.asarray(values, dtype=np.float64)
+    if values.ndim == 1:
+        values = values[:, None]
+    if _HAVE_NUMBA and len(row) and k > 0:
+        row = np.ascontiguousarray(row, dtype=np.int64).reshape(-1)
+        if row.min() < 0 or row.max() >= n_rows:
+            raise ValueError(f"pack_nearest: rows must lie in [0, {n_rows}), got [{row.min()}, {row.max()}]")
+        return _pack_nearest_kernel(
+            int(n_rows), row, np.ascontiguousarray(key, dtype=np.float64).reshape(-1), np.ascontiguousarray(values), int(k)
+        )
+    return _pack_nearest_numpy(n_rows, row, key, values, k)
+
+
+def _pack_nearest_numpy(
+    n_rows: int, row: np.ndarray, key: np.ndarray, values: np.ndarray, k: int
+) -> tuple[np.ndarray, np.ndarray]:
+    """The numpy reference of :func:`pack_nearest` (a stable sort by row, then key)."""
     values = np.asarray(values, dtype=np.float64)
     if values.ndim == 1:
         values = values[:, None]
@@ -73,6 +92,55 @@ def pack_nearest(
     packed[sorted_rows[keep], rank[keep]] = values[idx[keep]]
     order[sorted_rows[keep], rank[keep]] = idx[keep]
     return packed, order
+
+
+try:  # numba is optional: the compiled selection of pack_nearest
+    from swarm_envs._numba import njit
+
+    _HAVE_NUMBA = True
+except ImportError:  # pragma: no cover - exercised only without numba
+    _HAVE_NUMBA = False
+
+if _HAVE_NUMBA:
+
+    @njit(cache=True, inline="always")
+    def _before(key_a: float, idx_a: int, key_b: float, idx_b: int) -> bool:
+        """Whether link a comes before link b: smaller key first, NaN keys last, then link order."""
+        nan_a, nan_b = key_a != key_a, key_b != key_b
+        if nan_a != nan_b:
+            return nan_b
+        if not nan_a and key_a != key_b:
+            return key_a < key_b
+        return idx_a < idx_b
+
+    @njit(cache=True)
+    def _pack_nearest_kernel(n_rows: int, row: np.ndarray, key: np.ndarray, values: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray]:
+        """:func:`pack_nearest` in one pass over the links: each row keeps its k first links in
+        :func:`_before` order by insertion (links arrive in index order, so ties keep link order)."""
+        P, F = values.shape
+        order = np.full((n_rows, k), -1, dtype=np.int64)
+        best = np.empty((n_rows, k))
+        count = np.zeros(n_rows, dtype=np.int64)
+        for p in range(P):
+            r, kp = row[p], key[p]
+            c = count[r]
+            if c == k:
+                if not _before(kp, p, best[r, k - 1], order[r, k - 1]):
+                    continue
+                c = k - 1
+            else:
+                count[r] = c + 1
+            while c > 0 and _before(kp, p, best[r, c - 1], order[r, c - 1]):
+                best[r, c] = best[r, c - 1]
+                order[r, c] = order[r, c - 1]
+                c -= 1
+            best[r, c] = kp
+            order[r, c] = p
+        packed = np.zeros((n_rows, k, F))
+        for r in range(n_rows):
+            for c in range(count[r]):
+                packed[r, c, :] = values[order[r, c]]
+        return packed, order
 
 
 @dataclass

@@ -148,11 +148,14 @@ class SwarmVectorEnv(VectorEnv):
         return np.clip(arr, -1.0, 1.0)
 
     def _observations(self) -> dict[str, np.ndarray] | np.ndarray:
-        parts = self.core.observations()
-        named = {k: v[self._rows] for k, v in parts.items()}  # (B, N, ...)
+        parts = self.core.observations()  # fresh arrays every step
+        B, N = self._rows.shape
+        if self.task.n_static == 0:  # every robot is an agent: the rows are in order, reshape (no copy)
+            named = {k: v.reshape(B, N, *v.shape[1:]) for k, v in parts.items()}
+        else:
+            named = {k: v[self._rows] for k, v in parts.items()}  # (B, N, ...)
         if not self.layout.flatten:
             return named
-        B, N = self._rows.shape
         flat = [named[k].reshape(B, N, -1) for k in sorted(named)]  # gymnasium.spaces.flatten order for Dict
         return np.concatenate(flat, axis=2).astype(np.float32)
 

@@ -13,6 +13,10 @@ rotation at ``w``. pymunk moves a body with its previous velocity during the fir
 act from the second on), so the control velocities are set to ``(D - h u) / (dt - h)`` and
 ``(w dt - h omega) / (dt - h)`` (h the sub-step, u / omega the body's velocity at the step start): a free
 robot then ends every control step exactly on its differential-drive arc.
+
+:func:`step_worlds` steps several worlds (e.g. the copies of the batched core) at once: the control
+arithmetic runs as one numpy program over all their robots, and each space is written and read with one
+``pymunk.batch`` call (no Python loop over bodies); :meth:`World.step` is the same function for one world.
 """
 
 from __future__ import annotations
@@ -20,19 +24,30 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from collections.abc import Sequence
+
 import numpy as np
 import pymunk
+import pymunk.batch
 from scipy.spatial import cKDTree
 
 from swarm_envs.geometry import wrap_angle
 from swarm_envs.platforms import Platform
 
-__all__ = ["Arena", "World", "spawn_positions", "check_capacity", "lattice_lower_bound", "as_real_array", "wrap_angle", "N_BUMP_SECTORS"]
+__all__ = ["Arena", "World", "step_worlds", "spawn_positions", "check_capacity", "lattice_lower_bound", "as_real_array", "wrap_angle", "N_BUMP_SECTORS"]
 
 N_BUMP_SECTORS = 8  # bump sensor: one flag per 45-degree sector of the body (sector 0 centred ahead)
 _ROBOT, _WALL = 1, 2
 MOTOR_ACCELERATION = 50.0  # m/s^2: bounded motor force / mass; full speed within one physics sub-step
 MOTOR_ANGULAR_ACCELERATION = 2000.0  # rad/s^2
+# pymunk.batch fields: every body's (x, y, angle, vx, vy, omega) read in one call per space, and the
+# (vx, vy, omega) written in one call; a space's bodies come in insertion order (robot, its control, ...)
+_READ = pymunk.batch.BodyFields.POSITION | pymunk.batch.BodyFields.ANGLE | pymunk.batch.BodyFields.VELOCITY | pymunk.batch.BodyFields.ANGULAR_VELOCITY
+_WRITE = pymunk.batch.BodyFields.VELOCITY | pymunk.batch.BodyFields.ANGULAR_VELOCITY
+try:  # chipmunk's step function, called directly by _substeps (pymunk's Space.step adds only bookkeeping)
+    from pymunk._chipmunk_cffi import lib as _chipmunk
+except ImportError:  # pragma: no cover - another pymunk layout: Space.step is used
+    _chipmunk = None
 
 
 @dataclass(frozen=True)
@@ -240,6 +255,7 @@ class World:
         self.angular_velocities = np.zeros(self.n)
         self.bumps = np.zeros((self.n, N_BUMP_SECTORS), dtype=bool)
         self._contacts: list[tuple[int, float, float]] = []
+        self._body_motion = np.zeros((self.n, 3))  # pymunk body (vx, vy, omega) after the last step
 
     def _build_space(self) -> None:
         """A new pymunk space with every robot at the origin and the walls: no contact, arbiter or
@@ -277,6 +293,16 @@ class World:
         self._index = {body: i for i, body in enumerate(self.bodies)}
         self.space.on_collision(_ROBOT, _ROBOT, post_solve=self._on_contact)
         self.space.on_collision(_ROBOT, _WALL, post_solve=self._on_contact)
+        # batch buffers: reads (robot and control rows interleaved), and the velocities written each step
+        ids = pymunk.batch.Buffer()
+        pymunk.batch.get_space_bodies(self.space, pymunk.batch.BodyFields.BODY_ID, ids)
+        order = [body.id for pair in zip(self.bodies, self.controls) for body in pair] + [self.space.static_body.id]
+        if np.frombuffer(ids.int_buf(), dtype=np.uintp).tolist() != order:  # pragma: no cover - pymunk changed
+            raise RuntimeError("pymunk.batch does not list the bodies in insertion order")
+        self._read_buffer = pymunk.batch.Buffer()
+        self._write_values = np.zeros(len(order) * 3)  # the static body (last) keeps its zero velocity
+        self._write_buffer = pymunk.batch.Buffer()
+        self._write_buffer.set_float_buf(self._write_values)
 
     # -- state -----------------------------------------------------------------------------------
     def check_placement(self, positions: np.ndarray, headings: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -317,13 +343,23 @@ class World:
             self.space.reindex_shapes_for_body(body)
         self.positions = positions.copy()
         self.headings = wrap_angle(headings)
-        self.velocities[:] = 0.0
-        self.angular_velocities[:] = 0.0
-        self.bumps[:] = False
+        self.velocities = np.zeros((self.n, 2))
+        self.angular_velocities = np.zeros(self.n)
+        self.bumps = np.zeros((self.n, N_BUMP_SECTORS), dtype=bool)
+        self._body_motion = np.zeros((self.n, 3))
 
-    def _read_state(self) -> None:
-        self.positions = np.array([b.position for b in self.bodies], dtype=float).reshape(self.n, 2)
-        self.headings = wrap_angle(np.array([b.angle for b in self.bodies], dtype=float))
+    def _advance(self, control: np.ndarray, h: float) -> np.ndarray:
+        """Set the control bodies' (vx, vy, omega) rows ``control`` (n, 3), run the sub-steps of ``h``
+        seconds, and return every robot body's (x, y, angle, vx, vy, omega) (n, 6) from pymunk."""
+        self._contacts.clear()
+        values = self._write_values[: 6 * self.n].reshape(self.n, 2, 3)
+        values[:, 0] = self._body_motion  # robot bodies: written back unchanged
+        values[:, 1] = control
+        pymunk.batch.set_space_bodies(self.space, _WRITE, self._write_buffer)
+        _substeps(self.space, h, self.substeps)
+        self._read_buffer.clear()
+        pymunk.batch.get_space_bodies(self.space, _READ, self._read_buffer)
+        return np.frombuffer(self._read_buffer.float_buf(), dtype=np.float64)[: 12 * self.n].reshape(self.n, 2, 6)[:, 0]
 
     # -- dynamics --------------------------------------------------------------------------------
     def wheel_limited(self, linear: np.ndarray, angular: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -336,32 +372,7 @@ class World:
 
     def step(self, linear: np.ndarray, angular: np.ndarray, dt: float) -> None:
         """Advance ``dt`` seconds with commanded linear (m/s) and angular (rad/s) velocities (n,)."""
-        linear, angular = self.wheel_limited(np.asarray(linear, float), np.asarray(angular, float))
-        h = dt / self.substeps
-        self._contacts.clear()
-        # chord of the differential-drive arc over the control step (module docstring)
-        half = 0.5 * angular * dt
-        chord = linear * dt * np.sinc(half / np.pi)
-        mid = self.headings + half
-        if self.substeps > 1:
-            body_v = np.array([b.velocity for b in self.bodies], dtype=float).reshape(self.n, 2)
-            body_w = np.array([b.angular_velocity for b in self.bodies], dtype=float)
-            vx = (chord * np.cos(mid) - h * body_v[:, 0]) / (dt - h)
-            vy = (chord * np.sin(mid) - h * body_v[:, 1]) / (dt - h)
-            w = (angular * dt - h * body_w) / (dt - h)
-        else:  # one sub-step: the joints act only from the next step on
-            vx, vy, w = chord * np.cos(mid) / dt, chord * np.sin(mid) / dt, angular
-        for control, cx, cy, cw in zip(self.controls, vx.tolist(), vy.tolist(), w.tolist()):
-            control.velocity = (cx, cy)
-            control.angular_velocity = cw
-        for _ in range(self.substeps):
-            self.space.step(h)
-        before_pos, before_heading = self.positions, self.headings
-        self._read_state()
-        # velocity = motion actually achieved over the control step (pushes and walls included)
-        self.velocities = (self.positions - before_pos) / dt
-        self.angular_velocities = wrap_angle(self.headings - before_heading) / dt
-        self._update_bumps()
+        step_worlds([self], linear, angular, dt)
 
     def _on_contact(self, arbiter: pymunk.Arbiter, space: pymunk.Space, data: object) -> None:
         shapes = arbiter.shapes
@@ -372,13 +383,98 @@ class World:
                 sign = 1.0 if k == 0 else -1.0
                 self._contacts.append((idx, sign * normal.x, sign * normal.y))
 
-    def _update_bumps(self) -> None:
-        self.bumps[:] = False
-        if not self._contacts:
-            return
-        contacts = np.array(self._contacts)
-        idx = contacts[:, 0].astype(int)
-        world_angle = np.arctan2(contacts[:, 2], contacts[:, 1])
-        body_angle = wrap_angle(world_angle - self.headings[idx])
-        sector = np.floor((body_angle + np.pi / N_BUMP_SECTORS) / (2 * np.pi / N_BUMP_SECTORS)).astype(int)
-        self.bumps[idx, sector % N_BUMP_SECTORS] = True
+
+
+def step_worlds(worlds: Sequence[World], linear: np.ndarray, angular: np.ndarray, dt: float) -> None:
+    """Advance every world of ``worlds`` (one platform and sub-step count) by ``dt`` seconds.
+
+    ``linear`` (m/s) and ``angular`` (rad/s) are the commanded velocities of all their robots, world after
+    world (sum of ``n``,). The control arithmetic is one numpy program over all robots (element-wise, so
+    each world's numbers are those it would get alone); each space then takes one ``pymunk.batch`` write,
+    its sub-steps, and one read. Updates each world's state arrays and bump flags.
+    """
+    if not worlds:
+        return
+    first = worlds[0]
+    platform, substeps = first.platform, first.substeps
+    if any(w.platform is not platform or w.substeps != substeps for w in worlds):
+        raise ValueError("step_worlds needs worlds of one platform and one sub-step count")
+    linear, angular = first.wheel_limited(np.asarray(linear, float).reshape(-1), np.asarray(angular, float).reshape(-1))
+    sizes = [w.n for w in worlds]
+    bounds = np.concatenate([[0], np.cumsum(sizes)])
+    if linear.shape[0] != bounds[-1]:
+        raise ValueError(f"expected {bounds[-1]} commands (the worlds' robots), got {linear.shape[0]}")
+    single = len(worlds) == 1
+    headings = first.headings if single else np.concatenate([w.headings for w in worlds])
+    before_pos = first.positions if single else np.concatenate([w.positions for w in worlds])
+    h = dt / substeps
+    # chord of the differential-drive arc over the control step (module docstring)
+    half = 0.5 * angular * dt
+    chord = linear * dt * np.sinc(half / np.pi)
+    mid = headings + half
+    if substeps > 1:
+        body = first._body_motion if single else np.concatenate([w._body_motion for w in worlds])
+        control = np.stack(
+            [
+                (chord * np.cos(mid) - h * body[:, 0]) / (dt - h),
+                (chord * np.sin(mid) - h * body[:, 1]) / (dt - h),
+                (angular * dt - h * body[:, 2]) / (dt - h),
+            ],
+            axis=1,
+        )
+    else:  # one sub-step: the joints act only from the next step on
+        control = np.stack([chord * np.cos(mid) / dt, chord * np.sin(mid) / dt, angular], axis=1)
+    read = np.empty((bounds[-1], 6))
+    for w, a, b in zip(worlds, bounds[:-1], bounds[1:]):
+        read[a:b] = w._advance(control[a:b], h)
+    positions = read[:, 0:2].copy()
+    new_headings = wrap_angle(read[:, 2])
+    # velocity = motion actually achieved over the control step (pushes and walls included)
+    velocities = (positions - before_pos) / dt
+    angular_velocities = wrap_angle(new_headings - headings) / dt
+    bumps = _bump_flags(worlds, bounds, new_headings)
+    motion = read[:, 3:6].copy()
+    for w, a, b in zip(worlds, bounds[:-1], bounds[1:]):
+        w.positions, w.headings = positions[a:b], new_headings[a:b]
+        w.velocities, w.angular_velocities = velocities[a:b], angular_velocities[a:b]
+        w.bumps, w._body_motion = bumps[a:b], motion[a:b]
+
+
+def _substeps(space: pymunk.Space, h: float, count: int) -> None:
+    """``count`` pymunk steps of ``h`` seconds. ``Space.step`` wraps chipmunk's ``cpSpaceStep`` in
+    bookkeeping for bodies added or removed from callbacks and for post-step callbacks, none of which this
+    module uses (the contact callback only records); when that bookkeeping is empty the space is locked
+    once (as ``Space.step`` does) and ``cpSpaceStep`` is called directly, saving the wrapper per sub-step.
+    Otherwise (or with another pymunk layout) ``Space.step`` is used: the same chipmunk call either way."""
+    try:
+        direct = _chipmunk is not None and not (
+            space._bodies_to_check or space._add_later or space._remove_later or space._post_step_callbacks or space.threaded
+        )
+    except AttributeError:  # pragma: no cover - pymunk internals changed
+        direct = False
+    if not direct:
+        for _ in range(count):
+            space.step(h)
+        return
+    handle = space._space
+    space._locked = True
+    try:
+        for _ in range(count):
+            _chipmunk.cpSpaceStep(handle, h)
+    finally:
+        space._locked = False
+
+
+def _bump_flags(worlds: Sequence[World], bounds: np.ndarray, headings: np.ndarray) -> np.ndarray:
+    """(sum n, N_BUMP_SECTORS) contact flags of the last step from the worlds' post-solve contacts."""
+    bumps = np.zeros((bounds[-1], N_BUMP_SECTORS), dtype=bool)
+    contacts = [(np.array(w._contacts), a) for w, a in zip(worlds, bounds[:-1]) if w._contacts]
+    if not contacts:
+        return bumps
+    idx = np.concatenate([c[:, 0].astype(int) + a for c, a in contacts])
+    normal = np.concatenate([c[:, 1:3] for c, _ in contacts])
+    world_angle = np.arctan2(normal[:, 1], normal[:, 0])
+    body_angle = wrap_angle(world_angle - headings[idx])
+    sector = np.floor((body_angle + np.pi / N_BUMP_SECTORS) / (2 * np.pi / N_BUMP_SECTORS)).astype(int)
+    bumps[idx, sector % N_BUMP_SECTORS] = True
+    return bumps

@@ -24,6 +24,40 @@ def test_gains_kernel_equals_numpy_reference(name):
     reference = layer._pair_gains_numpy(R, psi, platform, model)
     assert (reference > 0).sum() > 1000 and (reference == 0).sum() > 100
     np.testing.assert_allclose(fast, reference, rtol=1e-9, atol=1e-12)
+    # the kernel skips rays behind a detector or an emitter without computing them: exactly the same
+    # rays must be lit as in the reference
+    np.testing.assert_array_equal(fast > 0, reference > 0)
+
+
+@pytest.mark.parametrize("name", ["droplet", "epuck", "rone"])
+def test_gains_kernel_compact_rows_are_the_lit_pairs(name):
+    """compact=True returns only the pairs with light, in order, with the same values as the full output."""
+    platform = get_platform(name)
+    rng = np.random.default_rng(21)
+    P = 3000
+    R = rng.uniform(-1.1, 1.1, (P, 2)) * platform.ir_range
+    R[:300] = rng.uniform(-1, 1, (300, 2)) * 3 * platform.radius
+    psi = rng.uniform(-np.pi, np.pi, P)
+    # a few occluders per pair, in the receiver frame, so that some pairs are dark
+    counts = rng.integers(0, 3, P)
+    offsets = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
+    pair = np.repeat(np.arange(P), counts)
+    xy = R[pair] * rng.uniform(0.2, 0.8, (len(pair), 1)) + rng.normal(0, platform.radius, (len(pair), 2))
+    kind, params = kernels.model_params(platform.ir_model)
+    args = (
+        R, psi, platform.detector_positions, platform.detector_directions, platform.emitter_positions,
+        platform.emitter_directions, kind, params, float(platform.ir_range), offsets, xy, float(platform.radius),
+    )
+    full, lit_full = kernels.gains_kernel(*args, False)
+    compact, lit = kernels.gains_kernel(*args, True)
+    expected = np.flatnonzero(full.reshape(P, -1).max(axis=1) > 0)
+    assert 0 < len(expected) < P
+    np.testing.assert_array_equal(lit, expected)
+    np.testing.assert_array_equal(lit_full, expected)
+    np.testing.assert_array_equal(compact, full[expected])
+    reference = layer._pair_gains_numpy(R, psi, platform, platform.ir_model) * layer._clear_rays_numpy(R, psi, platform, offsets, xy)
+    np.testing.assert_array_equal(full > 0, reference > 0)
+    np.testing.assert_allclose(full, reference, rtol=1e-9, atol=1e-12)
 
 
 def test_centre_line_of_sight_kernel_equals_numpy_reference(monkeypatch):

@@ -104,3 +104,35 @@ def test_place_rejects_overlap_and_outside():
         world.place(np.array([[0.0, 0.0], [0.03, 0.0]]), np.zeros(2))
     with pytest.raises(ValueError, match="outside"):
         world.place(np.array([[0.0, 0.0], [0.49, 0.0]]), np.zeros(2))
+
+
+def test_step_worlds_equals_stepping_each_world_alone():
+    """Several worlds stepped together (the batched core's physics) move bit for bit as each alone."""
+    from swarm_envs.world import step_worlds
+
+    p = PLATFORMS["epuck"]
+    arena = Arena("square", 0.8)
+    rng = np.random.default_rng(3)
+    sizes = [12, 5, 30]
+    starts = [(spawn_positions(rng, n, p.radius, arena), rng.uniform(-np.pi, np.pi, n)) for n in sizes]
+    together = [World(p, n, arena) for n in sizes]
+    alone = [World(p, n, arena) for n in sizes]
+    for w, v, (pos, head) in zip(together, alone, starts):
+        w.place(pos, head)
+        v.place(pos, head)
+    for _ in range(30):  # full speed towards the centre: contacts and bumps in every world
+        lin = np.concatenate([np.full(n, p.max_speed) for n in sizes])
+        ang = np.concatenate([3 * wrap_angle(np.arctan2(-w.positions[:, 1], -w.positions[:, 0]) - w.headings) for w in together])
+        step_worlds(together, lin, ang, 0.1)
+        start = 0
+        for v, n in zip(alone, sizes):
+            v.step(lin[start : start + n], ang[start : start + n], 0.1)
+            start += n
+        for w, v in zip(together, alone):
+            for name in ("positions", "headings", "velocities", "angular_velocities", "bumps"):
+                np.testing.assert_array_equal(getattr(w, name), getattr(v, name))
+    assert any(w.bumps.any() for w in together)
+    with pytest.raises(ValueError, match="commands"):
+        step_worlds(together, np.zeros(3), np.zeros(3), 0.1)
+    with pytest.raises(ValueError, match="platform"):
+        step_worlds([together[0], World(PLATFORMS["droplet"], 2, arena)], np.zeros(14), np.zeros(14), 0.1)

@@ -106,38 +106,83 @@ if HAVE_NUMBA:
         occ_offsets: np.ndarray,
         occ_xy: np.ndarray,
         occ_radius: float,
-    ) -> np.ndarray:
-        """(P, n_d, n_e) gains; same geometry as ``pair_cosines`` (SPEC 2), same models.
+        compact: bool = False,
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Gains of P pairs; same geometry as ``pair_cosines`` (SPEC 2), same models.
+
+        Returns ``(gains, lit)``: ``lit`` the indices of the pairs with a nonzero gain, and ``gains`` the
+        (P, n_d, n_e) gains of every pair, or with ``compact`` only the rows of the ``lit`` pairs.
 
         Per-ray line of sight (SPEC 2): the gain of ray (i, j), from emitter j of the transmitter to detector
         i of the receiver, is zero when that segment crosses an occluding disc (radius ``occ_radius``) of pair
         p: centres ``occ_xy[occ_offsets[p]:occ_offsets[p + 1]]`` in the receiver's frame; a blocked ray skips
         the model, pairs without candidate occluders cost nothing extra.
+
+        Dark rays are skipped without computing them where the model needs the emitter in front of the
+        detector and the detector in front of the emitter (e-puck; r-one arcs narrower than pi): with
+        ``dx`` the ray from detector i (position d_i, axis u_i) to emitter j (e_j, axis a_j, both in the
+        receiver frame) and R the transmitter centre, ``dx . u_i <= R . u_i + max_j |e_j| - d_i . u_i``
+        and ``dx . a_j >= R . a_j + e_j . a_j - max_i |d_i|``; a detector whose bound is below -1e-9 m
+        (or an emitter whose bound is above 1e-9 m) has only rays with cos <= 0, which the model leaves
+        dark. The margin is far above rounding (~1e-16 m), so exactly the same rays are lit as without
+        the bound.
         """
         P, nd, ne = rel_position.shape[0], det_pos.shape[0], em_pos.shape[0]
         r2 = occ_radius * occ_radius
-        out = np.zeros((P, nd, ne))
+        out = np.empty((P, nd, ne))  # each row is zeroed just before it is filled (one pass over memory)
+        lit = np.empty(P, dtype=np.int64)
+        n_lit = 0
         dcos, dsin = np.cos(det_dir), np.sin(det_dir)
         ecos, esin = np.cos(em_dir), np.sin(em_dir)
         prm = np.zeros(8)
         prm[: params.shape[0]] = params
         p0, p1, p2, p3, p4, p5, p6, p7 = prm[0], prm[1], prm[2], prm[3], prm[4], prm[5], prm[6], prm[7]
+        # front-only bounds (docstring): which sides may be pruned, and the per-element constants
+        margin = 1e-9
+        prune_det = kind == 1 or (kind == 2 and p3 > 0.0)
+        prune_em = kind == 1 or (kind == 2 and p4 > 0.0)
+        det_self = np.empty(nd)  # d_i . u_i
+        rho_d = 0.0
+        for i in range(nd):
+            det_self[i] = det_pos[i, 0] * dcos[i] + det_pos[i, 1] * dsin[i]
+            rho_d = max(rho_d, math.sqrt(det_pos[i, 0] ** 2 + det_pos[i, 1] ** 2))
+        em_self = np.empty(ne)  # e_j . (emitter axis), body frame
+        rho_e = 0.0
+        for j in range(ne):
+            em_self[j] = em_pos[j, 0] * ecos[j] + em_pos[j, 1] * esin[j]
+            rho_e = max(rho_e, math.sqrt(em_pos[j, 0] ** 2 + em_pos[j, 1] ** 2))
         ex = np.empty(ne)
         ey = np.empty(ne)
         eax = np.empty(ne)
         eay = np.empty(ne)
+        dets = np.empty(nd, dtype=np.int64)
+        ems = np.empty(ne, dtype=np.int64)
         for p in range(P):
+            row = n_lit if compact else p
+            out[row] = 0.0
             Rx, Ry = rel_position[p, 0], rel_position[p, 1]
             if math.sqrt(Rx * Rx + Ry * Ry) > ir_range:
                 continue
             c, s = math.cos(rel_heading[p]), math.sin(rel_heading[p])
+            n_em = 0
             for j in range(ne):  # TX emitters and their axes in the RX frame
                 ex[j] = Rx + c * em_pos[j, 0] - s * em_pos[j, 1]
                 ey[j] = Ry + s * em_pos[j, 0] + c * em_pos[j, 1]
                 eax[j] = c * ecos[j] - s * esin[j]
                 eay[j] = s * ecos[j] + c * esin[j]
+                if not prune_em or Rx * eax[j] + Ry * eay[j] + em_self[j] - rho_d <= margin:
+                    ems[n_em] = j
+                    n_em += 1
+            n_det = 0
             for i in range(nd):
-                for j in range(ne):
+                if not prune_det or Rx * dcos[i] + Ry * dsin[i] + rho_e - det_self[i] >= -margin:
+                    dets[n_det] = i
+                    n_det += 1
+            any_lit = False
+            for a in range(n_det):
+                i = dets[a]
+                for b in range(n_em):
+                    j = ems[b]
                     dx, dy = ex[j] - det_pos[i, 0], ey[j] - det_pos[i, 1]
                     d = math.sqrt(dx * dx + dy * dy)
                     inv = 1.0 / max(d, 1e-12)
@@ -154,8 +199,16 @@ if HAVE_NUMBA:
                             clear = False
                             break
                     if clear:
-                        out[p, i, j] = _gain(kind, p0, p1, p2, p3, p4, p5, p6, p7, d, cd, ce)
-        return out
+                        g = _gain(kind, p0, p1, p2, p3, p4, p5, p6, p7, d, cd, ce)
+                        out[row, i, j] = g
+                        if g > 0.0:
+                            any_lit = True
+            if any_lit:
+                lit[n_lit] = p
+                n_lit += 1
+        if compact:
+            return out[:n_lit], lit[:n_lit].copy()
+        return out, lit[:n_lit].copy()
 
     @njit(cache=True, error_model="numpy")
     def occluders_kernel(
@@ -170,9 +223,26 @@ if HAVE_NUMBA:
         """Third robots whose centre is closer than ``width`` to the centre segment rx[p]-tx[p], as CSR.
 
         Candidates are the neighbour lists (CSR ``starts``, ``counts``, ``nbrs``) of both ends, which must
-        reach ``|rx tx| / 2 + width``. Returns offsets (P + 1,) and robot indices (K,), each pair's sorted.
+        reach ``|rx tx| / 2 + width``: a centre closer than ``width`` to the segment is closer than
+        ``|rx tx| / 2 + width`` to its nearer end, so each end's list, sorted by distance here, is read only
+        up to that pair's own reach. Returns offsets (P + 1,) and robot indices (K,), each pair's sorted.
         """
         P, N = rx.shape[0], positions.shape[0]
+        # each robot's neighbours by increasing distance (insertion sort: the lists are short)
+        near = nbrs.copy()
+        dist2 = np.empty(nbrs.shape[0])
+        for r in range(N):
+            s0 = starts[r]
+            for q in range(s0, s0 + counts[r]):
+                k = near[q]
+                d2 = (positions[k, 0] - positions[r, 0]) ** 2 + (positions[k, 1] - positions[r, 1]) ** 2
+                q2 = q
+                while q2 > s0 and dist2[q2 - 1] > d2:
+                    dist2[q2] = dist2[q2 - 1]
+                    near[q2] = near[q2 - 1]
+                    q2 -= 1
+                dist2[q2] = d2
+                near[q2] = k
         stamp = np.full(N, -1, dtype=np.int64)
         offsets = np.zeros(P + 1, dtype=np.int64)
         idx = np.empty(max(16, 2 * P), dtype=np.int64)
@@ -183,9 +253,13 @@ if HAVE_NUMBA:
             ax, ay = positions[a, 0], positions[a, 1]
             sx, sy = positions[b, 0] - ax, positions[b, 1] - ay
             L2 = sx * sx + sy * sy
+            reach = 0.5 * math.sqrt(L2) + width + 1e-9  # margin far above rounding
+            reach2 = reach * reach
             for end in (a, b):
                 for q in range(starts[end], starts[end] + counts[end]):
-                    k = nbrs[q]
+                    if dist2[q] > reach2:
+                        break
+                    k = near[q]
                     if k == a or k == b or stamp[k] == p:
                         continue
                     stamp[k] = p

@@ -194,17 +194,26 @@ def pair_gains(
         xy = np.ascontiguousarray(occluders[1], dtype=float).reshape(-1, 2)
         if offsets.shape[0] != R.shape[0] + 1 or offsets[0] != 0 or offsets[-1] != xy.shape[0] or np.any(np.diff(offsets) < 0):
             raise ValueError(f"occluders: offsets must be non-decreasing, length P + 1 = {R.shape[0] + 1}, from 0 to len(centres)")
+    return _gains(R, psi, platform, model, offsets, xy, compact=False)[0]
+
+
+def _gains(
+    R: np.ndarray, psi: np.ndarray, platform: Platform, model: object, offsets: np.ndarray, xy: np.ndarray, compact: bool
+) -> tuple[np.ndarray, np.ndarray]:
+    """(gains, lit) of :func:`pair_gains` with checked inputs: ``lit`` the pairs with a nonzero gain, and
+    ``gains`` every pair's rows, or with ``compact`` only the ``lit`` rows (compiled kernel, or numpy)."""
     if kernels.HAVE_NUMBA and type(model).__name__ in kernels.MODEL_IDS:
         kind, params = kernels.model_params(model)
         return kernels.gains_kernel(
             R, psi, platform.detector_positions, platform.detector_directions,
             platform.emitter_positions, platform.emitter_directions, kind, params, float(platform.ir_range),
-            offsets, xy, float(platform.radius),
+            offsets, xy, float(platform.radius), compact,
         )
     g = _pair_gains_numpy(R, psi, platform, model)
     if xy.shape[0]:
         g = g * _clear_rays_numpy(R, psi, platform, offsets, xy)
-    return g
+    lit = np.flatnonzero(g.reshape(g.shape[0], -1).max(axis=1, initial=0.0) > 0)
+    return (g[lit] if compact else g), lit
 
 
 def _pair_gains_numpy(R: np.ndarray, psi: np.ndarray, platform: Platform, model: object) -> np.ndarray:
@@ -412,10 +421,10 @@ def compute_links(
     U = pairs.shape[0]
     rx = np.concatenate([pairs[:, 0], pairs[:, 1]]).astype(np.intp)
     tx = np.concatenate([pairs[:, 1], pairs[:, 0]]).astype(np.intp)
-    order = np.lexsort((tx, rx))
+    order = np.argsort(rx.astype(np.int64) * N + tx)  # by (rx, tx); the keys are unique, so any sort agrees
     rx, tx = rx[order], tx[order]
     d = positions[tx] - positions[rx]
-    c, s = np.cos(headings[rx]), np.sin(headings[rx])
+    c, s = np.cos(headings)[rx], np.sin(headings)[rx]  # per robot, then per pair
     rel = np.stack([c * d[:, 0] + s * d[:, 1], -s * d[:, 0] + c * d[:, 1]], axis=-1)
     rel_heading = wrap_angle(headings[tx] - headings[rx])
     occluders = None
@@ -424,15 +433,15 @@ def compute_links(
         a, b = (np.ascontiguousarray(pairs[:, k], dtype=np.int64) for k in (0, 1))
         offsets, idx = _occluder_lists(positions, a, b, occluder_width(platform), tree)
         occluders = _occluder_frames(positions, headings, rx, order % U, offsets, idx)
-    gains = pair_gains(rel, rel_heading, platform, occluders=occluders)
+    if occluders is None:
+        offsets, xy = np.zeros(rx.shape[0] + 1, dtype=np.int64), np.zeros((0, 2))
+    else:
+        offsets, xy = occluders
+    gains, lit = _gains(rel, rel_heading, platform, platform.ir_model, offsets, xy, compact=drop_zero)
     distance = np.hypot(d[:, 0], d[:, 1])
     rows = np.arange(rx.shape[0])
-    if drop_zero:
-        keep = gains.reshape(gains.shape[0], -1).max(axis=1) > 0
-        if not keep.all():
-            rx, tx, rel, rel_heading, gains, distance, rows = (
-                rx[keep], tx[keep], rel[keep], rel_heading[keep], gains[keep], distance[keep], rows[keep]
-            )
+    if drop_zero and lit.shape[0] < rx.shape[0]:
+        rx, tx, rel, rel_heading, distance, rows = rx[lit], tx[lit], rel[lit], rel_heading[lit], distance[lit], rows[lit]
     return IRLinks(rx, tx, distance, rel, rel_heading, gains, N, None if occluders is None else (*occluders, rows))
 
 
