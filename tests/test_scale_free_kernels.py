@@ -1,0 +1,83 @@
+"""The compiled 2-hop scale-free path equals the numpy reference bit for bit (swarm_envs.sensing.kernels)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from swarm_envs.sensing.kernels import HAVE_NUMBA
+from swarm_envs.sensing.scale_free import (
+    NeighbourKnowledge,
+    coordinates_all,
+    coordinates_all_numpy,
+    knowledge_from_matrix,
+)
+
+pytestmark = pytest.mark.skipif(not HAVE_NUMBA, reason="numba not installed")
+
+
+def _bearings(rng, n, side, quantise):
+    pos = rng.uniform(0, side, (n, 2))
+    hd = rng.uniform(-np.pi, np.pi, n)
+    d = pos[None] - pos[:, None]
+    B = np.arctan2(d[..., 1], d[..., 0]) - hd[:, None]
+    if quantise:  # 16 sectors: many exactly equal angles (ties in the MST and in the slot order)
+        B = np.rint(B / (np.pi / 8)) * (np.pi / 8)
+    else:
+        B = B + rng.normal(0, 0.05, B.shape)
+    B = np.pi - np.mod(np.pi - B, 2 * np.pi)
+    B[np.hypot(d[..., 0], d[..., 1]) > 1.0] = np.nan
+    return B
+
+
+def _damaged(rng, kn: NeighbourKnowledge) -> NeighbourKnowledge:
+    """Lossy, stale, shuffled knowledge: dropped rows and entries, NaN bearings, duplicated ids, permuted slots."""
+    ids, th = kn.ids.copy(), kn.bearings.copy()
+    rid, rth = kn.row_ids.copy(), kn.row_bearings.copy()
+    n, k = ids.shape
+    perm = np.argsort(rng.random((n, k)), 1)  # slot layout not in bearing order
+    ids, th = np.take_along_axis(ids, perm, 1), np.take_along_axis(th, perm, 1)
+    rid, rth = np.take_along_axis(rid, perm[..., None], 1), np.take_along_axis(rth, perm[..., None], 1)
+    rid[rng.random(rid.shape[:2]) < 0.15] = -1  # rows never received
+    rid[rng.random(rid.shape) < 0.1] = -1  # entries lost
+    rth[rng.random(rth.shape) < 0.05] = np.nan
+    th[rng.random(th.shape) < 0.03] = np.nan
+    dup = rng.random(rid.shape[:2]) < 0.1  # a row that lists its first id twice
+    rid[dup, -1], rth[dup, -1] = rid[dup, 0], rth[dup, 0] + 0.1
+    return NeighbourKnowledge(ids=ids, bearings=th, row_ids=rid, row_bearings=rth)
+
+
+def _assert_same(a, b):
+    for name in ("xy", "valid", "rigid", "ids", "length"):
+        x, y = getattr(a, name), getattr(b, name)
+        assert x.shape == y.shape and x.dtype == y.dtype, name
+        np.testing.assert_array_equal(x, y, err_msg=name)  # bit for bit (NaN == NaN)
+
+
+@pytest.mark.parametrize("noise_sensitivity", [True, False])
+@pytest.mark.parametrize("balance", [True, False])
+def test_compiled_equals_numpy_reference(noise_sensitivity, balance):
+    rng = np.random.default_rng(7)
+    checked_valid = 0
+    for trial in range(24):
+        n = int(rng.integers(3, 40))
+        B = _bearings(rng, n, side=float(rng.uniform(0.8, 2.5)), quantise=trial % 2 == 0)
+        kn = knowledge_from_matrix(B)
+        if trial % 3 == 1:
+            kn = _damaged(rng, kn)
+        if trial % 5 == 2:  # a subset of robots, with their own ids
+            sel = np.sort(rng.choice(n, size=max(1, n // 2), replace=False))
+            kn = NeighbourKnowledge(kn.ids[sel], kn.bearings[sel], kn.row_ids[sel], kn.row_bearings[sel], robot_ids=sel)
+        ref = coordinates_all_numpy(kn, noise_sensitivity=noise_sensitivity, angle_balance=balance)
+        got = coordinates_all(kn, noise_sensitivity=noise_sensitivity, angle_balance=balance, compiled=True)
+        _assert_same(got, ref)
+        checked_valid += int(ref.valid.sum())
+    assert checked_valid > 200  # the comparison covered many computed lengths, not only empty outputs
+
+
+def test_compiled_is_the_default_and_handles_tiny_inputs():
+    rng = np.random.default_rng(3)
+    kn = knowledge_from_matrix(_bearings(rng, 12, 1.2, quantise=False))
+    _assert_same(coordinates_all(kn), coordinates_all_numpy(kn))
+    empty = NeighbourKnowledge(np.full((2, 1), -1), np.full((2, 1), np.nan), np.full((2, 1, 1), -1), np.full((2, 1, 1), np.nan))
+    _assert_same(coordinates_all(empty, compiled=True), coordinates_all_numpy(empty))
