@@ -81,3 +81,22 @@ def test_compiled_is_the_default_and_handles_tiny_inputs():
     _assert_same(coordinates_all(kn), coordinates_all_numpy(kn))
     empty = NeighbourKnowledge(np.full((2, 1), -1), np.full((2, 1), np.nan), np.full((2, 1, 1), -1), np.full((2, 1, 1), np.nan))
     _assert_same(coordinates_all(empty, compiled=True), coordinates_all_numpy(empty))
+
+
+def test_segment_sum_equals_reduceat():
+    from swarm_envs.sensing.kernels import segment_sum
+
+    rng = np.random.default_rng(5)
+    for shape in [(1, 3), (7, 8), (40, 8, 8), (300, 32), (400, 2)]:  # segments up to > 128 rows
+        a = rng.normal(size=shape) * 10.0 ** rng.integers(-8, 8, size=shape)  # mixed magnitudes: order matters
+        a[rng.random(shape) < 0.2] = -0.0  # signed zeros: the kernel must start each sum as numpy does
+        a[rng.random(shape) < 0.1] = 0.0
+        for _ in range(10):
+            starts = np.sort(rng.choice(shape[0], size=int(rng.integers(1, shape[0] + 1)), replace=False))
+            starts[0] = rng.integers(0, 2) * starts[0]  # with and without a leading unsummed block
+            got, ref = segment_sum(a, starts), np.add.reduceat(a, starts, axis=0)
+            assert got.shape == ref.shape
+            np.testing.assert_array_equal(got, ref)
+            np.testing.assert_array_equal(np.signbit(got), np.signbit(ref))
+    with pytest.raises(IndexError):
+        segment_sum(np.zeros((3, 2)), np.array([0, 3]))

@@ -6,8 +6,9 @@ lock-step BFS / Prim). These kernels do the integer and graph work robot by robo
 arrays; every floating-point value that is not a plain copy or the additions of the length propagation
 (inner angles, rounding, ANGLEBALANCE, law-of-sines logs, sensitivities, exp, normalisation, sin/cos) is
 still computed by numpy in :func:`swarm_envs.sensing.scale_free.coordinates_all`, so the compiled path
-gives the reference's results bit for bit (``tests/test_scale_free_kernels.py``). Used only when numba is
-importable (``fast`` extra).
+gives the reference's results bit for bit (``tests/test_scale_free_kernels.py``). Also
+:func:`segment_sum`, a compiled ``np.add.reduceat`` over rows for the range & bearing sensor. Used only
+when numba is importable (``fast`` extra).
 """
 
 from __future__ import annotations
@@ -21,7 +22,7 @@ try:  # numba is optional: an accelerator, not a requirement
 except ImportError:  # pragma: no cover - exercised only without numba
     HAVE_NUMBA = False
 
-__all__ = ["HAVE_NUMBA", "two_hop_triangles", "two_hop_propagate"]
+__all__ = ["HAVE_NUMBA", "two_hop_triangles", "two_hop_propagate", "segment_sum"]
 
 
 if HAVE_NUMBA:
@@ -260,3 +261,74 @@ if HAVE_NUMBA:
                             known[u, b] = True
                     cnt += nnew
         return logf, known, rigid
+
+
+def segment_sum(a: np.ndarray, starts: np.ndarray) -> np.ndarray:
+    """``np.add.reduceat(a, starts, axis=0)`` bit for bit, compiled when numba is available (reduceat loops
+    over segments slowly when most segments hold one or two rows); otherwise reduceat itself.
+
+    numpy reduces each segment ``s:e`` column by column as ``a[s] + pairwise_sum(a[s+1:e])``, with its
+    pairwise summation (sequential from -0.0 (numpy >= 2) below 8 terms, 8 interleaved partial sums up to 128, halving
+    above); the kernel repeats exactly that order, so float results are identical, not just close.
+    """
+    a = np.asarray(a)
+    starts = np.asarray(starts, dtype=np.int64)
+    if not HAVE_NUMBA or a.dtype != np.float64 or starts.size == 0 or starts.min() < 0 or starts.max() >= a.shape[0]:
+        return np.add.reduceat(a, starts, axis=0)
+    flat = np.ascontiguousarray(a).reshape(a.shape[0], -1)
+    return _segment_sum(flat, starts, _PAIRWISE_INIT).reshape((starts.size, *a.shape[1:]))
+
+
+# numpy >= 2 starts a short pairwise sum from -0.0 (the additive identity: a sum of -0.0 stays -0.0),
+# older numpy from 0.0; ask the installed numpy (an argument, not a global: numba's cache would freeze it)
+_PAIRWISE_INIT = -0.0 if np.signbit(np.add.reduceat(np.full((3, 1), -0.0), [0], axis=0)[0, 0]) else 0.0
+
+if HAVE_NUMBA:
+
+    @njit(cache=True)
+    def _pairwise_sum(a, lo, n, c, init):  # pragma: no cover - compiled
+        """numpy's ``DOUBLE_pairwise_sum`` of ``a[lo:lo+n, c]`` (numpy/_core/src/umath/loops_utils.h.src)."""
+        if n < 8:
+            res = init
+            for i in range(n):
+                res += a[lo + i, c]
+            return res
+        if n <= 128:
+            r0, r1, r2, r3 = a[lo, c], a[lo + 1, c], a[lo + 2, c], a[lo + 3, c]
+            r4, r5, r6, r7 = a[lo + 4, c], a[lo + 5, c], a[lo + 6, c], a[lo + 7, c]
+            m = n - n % 8
+            i = 8
+            while i < m:
+                r0 += a[lo + i, c]
+                r1 += a[lo + i + 1, c]
+                r2 += a[lo + i + 2, c]
+                r3 += a[lo + i + 3, c]
+                r4 += a[lo + i + 4, c]
+                r5 += a[lo + i + 5, c]
+                r6 += a[lo + i + 6, c]
+                r7 += a[lo + i + 7, c]
+                i += 8
+            res = ((r0 + r1) + (r2 + r3)) + ((r4 + r5) + (r6 + r7))
+            while i < n:
+                res += a[lo + i, c]
+                i += 1
+            return res
+        n2 = n // 2
+        n2 -= n2 % 8
+        return _pairwise_sum(a, lo, n2, c, init) + _pairwise_sum(a, lo + n2, n - n2, c, init)
+
+    @njit(cache=True)
+    def _segment_sum(a, starts, init):  # pragma: no cover - compiled
+        G = starts.size
+        L, m = a.shape
+        out = np.empty((G, m), np.float64)
+        for g in range(G):
+            s = starts[g]
+            e = starts[g + 1] if g + 1 < G else L
+            if e <= s + 1:  # one row (reduceat also returns a[s] when the next start is not larger)
+                for c in range(m):
+                    out[g, c] = a[s, c]
+            else:
+                for c in range(m):
+                    out[g, c] = a[s, c] + _pairwise_sum(a, s + 1, e - s - 1, c, init)
+        return out
