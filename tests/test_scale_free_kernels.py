@@ -100,3 +100,24 @@ def test_segment_sum_equals_reduceat():
             np.testing.assert_array_equal(np.signbit(got), np.signbit(ref))
     with pytest.raises(IndexError):
         segment_sum(np.zeros((3, 2)), np.array([0, 3]))
+
+
+def test_pair_sorting_matches_lexsort():
+    from scipy.spatial import cKDTree
+
+    from swarm_envs.sensing.ideal import candidate_pairs, directed_pairs
+
+    rng = np.random.default_rng(2)
+    pos = rng.uniform(0, 3, (500, 2))
+    copy = np.repeat(np.arange(5), 100)
+    got = candidate_pairs(pos, 0.3, copy)
+    lift = np.c_[pos, copy * 1.6]
+    ref = cKDTree(lift).query_pairs(0.3, output_type="ndarray").astype(np.int64)
+    ref = ref[np.lexsort((ref[:, 1], ref[:, 0]))]
+    assert len(ref) > 100
+    np.testing.assert_array_equal(got, ref)
+    rx, tx = directed_pairs(got)
+    r2, t2 = np.r_[got[:, 0], got[:, 1]], np.r_[got[:, 1], got[:, 0]]
+    o = np.lexsort((t2, r2))
+    np.testing.assert_array_equal(rx, r2[o])
+    np.testing.assert_array_equal(tx, t2[o])
