@@ -28,7 +28,7 @@ __all__ = ["HAVE_NUMBA", "two_hop_triangles", "two_hop_propagate", "segment_sum"
 if HAVE_NUMBA:
 
     @njit(cache=True)
-    def two_hop_triangles(key_b, key_id, ids_in, th_in, ok_in, rid_in, rth_in, self_ids):  # pragma: no cover - compiled
+    def two_hop_triangles(key_b, key_id, ids_in, th_in, ok_in, rid_in, rth_in, self_ids, cap):  # pragma: no cover - compiled
         """Slot order and usable triangles of every robot (the reference's first half).
 
         Slots are ordered by (key_b, key_id), stable (``np.lexsort``). For sorted slots i, j of robot u the
@@ -37,7 +37,8 @@ if HAVE_NUMBA:
 
         Returns ``order`` (N, K), ``inv`` (N, K) (its inverse permutation), sorted ``ok`` (N, K) and ``th``
         (N, K), the per-robot triangle start offsets (N + 1,), and for each triangle in (u, i, j)
-        lexicographic order: u, i, j and the raw bearings ``theta_i(u), theta_i(j), theta_j(u),
+        lexicographic order (at most ``cap``: pass ``sum(deg * (deg - 1))`` over robots, deg = valid slots):
+        u, i, j and the raw bearings ``theta_i(u), theta_i(j), theta_j(u),
         theta_j(i), theta_u(i), theta_u(j)`` (rad).
         """
         n, k = ids_in.shape
@@ -46,7 +47,6 @@ if HAVE_NUMBA:
         inv = np.empty((n, k), np.int64)
         ok = np.zeros((n, k), np.bool_)
         th = np.empty((n, k), np.float64)
-        cap = n * k * max(k - 1, 0)
         tu = np.empty(cap, np.int64)
         ti = np.empty(cap, np.int64)
         tj = np.empty(cap, np.int64)

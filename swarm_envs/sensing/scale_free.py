@@ -174,8 +174,9 @@ def coordinates_all(
     slot_ok_in = (ids_in >= 0) & np.isfinite(th_in)
     key_b = np.where(slot_ok_in, np.mod(th_in, 2.0 * np.pi), np.inf)
     key_id = np.where(slot_ok_in, ids_in, np.iinfo(np.int64).max)
+    deg = slot_ok_in.sum(1)
     order, inv, ok, th, starts, tu, ti, tj, vals = two_hop_triangles(
-        key_b, key_id, ids_in, th_in, slot_ok_in, rid_in, rth_in, self_ids
+        key_b, key_id, ids_in, th_in, slot_ok_in, rid_in, rth_in, self_ids, int((deg * (deg - 1)).sum())
     )
     # the reference's float formulas on the same triangle list (see coordinates_all_numpy)
     Pij = np.round(np.abs(_wrap(vals[:, 0] - vals[:, 1])), ANGLE_DECIMALS)
