@@ -61,6 +61,7 @@ from swarm_envs.comm.protocol import (
     MAX_PAYLOAD,
     RECV,
     SEQ_BITS,
+    TYPE_BITS,
     DetectorBank,
     FrameFormat,
     KindRegistry,
@@ -485,6 +486,14 @@ class Network:
             np.concatenate([p.access for p in parts], axis=0),
         )
 
+    def _kind_names(self, types: np.ndarray) -> np.ndarray:
+        """(D,) object array of kind names of 3-bit type codes ("?" for unregistered), by table lookup."""
+        table = np.array([self.kinds.name(c) for c in range(1 << TYPE_BITS)], dtype=object)
+        types = np.asarray(types, dtype=np.int64)
+        if types.size and (types.min() < 0 or types.max() >= table.size):
+            return np.array([self.kinds.name(t) for t in types], dtype=object)
+        return table[types]
+
     def _slots_kernel(self, S, draws, tx_ptr, rx, G, sig_ptr, sig_rx) -> list[dict[str, np.ndarray]]:
         """The compiled slot loop (:func:`swarm_envs.comm.kernels.slot_loop`)."""
         a, det, fmt, c = self.adc_model, self.det, self.fmt, self.code
@@ -851,7 +860,7 @@ class Network:
             sender=d["sender"][keep],
             seq=d["seq"][keep],
             detector=d["detector"][keep],
-            kind=np.array([self.kinds.name(t) for t in d["type"][keep]], dtype=object),
+            kind=self._kind_names(d["type"][keep]),
             length=d["length"][keep],
             payload=d["payload"][keep],
             slot=d["slot"][keep],

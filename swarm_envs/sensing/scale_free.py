@@ -69,10 +69,15 @@ from dataclasses import dataclass
 import numpy as np
 
 from swarm_envs.sensing.exchange import BearingExchange, NeighbourKnowledge
+from swarm_envs.sensing.kernels import HAVE_NUMBA
+
+if HAVE_NUMBA:
+    from swarm_envs.sensing.kernels import two_hop_propagate, two_hop_triangles
 
 __all__ = [
     "coordinates",
     "coordinates_all",
+    "coordinates_all_numpy",
     "ScaleFreeSensor",
     "NeighbourKnowledge",
     "ScaleFreeResult",
@@ -142,8 +147,76 @@ def coordinates_all(
     knowledge: NeighbourKnowledge,
     noise_sensitivity: bool = True,
     angle_balance: bool = True,
+    compiled: bool | None = None,
 ) -> ScaleFreeResult:
     """2-hop scale-free coordinates for every robot at once [L Algs. 1-4].
+
+    With numba (``compiled=None`` or ``True``) the slot sort, id matching, components and BFS / Prim run
+    robot by robot in :mod:`swarm_envs.sensing.kernels`, while every floating-point formula (inner angles,
+    ANGLEBALANCE, law of sines, sensitivities, normalisation) stays the numpy code below; the result equals
+    :func:`coordinates_all_numpy` (the reference, ``compiled=False``) bit for bit. Arguments and result as
+    there.
+    """
+    if compiled is None:
+        compiled = HAVE_NUMBA
+    elif compiled and not HAVE_NUMBA:
+        raise ImportError("coordinates_all(compiled=True) needs numba (pip install numba)")
+    ids_in = np.asarray(knowledge.ids, dtype=np.int64)
+    n, k = ids_in.shape
+    if not compiled or n == 0 or k < 2:
+        return coordinates_all_numpy(knowledge, noise_sensitivity=noise_sensitivity, angle_balance=angle_balance)
+    th_in = np.asarray(knowledge.bearings, dtype=float)
+    rid_in = np.asarray(knowledge.row_ids, dtype=np.int64)
+    rth_in = np.asarray(knowledge.row_bearings, dtype=float)
+    self_ids = (
+        np.arange(n, dtype=np.int64) if knowledge.robot_ids is None else np.asarray(knowledge.robot_ids, np.int64)
+    )
+    slot_ok_in = (ids_in >= 0) & np.isfinite(th_in)
+    key_b = np.where(slot_ok_in, np.mod(th_in, 2.0 * np.pi), np.inf)
+    key_id = np.where(slot_ok_in, ids_in, np.iinfo(np.int64).max)
+    deg = slot_ok_in.sum(1)
+    order, inv, ok, th, starts, tu, ti, tj, vals = two_hop_triangles(
+        key_b, key_id, ids_in, th_in, slot_ok_in, rid_in, rth_in, self_ids, int((deg * (deg - 1)).sum())
+    )
+    # the reference's float formulas on the same triangle list (see coordinates_all_numpy)
+    Pij = np.round(np.abs(_wrap(vals[:, 0] - vals[:, 1])), ANGLE_DECIMALS)
+    Pji = np.round(np.abs(_wrap(vals[:, 2] - vals[:, 3])), ANGLE_DECIMALS)
+    pu = np.round(np.abs(_wrap(vals[:, 4] - vals[:, 5])), ANGLE_DECIMALS)
+    if angle_balance:
+        _, Pij, Pji = _angle_balance(pu, Pij, Pji)
+    good = (
+        (np.minimum(Pij, np.pi - Pij) > DEGENERATE_ANGLE)
+        & (np.minimum(Pji, np.pi - Pji) > DEGENERATE_ANGLE)
+        & (Pij < np.pi)
+        & (Pji < np.pi)
+    )
+    tu, ti, tj, Pij, Pji = tu[good], ti[good], tj[good], Pij[good], Pji[good]
+    starts = np.searchsorted(tu, np.arange(n + 1))
+    logratio = np.log(np.sin(Pij)) - np.log(np.sin(Pji))
+    if noise_sensitivity:
+        with np.errstate(divide="ignore", invalid="ignore"):
+            weight = triangle_sensitivity(Pij, Pji)
+    else:
+        weight = np.zeros(0)
+    logf, known, rigid = two_hop_propagate(ok, starts, ti, tj, logratio, weight, noise_sensitivity)
+    valid = known & ok
+    f = np.where(valid, np.exp(logf), np.nan)
+    nv = valid.sum(-1)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        mean_f = np.nansum(np.where(valid, f, 0.0), -1) / np.maximum(nv, 1)
+    f = f / np.where(nv > 0, mean_f, 1.0)[:, None]
+    # undo the slot permutation before the (element-wise) positions
+    f = np.take_along_axis(f, inv, 1)
+    xy = np.stack([f * np.cos(th_in), f * np.sin(th_in)], -1)
+    return ScaleFreeResult(xy=xy, valid=np.take_along_axis(valid, inv, 1), rigid=rigid, ids=ids_in.copy(), length=f)
+
+
+def coordinates_all_numpy(
+    knowledge: NeighbourKnowledge,
+    noise_sensitivity: bool = True,
+    angle_balance: bool = True,
+) -> ScaleFreeResult:
+    """2-hop scale-free coordinates for every robot at once [L Algs. 1-4] (numpy reference).
 
     Vectorised numpy over robots, no Python loop over robots: reported ids are matched to slots with one
     sorted search (O(N K K2 log NK)); triangle angles are computed only on usable triangles; connectivity
@@ -203,8 +276,11 @@ def coordinates_all(
     has_zw = np.zeros((n, k, k), dtype=bool)
     tzw = np.zeros((n, k, k))
     hu, hi, hm = ru[hit], ri[hit], rm[hit]
-    # if a row lists the same id twice, the first entry wins (reverse assignment order)
-    tzw[hu[::-1], hi[::-1], slot_j[::-1]] = rth[hu, hi, hm][::-1]
+    # if a row lists the same id twice, the last entry wins (explicitly: numpy leaves the winner of a
+    # repeated fancy-index assignment unspecified; this is what its in-memory-order loop has always given)
+    flat = (hu * k + hi) * k + slot_j
+    last = flat.size - 1 - np.unique(flat[::-1], return_index=True)[1]
+    tzw[hu[last], hi[last], slot_j[last]] = rth[hu[last], hi[last], hm[last]]
     has_zw[hu, hi, slot_j] = True
     eye = np.eye(k, dtype=bool)[None]
     tri = has_zw & np.swapaxes(has_zw, 1, 2) & has_zu[:, :, None] & has_zu[:, None, :] & ~eye

@@ -1,0 +1,334 @@
+"""Compiled (numba) kernels for the batched 2-hop scale-free algorithm [L Algs. 1-4], numpy as reference.
+
+:func:`swarm_envs.sensing.scale_free.coordinates_all_numpy` is the reference: vectorised numpy over robots,
+but built from many (N, K, K) temporaries (slot sort, id matching, reachability by matrix squaring,
+lock-step BFS / Prim). These kernels do the integer and graph work robot by robot with K-sized local
+arrays; every floating-point value that is not a plain copy or the additions of the length propagation
+(inner angles, rounding, ANGLEBALANCE, law-of-sines logs, sensitivities, exp, normalisation, sin/cos) is
+still computed by numpy in :func:`swarm_envs.sensing.scale_free.coordinates_all`, so the compiled path
+gives the reference's results bit for bit (``tests/test_scale_free_kernels.py``). Also
+:func:`segment_sum`, a compiled ``np.add.reduceat`` over rows for the range & bearing sensor. Used only
+when numba is importable (``fast`` extra).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+try:  # numba is optional: an accelerator, not a requirement
+    from swarm_envs._numba import njit  # numba.njit whose cache recovers from corrupted files
+
+    HAVE_NUMBA = True
+except ImportError:  # pragma: no cover - exercised only without numba
+    HAVE_NUMBA = False
+
+__all__ = ["HAVE_NUMBA", "two_hop_triangles", "two_hop_propagate", "segment_sum"]
+
+
+if HAVE_NUMBA:
+
+    @njit(cache=True)
+    def two_hop_triangles(key_b, key_id, ids_in, th_in, ok_in, rid_in, rth_in, self_ids, cap):  # pragma: no cover - compiled
+        """Slot order and usable triangles of every robot (the reference's first half).
+
+        Slots are ordered by (key_b, key_id), stable (``np.lexsort``). For sorted slots i, j of robot u the
+        triangle (u, i, j) is usable when both are valid, i reported u, and each reported the other
+        (a row listing an id twice: last entry wins; a row id held by two slots: the lower slot).
+
+        Returns ``order`` (N, K), ``inv`` (N, K) (its inverse permutation), sorted ``ok`` (N, K) and ``th``
+        (N, K), the per-robot triangle start offsets (N + 1,), and for each triangle in (u, i, j)
+        lexicographic order (at most ``cap``: pass ``sum(deg * (deg - 1))`` over robots, deg = valid slots):
+        u, i, j and the raw bearings ``theta_i(u), theta_i(j), theta_j(u),
+        theta_j(i), theta_u(i), theta_u(j)`` (rad).
+        """
+        n, k = ids_in.shape
+        k2 = rid_in.shape[2]
+        order = np.empty((n, k), np.int64)
+        inv = np.empty((n, k), np.int64)
+        ok = np.zeros((n, k), np.bool_)
+        th = np.empty((n, k), np.float64)
+        tu = np.empty(cap, np.int64)
+        ti = np.empty(cap, np.int64)
+        tj = np.empty(cap, np.int64)
+        vals = np.empty((cap, 6), np.float64)
+        starts = np.zeros(n + 1, np.int64)
+        ids = np.empty(k, np.int64)
+        has_zu = np.zeros(k, np.bool_)
+        tzu = np.zeros(k, np.float64)
+        has_zw = np.zeros((k, k), np.bool_)
+        tzw = np.zeros((k, k), np.float64)
+        t = 0
+        for u in range(n):
+            # stable insertion sort of the slots by (key_b, key_id)
+            for s in range(k):
+                order[u, s] = s
+            for a in range(1, k):
+                x = order[u, a]
+                b = a - 1
+                while b >= 0:
+                    y = order[u, b]
+                    if key_b[u, x] < key_b[u, y] or (key_b[u, x] == key_b[u, y] and key_id[u, x] < key_id[u, y]):
+                        order[u, b + 1] = y
+                        b -= 1
+                    else:
+                        break
+                order[u, b + 1] = x
+            for s in range(k):
+                o = order[u, s]
+                inv[u, o] = s
+                ok[u, s] = ok_in[u, o]
+                th[u, s] = th_in[u, o]
+                ids[s] = ids_in[u, o]
+            # theta_z(u) and theta_z(w) on sorted slots
+            for s in range(k):
+                has_zu[s] = False
+                tzu[s] = 0.0
+                for j in range(k):
+                    has_zw[s, j] = False
+                    tzw[s, j] = 0.0
+                if not ok[u, s]:
+                    continue
+                o = order[u, s]
+                for m in range(k2):
+                    r = rid_in[u, o, m]
+                    rt = rth_in[u, o, m]
+                    if r < 0 or not np.isfinite(rt):
+                        continue
+                    if r == self_ids[u] and not has_zu[s]:
+                        has_zu[s] = True
+                        tzu[s] = rt
+                    for j in range(k):
+                        if ok[u, j] and ids[j] == r:
+                            has_zw[s, j] = True
+                            tzw[s, j] = rt  # a row listing an id twice: the last entry wins
+                            break
+            for i in range(k):
+                if not (ok[u, i] and has_zu[i]):
+                    continue
+                for j in range(k):
+                    if i != j and ok[u, j] and has_zu[j] and has_zw[i, j] and has_zw[j, i]:
+                        tu[t] = u
+                        ti[t] = i
+                        tj[t] = j
+                        vals[t, 0] = tzu[i]
+                        vals[t, 1] = tzw[i, j]
+                        vals[t, 2] = tzu[j]
+                        vals[t, 3] = tzw[j, i]
+                        vals[t, 4] = th[u, i]
+                        vals[t, 5] = th[u, j]
+                        t += 1
+            starts[u + 1] = t
+        return order, inv, ok, th, starts, tu[:t], ti[:t], tj[:t], vals[:t]
+
+    @njit(cache=True)
+    def two_hop_propagate(ok, starts, ti, tj, logratio, weight, noise_sensitivity):  # pragma: no cover - compiled
+        """Components, root, rigidity and length propagation of every robot (the reference's second half).
+
+        ``starts``/``ti``/``tj`` list each robot's usable (non-degenerate) directed neighbour-graph edges,
+        ``logratio`` their ``log(f_j / f_i)`` and ``weight`` their sensitivity [L Alg. 3]. Root: first slot
+        (bearing order) of the largest component. Propagation: Prim's MST from the root [L Alg. 4] when
+        ``noise_sensitivity``, else the BFS queue of [L Alg. 1], with the reference's tie rules.
+
+        Returns ``logf`` (N, K) (0 at the root), ``known`` (N, K) bool and ``rigid`` (N,) bool.
+        """
+        n, k = ok.shape
+        logf = np.zeros((n, k), np.float64)
+        known = np.zeros((n, k), np.bool_)
+        rigid = np.zeros(n, np.bool_)
+        E = np.zeros((k, k), np.bool_)
+        LR = np.zeros((k, k), np.float64)
+        W = np.empty((k, k), np.float64)
+        comp = np.empty(k, np.int64)
+        size = np.zeros(k, np.int64)
+        stack = np.empty(k, np.int64)
+        best = np.empty(k, np.float64)
+        par = np.empty(k, np.int64)
+        disc = np.empty(k, np.int64)
+        new = np.zeros(k, np.bool_)
+        parent = np.zeros(k, np.int64)
+        BIG = np.iinfo(np.int64).max
+        for u in range(n):
+            for a in range(k):
+                for b in range(k):
+                    E[a, b] = False
+                    LR[a, b] = 0.0
+                    W[a, b] = np.inf
+            for e in range(starts[u], starts[u + 1]):
+                E[ti[e], tj[e]] = True
+                LR[ti[e], tj[e]] = logratio[e]
+                W[ti[e], tj[e]] = weight[e]
+            # connected components of the neighbour graph over valid slots
+            for a in range(k):
+                comp[a] = -1
+                size[a] = 0
+            for a in range(k):
+                if not ok[u, a] or comp[a] >= 0:
+                    continue
+                comp[a] = a
+                top = 0
+                stack[0] = a
+                cnt = 1
+                while top >= 0:
+                    x = stack[top]
+                    top -= 1
+                    for b in range(k):
+                        if E[x, b] and ok[u, b] and comp[b] < 0:
+                            comp[b] = a
+                            cnt += 1
+                            top += 1
+                            stack[top] = b
+                size[a] = cnt
+            big = 0
+            deg = 0
+            for a in range(k):
+                if ok[u, a]:
+                    deg += 1
+                    if size[comp[a]] > big:
+                        big = size[comp[a]]
+            root = 0
+            for a in range(k):
+                sa = size[comp[a]] if ok[u, a] else 0
+                if sa == big:
+                    root = a
+                    break
+            rigid[u] = deg >= 1 and big == deg
+            has_root = deg > 0
+            known[u, root] = has_root
+            if noise_sensitivity:
+                for a in range(k):
+                    best[a] = W[root, a] if has_root else np.inf
+                    par[a] = root
+                for _ in range(k - 1):
+                    jj = 0
+                    cmin = np.inf if known[u, 0] else best[0]
+                    if not np.isnan(cmin):
+                        for a in range(1, k):
+                            c = np.inf if known[u, a] else best[a]
+                            if np.isnan(c):  # np.argmin: the first NaN wins
+                                jj = a
+                                cmin = c
+                                break
+                            if c < cmin:
+                                jj = a
+                                cmin = c
+                    if not np.isfinite(cmin):
+                        break
+                    p = par[jj]
+                    logf[u, jj] = logf[u, p] + LR[p, jj]
+                    known[u, jj] = True
+                    for a in range(k):
+                        w = W[jj, a]
+                        if w < best[a] or (w == best[a] and jj < par[a] and np.isfinite(w)):
+                            best[a] = w
+                            par[a] = jj
+            else:
+                cnt = 1 if has_root else 0
+                for a in range(k):
+                    disc[a] = 0 if known[u, a] else BIG
+                for _ in range(k - 1):
+                    nnew = 0
+                    for b in range(k):
+                        new[b] = False
+                        parent[b] = 0
+                        if known[u, b]:
+                            continue
+                        dmin = BIG
+                        for a in range(k):
+                            if E[a, b] and known[u, a] and disc[a] < dmin:
+                                dmin = disc[a]
+                                parent[b] = a
+                                new[b] = True
+                        if new[b]:
+                            nnew += 1
+                    if nnew == 0:
+                        break
+                    # discovery rank: new nodes ordered by (parent's discovery rank, slot)
+                    for b in range(k):
+                        if not new[b]:
+                            continue
+                        kb = disc[parent[b]] * k + b
+                        rank = 0
+                        for c in range(k):
+                            if new[c] and disc[parent[c]] * k + c < kb:
+                                rank += 1
+                        stack[b] = cnt + rank
+                    for b in range(k):
+                        if new[b]:
+                            logf[u, b] = logf[u, parent[b]] + LR[parent[b], b]
+                    for b in range(k):
+                        if new[b]:
+                            disc[b] = stack[b]
+                            known[u, b] = True
+                    cnt += nnew
+        return logf, known, rigid
+
+
+def segment_sum(a: np.ndarray, starts: np.ndarray) -> np.ndarray:
+    """``np.add.reduceat(a, starts, axis=0)`` bit for bit, compiled when numba is available (reduceat loops
+    over segments slowly when most segments hold one or two rows); otherwise reduceat itself.
+
+    numpy reduces each segment ``s:e`` column by column as ``a[s] + pairwise_sum(a[s+1:e])``, with its
+    pairwise summation (sequential from -0.0 (numpy >= 2) below 8 terms, 8 interleaved partial sums up to 128, halving
+    above); the kernel repeats exactly that order, so float results are identical, not just close.
+    """
+    a = np.asarray(a)
+    starts = np.asarray(starts, dtype=np.int64)
+    if not HAVE_NUMBA or a.dtype != np.float64 or starts.size == 0 or starts.min() < 0 or starts.max() >= a.shape[0]:
+        return np.add.reduceat(a, starts, axis=0)
+    flat = np.ascontiguousarray(a).reshape(a.shape[0], -1)
+    return _segment_sum(flat, starts, _PAIRWISE_INIT).reshape((starts.size, *a.shape[1:]))
+
+
+# numpy >= 2 starts a short pairwise sum from -0.0 (the additive identity: a sum of -0.0 stays -0.0),
+# older numpy from 0.0; ask the installed numpy (an argument, not a global: numba's cache would freeze it)
+_PAIRWISE_INIT = -0.0 if np.signbit(np.add.reduceat(np.full((3, 1), -0.0), [0], axis=0)[0, 0]) else 0.0
+
+if HAVE_NUMBA:
+
+    @njit(cache=True)
+    def _pairwise_sum(a, lo, n, c, init):  # pragma: no cover - compiled
+        """numpy's ``DOUBLE_pairwise_sum`` of ``a[lo:lo+n, c]`` (numpy/_core/src/umath/loops_utils.h.src)."""
+        if n < 8:
+            res = init
+            for i in range(n):
+                res += a[lo + i, c]
+            return res
+        if n <= 128:
+            r0, r1, r2, r3 = a[lo, c], a[lo + 1, c], a[lo + 2, c], a[lo + 3, c]
+            r4, r5, r6, r7 = a[lo + 4, c], a[lo + 5, c], a[lo + 6, c], a[lo + 7, c]
+            m = n - n % 8
+            i = 8
+            while i < m:
+                r0 += a[lo + i, c]
+                r1 += a[lo + i + 1, c]
+                r2 += a[lo + i + 2, c]
+                r3 += a[lo + i + 3, c]
+                r4 += a[lo + i + 4, c]
+                r5 += a[lo + i + 5, c]
+                r6 += a[lo + i + 6, c]
+                r7 += a[lo + i + 7, c]
+                i += 8
+            res = ((r0 + r1) + (r2 + r3)) + ((r4 + r5) + (r6 + r7))
+            while i < n:
+                res += a[lo + i, c]
+                i += 1
+            return res
+        n2 = n // 2
+        n2 -= n2 % 8
+        return _pairwise_sum(a, lo, n2, c, init) + _pairwise_sum(a, lo + n2, n - n2, c, init)
+
+    @njit(cache=True)
+    def _segment_sum(a, starts, init):  # pragma: no cover - compiled
+        G = starts.size
+        L, m = a.shape
+        out = np.empty((G, m), np.float64)
+        for g in range(G):
+            s = starts[g]
+            e = starts[g + 1] if g + 1 < G else L
+            if e <= s + 1:  # one row (reduceat also returns a[s] when the next start is not larger)
+                for c in range(m):
+                    out[g, c] = a[s, c]
+            else:
+                for c in range(m):
+                    out[g, c] = a[s, c] + _pairwise_sum(a, s + 1, e - s - 1, c, init)
+        return out
