@@ -179,17 +179,7 @@ def coordinates_all(
         key_b, key_id, ids_in, th_in, slot_ok_in, rid_in, rth_in, self_ids, int((deg * (deg - 1)).sum())
     )
     # the reference's float formulas on the same triangle list (see coordinates_all_numpy)
-    Pij = np.round(np.abs(_wrap(vals[:, 0] - vals[:, 1])), ANGLE_DECIMALS)
-    Pji = np.round(np.abs(_wrap(vals[:, 2] - vals[:, 3])), ANGLE_DECIMALS)
-    pu = np.round(np.abs(_wrap(vals[:, 4] - vals[:, 5])), ANGLE_DECIMALS)
-    if angle_balance:
-        _, Pij, Pji = _angle_balance(pu, Pij, Pji)
-    good = (
-        (np.minimum(Pij, np.pi - Pij) > DEGENERATE_ANGLE)
-        & (np.minimum(Pji, np.pi - Pji) > DEGENERATE_ANGLE)
-        & (Pij < np.pi)
-        & (Pji < np.pi)
-    )
+    Pij, Pji, good = _triangle_angles(vals[:, 0], vals[:, 1], vals[:, 2], vals[:, 3], vals[:, 4], vals[:, 5], angle_balance)
     tu, ti, tj, Pij, Pji = tu[good], ti[good], tj[good], Pij[good], Pji[good]
     starts = np.searchsorted(tu, np.arange(n + 1))
     logratio = np.log(np.sin(Pij)) - np.log(np.sin(Pji))
@@ -199,12 +189,7 @@ def coordinates_all(
     else:
         weight = np.zeros(0)
     logf, known, rigid = two_hop_propagate(ok, starts, ti, tj, logratio, weight, noise_sensitivity)
-    valid = known & ok
-    f = np.where(valid, np.exp(logf), np.nan)
-    nv = valid.sum(-1)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        mean_f = np.nansum(np.where(valid, f, 0.0), -1) / np.maximum(nv, 1)
-    f = f / np.where(nv > 0, mean_f, 1.0)[:, None]
+    f, valid = _unit_mean_lengths(logf, known & ok)
     # undo the slot permutation before the (element-wise) positions
     f = np.take_along_axis(f, inv, 1)
     xy = np.stack([f * np.cos(th_in), f * np.sin(th_in)], -1)
@@ -292,17 +277,9 @@ def coordinates_all_numpy(
     # equal, and float noise (e.g. 67.5 deg from atan2 vs from a decoded 4-bit sector) must not decide
     # ties in the MST; ties then fall to slot (bearing) order.
     tu, ti, tj = np.nonzero(tri)
-    Pij = np.round(np.abs(_wrap(tzu[tu, ti] - tzw[tu, ti, tj])), ANGLE_DECIMALS)
-    Pji = np.round(np.abs(_wrap(tzu[tu, tj] - tzw[tu, tj, ti])), ANGLE_DECIMALS)
-    pu = np.round(np.abs(_wrap(th[tu, ti] - th[tu, tj])), ANGLE_DECIMALS)
-    if angle_balance:
-        _, Pij, Pji = _angle_balance(pu, Pij, Pji)
-    good = (
-        (np.minimum(Pij, np.pi - Pij) > DEGENERATE_ANGLE)
-        & (np.minimum(Pji, np.pi - Pji) > DEGENERATE_ANGLE)
-        & (Pij < np.pi)
-        & (Pji < np.pi)
-    )  # symmetric in (i, j) by construction
+    Pij, Pji, good = _triangle_angles(
+        tzu[tu, ti], tzw[tu, ti, tj], tzu[tu, tj], tzw[tu, tj, ti], th[tu, ti], th[tu, tj], angle_balance
+    )  # good is symmetric in (i, j) by construction
     tu, ti, tj, Pij, Pji = tu[good], ti[good], tj[good], Pij[good], Pji[good]
     E = np.zeros((n, k, k), dtype=bool)
     E[tu, ti, tj] = True
@@ -370,12 +347,7 @@ def coordinates_all_numpy(
             logf = np.where(new, np.take_along_axis(logf, parent, axis=1) + lr, logf)
             known |= new
 
-    valid = known & ok
-    f = np.where(valid, np.exp(logf), np.nan)
-    nv = valid.sum(-1)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        mean_f = np.nansum(np.where(valid, f, 0.0), -1) / np.maximum(nv, 1)
-    f = f / np.where(nv > 0, mean_f, 1.0)[:, None]
+    f, valid = _unit_mean_lengths(logf, known & ok)
     xy = np.stack([f * np.cos(th), f * np.sin(th)], -1)
 
     # undo the slot permutation
@@ -619,6 +591,37 @@ def coordinates(
 
 
 _angle_balance = angle_balance  # module-level alias: the keyword argument of coordinates_all shadows it
+
+
+def _unit_mean_lengths(logf: np.ndarray, valid: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(N, K) neighbour lengths ``exp(logf)`` where ``valid`` (NaN elsewhere), scaled so that each robot's
+    valid lengths have mean 1; returns them with ``valid``."""
+    f = np.where(valid, np.exp(logf), np.nan)
+    nv = valid.sum(-1)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        mean_f = np.nansum(np.where(valid, f, 0.0), -1) / np.maximum(nv, 1)
+    return f / np.where(nv > 0, mean_f, 1.0)[:, None], valid
+
+
+def _triangle_angles(
+    i_u: np.ndarray, i_j: np.ndarray, j_u: np.ndarray, j_i: np.ndarray, u_i: np.ndarray, u_j: np.ndarray, angle_balance: bool
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Inner angles of triangles (u, i, j) from the bearings ``theta_i(u), theta_i(j), theta_j(u), theta_j(i),
+    theta_u(i), theta_u(j)`` (rad): ``Pij`` at i and ``Pji`` at j, rounded to 1e-ANGLE_DECIMALS rad and
+    optionally angle-balanced [L Alg. 2], and ``good``: the non-degenerate ones (both away from 0 and pi).
+    Shared by the compiled path and the numpy reference (the same float formulas)."""
+    Pij = np.round(np.abs(_wrap(i_u - i_j)), ANGLE_DECIMALS)
+    Pji = np.round(np.abs(_wrap(j_u - j_i)), ANGLE_DECIMALS)
+    pu = np.round(np.abs(_wrap(u_i - u_j)), ANGLE_DECIMALS)
+    if angle_balance:
+        _, Pij, Pji = _angle_balance(pu, Pij, Pji)
+    good = (
+        (np.minimum(Pij, np.pi - Pij) > DEGENERATE_ANGLE)
+        & (np.minimum(Pji, np.pi - Pji) > DEGENERATE_ANGLE)
+        & (Pij < np.pi)
+        & (Pji < np.pi)
+    )
+    return Pij, Pji, good
 
 
 class ScaleFreeSensor:
