@@ -184,7 +184,7 @@ def link_tables(n, rx, tx, gains, scale, ambient, m_min, m_tr):
 
 @_jit
 def _word(bits, off, n):
-    """n bits starting at ``off`` (MSB first) -> int."""
+    """n bits starting at ``off`` (MSB first) -> int (BCH words and header fields)."""
     w = 0
     for i in range(n):
         w = (w << 1) | (1 if bits[off + i] else 0)
@@ -219,14 +219,6 @@ def decode_words(words, n, k, table_msg, table_ok):
     for i in range(words.size):
         msg[i], ok[i] = _decode_block(words[i], n, k, table_msg, table_ok)
     return msg, ok
-
-
-@_jit
-def _uint(info, off, w):
-    v = 0
-    for i in range(w):
-        v = (v << 1) | (1 if info[off + i] else 0)
-    return v
 
 
 @_jit
@@ -486,12 +478,12 @@ def slot_loop(
                     if code_k == code_n:
                         for i in range(4):
                             info[i] = buf[r, i]
-                        good = info[0] and valid_types[_uint(info, 1, 3)]
+                        good = info[0] and valid_types[_word(info, 1, 3)]
                     else:
                         _decode_stream(buf[r], code_n, code_n, code_k, table_msg, table_ok, info)
                         good = info[0]
                         if code_k >= 4:
-                            good = good and valid_types[_uint(info, 1, 3)]
+                            good = good and valid_types[_word(info, 1, 3)]
                     if not good:
                         _abort(r, state, nbits, buf, gt_buf, gt_id, collided, code_n, code_k, table_msg, table_ok, counts, per_robot)
                         break
@@ -501,10 +493,10 @@ def slot_loop(
                         break
                 elif ph == 1:  # header -> frame length
                     ok = _decode_stream(buf[r], header_blocks * code_n, code_n, code_k, table_msg, table_ok, info)
-                    typ = _uint(info, 1, 3)
-                    length = _uint(info, 4, 8)
-                    origin = _uint(info, 19, id_bits)
-                    sender = _uint(info, 19 + id_bits, id_bits) if with_sender else origin
+                    typ = _word(info, 1, 3)
+                    length = _word(info, 4, 8)
+                    origin = _word(info, 19, id_bits)
+                    sender = _word(info, 19 + id_bits, id_bits) if with_sender else origin
                     good = ok and info[0] and valid_types[typ] and origin < n_ids and sender < n_ids
                     if not good:
                         _abort(r, state, nbits, buf, gt_buf, gt_id, collided, code_n, code_k, table_msg, table_ok, counts, per_robot)
@@ -518,11 +510,11 @@ def slot_loop(
                     nb = nbits[r]
                     ok = _decode_stream(buf[r], nb, code_n, code_k, table_msg, table_ok, info)
                     width = (nb // code_n) * code_k
-                    typ = _uint(info, 1, 3)
-                    length = _uint(info, 4, 8)
-                    seq = _uint(info, 12, 7)
-                    origin = _uint(info, 19, id_bits)
-                    sender = _uint(info, 19 + id_bits, id_bits) if with_sender else origin
+                    typ = _word(info, 1, 3)
+                    length = _word(info, 4, 8)
+                    seq = _word(info, 12, 7)
+                    origin = _word(info, 19, id_bits)
+                    sender = _word(info, 19 + id_bits, id_bits) if with_sender else origin
                     aligned = gt_id[r] >= 0
                     corrupt = False
                     if aligned:
