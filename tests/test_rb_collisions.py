@@ -139,13 +139,15 @@ def test_single_firing_is_unchanged_bit_for_bit():
         for f in ("rx", "tx", "range", "bearing", "heading", "age", "true_tx", "n_overlap"):
             np.testing.assert_array_equal(getattr(ra, f), getattr(rb, f), err_msg=f)
     assert len(ra) == n * (n - 1) and np.all(ra.n_overlap == 1) and np.all(ra.tx == ra.true_tx)
-    # and a forced single firing equals read() of that link with the same stream
+    # and a forced single firing equals read() of that link with the same stream (the sensor's matrix noise
+    # is the second of three child streams of its generator: priorities, matrix noise, id noise)
     s = RangeBearingSensor("droplet", n, np.random.default_rng(11))
     fired = np.zeros(n, bool)
     fired[2] = True
     r = s.step(links, fired=fired)
     sel = np.flatnonzero(links.tx == 2)
-    R, th, ph, _ = read(links.gains[sel], links.rel_position[sel], links.rel_heading[sel], np.random.default_rng(11))
+    noise = np.random.default_rng(11).spawn(3)[1]
+    R, th, ph, _ = read(links.gains[sel], links.rel_position[sel], links.rel_heading[sel], noise)
     np.testing.assert_array_equal(r.rx, links.rx[sel])
     np.testing.assert_array_equal(r.range, R)
     np.testing.assert_array_equal(r.bearing, th)

@@ -73,7 +73,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from swarm_envs.copies import CopyRandom
+from swarm_envs.copies import CopyRandom, CopyStream
 from swarm_envs.ir.layer import IRLinks, pair_gains, wrap_angle
 from swarm_envs.platforms import Platform, get_platform
 from swarm_envs.sensing.kernels import segment_sum
@@ -141,7 +141,7 @@ def decode_ids(
     light: np.ndarray,
     frames: np.ndarray,
     starts: np.ndarray,
-    rng: np.random.Generator | CopyRandom,
+    rng: np.random.Generator | CopyRandom | CopyStream,
     sigma: float,
     platform: Platform | str = "droplet",
     id_check: bool = True,
@@ -243,7 +243,7 @@ def brightness(rel_position: np.ndarray, rel_heading: np.ndarray, platform: Plat
 
 def measure(
     brightness: np.ndarray,
-    rng: np.random.Generator | CopyRandom,
+    rng: np.random.Generator | CopyRandom | CopyStream,
     sigma: float | None = None,
     platform: Platform | str = "droplet",
     ladder: tuple[float, ...] = POWER_LADDER,
@@ -259,7 +259,8 @@ def measure(
 
     Args:
         brightness: (P, n_d, n_e) noiseless full-power brightness (model units).
-        rng: random generator for the noise, or per-copy streams (:class:`swarm_envs.copies.CopyRandom`)
+        rng: random generator for the noise, or per-copy streams (:class:`swarm_envs.copies.CopyRandom`, or a
+            normal :class:`swarm_envs.copies.CopyStream`)
             with ``row_copy`` (P,) the env copy of each matrix (sorted): each copy's noise then comes from its
             own stream, as in a single env.
         sigma: noise standard deviation in ADC counts; default the model's ``default_noise_sigma``.
@@ -295,10 +296,17 @@ def measure(
     return out, power
 
 
-def _noise(rng: np.random.Generator | CopyRandom, sigma: float, shape: tuple[int, ...], row_copy: np.ndarray | None) -> np.ndarray:
-    """N(0, sigma^2) noise of ``shape``; rows from each copy's stream when ``rng`` is a CopyRandom."""
+def _noise(
+    rng: np.random.Generator | CopyRandom | CopyStream, sigma: float, shape: tuple[int, ...], row_copy: np.ndarray | None
+) -> np.ndarray:
+    """N(0, sigma^2) noise of ``shape``; rows from each copy's stream when ``rng`` is a CopyRandom or a
+    normal :class:`~swarm_envs.copies.CopyStream`."""
+    rows = np.zeros(shape[0], dtype=np.int64) if row_copy is None else row_copy
+    if isinstance(rng, CopyStream):
+        if rng.kind != "normal":
+            raise ValueError("noise needs a 'normal' CopyStream")
+        return sigma * rng.draw(rows, shape[1:])
     if isinstance(rng, CopyRandom):
-        rows = np.zeros(shape[0], dtype=np.int64) if row_copy is None else row_copy
         return rng.normal(sigma, rows, shape[1:])
     return rng.normal(0.0, sigma, shape)
 
@@ -404,7 +412,7 @@ def read(
     brightness: np.ndarray,
     rel_position: np.ndarray,
     rel_heading: np.ndarray,
-    rng: np.random.Generator | CopyRandom,
+    rng: np.random.Generator | CopyRandom | CopyStream,
     sigma: float | None = None,
     platform: Platform | str = "droplet",
     ladder: tuple[float, ...] = POWER_LADDER,
@@ -538,8 +546,13 @@ class RangeBearingSensor:
         self.collisions = bool(collisions)
         self.id_check = bool(id_check)
         self._frames = id_frames(np.arange(self.copy_size)) if self.collisions else None
-        # id-decoding noise: a child of each copy's stream, so the matrix noise draws are as without ids
-        self.id_rng = CopyRandom([g.spawn(1)[0] for g in self.rng.generators])
+        # three buffered child streams of each copy's generator (one Generator call per copy every few
+        # steps instead of several per step): priorities, matrix noise, id-decoding noise (its own stream,
+        # so the matrix noise draws are as without ids)
+        kids = [g.spawn(3) for g in self.rng.generators]
+        self.prio_rng = CopyStream([k[0] for k in kids], "uniform", chunk=max(64, 16 * self.copy_size))
+        self.noise_rng = CopyStream([k[1] for k in kids], "normal")
+        self.id_rng = CopyStream([k[2] for k in kids], "normal")
         self.last_fired = np.zeros(self.n_robots, dtype=bool)
         self.reset()
 
@@ -559,7 +572,8 @@ class RangeBearingSensor:
         if rngs is not None:
             for b, g in zip(copies, rngs):
                 self.rng.generators[b] = g
-                self.id_rng.generators[b] = g.spawn(1)[0]
+                for stream, kid in zip((self.prio_rng, self.noise_rng, self.id_rng), g.spawn(3)):
+                    stream.set_generator(int(b), kid)
         keep = ~np.isin((self._key // self.n_robots) // self.copy_size, copies)
         self._key, self._range, self._bearing = self._key[keep], self._range[keep], self._bearing[keep]
         self._heading, self._age = self._heading[keep], self._age[keep]
@@ -572,7 +586,7 @@ class RangeBearingSensor:
         N = self.n_robots
         if self.schedule == "every_step":
             return np.ones(N, dtype=bool)
-        prio = self.rng.random(self.copy_of)
+        prio = self.prio_rng.draw(self.copy_of)
         a = np.concatenate([links.rx, links.tx])
         b = np.concatenate([links.tx, links.rx])
         fired = np.zeros(N, dtype=bool)
@@ -644,7 +658,7 @@ class RangeBearingSensor:
             single = starts.size == sel.size
             R, th, ph, _ = read(
                 lam[g], links.rel_position[sel][starts[g]] if single else None,
-                links.rel_heading[sel][starts[g]] if single else None, self.rng, self.noise_sigma,
+                links.rel_heading[sel][starts[g]] if single else None, self.noise_rng, self.noise_sigma,
                 self.platform, self.ladder, self.near_model, self.copy_of[grx[g]], low,
             )
             fin = np.isfinite(R)
