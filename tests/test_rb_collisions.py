@@ -280,3 +280,23 @@ def test_reset_of_one_copy_reseeds_its_id_stream():
     single = RangeBearingSensor("droplet", n, np.random.default_rng(0))
     single.reset(np.array([0]), [np.random.default_rng(9)])
     assert vec.id_rng.generators[1].random() == single.id_rng.generators[0].random()
+
+
+@pytest.mark.skipif(not rbmod.HAVE_NUMBA, reason="numba not installed")
+def test_compiled_contention_schedule_equals_the_luby_rounds():
+    """The compiled greedy independent set (kernels.priority_independent_set) equals the numpy Luby rounds
+    on random scenes, and is a maximal independent set of the link graph."""
+    from swarm_envs.sensing.kernels import priority_independent_set
+
+    rng = np.random.default_rng(4)
+    for n, side in [(1, 0.1), (5, 0.1), (40, 0.3), (300, 1.0), (300, 3.0)]:
+        pos = rng.uniform(0, side, (n, 2))
+        links = compute_links(pos, rng.uniform(-np.pi, np.pi, n), "droplet")
+        prio = rng.random(n)
+        got = priority_independent_set(prio, links.rx.astype(np.int64), links.tx.astype(np.int64))
+        ref = rbmod.independent_set_numpy(prio, links.rx, links.tx)
+        np.testing.assert_array_equal(got, ref)
+        assert not np.any(got[links.rx] & got[links.tx])  # independent
+        covered = got.copy()
+        covered[links.rx[got[links.tx]]] = True
+        assert covered.all()  # maximal: every robot fires or hears one that does

@@ -7,7 +7,9 @@ arrays; every floating-point value that is not a plain copy or the additions of 
 (inner angles, rounding, ANGLEBALANCE, law-of-sines logs, sensitivities, exp, normalisation, sin/cos) is
 still computed by numpy in :func:`swarm_envs.sensing.scale_free.coordinates_all`, so the compiled path
 gives the reference's results bit for bit (``tests/test_scale_free_kernels.py``). Also
-:func:`segment_sum`, a compiled ``np.add.reduceat`` over rows for the range & bearing sensor. Used only
+:func:`segment_sum`, a compiled ``np.add.reduceat`` over rows for the range & bearing sensor, and
+:func:`priority_independent_set`, its contention schedule (reference: the vectorised Luby rounds of
+:func:`swarm_envs.sensing.range_bearing.independent_set_numpy`). Used only
 when numba is importable (``fast`` extra).
 """
 
@@ -22,7 +24,7 @@ try:  # numba is optional: an accelerator, not a requirement
 except ImportError:  # pragma: no cover - exercised only without numba
     HAVE_NUMBA = False
 
-__all__ = ["HAVE_NUMBA", "two_hop_triangles", "two_hop_propagate", "segment_sum"]
+__all__ = ["HAVE_NUMBA", "two_hop_triangles", "two_hop_propagate", "segment_sum", "priority_independent_set"]
 
 
 if HAVE_NUMBA:
@@ -332,3 +334,39 @@ if HAVE_NUMBA:
                 for c in range(m):
                     out[g, c] = a[s, c] + _pairwise_sum(a, s + 1, e - s - 1, c, init)
         return out
+
+
+if HAVE_NUMBA:
+
+    @njit(cache=True)
+    def priority_independent_set(prio, u, v):  # pragma: no cover - compiled
+        """Greedy maximal independent set in decreasing ``prio`` of the graph with edges (u[e], v[e]) (either
+        direction): a node is in the set iff no neighbour of higher priority is. Equals the Luby rounds of
+        the numpy reference for distinct priorities (each round admits the nodes that beat every undecided
+        neighbour, which is exactly the greedy order's choice). Returns (N,) bool."""
+        n = prio.size
+        m = u.size
+        deg = np.zeros(n + 1, np.int64)
+        for e in range(m):
+            deg[u[e] + 1] += 1
+            deg[v[e] + 1] += 1
+        for i in range(n):
+            deg[i + 1] += deg[i]
+        fill = deg[:-1].copy()
+        adj = np.empty(2 * m, np.int64)
+        for e in range(m):
+            adj[fill[u[e]]] = v[e]
+            fill[u[e]] += 1
+            adj[fill[v[e]]] = u[e]
+            fill[v[e]] += 1
+        order = np.argsort(-prio)
+        fired = np.zeros(n, np.bool_)
+        blocked = np.zeros(n, np.bool_)
+        for k in range(n):
+            x = order[k]
+            if blocked[x]:
+                continue
+            fired[x] = True
+            for e in range(deg[x], deg[x + 1]):
+                blocked[adj[e]] = True
+        return fired

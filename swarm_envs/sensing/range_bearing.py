@@ -76,7 +76,10 @@ import numpy as np
 from swarm_envs.copies import CopyRandom, CopyStream
 from swarm_envs.ir.layer import IRLinks, pair_gains, wrap_angle
 from swarm_envs.platforms import Platform, get_platform
-from swarm_envs.sensing.kernels import segment_sum
+from swarm_envs.sensing.kernels import HAVE_NUMBA, segment_sum
+
+if HAVE_NUMBA:
+    from swarm_envs.sensing.kernels import priority_independent_set
 
 __all__ = [
     "POWER_LADDER",
@@ -587,21 +590,9 @@ class RangeBearingSensor:
         if self.schedule == "every_step":
             return np.ones(N, dtype=bool)
         prio = self.prio_rng.draw(self.copy_of)
-        a = np.concatenate([links.rx, links.tx])
-        b = np.concatenate([links.tx, links.rx])
-        fired = np.zeros(N, dtype=bool)
-        undecided = np.ones(N, dtype=bool)
-        while undecided.any():
-            m = undecided[a] & undecided[b]
-            nbmax = np.full(N, -1.0)
-            np.maximum.at(nbmax, a[m], prio[b[m]])
-            new = undecided & (prio > nbmax)
-            fired |= new
-            undecided &= ~new
-            blocked = np.zeros(N, dtype=bool)
-            blocked[a[new[b]]] = True
-            undecided &= ~blocked
-        return fired
+        if HAVE_NUMBA:
+            return priority_independent_set(prio, np.asarray(links.rx, np.int64), np.asarray(links.tx, np.int64))
+        return independent_set_numpy(prio, links.rx, links.tx)
 
     # -- one control step ------------------------------------------------------------------------------
     def step(self, links: IRLinks, fired: np.ndarray | None = None) -> RangeBearingReadings:
@@ -687,6 +678,29 @@ class RangeBearingSensor:
             rx.astype(np.intp), tx.astype(np.intp), self._range.copy(), self._bearing.copy(),
             self._heading.copy(), self._age.copy(), self._true.astype(np.intp), self._overlap.copy(),
         )
+
+
+def independent_set_numpy(prio: np.ndarray, u: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """(N,) bool greedy maximal independent set in decreasing priority (distinct ``prio``) of the graph with
+    edges (u[e], v[e]), by vectorised Luby rounds: an undecided node joins when its priority beats every
+    undecided neighbour's; the neighbours of the joined nodes drop out. Reference of the compiled
+    :func:`swarm_envs.sensing.kernels.priority_independent_set`."""
+    N = prio.size
+    a = np.concatenate([u, v])
+    b = np.concatenate([v, u])
+    fired = np.zeros(N, dtype=bool)
+    undecided = np.ones(N, dtype=bool)
+    while undecided.any():
+        m = undecided[a] & undecided[b]
+        nbmax = np.full(N, -1.0)
+        np.maximum.at(nbmax, a[m], prio[b[m]])
+        new = undecided & (prio > nbmax)
+        fired |= new
+        undecided &= ~new
+        blocked = np.zeros(N, dtype=bool)
+        blocked[a[new[b]]] = True
+        undecided &= ~blocked
+    return fired
 
 
 def _group_argmax(values: np.ndarray, starts: np.ndarray, labels: np.ndarray) -> np.ndarray:
