@@ -132,9 +132,15 @@ class CopyStream:
         short = np.flatnonzero(self._pos + need > self._end)
         if short.size:
             self._refill(short, need[short])
-        first = np.cumsum(rows) - rows  # first row of each copy
+        # each copy's values are consecutive in its buffer row and in the output: one gather of runs
+        used = np.flatnonzero(need)
+        n_used = need[used]
+        total = int(n_used.sum())
         cap = self._buf.shape[1]
-        start = row_copy * cap + self._pos[row_copy] + (np.arange(R) - first[row_copy]) * t
-        idx = start[:, None] + np.arange(t) if t > 1 else start
+        if used.size <= 8:  # few copies: slices
+            out = np.concatenate([self._buf[b, self._pos[b] : self._pos[b] + n] for b, n in zip(used, n_used)])
+        else:
+            shift = used * cap + self._pos[used] - (np.cumsum(n_used) - n_used)
+            out = np.take(self._buf.reshape(-1), np.repeat(shift, n_used) + np.arange(total))
         self._pos += need
-        return self._buf.reshape(-1)[idx].reshape(R, *tail)
+        return out.reshape(R, *tail)

@@ -7,8 +7,9 @@ from swarm_envs.copies import CopyStream
 
 
 @pytest.mark.parametrize("kind", ["normal", "uniform"])
-def test_copy_stream_serves_each_copy_its_own_stream_whatever_the_chunking(kind):
-    seeds = [3, 4, 5]
+@pytest.mark.parametrize("n_copies", [3, 12])  # few copies (gathered by slices) and many (one indexed take)
+def test_copy_stream_serves_each_copy_its_own_stream_whatever_the_chunking(kind, n_copies):
+    seeds = list(range(3, 3 + n_copies))
     stream = CopyStream([np.random.default_rng(s) for s in seeds], kind, chunk=7)
     rng = np.random.default_rng(0)
     got = [[] for _ in seeds]

@@ -76,7 +76,7 @@ import numpy as np
 from swarm_envs.copies import CopyRandom, CopyStream
 from swarm_envs.ir.layer import IRLinks, pair_gains, wrap_angle
 from swarm_envs.platforms import Platform, get_platform
-from swarm_envs.sensing.kernels import HAVE_NUMBA, segment_sum
+from swarm_envs.sensing.kernels import HAVE_NUMBA, segment_sum, sum_last
 
 if HAVE_NUMBA:
     from swarm_envs.sensing.kernels import priority_independent_set
@@ -369,8 +369,8 @@ def estimate(
     dpos = platform.detector_positions
     epos = platform.emitter_positions
 
-    S = lam.sum(axis=2)  # (P, n_d) [Eq. (5)]
-    T = lam.sum(axis=1)  # (P, n_e) [Eq. (6)]
+    S = sum_last(lam)  # (P, n_d) [Eq. (5)]
+    T = sum_last(lam.transpose(0, 2, 1))  # (P, n_e) [Eq. (6)]
     theta = np.arctan2(S @ np.sin(dd), S @ np.cos(dd))  # [Eqs. (7),(8)]
     phi = wrap_angle(theta + np.pi - np.arctan2(T @ np.sin(ed), T @ np.cos(ed)))  # [Eqs. (9),(10)]
 
@@ -628,7 +628,7 @@ class RangeBearingSensor:
         if self.collisions and sel.size:
             local = np.asarray(links.tx[sel], dtype=np.int64) % self.copy_size
             dec = decode_ids(
-                gains.sum(axis=2), self._frames[local], starts, self.id_rng, self.noise_sigma, self.platform,
+                sum_last(gains), self._frames[local], starts, self.id_rng, self.noise_sigma, self.platform,
                 self.id_check, self.copy_of[grx],
             )
             base = self.copy_of[grx].astype(np.int64) * self.copy_size
