@@ -300,3 +300,31 @@ def test_compiled_contention_schedule_equals_the_luby_rounds():
         covered = got.copy()
         covered[links.rx[got[links.tx]]] = True
         assert covered.all()  # maximal: every robot fires or hears one that does
+
+
+@pytest.mark.skipif(not rbmod.HAVE_NUMBA, reason="numba not installed")
+@pytest.mark.parametrize("platform", ["droplet", "epuck"])
+def test_compiled_frame_words_equal_the_numpy_reference(platform):
+    """kernels.frame_words reads the same id and CRC words as range_bearing.frame_words_numpy on random
+    groups of colliding frames (1 to 40 links per group: reduceat's short and pairwise sums), with light
+    around the floor so that noise and superposition decide bits."""
+    from swarm_envs.platforms import get_platform
+    from swarm_envs.sensing.kernels import frame_words
+
+    model = get_platform(platform).ir_model
+    n_d = get_platform(platform).n_detectors
+    scale, top, floor = float(model.adc_scale), float(model.adc_max), float(model.no_reading_floor)
+    rng = np.random.default_rng(8)
+    for _ in range(20):
+        sizes = rng.choice([1, 1, 2, 3, 8, 9, 12, 40], size=int(rng.integers(1, 30)))
+        L = int(sizes.sum())
+        starts = np.r_[0, np.cumsum(sizes)[:-1]].astype(np.int64)
+        light = rng.uniform(0, 3, (L, n_d)) * floor * (rng.random((L, n_d)) < 0.7)
+        frames = id_frames(rng.integers(0, 2**16, L))
+        heard = rng.random((sizes.size, n_d)) < 0.6
+        noise = rng.normal(0, 2.0, (int(heard.sum()), frames.shape[1] - 1))
+        got = frame_words(light, frames, starts, heard, noise, scale, top, floor, 16)
+        ref = rbmod.frame_words_numpy(light, frames, starts, heard, noise, scale, top, floor, 16)
+        np.testing.assert_array_equal(got[0], ref[0])
+        np.testing.assert_array_equal(got[1], ref[1])
+        assert 0 < np.mean(ref[0] > 0) and np.any(ref[0] != ref[0][0])  # words vary: not all zero

@@ -9,7 +9,9 @@ still computed by numpy in :func:`swarm_envs.sensing.scale_free.coordinates_all`
 gives the reference's results bit for bit (``tests/test_scale_free_kernels.py``). Also
 :func:`segment_sum`, a compiled ``np.add.reduceat`` over rows for the range & bearing sensor, and
 :func:`priority_independent_set`, its contention schedule (reference: the vectorised Luby rounds of
-:func:`swarm_envs.sensing.range_bearing.independent_set_numpy`). Used only
+:func:`swarm_envs.sensing.range_bearing.independent_set_numpy`), and :func:`frame_words`, the id and CRC
+words its receivers read from colliding request frames (reference:
+:func:`swarm_envs.sensing.range_bearing.frame_words_numpy`). Used only
 when numba is importable (``fast`` extra).
 """
 
@@ -24,7 +26,7 @@ try:  # numba is optional: an accelerator, not a requirement
 except ImportError:  # pragma: no cover - exercised only without numba
     HAVE_NUMBA = False
 
-__all__ = ["HAVE_NUMBA", "two_hop_triangles", "two_hop_propagate", "segment_sum", "sum_last", "priority_independent_set"]
+__all__ = ["HAVE_NUMBA", "two_hop_triangles", "two_hop_propagate", "segment_sum", "sum_last", "priority_independent_set", "frame_words"]
 
 
 if HAVE_NUMBA:
@@ -408,3 +410,87 @@ if HAVE_NUMBA:
             for e in range(deg[x], deg[x + 1]):
                 blocked[adj[e]] = True
         return fired
+
+
+#: largest group (colliding links at one receiver) :func:`frame_words` sums; larger groups need numpy's
+#: recursive pairwise sum (not called from here: a cached kernel calling a recursive one crashes when
+#: numba loads it back from its disk cache)
+FRAME_WORDS_MAX_GROUP = 129
+
+
+def frame_words(light, frames, starts, heard, noise, scale, top, floor, id_bits):
+    """Compiled :func:`swarm_envs.sensing.range_bearing.frame_words_numpy` (same arguments, same bits:
+    the level of a bit slot is summed over the group's links in numpy's reduceat order) for groups of at
+    most :data:`FRAME_WORDS_MAX_GROUP` links."""
+    return _frame_words(
+        np.ascontiguousarray(light, dtype=np.float64), np.ascontiguousarray(frames, dtype=np.bool_),
+        np.ascontiguousarray(starts, dtype=np.int64), np.ascontiguousarray(heard, dtype=np.bool_),
+        np.ascontiguousarray(noise, dtype=np.float64), float(scale), float(top), float(floor), int(id_bits),
+        _PAIRWISE_INIT,
+    )
+
+
+if HAVE_NUMBA:
+
+    @njit(cache=True)
+    def _pairwise_block(a, n):  # pragma: no cover - compiled
+        """numpy's pairwise sum of ``a[:n]`` for 8 <= n <= 128 (the unrolled, non-recursive branch)."""
+        r0, r1, r2, r3 = a[0], a[1], a[2], a[3]
+        r4, r5, r6, r7 = a[4], a[5], a[6], a[7]
+        m = n - n % 8
+        i = 8
+        while i < m:
+            r0 += a[i]
+            r1 += a[i + 1]
+            r2 += a[i + 2]
+            r3 += a[i + 3]
+            r4 += a[i + 4]
+            r5 += a[i + 5]
+            r6 += a[i + 6]
+            r7 += a[i + 7]
+            i += 8
+        res = ((r0 + r1) + (r2 + r3)) + ((r4 + r5) + (r6 + r7))
+        while i < n:
+            res += a[i]
+            i += 1
+        return res
+
+    @njit(cache=True)
+    def _frame_words(light, frames, starts, heard, noise, scale, top, floor, id_bits, init):  # pragma: no cover - compiled
+        G, n_d = heard.shape
+        L = light.shape[0]
+        nb = frames.shape[1] - 1
+        H = noise.shape[0]
+        ident = np.zeros(H, np.int64)
+        crc = np.zeros(H, np.int64)
+        buf = np.empty(max(L, 1), np.float64)  # scratch for the pairwise sums of large groups
+        h = 0
+        for g in range(G):
+            s = starts[g]
+            e = starts[g + 1] if g + 1 < G else L
+            m = e - s
+            for i in range(n_d):
+                if not heard[g, i]:
+                    continue
+                for k in range(nb):
+                    first = light[s, i] * (1.0 if frames[s, k + 1] else 0.0)
+                    if m <= 1:
+                        lev = first
+                    elif m - 1 < 8:  # reduceat: first + sequential sum of the rest from init
+                        res = init
+                        for l in range(s + 1, e):
+                            res += light[l, i] * (1.0 if frames[l, k + 1] else 0.0)
+                        lev = first + res
+                    else:  # 9 to 129 links (the caller checks): numpy's unrolled pairwise block
+                        for l in range(s + 1, e):
+                            buf[l - s - 1] = light[l, i] * (1.0 if frames[l, k + 1] else 0.0)
+                        lev = first + _pairwise_block(buf, m - 1)
+                    c = np.rint(lev * scale + noise[h, k])
+                    c = min(max(c, 0.0), top)
+                    if c / scale >= floor:
+                        if k < id_bits:
+                            ident[h] |= np.int64(1) << k
+                        else:
+                            crc[h] |= np.int64(1) << (k - id_bits)
+                h += 1
+        return ident, crc

@@ -79,7 +79,7 @@ from swarm_envs.platforms import Platform, get_platform
 from swarm_envs.sensing.kernels import HAVE_NUMBA, segment_sum, sum_last
 
 if HAVE_NUMBA:
-    from swarm_envs.sensing.kernels import priority_independent_set
+    from swarm_envs.sensing.kernels import FRAME_WORDS_MAX_GROUP, frame_words, priority_independent_set
 
 __all__ = [
     "POWER_LADDER",
@@ -178,8 +178,6 @@ def decode_ids(
     G = int(len(starts))
     if G == 0:
         return np.zeros(0, dtype=np.int64)
-    sizes = np.diff(np.r_[starts, L])
-    group = np.repeat(np.arange(G), sizes)
 
     def read_bits(level: np.ndarray, rows: np.ndarray) -> np.ndarray:  # ADC + floor, as the matrix
         counts = level * float(model.adc_scale)
@@ -194,6 +192,47 @@ def decode_ids(
     # the rest of the frame, only on channels that heard a start bit (draws: per copy, after the start bits)
     hg, hi = np.nonzero(heard)
     H = hg.size
+    n_bits = frames.shape[1] - 1
+    if sigma > 0:
+        noise = _noise(rng, sigma, (H, n_bits), None if row_copy is None else row_copy[hg])
+    else:
+        noise = np.zeros((H, n_bits))
+    compiled = HAVE_NUMBA and int(np.diff(np.r_[starts, L]).max()) <= FRAME_WORDS_MAX_GROUP
+    words = frame_words if compiled else frame_words_numpy
+    ident_h, crc_h = words(
+        light, np.asarray(frames, dtype=bool), np.asarray(starts, dtype=np.int64), heard, noise,
+        float(model.adc_scale), float(model.adc_max), float(model.no_reading_floor), ID_BITS,
+    )
+    ident = np.zeros((G, n_d), dtype=np.int64)
+    crc = np.zeros((G, n_d), dtype=np.int64)
+    ident[hg, hi] = ident_h
+    crc[hg, hi] = crc_h
+    ok = heard
+    if id_check:
+        ok = ok & (_CRC16[ident] == crc)
+    big = np.int64(2**ID_BITS)
+    lo = np.where(ok, ident, big).min(axis=1)
+    top = np.where(ok, ident, -1).max(axis=1)
+    return np.where(lo == big, NOT_HEARD, np.where(lo == top, lo, CONFLICT))
+
+
+def frame_words_numpy(
+    light: np.ndarray, frames: np.ndarray, starts: np.ndarray, heard: np.ndarray, noise: np.ndarray,
+    scale: float, top: float, floor: float, id_bits: int = ID_BITS,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Id and CRC words read on the heard channels (reference of the compiled
+    :func:`swarm_envs.sensing.kernels.frame_words`).
+
+    Channel h (``np.nonzero(heard)`` order: group g, detector i) reads bit k of the frame at level
+    ``sum_links frames[l, 1 + k] * light[l, i]`` over its group's links (summed as ``np.add.reduceat``),
+    ``clip(round(level * scale + noise[h, k]), 0, top) / scale >= floor``; bits 0..id_bits-1 are the id
+    word, the rest the CRC word (LSB first). Returns ((H,), (H,)) int64.
+    """
+    G, n_d = heard.shape
+    L = light.shape[0]
+    group = np.repeat(np.arange(G), np.diff(np.r_[starts, L]))
+    hg, hi = np.nonzero(heard)
+    H = hg.size
     row_of = np.full((G, n_d), -1, dtype=np.int64)
     row_of[hg, hi] = np.arange(H)
     ll, li = np.nonzero(heard[group])  # (link, detector) pairs that feed a heard channel
@@ -204,18 +243,10 @@ def decode_ids(
         level = segment_sum(level[order], np.flatnonzero(np.r_[True, np.diff(rows[order]) != 0]))
     else:
         level = level[order]
-    bits = read_bits(level, hg)
-    ident = np.zeros((G, n_d), dtype=np.int64)
-    crc = np.zeros((G, n_d), dtype=np.int64)
-    ident[hg, hi] = bits[:, :ID_BITS].astype(np.int64) @ _WEIGHTS
-    crc[hg, hi] = bits[:, ID_BITS:].astype(np.int64) @ _WEIGHTS
-    ok = heard
-    if id_check:
-        ok = ok & (_CRC16[ident] == crc)
-    big = np.int64(2**ID_BITS)
-    lo = np.where(ok, ident, big).min(axis=1)
-    top = np.where(ok, ident, -1).max(axis=1)
-    return np.where(lo == big, NOT_HEARD, np.where(lo == top, lo, CONFLICT))
+    counts = np.clip(np.round(level * scale + noise), 0.0, top)
+    bits = (counts / scale >= floor).astype(np.int64)
+    weights = 1 << np.arange(max(id_bits, bits.shape[1] - id_bits), dtype=np.int64)
+    return bits[:, :id_bits] @ weights[:id_bits], bits[:, id_bits:] @ weights[: bits.shape[1] - id_bits]
 
 
 def _model(platform: Platform):
