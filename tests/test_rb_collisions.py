@@ -328,3 +328,16 @@ def test_compiled_frame_words_equal_the_numpy_reference(platform):
         np.testing.assert_array_equal(got[0], ref[0])
         np.testing.assert_array_equal(got[1], ref[1])
         assert 0 < np.mean(ref[0] > 0) and np.any(ref[0] != ref[0][0])  # words vary: not all zero
+
+
+def test_group_argmax_and_membership_helpers_match_their_plain_numpy_forms():
+    rng = np.random.default_rng(12)
+    for _ in range(50):
+        sizes = rng.integers(1, 6, int(rng.integers(1, 20)))
+        starts = np.r_[0, np.cumsum(sizes)[:-1]]
+        values = rng.integers(0, 4, int(sizes.sum())).astype(float)  # many ties: the first one wins
+        labels = rng.permutation(values.size)
+        ref = [labels[s + int(np.argmax(values[s : s + n]))] for s, n in zip(starts, sizes)]
+        np.testing.assert_array_equal(rbmod._group_argmax(values, starts, labels), ref)
+        a, b = rng.integers(0, 30, 40), rng.integers(0, 30, int(rng.integers(0, 10)))
+        np.testing.assert_array_equal(rbmod._member(a, b), np.isin(a, b))

@@ -690,7 +690,7 @@ class RangeBearingSensor:
         new_key = grx[g].astype(np.int64) * N + tx_dec[g]
 
         age = self._age + 1
-        keep = (age <= self.max_age) & ~np.isin(self._key, new_key)
+        keep = (age <= self.max_age) & ~_member(self._key, new_key)
         key = np.concatenate([self._key[keep], new_key])
         order = np.argsort(key, kind="stable")
         self._key = key[order]
@@ -735,9 +735,19 @@ def independent_set_numpy(prio: np.ndarray, u: np.ndarray, v: np.ndarray) -> np.
 
 
 def _group_argmax(values: np.ndarray, starts: np.ndarray, labels: np.ndarray) -> np.ndarray:
-    """Per contiguous group (``starts``), the label of the row with the largest value (first on ties)."""
+    """Per contiguous group (``starts``, sorted, non-empty groups), the label of the row with the largest
+    value (first on ties); ``values`` without NaN."""
     n = values.size
     group = np.repeat(np.arange(starts.size), np.diff(np.r_[starts, n]))
-    order = np.lexsort((-values, group))  # within each group, largest first
-    first = order[starts]
-    return labels[first]
+    top = np.maximum.reduceat(values, starts)
+    best = np.flatnonzero(values == top[group])  # every group holds >= 1 of its maxima
+    return labels[best[np.searchsorted(best, starts)]]
+
+
+def _member(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """``np.isin(a, b)`` for integer arrays, by binary search in sorted ``b``."""
+    if b.size == 0:
+        return np.zeros(a.shape, dtype=bool)
+    b = np.sort(b)
+    pos = np.minimum(np.searchsorted(b, a), b.size - 1)
+    return b[pos] == a
