@@ -14,7 +14,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-__all__ = ["CopyRandom", "copy_counts"]
+__all__ = ["CopyRandom", "CopyStream", "copy_counts"]
 
 
 def copy_counts(row_copy: np.ndarray, n_copies: int) -> np.ndarray:
@@ -66,3 +66,81 @@ class CopyRandom:
         counts = copy_counts(row_copy, self.n_copies)
         parts = self._draw(counts, lambda g, c: g.integers(low, high, (c, *tail)))
         return np.concatenate(parts, axis=0) if parts else np.zeros((0, *tail), dtype=np.int64)
+
+
+class CopyStream:
+    """Per-copy buffered draws of one distribution (``"normal"``: N(0, 1); ``"uniform"``: U[0, 1)).
+
+    Drawing row by row from B generators costs one Generator call per copy and request (microseconds
+    each, several per copy and step). Here each copy's generator is read in large chunks into a buffer
+    row and requests are served from the buffers with one vectorised gather. Each generator must serve
+    only this stream: numpy's ``standard_normal`` (ziggurat) and ``random`` keep no state between calls,
+    so ``g.standard_normal(a)`` then ``g.standard_normal(b)`` equals ``g.standard_normal(a + b)`` and the
+    values copy ``b`` receives are the first ones of its own generator's stream, whatever the chunking
+    or the other copies' demand: copy ``b`` of a batch equals a single env (``tests/test_copies.py``).
+
+    Args:
+        generators: one generator per copy (used for this stream only).
+        kind: ``"normal"`` or ``"uniform"``.
+        chunk: initial buffer length per copy (values); grows to the largest single request.
+    """
+
+    def __init__(self, generators: Sequence[np.random.Generator] | np.random.Generator, kind: str = "normal", chunk: int = 2048) -> None:
+        if isinstance(generators, np.random.Generator):
+            generators = [generators]
+        if kind not in ("normal", "uniform"):
+            raise ValueError(f"kind must be 'normal' or 'uniform', got {kind!r}")
+        self.generators = list(generators)
+        self.kind = kind
+        self._buf = np.empty((len(self.generators), max(int(chunk), 1)))
+        self._pos = np.zeros(len(self.generators), dtype=np.int64)  # next unread value of each copy
+        self._end = np.zeros(len(self.generators), dtype=np.int64)  # end of each copy's valid values
+
+    @property
+    def n_copies(self) -> int:
+        return len(self.generators)
+
+    def set_generator(self, copy: int, generator: np.random.Generator) -> None:
+        """Give copy ``copy`` a new generator and drop its buffered values."""
+        self.generators[copy] = generator
+        self._pos[copy] = self._end[copy] = 0
+
+    def _refill(self, copies: np.ndarray, need: np.ndarray) -> None:
+        cap = self._buf.shape[1]
+        if need.max() > cap:  # a request larger than a buffer row: widen every row (values kept)
+            wide = np.empty((self.n_copies, max(2 * cap, int(need.max()))))
+            wide[:, :cap] = self._buf
+            self._buf, cap = wide, wide.shape[1]
+        for b in copies:
+            b = int(b)
+            rem = int(self._end[b] - self._pos[b])
+            row = self._buf[b]
+            row[:rem] = row[self._pos[b] : self._end[b]]
+            g = self.generators[b]
+            row[rem:] = g.standard_normal(cap - rem) if self.kind == "normal" else g.random(cap - rem)
+            self._pos[b], self._end[b] = 0, cap
+
+    def draw(self, row_copy: np.ndarray, tail: tuple[int, ...] = ()) -> np.ndarray:
+        """(R, *tail) draws; rows of copy b are the next values of copy b's stream (``row_copy`` sorted)."""
+        row_copy = np.asarray(row_copy, dtype=np.int64).reshape(-1)
+        t = int(np.prod(tail, dtype=np.int64))
+        R = row_copy.size
+        if R == 0 or t == 0:
+            return np.zeros((R, *tail))
+        rows = copy_counts(row_copy, self.n_copies)
+        need = rows * t
+        short = np.flatnonzero(self._pos + need > self._end)
+        if short.size:
+            self._refill(short, need[short])
+        # each copy's values are consecutive in its buffer row and in the output: one gather of runs
+        used = np.flatnonzero(need)
+        n_used = need[used]
+        total = int(n_used.sum())
+        cap = self._buf.shape[1]
+        if used.size <= 8:  # few copies: slices
+            out = np.concatenate([self._buf[b, self._pos[b] : self._pos[b] + n] for b, n in zip(used, n_used)])
+        else:
+            shift = used * cap + self._pos[used] - (np.cumsum(n_used) - n_used)
+            out = np.take(self._buf.reshape(-1), np.repeat(shift, n_used) + np.arange(total))
+        self._pos += need
+        return out.reshape(R, *tail)

@@ -102,6 +102,20 @@ def test_segment_sum_equals_reduceat():
         segment_sum(np.zeros((3, 2)), np.array([0, 3]))
 
 
+def test_sum_last_equals_its_numpy_reference():
+    from swarm_envs.sensing.kernels import sum_last, sum_last_numpy
+
+    rng = np.random.default_rng(6)
+    for shape in [(5,), (0, 8), (7, 1), (40, 8, 8), (3, 6, 6)]:
+        a = rng.normal(size=shape) * 10.0 ** rng.integers(-8, 8, size=shape)  # order matters at mixed magnitudes
+        for view in (a, np.moveaxis(a, -1, 0)):  # contiguous and strided
+            got = sum_last(view)
+            assert got.shape == view.shape[:-1]
+            if view.shape[-1]:
+                np.testing.assert_array_equal(got, sum_last_numpy(view))
+            np.testing.assert_allclose(got, view.sum(axis=-1), rtol=1e-9, atol=1e-9 * np.abs(view).max(initial=0))
+
+
 def test_pair_sorting_matches_lexsort():
     from scipy.spatial import cKDTree
 

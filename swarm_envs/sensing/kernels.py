@@ -7,7 +7,11 @@ arrays; every floating-point value that is not a plain copy or the additions of 
 (inner angles, rounding, ANGLEBALANCE, law-of-sines logs, sensitivities, exp, normalisation, sin/cos) is
 still computed by numpy in :func:`swarm_envs.sensing.scale_free.coordinates_all`, so the compiled path
 gives the reference's results bit for bit (``tests/test_scale_free_kernels.py``). Also
-:func:`segment_sum`, a compiled ``np.add.reduceat`` over rows for the range & bearing sensor. Used only
+:func:`segment_sum`, a compiled ``np.add.reduceat`` over rows for the range & bearing sensor, and
+:func:`priority_independent_set`, its contention schedule (reference: the vectorised Luby rounds of
+:func:`swarm_envs.sensing.range_bearing.independent_set_numpy`), and :func:`frame_words`, the id and CRC
+words its receivers read from colliding request frames (reference:
+:func:`swarm_envs.sensing.range_bearing.frame_words_numpy`). Used only
 when numba is importable (``fast`` extra).
 """
 
@@ -22,7 +26,7 @@ try:  # numba is optional: an accelerator, not a requirement
 except ImportError:  # pragma: no cover - exercised only without numba
     HAVE_NUMBA = False
 
-__all__ = ["HAVE_NUMBA", "two_hop_triangles", "two_hop_propagate", "segment_sum"]
+__all__ = ["HAVE_NUMBA", "two_hop_triangles", "two_hop_propagate", "segment_sum", "sum_last", "priority_independent_set", "frame_words"]
 
 
 if HAVE_NUMBA:
@@ -328,7 +332,165 @@ if HAVE_NUMBA:
             if e <= s + 1:  # one row (reduceat also returns a[s] when the next start is not larger)
                 for c in range(m):
                     out[g, c] = a[s, c]
+            elif e - s - 1 < 8:  # short segment: _pairwise_sum's sequential branch, inline (it is recursive,
+                for c in range(m):  # so numba calls it as a function: slow for the typical 2-3 rows)
+                    res = init
+                    for i in range(s + 1, e):
+                        res += a[i, c]
+                    out[g, c] = a[s, c] + res
             else:
                 for c in range(m):
                     out[g, c] = a[s, c] + _pairwise_sum(a, s + 1, e - s - 1, c, init)
         return out
+
+
+def sum_last(a: np.ndarray) -> np.ndarray:
+    """Sum over the last axis, added left to right (``((a0 + a1) + a2) + ...``), compiled when numba is
+    available; the numpy fallback adds the same columns in the same order, so both give the same bits.
+    (``a.sum(-1)`` reduces a short last axis slowly: ~4x slower for the (L, 8, 8) gain matrices.)"""
+    a = np.asarray(a, dtype=float)
+    if a.shape[-1] == 0:
+        return np.zeros(a.shape[:-1])
+    if not HAVE_NUMBA:
+        return sum_last_numpy(a)
+    flat = a.reshape(-1, a.shape[-1])
+    return _sum_last(flat).reshape(a.shape[:-1])
+
+
+def sum_last_numpy(a: np.ndarray) -> np.ndarray:
+    """Reference of :func:`sum_last`: numpy column additions, left to right."""
+    out = a[..., 0].copy()
+    for j in range(1, a.shape[-1]):
+        out += a[..., j]
+    return out
+
+
+if HAVE_NUMBA:
+
+    @njit(cache=True)
+    def _sum_last(a):  # pragma: no cover - compiled
+        m, k = a.shape
+        out = np.empty(m, np.float64)
+        for i in range(m):
+            r = a[i, 0]
+            for j in range(1, k):
+                r += a[i, j]
+            out[i] = r
+        return out
+
+    @njit(cache=True)
+    def priority_independent_set(prio, u, v):  # pragma: no cover - compiled
+        """Greedy maximal independent set in decreasing ``prio`` of the graph with edges (u[e], v[e]) (either
+        direction): a node is in the set iff no neighbour of higher priority is. Equals the Luby rounds of
+        the numpy reference for distinct priorities (each round admits the nodes that beat every undecided
+        neighbour, which is exactly the greedy order's choice). Returns (N,) bool."""
+        n = prio.size
+        m = u.size
+        deg = np.zeros(n + 1, np.int64)
+        for e in range(m):
+            deg[u[e] + 1] += 1
+            deg[v[e] + 1] += 1
+        for i in range(n):
+            deg[i + 1] += deg[i]
+        fill = deg[:-1].copy()
+        adj = np.empty(2 * m, np.int64)
+        for e in range(m):
+            adj[fill[u[e]]] = v[e]
+            fill[u[e]] += 1
+            adj[fill[v[e]]] = u[e]
+            fill[v[e]] += 1
+        order = np.argsort(-prio)
+        fired = np.zeros(n, np.bool_)
+        blocked = np.zeros(n, np.bool_)
+        for k in range(n):
+            x = order[k]
+            if blocked[x]:
+                continue
+            fired[x] = True
+            for e in range(deg[x], deg[x + 1]):
+                blocked[adj[e]] = True
+        return fired
+
+
+#: largest group (colliding links at one receiver) :func:`frame_words` sums; larger groups need numpy's
+#: recursive pairwise sum (not called from here: a cached kernel calling a recursive one crashes when
+#: numba loads it back from its disk cache)
+FRAME_WORDS_MAX_GROUP = 129
+
+
+def frame_words(light, frames, starts, heard, noise, scale, top, floor, id_bits):
+    """Compiled :func:`swarm_envs.sensing.range_bearing.frame_words_numpy` (same arguments, same bits:
+    the level of a bit slot is summed over the group's links in numpy's reduceat order) for groups of at
+    most :data:`FRAME_WORDS_MAX_GROUP` links."""
+    return _frame_words(
+        np.ascontiguousarray(light, dtype=np.float64), np.ascontiguousarray(frames, dtype=np.bool_),
+        np.ascontiguousarray(starts, dtype=np.int64), np.ascontiguousarray(heard, dtype=np.bool_),
+        np.ascontiguousarray(noise, dtype=np.float64), float(scale), float(top), float(floor), int(id_bits),
+        _PAIRWISE_INIT,
+    )
+
+
+if HAVE_NUMBA:
+
+    @njit(cache=True)
+    def _pairwise_block(a, n):  # pragma: no cover - compiled
+        """numpy's pairwise sum of ``a[:n]`` for 8 <= n <= 128 (the unrolled, non-recursive branch)."""
+        r0, r1, r2, r3 = a[0], a[1], a[2], a[3]
+        r4, r5, r6, r7 = a[4], a[5], a[6], a[7]
+        m = n - n % 8
+        i = 8
+        while i < m:
+            r0 += a[i]
+            r1 += a[i + 1]
+            r2 += a[i + 2]
+            r3 += a[i + 3]
+            r4 += a[i + 4]
+            r5 += a[i + 5]
+            r6 += a[i + 6]
+            r7 += a[i + 7]
+            i += 8
+        res = ((r0 + r1) + (r2 + r3)) + ((r4 + r5) + (r6 + r7))
+        while i < n:
+            res += a[i]
+            i += 1
+        return res
+
+    @njit(cache=True)
+    def _frame_words(light, frames, starts, heard, noise, scale, top, floor, id_bits, init):  # pragma: no cover - compiled
+        G, n_d = heard.shape
+        L = light.shape[0]
+        nb = frames.shape[1] - 1
+        H = noise.shape[0]
+        ident = np.zeros(H, np.int64)
+        crc = np.zeros(H, np.int64)
+        buf = np.empty(max(L, 1), np.float64)  # scratch for the pairwise sums of large groups
+        h = 0
+        for g in range(G):
+            s = starts[g]
+            e = starts[g + 1] if g + 1 < G else L
+            m = e - s
+            for i in range(n_d):
+                if not heard[g, i]:
+                    continue
+                for k in range(nb):
+                    first = light[s, i] * (1.0 if frames[s, k + 1] else 0.0)
+                    if m <= 1:
+                        lev = first
+                    elif m - 1 < 8:  # reduceat: first + sequential sum of the rest from init
+                        res = init
+                        for l in range(s + 1, e):
+                            res += light[l, i] * (1.0 if frames[l, k + 1] else 0.0)
+                        lev = first + res
+                    else:  # 9 to 129 links (the caller checks): numpy's unrolled pairwise block
+                        for l in range(s + 1, e):
+                            buf[l - s - 1] = light[l, i] * (1.0 if frames[l, k + 1] else 0.0)
+                        lev = first + _pairwise_block(buf, m - 1)
+                    c = np.rint(lev * scale + noise[h, k])
+                    c = min(max(c, 0.0), top)
+                    if c / scale >= floor:
+                        if k < id_bits:
+                            ident[h] |= np.int64(1) << k
+                        else:
+                            crc[h] |= np.int64(1) << (k - id_bits)
+                h += 1
+        return ident, crc

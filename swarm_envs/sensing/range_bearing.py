@@ -73,10 +73,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from swarm_envs.copies import CopyRandom
+from swarm_envs.copies import CopyRandom, CopyStream
 from swarm_envs.ir.layer import IRLinks, pair_gains, wrap_angle
 from swarm_envs.platforms import Platform, get_platform
-from swarm_envs.sensing.kernels import segment_sum
+from swarm_envs.sensing.kernels import HAVE_NUMBA, segment_sum, sum_last
+
+if HAVE_NUMBA:
+    from swarm_envs.sensing.kernels import FRAME_WORDS_MAX_GROUP, frame_words, priority_independent_set
 
 __all__ = [
     "POWER_LADDER",
@@ -141,7 +144,7 @@ def decode_ids(
     light: np.ndarray,
     frames: np.ndarray,
     starts: np.ndarray,
-    rng: np.random.Generator | CopyRandom,
+    rng: np.random.Generator | CopyRandom | CopyStream,
     sigma: float,
     platform: Platform | str = "droplet",
     id_check: bool = True,
@@ -175,8 +178,6 @@ def decode_ids(
     G = int(len(starts))
     if G == 0:
         return np.zeros(0, dtype=np.int64)
-    sizes = np.diff(np.r_[starts, L])
-    group = np.repeat(np.arange(G), sizes)
 
     def read_bits(level: np.ndarray, rows: np.ndarray) -> np.ndarray:  # ADC + floor, as the matrix
         counts = level * float(model.adc_scale)
@@ -191,6 +192,47 @@ def decode_ids(
     # the rest of the frame, only on channels that heard a start bit (draws: per copy, after the start bits)
     hg, hi = np.nonzero(heard)
     H = hg.size
+    n_bits = frames.shape[1] - 1
+    if sigma > 0:
+        noise = _noise(rng, sigma, (H, n_bits), None if row_copy is None else row_copy[hg])
+    else:
+        noise = np.zeros((H, n_bits))
+    compiled = HAVE_NUMBA and int(np.diff(np.r_[starts, L]).max()) <= FRAME_WORDS_MAX_GROUP
+    words = frame_words if compiled else frame_words_numpy
+    ident_h, crc_h = words(
+        light, np.asarray(frames, dtype=bool), np.asarray(starts, dtype=np.int64), heard, noise,
+        float(model.adc_scale), float(model.adc_max), float(model.no_reading_floor), ID_BITS,
+    )
+    ident = np.zeros((G, n_d), dtype=np.int64)
+    crc = np.zeros((G, n_d), dtype=np.int64)
+    ident[hg, hi] = ident_h
+    crc[hg, hi] = crc_h
+    ok = heard
+    if id_check:
+        ok = ok & (_CRC16[ident] == crc)
+    big = np.int64(2**ID_BITS)
+    lo = np.where(ok, ident, big).min(axis=1)
+    top = np.where(ok, ident, -1).max(axis=1)
+    return np.where(lo == big, NOT_HEARD, np.where(lo == top, lo, CONFLICT))
+
+
+def frame_words_numpy(
+    light: np.ndarray, frames: np.ndarray, starts: np.ndarray, heard: np.ndarray, noise: np.ndarray,
+    scale: float, top: float, floor: float, id_bits: int = ID_BITS,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Id and CRC words read on the heard channels (reference of the compiled
+    :func:`swarm_envs.sensing.kernels.frame_words`).
+
+    Channel h (``np.nonzero(heard)`` order: group g, detector i) reads bit k of the frame at level
+    ``sum_links frames[l, 1 + k] * light[l, i]`` over its group's links (summed as ``np.add.reduceat``),
+    ``clip(round(level * scale + noise[h, k]), 0, top) / scale >= floor``; bits 0..id_bits-1 are the id
+    word, the rest the CRC word (LSB first). Returns ((H,), (H,)) int64.
+    """
+    G, n_d = heard.shape
+    L = light.shape[0]
+    group = np.repeat(np.arange(G), np.diff(np.r_[starts, L]))
+    hg, hi = np.nonzero(heard)
+    H = hg.size
     row_of = np.full((G, n_d), -1, dtype=np.int64)
     row_of[hg, hi] = np.arange(H)
     ll, li = np.nonzero(heard[group])  # (link, detector) pairs that feed a heard channel
@@ -201,18 +243,10 @@ def decode_ids(
         level = segment_sum(level[order], np.flatnonzero(np.r_[True, np.diff(rows[order]) != 0]))
     else:
         level = level[order]
-    bits = read_bits(level, hg)
-    ident = np.zeros((G, n_d), dtype=np.int64)
-    crc = np.zeros((G, n_d), dtype=np.int64)
-    ident[hg, hi] = bits[:, :ID_BITS].astype(np.int64) @ _WEIGHTS
-    crc[hg, hi] = bits[:, ID_BITS:].astype(np.int64) @ _WEIGHTS
-    ok = heard
-    if id_check:
-        ok = ok & (_CRC16[ident] == crc)
-    big = np.int64(2**ID_BITS)
-    lo = np.where(ok, ident, big).min(axis=1)
-    top = np.where(ok, ident, -1).max(axis=1)
-    return np.where(lo == big, NOT_HEARD, np.where(lo == top, lo, CONFLICT))
+    counts = np.clip(np.round(level * scale + noise), 0.0, top)
+    bits = (counts / scale >= floor).astype(np.int64)
+    weights = 1 << np.arange(max(id_bits, bits.shape[1] - id_bits), dtype=np.int64)
+    return bits[:, :id_bits] @ weights[:id_bits], bits[:, id_bits:] @ weights[: bits.shape[1] - id_bits]
 
 
 def _model(platform: Platform):
@@ -243,7 +277,7 @@ def brightness(rel_position: np.ndarray, rel_heading: np.ndarray, platform: Plat
 
 def measure(
     brightness: np.ndarray,
-    rng: np.random.Generator | CopyRandom,
+    rng: np.random.Generator | CopyRandom | CopyStream,
     sigma: float | None = None,
     platform: Platform | str = "droplet",
     ladder: tuple[float, ...] = POWER_LADDER,
@@ -259,7 +293,8 @@ def measure(
 
     Args:
         brightness: (P, n_d, n_e) noiseless full-power brightness (model units).
-        rng: random generator for the noise, or per-copy streams (:class:`swarm_envs.copies.CopyRandom`)
+        rng: random generator for the noise, or per-copy streams (:class:`swarm_envs.copies.CopyRandom`, or a
+            normal :class:`swarm_envs.copies.CopyStream`)
             with ``row_copy`` (P,) the env copy of each matrix (sorted): each copy's noise then comes from its
             own stream, as in a single env.
         sigma: noise standard deviation in ADC counts; default the model's ``default_noise_sigma``.
@@ -295,10 +330,17 @@ def measure(
     return out, power
 
 
-def _noise(rng: np.random.Generator | CopyRandom, sigma: float, shape: tuple[int, ...], row_copy: np.ndarray | None) -> np.ndarray:
-    """N(0, sigma^2) noise of ``shape``; rows from each copy's stream when ``rng`` is a CopyRandom."""
+def _noise(
+    rng: np.random.Generator | CopyRandom | CopyStream, sigma: float, shape: tuple[int, ...], row_copy: np.ndarray | None
+) -> np.ndarray:
+    """N(0, sigma^2) noise of ``shape``; rows from each copy's stream when ``rng`` is a CopyRandom or a
+    normal :class:`~swarm_envs.copies.CopyStream`."""
+    rows = np.zeros(shape[0], dtype=np.int64) if row_copy is None else row_copy
+    if isinstance(rng, CopyStream):
+        if rng.kind != "normal":
+            raise ValueError("noise needs a 'normal' CopyStream")
+        return sigma * rng.draw(rows, shape[1:])
     if isinstance(rng, CopyRandom):
-        rows = np.zeros(shape[0], dtype=np.int64) if row_copy is None else row_copy
         return rng.normal(sigma, rows, shape[1:])
     return rng.normal(0.0, sigma, shape)
 
@@ -358,8 +400,8 @@ def estimate(
     dpos = platform.detector_positions
     epos = platform.emitter_positions
 
-    S = lam.sum(axis=2)  # (P, n_d) [Eq. (5)]
-    T = lam.sum(axis=1)  # (P, n_e) [Eq. (6)]
+    S = sum_last(lam)  # (P, n_d) [Eq. (5)]
+    T = sum_last(lam.transpose(0, 2, 1))  # (P, n_e) [Eq. (6)]
     theta = np.arctan2(S @ np.sin(dd), S @ np.cos(dd))  # [Eqs. (7),(8)]
     phi = wrap_angle(theta + np.pi - np.arctan2(T @ np.sin(ed), T @ np.cos(ed)))  # [Eqs. (9),(10)]
 
@@ -404,7 +446,7 @@ def read(
     brightness: np.ndarray,
     rel_position: np.ndarray,
     rel_heading: np.ndarray,
-    rng: np.random.Generator | CopyRandom,
+    rng: np.random.Generator | CopyRandom | CopyStream,
     sigma: float | None = None,
     platform: Platform | str = "droplet",
     ladder: tuple[float, ...] = POWER_LADDER,
@@ -538,8 +580,13 @@ class RangeBearingSensor:
         self.collisions = bool(collisions)
         self.id_check = bool(id_check)
         self._frames = id_frames(np.arange(self.copy_size)) if self.collisions else None
-        # id-decoding noise: a child of each copy's stream, so the matrix noise draws are as without ids
-        self.id_rng = CopyRandom([g.spawn(1)[0] for g in self.rng.generators])
+        # three buffered child streams of each copy's generator (one Generator call per copy every few
+        # steps instead of several per step): priorities, matrix noise, id-decoding noise (its own stream,
+        # so the matrix noise draws are as without ids)
+        kids = [g.spawn(3) for g in self.rng.generators]
+        self.prio_rng = CopyStream([k[0] for k in kids], "uniform", chunk=max(64, 16 * self.copy_size))
+        self.noise_rng = CopyStream([k[1] for k in kids], "normal")
+        self.id_rng = CopyStream([k[2] for k in kids], "normal")
         self.last_fired = np.zeros(self.n_robots, dtype=bool)
         self.reset()
 
@@ -559,7 +606,8 @@ class RangeBearingSensor:
         if rngs is not None:
             for b, g in zip(copies, rngs):
                 self.rng.generators[b] = g
-                self.id_rng.generators[b] = g.spawn(1)[0]
+                for stream, kid in zip((self.prio_rng, self.noise_rng, self.id_rng), g.spawn(3)):
+                    stream.set_generator(int(b), kid)
         keep = ~np.isin((self._key // self.n_robots) // self.copy_size, copies)
         self._key, self._range, self._bearing = self._key[keep], self._range[keep], self._bearing[keep]
         self._heading, self._age = self._heading[keep], self._age[keep]
@@ -572,22 +620,10 @@ class RangeBearingSensor:
         N = self.n_robots
         if self.schedule == "every_step":
             return np.ones(N, dtype=bool)
-        prio = self.rng.random(self.copy_of)
-        a = np.concatenate([links.rx, links.tx])
-        b = np.concatenate([links.tx, links.rx])
-        fired = np.zeros(N, dtype=bool)
-        undecided = np.ones(N, dtype=bool)
-        while undecided.any():
-            m = undecided[a] & undecided[b]
-            nbmax = np.full(N, -1.0)
-            np.maximum.at(nbmax, a[m], prio[b[m]])
-            new = undecided & (prio > nbmax)
-            fired |= new
-            undecided &= ~new
-            blocked = np.zeros(N, dtype=bool)
-            blocked[a[new[b]]] = True
-            undecided &= ~blocked
-        return fired
+        prio = self.prio_rng.draw(self.copy_of)
+        if HAVE_NUMBA:
+            return priority_independent_set(prio, np.asarray(links.rx, np.int64), np.asarray(links.tx, np.int64))
+        return independent_set_numpy(prio, links.rx, links.tx)
 
     # -- one control step ------------------------------------------------------------------------------
     def step(self, links: IRLinks, fired: np.ndarray | None = None) -> RangeBearingReadings:
@@ -623,7 +659,7 @@ class RangeBearingSensor:
         if self.collisions and sel.size:
             local = np.asarray(links.tx[sel], dtype=np.int64) % self.copy_size
             dec = decode_ids(
-                gains.sum(axis=2), self._frames[local], starts, self.id_rng, self.noise_sigma, self.platform,
+                sum_last(gains), self._frames[local], starts, self.id_rng, self.noise_sigma, self.platform,
                 self.id_check, self.copy_of[grx],
             )
             base = self.copy_of[grx].astype(np.int64) * self.copy_size
@@ -644,7 +680,7 @@ class RangeBearingSensor:
             single = starts.size == sel.size
             R, th, ph, _ = read(
                 lam[g], links.rel_position[sel][starts[g]] if single else None,
-                links.rel_heading[sel][starts[g]] if single else None, self.rng, self.noise_sigma,
+                links.rel_heading[sel][starts[g]] if single else None, self.noise_rng, self.noise_sigma,
                 self.platform, self.ladder, self.near_model, self.copy_of[grx[g]], low,
             )
             fin = np.isfinite(R)
@@ -654,7 +690,7 @@ class RangeBearingSensor:
         new_key = grx[g].astype(np.int64) * N + tx_dec[g]
 
         age = self._age + 1
-        keep = (age <= self.max_age) & ~np.isin(self._key, new_key)
+        keep = (age <= self.max_age) & ~_member(self._key, new_key)
         key = np.concatenate([self._key[keep], new_key])
         order = np.argsort(key, kind="stable")
         self._key = key[order]
@@ -675,10 +711,43 @@ class RangeBearingSensor:
         )
 
 
+def independent_set_numpy(prio: np.ndarray, u: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """(N,) bool greedy maximal independent set in decreasing priority (distinct ``prio``) of the graph with
+    edges (u[e], v[e]), by vectorised Luby rounds: an undecided node joins when its priority beats every
+    undecided neighbour's; the neighbours of the joined nodes drop out. Reference of the compiled
+    :func:`swarm_envs.sensing.kernels.priority_independent_set`."""
+    N = prio.size
+    a = np.concatenate([u, v])
+    b = np.concatenate([v, u])
+    fired = np.zeros(N, dtype=bool)
+    undecided = np.ones(N, dtype=bool)
+    while undecided.any():
+        m = undecided[a] & undecided[b]
+        nbmax = np.full(N, -1.0)
+        np.maximum.at(nbmax, a[m], prio[b[m]])
+        new = undecided & (prio > nbmax)
+        fired |= new
+        undecided &= ~new
+        blocked = np.zeros(N, dtype=bool)
+        blocked[a[new[b]]] = True
+        undecided &= ~blocked
+    return fired
+
+
 def _group_argmax(values: np.ndarray, starts: np.ndarray, labels: np.ndarray) -> np.ndarray:
-    """Per contiguous group (``starts``), the label of the row with the largest value (first on ties)."""
+    """Per contiguous group (``starts``, sorted, non-empty groups), the label of the row with the largest
+    value (first on ties); ``values`` without NaN."""
     n = values.size
     group = np.repeat(np.arange(starts.size), np.diff(np.r_[starts, n]))
-    order = np.lexsort((-values, group))  # within each group, largest first
-    first = order[starts]
-    return labels[first]
+    top = np.maximum.reduceat(values, starts)
+    best = np.flatnonzero(values == top[group])  # every group holds >= 1 of its maxima
+    return labels[best[np.searchsorted(best, starts)]]
+
+
+def _member(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """``np.isin(a, b)`` for integer arrays, by binary search in sorted ``b``."""
+    if b.size == 0:
+        return np.zeros(a.shape, dtype=bool)
+    b = np.sort(b)
+    pos = np.minimum(np.searchsorted(b, a), b.size - 1)
+    return b[pos] == a
