@@ -53,12 +53,14 @@ _CONTACT_FIELDS = (
     | pymunk.batch.ArbiterFields.CONTACT_COUNT
     | pymunk.batch.ArbiterFields.NORMAL
 )
-try:  # chipmunk's step and arbiter iteration, called directly by _substeps (pymunk's wrappers add bookkeeping)
+try:  # chipmunk's step and pymunk.batch's C iterators, called directly (pymunk's wrappers add bookkeeping)
     from pymunk._chipmunk_cffi import ffi as _ffi, lib as _chipmunk
 
     _READ_ARBITER = _ffi.addressof(_chipmunk, "pmSpaceArbiterIteratorFuncBatched")
+    _GET_BODY = _ffi.addressof(_chipmunk, "pmSpaceBodyGetIteratorFuncBatched")
+    _SET_BODY = _ffi.addressof(_chipmunk, "pmSpaceBodySetIteratorFuncBatched")
 except (ImportError, AttributeError):  # pragma: no cover - another pymunk layout: the public API is used
-    _ffi = _chipmunk = _READ_ARBITER = None
+    _ffi = _chipmunk = _READ_ARBITER = _GET_BODY = _SET_BODY = None
 
 
 @dataclass(frozen=True)
@@ -303,12 +305,6 @@ class World:
         # contacts of the sub-steps of a control step, appended by _substeps (see there)
         self._robot_ids = np.array([body.id for body in self.bodies], dtype=np.uintp)
         self._contacts = pymunk.batch.Buffer()
-        self._contact_reader = None
-        if _ffi is not None:
-            self._contact_reader = _ffi.new("pmBatchedData *")
-            self._contact_reader.fields = _CONTACT_FIELDS.value
-            self._contact_reader.intArray = self._contacts._int_arr
-            self._contact_reader.floatArray = self._contacts._float_arr
         # batch buffers: reads (robot and control rows interleaved), and the velocities written each step
         ids = pymunk.batch.Buffer()
         pymunk.batch.get_space_bodies(self.space, pymunk.batch.BodyFields.BODY_ID, ids)
@@ -317,8 +313,17 @@ class World:
             raise RuntimeError("pymunk.batch does not list the bodies in insertion order")
         self._read_buffer = pymunk.batch.Buffer()
         self._write_values = np.zeros(len(order) * 3)  # the static body (last) keeps its zero velocity
+        self._write_rows = self._write_values[: 6 * self.n].reshape(self.n, 2, 3)  # (robot, control) rows
         self._write_buffer = pymunk.batch.Buffer()
         self._write_buffer.set_float_buf(self._write_values)
+        # the same C iterators as pymunk.batch's get/set_space_bodies and get_space_arbiters, each with one
+        # pmBatchedData made here instead of one per call (None: another pymunk layout, public API used)
+        self._batched = None
+        if _ffi is not None:
+            self._batched = tuple(
+                _batched_data(buffer, fields) for buffer, fields in ((self._write_buffer, _WRITE), (self._read_buffer, _READ), (self._contacts, _CONTACT_FIELDS))
+            )
+        self._read_ptr = None  # the read buffer's C array when _read_rows was made
 
     # -- state -----------------------------------------------------------------------------------
     def check_placement(self, positions: np.ndarray, headings: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -365,16 +370,31 @@ class World:
 
     def _advance(self, control: np.ndarray, h: float) -> np.ndarray:
         """Set the control bodies' (vx, vy, omega) rows ``control`` (n, 3), run the sub-steps of ``h``
-        seconds, and return every robot body's (x, y, angle, vx, vy, omega) (n, 6) from pymunk."""
+        seconds, and return every robot body's (x, y, angle, vx, vy, omega) (n, 6) from pymunk (a view of
+        the read buffer, valid until the next step)."""
         self._contacts.clear()
-        values = self._write_values[: 6 * self.n].reshape(self.n, 2, 3)
-        values[:, 0] = self._body_motion  # robot bodies: written back unchanged
-        values[:, 1] = control
-        pymunk.batch.set_space_bodies(self.space, _WRITE, self._write_buffer)
-        _substeps(self.space, h, self.substeps, self._contacts, self._contact_reader)
-        self._read_buffer.clear()
-        pymunk.batch.get_space_bodies(self.space, _READ, self._read_buffer)
-        return np.frombuffer(self._read_buffer.float_buf(), dtype=np.float64)[: 12 * self.n].reshape(self.n, 2, 6)[:, 0]
+        rows = self._write_rows
+        rows[:, 0] = self._body_motion  # robot bodies: written back unchanged
+        rows[:, 1] = control
+        space, batched = self.space, self._batched
+        if batched is None:  # another pymunk layout: the public API
+            pymunk.batch.set_space_bodies(space, _WRITE, self._write_buffer)
+            _substeps(space, h, self.substeps, self._contacts, None)
+            self._read_buffer.clear()
+            pymunk.batch.get_space_bodies(space, _READ, self._read_buffer)
+            return np.frombuffer(self._read_buffer.float_buf(), dtype=np.float64)[: 12 * self.n].reshape(self.n, 2, 6)[:, 0]
+        write, read, contacts = batched
+        # as pymunk.batch.set_space_bodies: the setter pops values from the start of the array
+        write.floatArray.num = 0
+        _chipmunk.cpSpaceEachBody(space._space, _SET_BODY, write)
+        write.floatArray.num = len(self._write_values)
+        _substeps(space, h, self.substeps, self._contacts, contacts)
+        read.floatArray.num = 0  # as Buffer.clear
+        _chipmunk.cpSpaceEachBody(space._space, _GET_BODY, read)
+        if read.floatArray.arr != self._read_ptr:  # the first read, or the C array moved: a new view
+            self._read_ptr = read.floatArray.arr
+            self._read_rows = np.frombuffer(self._read_buffer.float_buf(), dtype=np.float64)[: 12 * self.n].reshape(self.n, 2, 6)[:, 0]
+        return self._read_rows
 
     # -- dynamics --------------------------------------------------------------------------------
     def wheel_limited(self, linear: np.ndarray, angular: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -443,6 +463,15 @@ def step_worlds(worlds: Sequence[World], linear: np.ndarray, angular: np.ndarray
         w.positions, w.headings = positions[a:b], new_headings[a:b]
         w.velocities, w.angular_velocities = velocities[a:b], angular_velocities[a:b]
         w.bumps, w._body_motion = bumps[a:b], motion[a:b]
+
+
+def _batched_data(buffer: pymunk.batch.Buffer, fields: object) -> object:
+    """A cffi ``pmBatchedData`` over ``buffer``'s arrays for ``fields``, as pymunk.batch makes per call."""
+    data = _ffi.new("pmBatchedData *")
+    data.fields = fields.value
+    data.floatArray = buffer._float_arr
+    data.intArray = buffer._int_arr
+    return data
 
 
 def _substeps(space: pymunk.Space, h: float, count: int, contacts: pymunk.batch.Buffer, reader: object | None) -> None:

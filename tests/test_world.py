@@ -211,7 +211,7 @@ def test_bump_flags_equal_post_solve_callbacks_on_dense_scenes(substeps, shape):
 
 
 def test_contact_read_fallback_equals_direct_path():
-    """The public-API fallback of the sub-step loop (Space.step + pymunk.batch.get_space_arbiters) moves
+    """The public-API fallback (pymunk.batch.get/set_space_bodies, Space.step, get_space_arbiters) moves
     and flags bit for bit as the direct chipmunk calls."""
     p = PLATFORMS["epuck"]
     rng = np.random.default_rng(5)
@@ -220,7 +220,7 @@ def test_contact_read_fallback_equals_direct_path():
     direct, public = World(p, 20, arena), World(p, 20, arena)
     direct.place(pos, head)
     public.place(pos, head)
-    public._contact_reader = None  # what _substeps gets when pymunk's internals are not available
+    public._batched = None  # what a world has when pymunk's internals are not available
     flagged = 0
     for _ in range(20):
         lin, ang = rng.uniform(-1, 1, 20) * p.max_speed, rng.uniform(-1, 1, 20) * p.max_angular_speed
