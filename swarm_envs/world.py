@@ -522,14 +522,14 @@ def _bump_flags(worlds: Sequence[World], bounds: np.ndarray, headings: np.ndarra
     normal points from body a to body b) relative to the robot's heading at the end of the step.
     """
     bumps = np.zeros((bounds[-1], N_BUMP_SECTORS), dtype=bool)
-    ints, floats, ids, rows = [], [], [], []
+    ints, floats, ids, starts, sizes = [], [], [], [], []
     for w, a in zip(worlds, bounds[:-1]):
-        buf = w._contacts.int_buf()
-        if len(buf):
-            ints.append(buf)
+        if w._contacts._int_arr.num:  # the world had contacts
+            ints.append(w._contacts.int_buf())
             floats.append(w._contacts.float_buf())
             ids.append(w._robot_ids)
-            rows.append(np.arange(a, a + w.n))
+            starts.append(a)
+            sizes.append(w.n)
     if not ints:
         return bumps
     arbiters = np.frombuffer(b"".join(ints), dtype=np.uintp).reshape(-1, 3)
@@ -537,16 +537,15 @@ def _bump_flags(worlds: Sequence[World], bounds: np.ndarray, headings: np.ndarra
     touching = arbiters[:, 2] > 0
     arbiters, normals = arbiters[touching], normals[touching]
     # body ids (unique among live bodies) -> robot rows; the walls' static body is no robot
-    ids, rows = np.concatenate(ids), np.concatenate(rows)
+    ids, sizes = np.concatenate(ids), np.array(sizes)
+    rows = np.arange(len(ids)) + np.repeat(np.array(starts) - (np.cumsum(sizes) - sizes), sizes)
     order = np.argsort(ids)
     ids, rows = ids[order], rows[order]
-    idx, normal = [], []
-    for column, sign in ((0, 1.0), (1, -1.0)):
-        pos = np.minimum(np.searchsorted(ids, arbiters[:, column]), len(ids) - 1)
-        robot = ids[pos] == arbiters[:, column]
-        idx.append(rows[pos[robot]])
-        normal.append(sign * normals[robot])
-    idx, normal = np.concatenate(idx), np.concatenate(normal)
+    bodies = arbiters[:, :2].ravel()  # a, b, a, b, ...: body a sees the normal, body b its opposite
+    pos = np.minimum(np.searchsorted(ids, bodies), len(ids) - 1)
+    robot = ids[pos] == bodies
+    idx = rows[pos[robot]]
+    normal = (normals[:, None, :] * np.array([[1.0], [-1.0]])).reshape(-1, 2)[robot]
     world_angle = np.arctan2(normal[:, 1], normal[:, 0])
     body_angle = wrap_angle(world_angle - headings[idx])
     sector = np.floor((body_angle + np.pi / N_BUMP_SECTORS) / (2 * np.pi / N_BUMP_SECTORS)).astype(int)
