@@ -465,7 +465,7 @@ def step_worlds(worlds: Sequence[World], linear: np.ndarray, angular: np.ndarray
         w.bumps, w._body_motion = bumps[a:b], motion[a:b]
 
 
-def _batched_data(buffer: pymunk.batch.Buffer, fields: object) -> object:
+def _batched_data(buffer: pymunk.batch.Buffer, fields: pymunk.batch.BodyFields | pymunk.batch.ArbiterFields) -> object:
     """A cffi ``pmBatchedData`` over ``buffer``'s arrays for ``fields``, as pymunk.batch makes per call."""
     data = _ffi.new("pmBatchedData *")
     data.fields = fields.value
