@@ -5,7 +5,8 @@ Each control step (``dt`` = 0.1 s) is split into physics sub-steps. Every robot 
 kinematic *control body* (pymunk's top-down "tank" pattern): a pivot joint and a gear joint with zero
 bias and bounded force make the body's velocity track the control body's as motors would, while
 contacts, which have unbounded force, win over the motors: robots push each other but never overlap
-and walls hold; bump sensing comes from pymunk's post-solve collision callbacks (SPEC 1).
+and walls hold; bump sensing reads the contacts pymunk's solver processed in each sub-step (SPEC 1; the
+contacts its post-solve collision callbacks would report, see :func:`_substeps`).
 
 The control bodies are set once per control step (no Python work per sub-step): translation along the
 chord of the differential-drive arc, ``D = v dt sinc(w dt / 2)`` towards ``heading + w dt / 2``, and
@@ -16,7 +17,8 @@ robot then ends every control step exactly on its differential-drive arc.
 
 :func:`step_worlds` steps several worlds (e.g. the copies of the batched core) at once: the control
 arithmetic runs as one numpy program over all their robots, and each space is written and read with one
-``pymunk.batch`` call (no Python loop over bodies); :meth:`World.step` is the same function for one world.
+``pymunk.batch`` call (no Python loop over bodies), and its contacts are read with one C call per sub-step
+(no Python work per contact); :meth:`World.step` is the same function for one world.
 """
 
 from __future__ import annotations
@@ -44,10 +46,21 @@ MOTOR_ANGULAR_ACCELERATION = 2000.0  # rad/s^2
 # (vx, vy, omega) written in one call; a space's bodies come in insertion order (robot, its control, ...)
 _READ = pymunk.batch.BodyFields.POSITION | pymunk.batch.BodyFields.ANGLE | pymunk.batch.BodyFields.VELOCITY | pymunk.batch.BodyFields.ANGULAR_VELOCITY
 _WRITE = pymunk.batch.BodyFields.VELOCITY | pymunk.batch.BodyFields.ANGULAR_VELOCITY
-try:  # chipmunk's step function, called directly by _substeps (pymunk's Space.step adds only bookkeeping)
-    from pymunk._chipmunk_cffi import lib as _chipmunk
-except ImportError:  # pragma: no cover - another pymunk layout: Space.step is used
-    _chipmunk = None
+# contacts: per cached arbiter, the two bodies' ids and its contact count (ints) and normal (floats)
+_CONTACT_FIELDS = (
+    pymunk.batch.ArbiterFields.BODY_A_ID
+    | pymunk.batch.ArbiterFields.BODY_B_ID
+    | pymunk.batch.ArbiterFields.CONTACT_COUNT
+    | pymunk.batch.ArbiterFields.NORMAL
+)
+try:  # chipmunk's step and pymunk.batch's C iterators, called directly (pymunk's wrappers add bookkeeping)
+    from pymunk._chipmunk_cffi import ffi as _ffi, lib as _chipmunk
+
+    _READ_ARBITER = _ffi.addressof(_chipmunk, "pmSpaceArbiterIteratorFuncBatched")
+    _GET_BODY = _ffi.addressof(_chipmunk, "pmSpaceBodyGetIteratorFuncBatched")
+    _SET_BODY = _ffi.addressof(_chipmunk, "pmSpaceBodySetIteratorFuncBatched")
+except (ImportError, AttributeError):  # pragma: no cover - another pymunk layout: the public API is used
+    _ffi = _chipmunk = _READ_ARBITER = _GET_BODY = _SET_BODY = None
 
 
 @dataclass(frozen=True)
@@ -254,7 +267,6 @@ class World:
         self.velocities = np.zeros((self.n, 2))
         self.angular_velocities = np.zeros(self.n)
         self.bumps = np.zeros((self.n, N_BUMP_SECTORS), dtype=bool)
-        self._contacts: list[tuple[int, float, float]] = []
         self._body_motion = np.zeros((self.n, 3))  # pymunk body (vx, vy, omega) after the last step
 
     def _build_space(self) -> None:
@@ -290,9 +302,9 @@ class World:
             wall.elasticity = 0.0
             wall.collision_type = _WALL
             self.space.add(wall)
-        self._index = {body: i for i, body in enumerate(self.bodies)}
-        self.space.on_collision(_ROBOT, _ROBOT, post_solve=self._on_contact)
-        self.space.on_collision(_ROBOT, _WALL, post_solve=self._on_contact)
+        # contacts of the sub-steps of a control step, appended by _substeps (see there)
+        self._robot_ids = np.array([body.id for body in self.bodies], dtype=np.uintp)
+        self._contacts = pymunk.batch.Buffer()
         # batch buffers: reads (robot and control rows interleaved), and the velocities written each step
         ids = pymunk.batch.Buffer()
         pymunk.batch.get_space_bodies(self.space, pymunk.batch.BodyFields.BODY_ID, ids)
@@ -301,8 +313,17 @@ class World:
             raise RuntimeError("pymunk.batch does not list the bodies in insertion order")
         self._read_buffer = pymunk.batch.Buffer()
         self._write_values = np.zeros(len(order) * 3)  # the static body (last) keeps its zero velocity
+        self._write_rows = self._write_values[: 6 * self.n].reshape(self.n, 2, 3)  # (robot, control) rows
         self._write_buffer = pymunk.batch.Buffer()
         self._write_buffer.set_float_buf(self._write_values)
+        # the same C iterators as pymunk.batch's get/set_space_bodies and get_space_arbiters, each with one
+        # pmBatchedData made here instead of one per call (None: another pymunk layout, public API used)
+        self._batched = None
+        if _ffi is not None:
+            self._batched = tuple(
+                _batched_data(buffer, fields) for buffer, fields in ((self._write_buffer, _WRITE), (self._read_buffer, _READ), (self._contacts, _CONTACT_FIELDS))
+            )
+        self._read_ptr = None  # the read buffer's C array when _read_rows was made
 
     # -- state -----------------------------------------------------------------------------------
     def check_placement(self, positions: np.ndarray, headings: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -333,7 +354,6 @@ class World:
         physics space (nothing of the previous episode survives). Raises like :meth:`check_placement`."""
         positions, headings = self.check_placement(positions, headings)
         self._build_space()
-        self._contacts.clear()
         for body, control, p, h in zip(self.bodies, self.controls, positions, headings):
             body.position = control.position = (float(p[0]), float(p[1]))
             body.angle = control.angle = float(h)
@@ -350,16 +370,31 @@ class World:
 
     def _advance(self, control: np.ndarray, h: float) -> np.ndarray:
         """Set the control bodies' (vx, vy, omega) rows ``control`` (n, 3), run the sub-steps of ``h``
-        seconds, and return every robot body's (x, y, angle, vx, vy, omega) (n, 6) from pymunk."""
+        seconds, and return every robot body's (x, y, angle, vx, vy, omega) (n, 6) from pymunk (a view of
+        the read buffer, valid until the next step)."""
         self._contacts.clear()
-        values = self._write_values[: 6 * self.n].reshape(self.n, 2, 3)
-        values[:, 0] = self._body_motion  # robot bodies: written back unchanged
-        values[:, 1] = control
-        pymunk.batch.set_space_bodies(self.space, _WRITE, self._write_buffer)
-        _substeps(self.space, h, self.substeps)
-        self._read_buffer.clear()
-        pymunk.batch.get_space_bodies(self.space, _READ, self._read_buffer)
-        return np.frombuffer(self._read_buffer.float_buf(), dtype=np.float64)[: 12 * self.n].reshape(self.n, 2, 6)[:, 0]
+        rows = self._write_rows
+        rows[:, 0] = self._body_motion  # robot bodies: written back unchanged
+        rows[:, 1] = control
+        space, batched = self.space, self._batched
+        if batched is None:  # another pymunk layout: the public API
+            pymunk.batch.set_space_bodies(space, _WRITE, self._write_buffer)
+            _substeps(space, h, self.substeps, self._contacts, None)
+            self._read_buffer.clear()
+            pymunk.batch.get_space_bodies(space, _READ, self._read_buffer)
+            return np.frombuffer(self._read_buffer.float_buf(), dtype=np.float64)[: 12 * self.n].reshape(self.n, 2, 6)[:, 0]
+        write, read, contacts = batched
+        # as pymunk.batch.set_space_bodies: the setter pops values from the start of the array
+        write.floatArray.num = 0
+        _chipmunk.cpSpaceEachBody(space._space, _SET_BODY, write)
+        write.floatArray.num = len(self._write_values)
+        _substeps(space, h, self.substeps, self._contacts, contacts)
+        read.floatArray.num = 0  # as Buffer.clear
+        _chipmunk.cpSpaceEachBody(space._space, _GET_BODY, read)
+        if read.floatArray.arr != self._read_ptr:  # the first read, or the C array moved: a new view
+            self._read_ptr = read.floatArray.arr
+            self._read_rows = np.frombuffer(self._read_buffer.float_buf(), dtype=np.float64)[: 12 * self.n].reshape(self.n, 2, 6)[:, 0]
+        return self._read_rows
 
     # -- dynamics --------------------------------------------------------------------------------
     def wheel_limited(self, linear: np.ndarray, angular: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -373,16 +408,6 @@ class World:
     def step(self, linear: np.ndarray, angular: np.ndarray, dt: float) -> None:
         """Advance ``dt`` seconds with commanded linear (m/s) and angular (rad/s) velocities (n,)."""
         step_worlds([self], linear, angular, dt)
-
-    def _on_contact(self, arbiter: pymunk.Arbiter, space: pymunk.Space, data: object) -> None:
-        shapes = arbiter.shapes
-        normal = arbiter.normal  # points from shape a to shape b
-        for k, shape in enumerate(shapes):
-            idx = self._index.get(shape.body)
-            if idx is not None:
-                sign = 1.0 if k == 0 else -1.0
-                self._contacts.append((idx, sign * normal.x, sign * normal.y))
-
 
 
 def step_worlds(worlds: Sequence[World], linear: np.ndarray, angular: np.ndarray, dt: float) -> None:
@@ -440,14 +465,35 @@ def step_worlds(worlds: Sequence[World], linear: np.ndarray, angular: np.ndarray
         w.bumps, w._body_motion = bumps[a:b], motion[a:b]
 
 
-def _substeps(space: pymunk.Space, h: float, count: int) -> None:
-    """``count`` pymunk steps of ``h`` seconds. ``Space.step`` wraps chipmunk's ``cpSpaceStep`` in
-    bookkeeping for bodies added or removed from callbacks and for post-step callbacks, none of which this
-    module uses (the contact callback only records); when that bookkeeping is empty the space is locked
-    once (as ``Space.step`` does) and ``cpSpaceStep`` is called directly, saving the wrapper per sub-step.
-    Otherwise (or with another pymunk layout) ``Space.step`` is used: the same chipmunk call either way."""
+def _batched_data(buffer: pymunk.batch.Buffer, fields: pymunk.batch.BodyFields | pymunk.batch.ArbiterFields) -> object:
+    """A cffi ``pmBatchedData`` over ``buffer``'s arrays for ``fields``, as pymunk.batch makes per call."""
+    data = _ffi.new("pmBatchedData *")
+    data.fields = fields.value
+    data.floatArray = buffer._float_arr
+    data.intArray = buffer._int_arr
+    return data
+
+
+def _substeps(space: pymunk.Space, h: float, count: int, contacts: pymunk.batch.Buffer, reader: object | None) -> None:
+    """``count`` pymunk steps of ``h`` seconds; after each, the contacts the step processed are appended to
+    ``contacts``: per arbiter the ints (body a id, body b id, contact count) and the floats (normal x, y).
+
+    Contacts: chipmunk keeps every arbiter touched in the last ``space.collision_persistence`` steps in the
+    space's cached-arbiter set (``cpSpaceArbiterSetFilter``); one touched in the step just taken has its
+    contacts and normal of this step, while an older one is marked cached, for which ``cpArbiterGetCount``
+    returns 0. Reading the set after every step and keeping the rows with a contact count > 0 (done by
+    :func:`_bump_flags`) therefore gives exactly the arbiters the step's solver processed, the ones its
+    post-solve collision callbacks would report, with the same normals, and never an earlier step's
+    (whatever the persistence and sub-step count). One C call per step, no Python work per contact.
+
+    ``Space.step`` wraps chipmunk's ``cpSpaceStep`` in bookkeeping for bodies added or removed from
+    callbacks and for post-step callbacks, none of which this module uses; when that bookkeeping is empty
+    the space is locked once (as ``Space.step`` does) and ``cpSpaceStep`` and the arbiter iteration (with
+    ``reader``, a ``pmBatchedData`` over ``contacts``) are called directly. Otherwise (or with another
+    pymunk layout) ``Space.step`` and ``pymunk.batch.get_space_arbiters`` are used: the same chipmunk calls.
+    """
     try:
-        direct = _chipmunk is not None and not (
+        direct = reader is not None and not (
             space._bodies_to_check or space._add_later or space._remove_later or space._post_step_callbacks or space.threaded
         )
     except AttributeError:  # pragma: no cover - pymunk internals changed
@@ -455,24 +501,51 @@ def _substeps(space: pymunk.Space, h: float, count: int) -> None:
     if not direct:
         for _ in range(count):
             space.step(h)
+            pymunk.batch.get_space_arbiters(space, _CONTACT_FIELDS, contacts)
         return
     handle = space._space
+    step, each_arbiter = _chipmunk.cpSpaceStep, _chipmunk.cpSpaceEachCachedArbiter
     space._locked = True
     try:
         for _ in range(count):
-            _chipmunk.cpSpaceStep(handle, h)
+            step(handle, h)
+            each_arbiter(handle, _READ_ARBITER, reader)
     finally:
         space._locked = False
 
 
 def _bump_flags(worlds: Sequence[World], bounds: np.ndarray, headings: np.ndarray) -> np.ndarray:
-    """(sum n, N_BUMP_SECTORS) contact flags of the last step from the worlds' post-solve contacts."""
+    """(sum n, N_BUMP_SECTORS) contact flags of the last control step from the worlds' contacts.
+
+    Each contact of a sub-step (an arbiter with a contact count > 0, see :func:`_substeps`) flags, for
+    each of its two bodies that is a robot, the sector of the contact normal seen from that robot (the
+    normal points from body a to body b) relative to the robot's heading at the end of the step.
+    """
     bumps = np.zeros((bounds[-1], N_BUMP_SECTORS), dtype=bool)
-    contacts = [(np.array(w._contacts), a) for w, a in zip(worlds, bounds[:-1]) if w._contacts]
-    if not contacts:
+    ints, floats, ids, starts, sizes = [], [], [], [], []
+    for w, a in zip(worlds, bounds[:-1]):
+        if w._contacts._int_arr.num:  # the world had contacts
+            ints.append(w._contacts.int_buf())
+            floats.append(w._contacts.float_buf())
+            ids.append(w._robot_ids)
+            starts.append(a)
+            sizes.append(w.n)
+    if not ints:
         return bumps
-    idx = np.concatenate([c[:, 0].astype(int) + a for c, a in contacts])
-    normal = np.concatenate([c[:, 1:3] for c, _ in contacts])
+    arbiters = np.frombuffer(b"".join(ints), dtype=np.uintp).reshape(-1, 3)
+    normals = np.frombuffer(b"".join(floats), dtype=np.float64).reshape(-1, 2)
+    touching = arbiters[:, 2] > 0
+    arbiters, normals = arbiters[touching], normals[touching]
+    # body ids (unique among live bodies) -> robot rows; the walls' static body is no robot
+    ids, sizes = np.concatenate(ids), np.array(sizes)
+    rows = np.arange(len(ids)) + np.repeat(np.array(starts) - (np.cumsum(sizes) - sizes), sizes)
+    order = np.argsort(ids)
+    ids, rows = ids[order], rows[order]
+    bodies = arbiters[:, :2].ravel()  # a, b, a, b, ...: body a sees the normal, body b its opposite
+    pos = np.minimum(np.searchsorted(ids, bodies), len(ids) - 1)
+    robot = ids[pos] == bodies
+    idx = rows[pos[robot]]
+    normal = (normals[:, None, :] * np.array([[1.0], [-1.0]])).reshape(-1, 2)[robot]
     world_angle = np.arctan2(normal[:, 1], normal[:, 0])
     body_angle = wrap_angle(world_angle - headings[idx])
     sector = np.floor((body_angle + np.pi / N_BUMP_SECTORS) / (2 * np.pi / N_BUMP_SECTORS)).astype(int)

@@ -136,3 +136,97 @@ def test_step_worlds_equals_stepping_each_world_alone():
         step_worlds(together, np.zeros(3), np.zeros(3), 0.1)
     with pytest.raises(ValueError, match="platform"):
         step_worlds([together[0], World(PLATFORMS["droplet"], 2, arena)], np.zeros(14), np.zeros(14), 0.1)
+
+
+class _PostSolveReference:
+    """Bump flags from pymunk post-solve collision callbacks attached to a world's space (the SPEC 1
+    definition, and the implementation before contacts were read in batches): every contact a sub-step's
+    solver processed flags the sector of its normal seen from each robot it touches."""
+
+    def __init__(self, world):
+        from swarm_envs.world import _ROBOT, _WALL
+
+        self.world = world
+        self.index = {body: i for i, body in enumerate(world.bodies)}
+        self.contacts = []
+        for other in (_ROBOT, _WALL):
+            world.space.on_collision(_ROBOT, other, post_solve=self.on_contact)
+
+    def on_contact(self, arbiter, space, data):
+        normal = arbiter.normal  # from shape a to shape b
+        for k, shape in enumerate(arbiter.shapes):
+            idx = self.index.get(shape.body)
+            if idx is not None:
+                sign = 1.0 if k == 0 else -1.0
+                self.contacts.append((idx, sign * normal.x, sign * normal.y))
+
+    def flags(self):
+        """Flags of the contacts since the last call, relative to the world's current headings."""
+        from swarm_envs.world import N_BUMP_SECTORS
+
+        bumps = np.zeros((self.world.n, N_BUMP_SECTORS), dtype=bool)
+        if self.contacts:
+            c = np.array(self.contacts)
+            idx = c[:, 0].astype(int)
+            body_angle = wrap_angle(np.arctan2(c[:, 2], c[:, 1]) - self.world.headings[idx])
+            sector = np.floor((body_angle + np.pi / N_BUMP_SECTORS) / (2 * np.pi / N_BUMP_SECTORS)).astype(int)
+            bumps[idx, sector % N_BUMP_SECTORS] = True
+        self.contacts.clear()
+        return bumps
+
+
+@pytest.mark.parametrize("substeps", [1, 2, 3, 8])
+@pytest.mark.parametrize("shape", ["square", "circle"])
+def test_bump_flags_equal_post_solve_callbacks_on_dense_scenes(substeps, shape):
+    """The batched contact read gives, step by step, exactly the flags of post-solve callbacks, on
+    aggregated robots (random commands, pushing each other and the walls) and under a crush; sub-step
+    counts below and above chipmunk's collision persistence (3) never mix in an earlier step's contacts."""
+    from swarm_envs.world import step_worlds
+
+    p = PLATFORMS["epuck"]
+    rng = np.random.default_rng(11 + substeps)
+    arena = Arena(shape, 0.45)
+    sizes = [25, 12, 1]
+    worlds = [World(p, n, arena, substeps=substeps) for n in sizes]
+    for w in worlds:
+        w.place(spawn_positions(rng, w.n, p.radius, arena), rng.uniform(-np.pi, np.pi, w.n))
+    refs = [_PostSolveReference(w) for w in worlds]
+    flagged, changed = 0, 0
+    for step in range(60):
+        if step < 30:  # random commands: contacts start and end
+            lin = rng.uniform(-1, 1, sum(sizes)) * p.max_speed
+            ang = rng.uniform(-1, 1, sum(sizes)) * p.max_angular_speed
+        else:  # a crush towards the centre: many simultaneous contacts
+            pos = np.concatenate([w.positions for w in worlds])
+            head = np.concatenate([w.headings for w in worlds])
+            lin = np.full(sum(sizes), p.max_speed)
+            ang = 3 * wrap_angle(np.arctan2(-pos[:, 1], -pos[:, 0]) - head)
+        before = [w.bumps.copy() for w in worlds]
+        step_worlds(worlds, lin, ang, 0.1)
+        for w, ref, old in zip(worlds, refs, before):
+            np.testing.assert_array_equal(w.bumps, ref.flags())
+            flagged += int(w.bumps.sum())
+            changed += int((w.bumps != old).sum())
+    assert flagged > 500 and changed > 50, "the scenes must make and break many contacts"
+
+
+def test_contact_read_fallback_equals_direct_path():
+    """The public-API fallback (pymunk.batch.get/set_space_bodies, Space.step, get_space_arbiters) moves
+    and flags bit for bit as the direct chipmunk calls."""
+    p = PLATFORMS["epuck"]
+    rng = np.random.default_rng(5)
+    arena = Arena("square", 0.4)
+    pos, head = spawn_positions(rng, 20, p.radius, arena), rng.uniform(-np.pi, np.pi, 20)
+    direct, public = World(p, 20, arena), World(p, 20, arena)
+    direct.place(pos, head)
+    public.place(pos, head)
+    public._batched = None  # what a world has when pymunk's internals are not available
+    flagged = 0
+    for _ in range(20):
+        lin, ang = rng.uniform(-1, 1, 20) * p.max_speed, rng.uniform(-1, 1, 20) * p.max_angular_speed
+        direct.step(lin, ang, 0.1)
+        public.step(lin, ang, 0.1)
+        for name in ("positions", "headings", "velocities", "angular_velocities", "bumps"):
+            np.testing.assert_array_equal(getattr(direct, name), getattr(public, name))
+        flagged += int(direct.bumps.sum())
+    assert flagged > 20, "the scene must make contacts"
