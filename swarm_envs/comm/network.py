@@ -54,7 +54,7 @@ import numpy as np
 from swarm_envs.copies import CopyRandom
 from swarm_envs.comm.bch import BCHCode, code as bch_code
 from swarm_envs.comm.channel import ADCModel, adc_model_for, detector_response
-from swarm_envs.comm.kernels import COUNTERS, DELIVERY_FIELDS, HAVE_NUMBA, PER_ROBOT, StepDraws, draw_step, link_tables, slot_loop
+from swarm_envs.comm.kernels import COUNTERS, DELIVERY_FIELDS, HAVE_NUMBA, PER_ROBOT, GeneratorList, StepDraws, draw_copies, link_tables, slot_loop
 from swarm_envs.comm.protocol import (
     CSMA,
     IDLE,
@@ -249,6 +249,7 @@ class Network:
         self.n_det = self.platform.n_detectors
         self.det = DetectorBank(self.n, self.m_tr, max_bits=64)
         self.csma = CSMA(self.n, backoff_window)
+        self._gen_list: GeneratorList | None = None  # the copies' generators as draw_copies takes them
         self.reset()
 
     # ------------------------------------------------------------------ state
@@ -470,20 +471,14 @@ class Network:
         return self._finish_step(deliveries)
 
     def draw_step(self, S: int) -> StepDraws:
-        """Every random number of a step of S slots, drawn before the slot loop (same for both backends)."""
+        """Every random number of a step of S slots, drawn before the slot loop (same for both backends): all
+        copies in one call, copy b from its own generator (:func:`swarm_envs.comm.kernels.draw_copies`)."""
         a = self.adc_model
-        parts = [
-            draw_step(g, S, self.copy_size, self.n_det, a.noise_sigma if a.noise_var > 0 else 0.0, self.intensity_sigma, self.csma.window)
-            for g in self.rng.generators
-        ]
-        if len(parts) == 1:
-            return parts[0]
-        inoise = np.concatenate([p.intensity_noise for p in parts], axis=1) if parts[0].intensity_noise.size else parts[0].intensity_noise
-        return StepDraws(
-            np.concatenate([p.noise for p in parts], axis=1),
-            inoise,
-            np.concatenate([p.backoff for p in parts], axis=0),
-            np.concatenate([p.access for p in parts], axis=0),
+        gens = self.rng.generators
+        if self._gen_list is None:
+            self._gen_list = GeneratorList(gens)
+        return draw_copies(
+            self._gen_list.sync(gens), S, self.copy_size, self.n_det, a.noise_sigma if a.noise_var > 0 else 0.0, self.intensity_sigma, self.csma.window
         )
 
     def _kind_names(self, types: np.ndarray) -> np.ndarray:
