@@ -19,10 +19,12 @@
 6. ground truth for statistics only (strongest s1 transmitter at a start, the bits it really sent,
    collisions, bit / block errors, corrupt deliveries).
 
-Every random number the step needs is an input (:class:`StepDraws`, drawn by :func:`draw_step`): the
-kernel and the numpy reference consume the same arrays and must give the same deliveries and counters
+Every random number the step needs is an input (:class:`StepDraws`, drawn by :func:`draw_copies` for
+all env copies in one compiled call, each copy from its own generator): the kernel and the numpy
+reference consume the same arrays and must give the same deliveries and counters
 (``tests/test_network_kernel.py``). The arrays are indexed by robot and their shapes do not depend on
-what the robots do, so a batched engine can draw them per env copy and concatenate the robot axes.
+what the robots do, so copy b of a batch draws exactly what a single env draws. The compiled drawer gives
+bit for bit what NumPy's ``Generator`` methods give (the plain-Python fallback without numba).
 
 The flooding dedupe and relaying run once per step in numpy (``Network._finish_step``), not per slot.
 Without numba the same functions run as (slow) plain Python; ``Network`` then defaults to numpy.
@@ -142,7 +144,7 @@ def _draw_copies_py(gens, S, n, n_det, noise_sigma, intensity_sigma, window):
     B = len(gens)
     N = B * n
     ni = S if intensity_sigma > 0 else 0
-    noise = np.zeros((S, N, n_det), dtype=np.float32)
+    noise = np.empty((S, N, n_det), dtype=np.float32) if noise_sigma > 0 else np.zeros((S, N, n_det), dtype=np.float32)
     inoise = np.zeros((ni, N if ni else 0, n_det if ni else 0))
     backoff = np.empty((N, S), dtype=np.int64)
     access = np.empty(N, dtype=np.int64)
@@ -211,7 +213,7 @@ if _FAST_NORMAL:
         B = len(gens)
         N = B * n
         ni = S if intensity_sigma > 0 else 0
-        noise = np.zeros((S, N, n_det), dtype=np.float32)
+        noise = np.empty((S, N, n_det), dtype=np.float32) if noise_sigma > 0 else np.zeros((S, N, n_det), dtype=np.float32)
         inoise = np.zeros((ni, N if ni else 0, n_det if ni else 0))
         backoff = np.empty((N, S), dtype=np.int64)
         access = np.empty(N, dtype=np.int64)

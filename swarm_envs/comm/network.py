@@ -20,7 +20,7 @@ step boundaries). In every slot, vectorised over all robots:
 Backends: ``backend="numba"`` (default when numba imports) runs all slots of a step in one compiled call
 (:func:`swarm_envs.comm.kernels.slot_loop`); ``backend="numpy"`` runs the vectorised loop below, the
 tested reference. Every random number of a step (ADC and intensity noise, CSMA access delays and backoffs)
-is drawn before the slot loop by :func:`swarm_envs.comm.kernels.draw_step` in arrays indexed by robot, so
+is drawn before the slot loop by :func:`swarm_envs.comm.kernels.draw_copies` in arrays indexed by robot, so
 both backends consume the same numbers and the stream does not depend on the robots' activity. Deliveries
 are returned in a canonical order (by completion slot, then receiver).
 
@@ -149,7 +149,7 @@ class Network:
     Args:
         platform: robot platform (its IR model gives the gains, :func:`adc_model_for` the ADC).
         n_robots: swarm size N.
-        rng: random generator (start-up ambient samples at reset, then :func:`~swarm_envs.comm.kernels.draw_step`
+        rng: random generator (start-up ambient samples at reset, then :func:`~swarm_envs.comm.kernels.draw_copies`
             once per step).
         bitrate: bits per second (e-puck: 310 default, 650, 1080, 1160, 1670, 1800 [T20 Sec. 5]); with the
             e-puck's detector response (:func:`swarm_envs.comm.channel.detector_response`) the reliable
@@ -172,7 +172,7 @@ class Network:
             message, a broadcast storm that the paper does not report (validation (c) shows both).
         backend: ``"numba"`` (default when numba imports): the compiled slot loop of
             :mod:`swarm_envs.comm.kernels`; ``"numpy"``: the vectorised reference. Both consume the same
-            pre-drawn random numbers (:func:`swarm_envs.comm.kernels.draw_step`) and give the same results.
+            pre-drawn random numbers (:func:`swarm_envs.comm.kernels.draw_copies`) and give the same results.
         n_copies: env copies of ``n_robots`` robots each (rows copy-major); ``rng`` is then a
             :class:`swarm_envs.copies.CopyRandom` with one generator per copy. Frames carry a copy's own
             robot numbers (header widths as in a single env), every random number of a copy comes from its
