@@ -204,7 +204,8 @@ if _FAST_NORMAL:
                     yy = np.float32(-np.log1p(-next_float(bg)))
                     if np.float32(yy + yy) > np.float32(xx * xx):
                         return -np.float32(zr + xx) if (rabs >> 8) & 1 else np.float32(zr + xx)
-            elif (fi[idx - 1] - fi[idx]) * next_float(bg) + fi[idx] < np.float32(np.exp(-np.float32(0.5) * x * x)):
+            # wedge test as in NumPy's C code: float32 left side, double exp(-0.5 x^2) (not rounded to float32)
+            elif np.float64((fi[idx - 1] - fi[idx]) * next_float(bg) + fi[idx]) < np.exp(-0.5 * np.float64(x) * np.float64(x)):
                 return x
 
     @njit(cache=True)

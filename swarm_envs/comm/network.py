@@ -903,5 +903,7 @@ def _cat_pad(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 
 def _cat_pad_list(arrs: list[np.ndarray]) -> np.ndarray:
+    if len(arrs) == 1:  # the compiled backend's single part: nothing to pad
+        return arrs[0]
     W = max((x.shape[1] for x in arrs), default=0)
-    return np.concatenate([np.pad(x, ((0, 0), (0, W - x.shape[1]))) for x in arrs], axis=0) if arrs else np.zeros((0, 0), bool)
+    return np.concatenate([np.pad(x, ((0, 0), (0, W - x.shape[1]))) if x.shape[1] < W else x for x in arrs], axis=0) if arrs else np.zeros((0, 0), bool)
