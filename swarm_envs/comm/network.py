@@ -252,6 +252,12 @@ class Network:
         self._gen_list: GeneratorList | None = None  # the copies' generators as draw_copies takes them
         self.reset()
 
+    def __getstate__(self) -> dict[str, Any]:
+        """Pickle / deepcopy without the numba list of generators (not picklable; rebuilt from ``rng``)."""
+        state = self.__dict__.copy()
+        state["_gen_list"] = None
+        return state
+
     # ------------------------------------------------------------------ state
     def reset(self) -> None:
         """Empty all queues, idle all transceivers (detector response levels to 0), zero the statistics, redo
