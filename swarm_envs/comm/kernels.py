@@ -19,10 +19,12 @@
 6. ground truth for statistics only (strongest s1 transmitter at a start, the bits it really sent,
    collisions, bit / block errors, corrupt deliveries).
 
-Every random number the step needs is an input (:class:`StepDraws`, drawn by :func:`draw_step`): the
-kernel and the numpy reference consume the same arrays and must give the same deliveries and counters
+Every random number the step needs is an input (:class:`StepDraws`, drawn by :func:`draw_copies` for
+all env copies in one compiled call, each copy from its own generator): the kernel and the numpy
+reference consume the same arrays and must give the same deliveries and counters
 (``tests/test_network_kernel.py``). The arrays are indexed by robot and their shapes do not depend on
-what the robots do, so a batched engine can draw them per env copy and concatenate the robot axes.
+what the robots do, so copy b of a batch draws exactly what a single env draws. The compiled drawer gives
+bit for bit what NumPy's ``Generator`` methods give (the plain-Python fallback without numba).
 
 The flooding dedupe and relaying run once per step in numpy (``Network._finish_step``), not per slot.
 Without numba the same functions run as (slow) plain Python; ``Network`` then defaults to numpy.
@@ -30,7 +32,7 @@ Without numba the same functions run as (slow) plain Python; ``Network`` then de
 
 from __future__ import annotations
 
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -41,7 +43,7 @@ try:  # numba is optional: an accelerator, not a requirement
 except ImportError:  # pragma: no cover - exercised only without numba
     HAVE_NUMBA = False
 
-__all__ = ["HAVE_NUMBA", "COUNTERS", "PER_ROBOT", "DELIVERY_FIELDS", "StepDraws", "draw_step", "link_tables", "slot_loop", "decode_words"]
+__all__ = ["HAVE_NUMBA", "COUNTERS", "PER_ROBOT", "DELIVERY_FIELDS", "StepDraws", "GeneratorList", "draw_step", "draw_copies", "link_tables", "slot_loop", "decode_words"]
 
 COUNTERS = (
     "slots",
@@ -112,18 +114,52 @@ class StepDraws(NamedTuple):
 
 def draw_step(rng: np.random.Generator, S: int, n: int, n_det: int, noise_sigma: float, intensity_sigma: float, window: int) -> StepDraws:
     """Draw the random numbers of one step in a fixed order and with shapes fixed by (S, n), independent of
-    the robots' activity (a batched engine calls this once per env copy and concatenates robot axes)."""
-    if noise_sigma > 0:
-        noise = rng.standard_normal(size=(S, n, n_det), dtype=np.float32) * np.float32(noise_sigma)
-    else:
-        noise = np.zeros((S, n, n_det), dtype=np.float32)
-    if intensity_sigma > 0:
-        inoise = rng.normal(0.0, intensity_sigma, size=(S, n, n_det))
-    else:
-        inoise = np.zeros((0, 0, 0))
-    backoff = rng.integers(0, window, size=(n, S), dtype=np.int64)
-    access = rng.integers(0, window, size=n, dtype=np.int64)
-    return StepDraws(noise, inoise, backoff, access)
+    the robots' activity (one env copy; :func:`draw_copies` does all copies of a batch in one call)."""
+    return draw_copies(GeneratorList([rng]).sync([rng]), S, n, n_det, noise_sigma, intensity_sigma, window)
+
+
+class GeneratorList:
+    """The env copies' generators in the form :func:`draw_copies` takes (a ``numba.typed.List`` with numba,
+    else a plain list), updated in place when a copy's generator is replaced (boxing a generator for numba
+    costs ~20 us, so the list is kept between steps instead of being rebuilt)."""
+
+    def __init__(self, generators: list[np.random.Generator]) -> None:
+        self._py: list[np.random.Generator] = list(generators)
+        self._list = _typed_list(self._py) if HAVE_NUMBA else list(self._py)
+
+    def sync(self, generators: list[np.random.Generator]) -> "Any":
+        """The list for ``generators`` (same length as at construction; replaced entries are swapped in)."""
+        if len(generators) != len(self._py):
+            self.__init__(generators)
+            return self._list
+        for b, g in enumerate(generators):
+            if self._py[b] is not g:
+                self._py[b] = g
+                self._list[b] = g
+        return self._list
+
+
+def _draw_copies_py(gens, S, n, n_det, noise_sigma, intensity_sigma, window):
+    """Body of :func:`draw_copies` (compiled with numba; the same code runs in plain Python without)."""
+    B = len(gens)
+    N = B * n
+    ni = S if intensity_sigma > 0 else 0
+    noise = np.empty((S, N, n_det), dtype=np.float32) if noise_sigma > 0 else np.zeros((S, N, n_det), dtype=np.float32)
+    inoise = np.zeros((ni, N if ni else 0, n_det if ni else 0))
+    backoff = np.empty((N, S), dtype=np.int64)
+    access = np.empty(N, dtype=np.int64)
+    sg = np.float32(noise_sigma)
+    for b in range(B):
+        g = gens[b]
+        o = b * n
+        if noise_sigma > 0:
+            noise[:, o : o + n, :] = g.standard_normal(size=(S, n, n_det), dtype=np.float32) * sg
+        if ni:
+            inoise[:, o : o + n, :] = g.normal(0.0, intensity_sigma, size=(S, n, n_det))
+        k = g.integers(0, window, size=n * S + n)  # backoff (row-major (n, S)), then access
+        backoff[o : o + n, :] = k[: n * S].reshape((n, S))
+        access[o : o + n] = k[n * S :]
+    return noise, inoise, backoff, access
 
 
 def _identity(f):  # pragma: no cover - used only without numba
@@ -131,6 +167,91 @@ def _identity(f):  # pragma: no cover - used only without numba
 
 
 _jit = njit(cache=True) if HAVE_NUMBA else _identity
+
+
+if HAVE_NUMBA:
+    from numba.typed import List as _typed_list
+
+try:  # NumPy's float32 ziggurat, compiled inline (numba's bindings of the bit generator and NumPy's tables)
+    from numba.np.random._constants import fi_float, ki_float, wi_float, ziggurat_nor_inv_r_f, ziggurat_nor_r_f
+    from numba.np.random.generator_core import next_float, next_uint32
+
+    _FAST_NORMAL = HAVE_NUMBA
+except ImportError:  # pragma: no cover - other numba versions: numba's Generator.standard_normal (same stream)
+    _FAST_NORMAL = False
+
+if _FAST_NORMAL:
+    _ZIG = (ki_float.copy(), wi_float.copy(), fi_float.copy(), np.float32(ziggurat_nor_r_f), np.float32(ziggurat_nor_inv_r_f))
+
+    @njit(cache=True)
+    def _normal_f(bg, ki, wi, fi, zr, zir):
+        """One float32 standard normal: NumPy's ``random_standard_normal_f`` (ziggurat, 256 layers) step for
+        step, drawing the same 32-bit words from the same bit generator, so the stream is NumPy's
+        ``Generator.standard_normal(dtype=float32)`` bit for bit (``tests/test_network_kernel.py``); inlined
+        here it costs less than the library call per sample."""
+        while True:
+            r = next_uint32(bg)
+            idx = r & 0xFF
+            rabs = (r >> 9) & 0x7FFFFF
+            x = np.float32(np.float32(rabs) * wi[idx])
+            if (r >> 8) & 1:
+                x = -x
+            if rabs < ki[idx]:
+                return x  # ~99 % of the samples
+            if idx == 0:  # tail beyond the base layer
+                while True:
+                    xx = np.float32(-zir * np.log1p(-next_float(bg)))
+                    yy = np.float32(-np.log1p(-next_float(bg)))
+                    if np.float32(yy + yy) > np.float32(xx * xx):
+                        return -np.float32(zr + xx) if (rabs >> 8) & 1 else np.float32(zr + xx)
+            # wedge test as in NumPy's C code: float32 left side, double exp(-0.5 x^2) (not rounded to float32)
+            elif np.float64((fi[idx - 1] - fi[idx]) * next_float(bg) + fi[idx]) < np.exp(-0.5 * np.float64(x) * np.float64(x)):
+                return x
+
+    @njit(cache=True)
+    def _draw_copies_nb(gens, S, n, n_det, noise_sigma, intensity_sigma, window, ki, wi, fi, zr, zir):
+        """:func:`_draw_copies_py` compiled, with the ADC noise from :func:`_normal_f` (same numbers)."""
+        B = len(gens)
+        N = B * n
+        ni = S if intensity_sigma > 0 else 0
+        noise = np.empty((S, N, n_det), dtype=np.float32) if noise_sigma > 0 else np.zeros((S, N, n_det), dtype=np.float32)
+        inoise = np.zeros((ni, N if ni else 0, n_det if ni else 0))
+        backoff = np.empty((N, S), dtype=np.int64)
+        access = np.empty(N, dtype=np.int64)
+        sg = np.float32(noise_sigma)
+        for b in range(B):
+            g = gens[b]
+            o = b * n
+            if noise_sigma > 0:
+                bg = g.bit_generator
+                for s in range(S):
+                    for r in range(o, o + n):
+                        for d in range(n_det):
+                            noise[s, r, d] = _normal_f(bg, ki, wi, fi, zr, zir) * sg
+            if ni:
+                inoise[:, o : o + n, :] = g.normal(0.0, intensity_sigma, size=(S, n, n_det))
+            k = g.integers(0, window, size=n * S + n)  # backoff (row-major (n, S)), then access
+            backoff[o : o + n, :] = k[: n * S].reshape((n, S))
+            access[o : o + n] = k[n * S :]
+        return noise, inoise, backoff, access
+
+    def _draw_copies(gens, S, n, n_det, noise_sigma, intensity_sigma, window):
+        return _draw_copies_nb(gens, S, n, n_det, noise_sigma, intensity_sigma, window, *_ZIG)
+else:
+    _draw_copies = _jit(_draw_copies_py)
+
+
+def draw_copies(gens: Any, S: int, n: int, n_det: int, noise_sigma: float, intensity_sigma: float, window: int) -> StepDraws:
+    """Every random number of one step of S slots for ``len(gens)`` env copies of n robots, in one call.
+
+    Copy b draws from ``gens[b]`` only (a :meth:`GeneratorList.sync` list), in a fixed order with shapes
+    fixed by (S, n), independent of the robots' activity: the ADC noise n_m of every detector sample
+    (float32 standard normals times ``noise_sigma``; zeros when 0), the intensity noise n_j (only when
+    ``intensity_sigma > 0``), then one ``integers(0, window, n * S + n)`` call whose first ``n * S`` values
+    are the CSMA backoff draws (robot-major) and the last ``n`` the access delays. Robot rows of copy b are
+    ``b * n .. b * n + n - 1``; so copy b of a batch draws exactly what a single env with ``gens[b]`` draws.
+    """
+    return StepDraws(*_draw_copies(gens, int(S), int(n), int(n_det), float(noise_sigma), float(intensity_sigma), int(window)))
 
 
 @_jit

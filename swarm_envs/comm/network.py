@@ -20,7 +20,7 @@ step boundaries). In every slot, vectorised over all robots:
 Backends: ``backend="numba"`` (default when numba imports) runs all slots of a step in one compiled call
 (:func:`swarm_envs.comm.kernels.slot_loop`); ``backend="numpy"`` runs the vectorised loop below, the
 tested reference. Every random number of a step (ADC and intensity noise, CSMA access delays and backoffs)
-is drawn before the slot loop by :func:`swarm_envs.comm.kernels.draw_step` in arrays indexed by robot, so
+is drawn before the slot loop by :func:`swarm_envs.comm.kernels.draw_copies` in arrays indexed by robot, so
 both backends consume the same numbers and the stream does not depend on the robots' activity. Deliveries
 are returned in a canonical order (by completion slot, then receiver).
 
@@ -54,7 +54,7 @@ import numpy as np
 from swarm_envs.copies import CopyRandom
 from swarm_envs.comm.bch import BCHCode, code as bch_code
 from swarm_envs.comm.channel import ADCModel, adc_model_for, detector_response
-from swarm_envs.comm.kernels import COUNTERS, DELIVERY_FIELDS, HAVE_NUMBA, PER_ROBOT, StepDraws, draw_step, link_tables, slot_loop
+from swarm_envs.comm.kernels import COUNTERS, DELIVERY_FIELDS, HAVE_NUMBA, PER_ROBOT, GeneratorList, StepDraws, draw_copies, link_tables, slot_loop
 from swarm_envs.comm.protocol import (
     CSMA,
     IDLE,
@@ -149,7 +149,7 @@ class Network:
     Args:
         platform: robot platform (its IR model gives the gains, :func:`adc_model_for` the ADC).
         n_robots: swarm size N.
-        rng: random generator (start-up ambient samples at reset, then :func:`~swarm_envs.comm.kernels.draw_step`
+        rng: random generator (start-up ambient samples at reset, then :func:`~swarm_envs.comm.kernels.draw_copies`
             once per step).
         bitrate: bits per second (e-puck: 310 default, 650, 1080, 1160, 1670, 1800 [T20 Sec. 5]); with the
             e-puck's detector response (:func:`swarm_envs.comm.channel.detector_response`) the reliable
@@ -172,7 +172,7 @@ class Network:
             message, a broadcast storm that the paper does not report (validation (c) shows both).
         backend: ``"numba"`` (default when numba imports): the compiled slot loop of
             :mod:`swarm_envs.comm.kernels`; ``"numpy"``: the vectorised reference. Both consume the same
-            pre-drawn random numbers (:func:`swarm_envs.comm.kernels.draw_step`) and give the same results.
+            pre-drawn random numbers (:func:`swarm_envs.comm.kernels.draw_copies`) and give the same results.
         n_copies: env copies of ``n_robots`` robots each (rows copy-major); ``rng`` is then a
             :class:`swarm_envs.copies.CopyRandom` with one generator per copy. Frames carry a copy's own
             robot numbers (header widths as in a single env), every random number of a copy comes from its
@@ -249,7 +249,14 @@ class Network:
         self.n_det = self.platform.n_detectors
         self.det = DetectorBank(self.n, self.m_tr, max_bits=64)
         self.csma = CSMA(self.n, backoff_window)
+        self._gen_list: GeneratorList | None = None  # the copies' generators as draw_copies takes them
         self.reset()
+
+    def __getstate__(self) -> dict[str, Any]:
+        """Pickle / deepcopy without the numba list of generators (not picklable; rebuilt from ``rng``)."""
+        state = self.__dict__.copy()
+        state["_gen_list"] = None
+        return state
 
     # ------------------------------------------------------------------ state
     def reset(self) -> None:
@@ -470,20 +477,14 @@ class Network:
         return self._finish_step(deliveries)
 
     def draw_step(self, S: int) -> StepDraws:
-        """Every random number of a step of S slots, drawn before the slot loop (same for both backends)."""
+        """Every random number of a step of S slots, drawn before the slot loop (same for both backends): all
+        copies in one call, copy b from its own generator (:func:`swarm_envs.comm.kernels.draw_copies`)."""
         a = self.adc_model
-        parts = [
-            draw_step(g, S, self.copy_size, self.n_det, a.noise_sigma if a.noise_var > 0 else 0.0, self.intensity_sigma, self.csma.window)
-            for g in self.rng.generators
-        ]
-        if len(parts) == 1:
-            return parts[0]
-        inoise = np.concatenate([p.intensity_noise for p in parts], axis=1) if parts[0].intensity_noise.size else parts[0].intensity_noise
-        return StepDraws(
-            np.concatenate([p.noise for p in parts], axis=1),
-            inoise,
-            np.concatenate([p.backoff for p in parts], axis=0),
-            np.concatenate([p.access for p in parts], axis=0),
+        gens = self.rng.generators
+        if self._gen_list is None:
+            self._gen_list = GeneratorList(gens)
+        return draw_copies(
+            self._gen_list.sync(gens), S, self.copy_size, self.n_det, a.noise_sigma if a.noise_var > 0 else 0.0, self.intensity_sigma, self.csma.window
         )
 
     def _kind_names(self, types: np.ndarray) -> np.ndarray:
@@ -908,5 +909,7 @@ def _cat_pad(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 
 def _cat_pad_list(arrs: list[np.ndarray]) -> np.ndarray:
+    if len(arrs) == 1:  # the compiled backend's single part: nothing to pad
+        return arrs[0]
     W = max((x.shape[1] for x in arrs), default=0)
-    return np.concatenate([np.pad(x, ((0, 0), (0, W - x.shape[1]))) for x in arrs], axis=0) if arrs else np.zeros((0, 0), bool)
+    return np.concatenate([np.pad(x, ((0, 0), (0, W - x.shape[1]))) if x.shape[1] < W else x for x in arrs], axis=0) if arrs else np.zeros((0, 0), bool)
