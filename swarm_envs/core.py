@@ -23,7 +23,7 @@ from typing import Any
 
 import numpy as np
 
-from swarm_envs.observation import ObservationLayout, pack_nearest
+from swarm_envs.observation import ObservationLayout, nearest_slots, pack_nearest
 from swarm_envs.sensing.base import SensorFrame
 from swarm_envs.task import BatchState, Task
 from swarm_envs.world import N_BUMP_SECTORS, World, step_worlds
@@ -153,15 +153,15 @@ class SwarmCore:
         frame = self.frame
         n, k, m, b = self.n_total, self.layout.n_neighbours, self.layout.n_messages, self.layout.message_bits
         nb = frame.neighbours
-        rb_values = (
-            np.stack(
-                [np.ones(len(nb.rx)), nb.range, np.cos(nb.bearing), np.sin(nb.bearing), np.cos(nb.heading), np.sin(nb.heading), nb.age],
-                axis=-1,
-            )
-            if len(nb.rx)
-            else np.zeros((0, 7))
+        # the k nearest readings per robot; only those are turned into observation rows
+        order = nearest_slots(n, nb.rx, nb.range, k)
+        valid = order >= 0
+        kept = order[valid]
+        bearing, heading = nb.bearing[kept], nb.heading[kept]
+        range_bearing = np.zeros((n, k, 7))
+        range_bearing[valid] = np.stack(
+            [np.ones(len(kept)), nb.range[kept], np.cos(bearing), np.sin(bearing), np.cos(heading), np.sin(heading), nb.age[kept]], axis=-1
         )
-        range_bearing, _ = pack_nearest(n, nb.rx, nb.range, rb_values, k)
         msg = frame.messages
         if len(msg.receiver):
             key = msg.distance_hint if msg.distance_hint is not None else np.arange(len(msg.receiver), dtype=float)

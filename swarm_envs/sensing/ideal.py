@@ -11,11 +11,21 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import cKDTree
 
-from swarm_envs.observation import pack_nearest, relative_pose
+from swarm_envs.observation import nearest_slots, wrapped_difference
 from swarm_envs.platforms import Platform
 from swarm_envs.sensing.base import MessageReadings, NeighbourReadings, ScaleFreeReadings, SensorFrame
 
-__all__ = ["IdealSensing", "candidate_pairs", "directed_pairs", "neighbour_pairs"]
+__all__ = ["IdealSensing", "candidate_pairs", "copy_pairs", "directed_pairs", "directed_links", "neighbour_pairs"]
+
+#: robots per copy up to which :func:`copy_pairs` checks every pair of a copy (compiled) instead of a KD-tree
+BRUTE_FORCE_MAX = 1024
+
+try:  # numba is optional: compiled pair search and pair direction
+    from swarm_envs._numba import njit
+
+    _HAVE_NUMBA = True
+except ImportError:  # pragma: no cover - exercised only without numba
+    _HAVE_NUMBA = False
 
 
 def candidate_pairs(positions: np.ndarray, max_range: float, copy: np.ndarray | None = None) -> np.ndarray:
@@ -38,6 +48,98 @@ def candidate_pairs(positions: np.ndarray, max_range: float, copy: np.ndarray | 
     pairs = pairs.astype(np.int64)
     # lexicographic order by one argsort of a unique integer key (as lexsort, ~2.5x faster)
     return pairs[np.argsort(pairs[:, 0] * len(points) + pairs[:, 1])]
+
+
+def copy_pairs(positions: np.ndarray, max_range: float, copy_size: int) -> np.ndarray:
+    """:func:`candidate_pairs` of rows grouped in env copies of ``copy_size`` consecutive robots: the same
+    (P, 2) sorted pairs i < j of one copy closer than ``max_range`` (m), squared distance ``<= max_range**2``
+    as in the KD-tree. Small copies (at most :data:`BRUTE_FORCE_MAX` robots) check every pair of a copy in
+    a compiled loop, which emits the pairs already sorted; larger ones use :func:`candidate_pairs`."""
+    positions = np.ascontiguousarray(positions, dtype=np.float64).reshape(-1, 2)
+    copy_size = int(copy_size)
+    if copy_size < 1 or len(positions) % copy_size:
+        raise ValueError(f"copy_pairs: {len(positions)} rows are not whole copies of {copy_size} robots")
+    if _HAVE_NUMBA and copy_size <= BRUTE_FORCE_MAX:
+        return _copy_pairs_kernel(positions, copy_size, float(max_range) * float(max_range))
+    n_copies = len(positions) // copy_size
+    copy = np.repeat(np.arange(n_copies), copy_size) if n_copies > 1 else None
+    return candidate_pairs(positions, max_range, copy)
+
+
+def directed_links(pairs: np.ndarray, n_rows: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Both directions of sorted (P, 2) pairs i < j as :func:`directed_pairs` gives them (sorted by
+    (rx, tx)), plus the index of each link's pair; ``n_rows`` > every robot index. O(P) when compiled."""
+    pairs = np.ascontiguousarray(pairs, dtype=np.int64).reshape(-1, 2)
+    if len(pairs) == 0:
+        empty = np.zeros(0, dtype=np.int64)
+        return empty, empty, empty
+    if _HAVE_NUMBA:
+        return _directed_links_kernel(pairs, int(n_rows))
+    rx = np.concatenate([pairs[:, 0], pairs[:, 1]])
+    tx = np.concatenate([pairs[:, 1], pairs[:, 0]])
+    order = np.argsort(rx * int(n_rows) + tx)
+    return rx[order], tx[order], np.concatenate([np.arange(len(pairs))] * 2)[order]
+
+
+if _HAVE_NUMBA:
+
+    @njit(cache=True)
+    def _copy_pairs_kernel(positions: np.ndarray, m: int, r2: float) -> np.ndarray:  # pragma: no cover - compiled
+        """Pairs i < j of each copy of ``m`` rows with dx^2 + dy^2 <= r2, in (i, j) order (count, then fill)."""
+        n = positions.shape[0]
+        count = 0
+        for o in range(0, n, m):
+            for i in range(o, o + m):
+                xi, yi = positions[i, 0], positions[i, 1]
+                for j in range(i + 1, o + m):
+                    dx = positions[j, 0] - xi
+                    dy = positions[j, 1] - yi
+                    if dx * dx + dy * dy <= r2:
+                        count += 1
+        out = np.empty((count, 2), np.int64)
+        p = 0
+        for o in range(0, n, m):
+            for i in range(o, o + m):
+                xi, yi = positions[i, 0], positions[i, 1]
+                for j in range(i + 1, o + m):
+                    dx = positions[j, 0] - xi
+                    dy = positions[j, 1] - yi
+                    if dx * dx + dy * dy <= r2:
+                        out[p, 0] = i
+                        out[p, 1] = j
+                        p += 1
+        return out
+
+    @njit(cache=True)
+    def _directed_links_kernel(pairs: np.ndarray, n_rows: int):  # pragma: no cover - compiled
+        """Row r's links in (rx, tx) order: first tx < r (pairs (tx, r), met in increasing tx), then tx > r
+        (pairs (r, tx), also increasing) -- a counting sort, no comparison sort."""
+        P = pairs.shape[0]
+        lower = np.zeros(n_rows, np.int64)
+        degree = np.zeros(n_rows, np.int64)
+        for p in range(P):
+            lower[pairs[p, 1]] += 1
+            degree[pairs[p, 0]] += 1
+            degree[pairs[p, 1]] += 1
+        low_at = np.empty(n_rows, np.int64)
+        high_at = np.empty(n_rows, np.int64)
+        start = 0
+        for r in range(n_rows):
+            low_at[r] = start
+            high_at[r] = start + lower[r]
+            start += degree[r]
+        rx = np.empty(2 * P, np.int64)
+        tx = np.empty(2 * P, np.int64)
+        link = np.empty(2 * P, np.int64)
+        for p in range(P):
+            i, j = pairs[p, 0], pairs[p, 1]
+            q = low_at[j]
+            rx[q], tx[q], link[q] = j, i, p
+            low_at[j] = q + 1
+            q = high_at[i]
+            rx[q], tx[q], link[q] = i, j, p
+            high_at[i] = q + 1
+        return rx, tx, link
 
 
 def neighbour_pairs(positions: np.ndarray, max_range: float, copy: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
@@ -80,8 +182,17 @@ class IdealSensing:
     ) -> SensorFrame:
         """One step for all robots; ``payloads`` (N, b) bool or None, ``sending`` (N,) bool robots whose
         payload goes out this step (default: all when payloads are given)."""
-        rx, tx = neighbour_pairs(positions, self.platform.ir_range, self.copy if self.n_copies > 1 else None)
-        distance, bearing, heading = relative_pose(positions, headings, rx, tx)
+        positions = np.asarray(positions, dtype=np.float64)
+        headings = np.asarray(headings, dtype=np.float64)
+        pairs = copy_pairs(positions, self.platform.ir_range, self.copy_size)
+        rx, tx, link = directed_links(pairs, self.n)
+        # exact pose of tx seen by rx (as observation.relative_pose); the two directions of a pair have
+        # opposite offsets, so one hypot per pair gives both distances bit for bit
+        i, j = pairs[:, 0], pairs[:, 1]
+        distance = np.hypot(positions[j, 0] - positions[i, 0], positions[j, 1] - positions[i, 1])[link]
+        delta = positions[tx] - positions[rx]
+        bearing = wrapped_difference(np.arctan2(delta[:, 1], delta[:, 0]), headings[rx])
+        heading = wrapped_difference(headings[tx], headings[rx])
         neighbours = NeighbourReadings(rx, tx, distance, bearing, heading, np.zeros(len(rx)))
 
         if self.message_bits > 0 and payloads is not None:
@@ -90,10 +201,15 @@ class IdealSensing:
         else:
             messages = MessageReadings(payload=np.zeros((0, self.message_bits)))
 
+        # scale-free coordinates [L]: true offsets over the mean neighbour distance, the k nearest per robot
+        # (only the kept links are turned into coordinates)
         mean_distance = np.bincount(rx, distance, self.n) / np.maximum(np.bincount(rx, minlength=self.n), 1)
-        scale = np.where(mean_distance > 0, mean_distance, 1.0)[rx]
-        local = np.stack([distance * np.cos(bearing), distance * np.sin(bearing)], -1) / scale[:, None]
-        packed, order = pack_nearest(self.n, rx, distance, local, self.k)
+        order = nearest_slots(self.n, rx, distance, self.k)
         valid = order >= 0
+        kept = order[valid]
+        scale = np.where(mean_distance > 0, mean_distance, 1.0)[rx[kept]]
+        d, b = distance[kept], bearing[kept]
+        packed = np.zeros((self.n, self.k, 2))
+        packed[valid] = np.stack([d * np.cos(b), d * np.sin(b)], -1) / scale[:, None]
         scale_free = ScaleFreeReadings(packed, valid, valid.any(axis=1))
         return SensorFrame(neighbours, messages, scale_free)
