@@ -24,13 +24,13 @@ def largest_component_fraction(
     """For (B, N, 2) positions of B env copies: (largest-component fraction (B,), number of components
     (B,)), linking centres of one copy closer than ``link_distance`` (m), chained. One graph for all copies
     (pairs never cross copies), so one connected-components call per step instead of one per copy.
-    ``pairs``: those links if the caller already has them (``candidate_pairs`` over the B x N rows)."""
-    from swarm_envs.sensing.ideal import candidate_pairs
+    ``pairs``: those links if the caller already has them (``copy_pairs`` over the B x N rows)."""
+    from swarm_envs.sensing.ideal import copy_pairs
 
     B, N = positions.shape[:2]
     copy = np.repeat(np.arange(B), N)
     if pairs is None:
-        pairs = candidate_pairs(positions.reshape(B * N, 2), link_distance, copy)
+        pairs = copy_pairs(positions.reshape(B * N, 2), link_distance, N)
     n = B * N
     graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(n, n))
     labels = connected_components(graph, directed=False)[1]
