@@ -156,12 +156,13 @@ class SwarmCore:
         # the k nearest readings per robot; only those are turned into observation rows
         order = nearest_slots(n, nb.rx, nb.range, k)
         valid = order >= 0
-        kept = order[valid]
-        bearing, heading = nb.bearing[kept], nb.heading[kept]
-        range_bearing = np.zeros((n, k, 7))
-        range_bearing[valid] = np.stack(
-            [np.ones(len(kept)), nb.range[kept], np.cos(bearing), np.sin(bearing), np.cos(heading), np.sin(heading), nb.age[kept]], axis=-1
-        )
+        if len(nb.rx):
+            kept = np.where(valid, order, 0)  # empty slots read link 0 and are zeroed below
+            bearing, heading = nb.bearing[kept], nb.heading[kept]
+            columns = [np.ones((n, k)), nb.range[kept], np.cos(bearing), np.sin(bearing), np.cos(heading), np.sin(heading), nb.age[kept]]
+            range_bearing = np.where(valid[..., None], np.stack(columns, axis=-1), 0.0)
+        else:
+            range_bearing = np.zeros((n, k, 7))
         msg = frame.messages
         if len(msg.receiver):
             key = msg.distance_hint if msg.distance_hint is not None else np.arange(len(msg.receiver), dtype=float)
