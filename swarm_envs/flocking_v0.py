@@ -52,10 +52,10 @@ class FlockingTask(Task):
         bumped = bump_any(self.agents_of(state.bumps)).astype(float)  # (B, A)
         # local polarisation over each robot and its IR neighbours: per robot its own vector, then its
         # neighbours in increasing index (pairs are sorted, so the tx < rx links, then the tx > rx ones)
-        flat = vec.reshape(B * A, 2)
+        vx, vy = vec[..., 0].reshape(-1), vec[..., 1].reshape(-1)
         rows = np.concatenate([np.arange(B * A), pairs[:, 1], pairs[:, 0]])
         src = np.concatenate([np.arange(B * A), pairs[:, 0], pairs[:, 1]])
-        sums = np.stack([np.bincount(rows, flat[src, 0], B * A), np.bincount(rows, flat[src, 1], B * A)], -1)
+        sums = np.stack([np.bincount(rows, vx[src], B * A), np.bincount(rows, vy[src], B * A)], -1)
         counts = np.bincount(rows, minlength=B * A)
         local_pol = np.linalg.norm(sums / counts[:, None], axis=1).reshape(B, A)
         global_reward = pol * cohesion - self.penalty * bumped.mean(axis=1)

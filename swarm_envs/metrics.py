@@ -31,6 +31,9 @@ def largest_component_fraction(
     copy = np.repeat(np.arange(B), N)
     if pairs is None:
         pairs = copy_pairs(positions.reshape(B * N, 2), link_distance, N)
+    if _HAVE_NUMBA:
+        largest, count = _component_stats_kernel(np.ascontiguousarray(pairs, dtype=np.int64).reshape(-1, 2), B, N)
+        return largest / N, count
     n = B * N
     graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(n, n))
     labels = connected_components(graph, directed=False)[1]
@@ -43,6 +46,50 @@ def largest_component_fraction(
     np.maximum.at(largest, label_copy[present], sizes[present])
     count = np.bincount(label_copy[present], minlength=B)
     return largest / N, count
+
+
+try:  # numba is optional: union-find instead of scipy's connected components (same sizes and counts)
+    from swarm_envs._numba import njit
+
+    _HAVE_NUMBA = True
+except ImportError:  # pragma: no cover - exercised only without numba
+    _HAVE_NUMBA = False
+
+if _HAVE_NUMBA:
+
+    @njit(cache=True)
+    def _component_stats_kernel(pairs: np.ndarray, B: int, N: int):  # pragma: no cover - compiled
+        """(largest component size (B,) float, number of components (B,) int) of the graph of ``pairs``
+        over B copies of N rows, by union-find (union by index, path halving)."""
+        n = B * N
+        parent = np.arange(n)
+        for p in range(pairs.shape[0]):
+            a, b = pairs[p, 0], pairs[p, 1]
+            while parent[a] != a:
+                parent[a] = parent[parent[a]]
+                a = parent[a]
+            while parent[b] != b:
+                parent[b] = parent[parent[b]]
+                b = parent[b]
+            if a < b:
+                parent[b] = a
+            elif b < a:
+                parent[a] = b
+        size = np.zeros(n, np.int64)
+        for i in range(n):
+            r = i
+            while parent[r] != r:
+                r = parent[r]
+            size[r] += 1
+        largest = np.zeros(B)
+        count = np.zeros(B, np.int64)
+        for i in range(n):
+            if size[i] > 0:
+                c = i // N
+                count[c] += 1
+                if size[i] > largest[c]:
+                    largest[c] = size[i]
+        return largest, count
 
 
 def cluster_stats(positions: np.ndarray, link_distance: float) -> tuple[float, int]:

@@ -130,7 +130,7 @@ def _old_flocking_rewards(task, state):
 
 
 # -- building blocks -------------------------------------------------------------------------------------
-@pytest.mark.parametrize("copies,size,spread,r", [(7, 10, 1.0, 0.5), (1, 300, 4.0, 0.6), (3, 40, 0.3, 1.0), (1, 1500, 8.0, 0.7), (4, 1, 1.0, 1.0)])
+@pytest.mark.parametrize("copies,size,spread,r", [(7, 10, 1.0, 0.5), (1, 300, 4.0, 0.6), (3, 40, 0.3, 1.0), (1, 1500, 8.0, 0.7), (4, 1, 1.0, 1.0), (2, 100, 100.0, 0.05)])
 def test_copy_pairs_equal_kd_tree_pairs(copies, size, spread, r):
     rng = np.random.default_rng(size)
     pos = rng.uniform(0, spread, (copies * size, 2))
@@ -149,11 +149,18 @@ def test_copy_pairs_equal_kd_tree_pairs(copies, size, spread, r):
         copy_pairs(np.zeros((7, 2)), r, 2)
 
 
-def test_copy_pairs_kd_tree_branch_for_large_copies(monkeypatch):
-    monkeypatch.setattr(ideal, "BRUTE_FORCE_MAX", 5)
+@pytest.mark.parametrize("spread,r", [(1.0, 0.3), (1.0, 5.0), (100.0, 0.05), (3.0, 0.2)])
+def test_copy_pairs_grid_and_numpy_branches(monkeypatch, spread, r):
+    """The cell grid (copies above BRUTE_FORCE_MAX; one cell, capped cells) and the KD-tree fallback."""
     rng = np.random.default_rng(3)
-    pos = rng.uniform(0, 1, (60, 2))
-    _equal(copy_pairs(pos, 0.3, 20), candidate_pairs(pos, 0.3, np.repeat(np.arange(3), 20)))
+    pos = rng.uniform(0, spread, (240, 2))
+    pos[40:60] = pos[40] + rng.normal(0, r / 3, (20, 2))  # a dense clump in every case
+    ref = candidate_pairs(pos, r, np.repeat(np.arange(3), 80))
+    assert len(ref) > 0
+    monkeypatch.setattr(ideal, "BRUTE_FORCE_MAX", 5)
+    _equal(copy_pairs(pos, r, 80), ref)
+    monkeypatch.setattr(ideal, "_HAVE_NUMBA", False)
+    _equal(copy_pairs(pos, r, 80), ref)
 
 
 def test_directed_links_numpy_path_equals_compiled(monkeypatch):
@@ -252,12 +259,15 @@ def test_flocking_rewards_equal_the_previous_formulas(B, n, mode):
     assert (ref[1]["local_polarisation"] != ref[1]["polarisation"]).any()
 
 
-def test_cluster_metrics_equal_the_previous_formulas():
-    from swarm_envs.metrics import largest_component_fraction
+@pytest.mark.parametrize("compiled", [True, False])
+def test_cluster_metrics_equal_the_previous_formulas(monkeypatch, compiled):
+    from swarm_envs import metrics
 
+    if not compiled:
+        monkeypatch.setattr(metrics, "_HAVE_NUMBA", False)
     rng = np.random.default_rng(8)
-    for B, N, link in [(9, 10, 0.3), (1, 1200, 0.25), (3, 30, 0.1)]:
+    for B, N, link in [(9, 10, 0.3), (1, 1200, 0.25), (3, 30, 0.1), (2, 5, 2.0), (4, 6, 1e-3)]:
         pos = rng.uniform(0, 1 if N < 100 else 8, (B, N, 2))
-        got, ref = largest_component_fraction(pos, link), _old_largest_component_fraction(pos, link)
+        got, ref = metrics.largest_component_fraction(pos, link), _old_largest_component_fraction(pos, link)
         _equal(got[0], ref[0])
         _equal(got[1], ref[1])

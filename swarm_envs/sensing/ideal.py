@@ -17,8 +17,8 @@ from swarm_envs.sensing.base import MessageReadings, NeighbourReadings, ScaleFre
 
 __all__ = ["IdealSensing", "candidate_pairs", "copy_pairs", "directed_pairs", "directed_links", "neighbour_pairs"]
 
-#: robots per copy up to which :func:`copy_pairs` checks every pair of a copy (compiled) instead of a KD-tree
-BRUTE_FORCE_MAX = 1024
+#: robots per copy up to which :func:`copy_pairs` checks every pair of a copy; larger copies use a cell grid
+BRUTE_FORCE_MAX = 64
 
 try:  # numba is optional: compiled pair search and pair direction
     from swarm_envs._numba import njit
@@ -53,14 +53,19 @@ def candidate_pairs(positions: np.ndarray, max_range: float, copy: np.ndarray | 
 def copy_pairs(positions: np.ndarray, max_range: float, copy_size: int) -> np.ndarray:
     """:func:`candidate_pairs` of rows grouped in env copies of ``copy_size`` consecutive robots: the same
     (P, 2) sorted pairs i < j of one copy closer than ``max_range`` (m), squared distance ``<= max_range**2``
-    as in the KD-tree. Small copies (at most :data:`BRUTE_FORCE_MAX` robots) check every pair of a copy in
-    a compiled loop, which emits the pairs already sorted; larger ones use :func:`candidate_pairs`."""
+    as in the KD-tree. Compiled (numba): small copies (at most :data:`BRUTE_FORCE_MAX` robots) check every
+    pair of a copy, larger ones the robots of the neighbouring cells of a grid of cells >= ``max_range``;
+    both emit the pairs already sorted. Without numba: :func:`candidate_pairs`."""
     positions = np.ascontiguousarray(positions, dtype=np.float64).reshape(-1, 2)
     copy_size = int(copy_size)
     if copy_size < 1 or len(positions) % copy_size:
         raise ValueError(f"copy_pairs: {len(positions)} rows are not whole copies of {copy_size} robots")
+    r2 = float(max_range) * float(max_range)
     if _HAVE_NUMBA and copy_size <= BRUTE_FORCE_MAX:
-        return _copy_pairs_kernel(positions, copy_size, float(max_range) * float(max_range))
+        return _copy_pairs_kernel(positions, copy_size, r2)
+    if _HAVE_NUMBA and np.isfinite(positions).all() and max_range > 0:
+        # cells a little larger than the range: a pair in range is never two cells apart despite rounding
+        return _grid_pairs_kernel(positions, copy_size, r2, float(max_range) * (1.0 + 1e-6))
     n_copies = len(positions) // copy_size
     copy = np.repeat(np.arange(n_copies), copy_size) if n_copies > 1 else None
     return candidate_pairs(positions, max_range, copy)
@@ -109,6 +114,82 @@ if _HAVE_NUMBA:
                         out[p, 1] = j
                         p += 1
         return out
+
+    @njit(cache=True)
+    def _grid_pairs_kernel(positions: np.ndarray, m: int, r2: float, cell: float) -> np.ndarray:  # pragma: no cover - compiled
+        """Pairs i < j of each copy of ``m`` rows with dx^2 + dy^2 <= r2, in (i, j) order: robots binned in
+        square cells of side ``cell`` (>= the range; doubled until there are at most ~4 m cells), each
+        robot's partners j > i collected from its 3 x 3 cells and sorted."""
+        n = positions.shape[0]
+        out = np.empty((max(16, 8 * n), 2), np.int64)
+        p = 0
+        buf = np.empty(m, np.int64)
+        for o in range(0, n, m):
+            xmin, ymin = positions[o, 0], positions[o, 1]
+            xmax, ymax = xmin, ymin
+            for i in range(o, o + m):
+                xmin = min(xmin, positions[i, 0])
+                xmax = max(xmax, positions[i, 0])
+                ymin = min(ymin, positions[i, 1])
+                ymax = max(ymax, positions[i, 1])
+            side = cell
+            nx = int((xmax - xmin) / side) + 1
+            ny = int((ymax - ymin) / side) + 1
+            while nx * ny > 4 * m + 16:
+                side *= 2.0
+                nx = int((xmax - xmin) / side) + 1
+                ny = int((ymax - ymin) / side) + 1
+            cx = np.empty(m, np.int64)
+            cy = np.empty(m, np.int64)
+            start = np.zeros(nx * ny + 1, np.int64)
+            for a in range(m):
+                cx[a] = int((positions[o + a, 0] - xmin) / side)
+                cy[a] = int((positions[o + a, 1] - ymin) / side)
+                start[cx[a] * ny + cy[a] + 1] += 1
+            for c in range(nx * ny):
+                start[c + 1] += start[c]
+            fill = start[:-1].copy()
+            members = np.empty(m, np.int64)
+            for a in range(m):  # counting sort: each cell lists its robots in increasing index
+                c = cx[a] * ny + cy[a]
+                members[fill[c]] = a
+                fill[c] += 1
+            for a in range(m):
+                xi, yi = positions[o + a, 0], positions[o + a, 1]
+                cnt = 0
+                for gx in range(max(cx[a] - 1, 0), min(cx[a] + 2, nx)):
+                    for gy in range(max(cy[a] - 1, 0), min(cy[a] + 2, ny)):
+                        c = gx * ny + gy
+                        for q in range(start[c + 1] - 1, start[c] - 1, -1):  # members > a, from the top
+                            b = members[q]
+                            if b <= a:
+                                break
+                            dx = positions[o + b, 0] - xi
+                            dy = positions[o + b, 1] - yi
+                            if dx * dx + dy * dy <= r2:
+                                buf[cnt] = b
+                                cnt += 1
+                if cnt == 0:
+                    continue
+                if cnt > 64:
+                    buf[:cnt] = np.sort(buf[:cnt])
+                else:  # insertion sort of the few partners
+                    for q in range(1, cnt):
+                        v = buf[q]
+                        w = q - 1
+                        while w >= 0 and buf[w] > v:
+                            buf[w + 1] = buf[w]
+                            w -= 1
+                        buf[w + 1] = v
+                if p + cnt > out.shape[0]:
+                    grown = np.empty((2 * out.shape[0] + cnt, 2), np.int64)
+                    grown[:p] = out[:p]
+                    out = grown
+                for q in range(cnt):
+                    out[p, 0] = o + a
+                    out[p, 1] = o + buf[q]
+                    p += 1
+        return out[:p].copy()
 
     @njit(cache=True)
     def _directed_links_kernel(pairs: np.ndarray, n_rows: int):  # pragma: no cover - compiled
