@@ -66,6 +66,23 @@ def wrapped_difference(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return wrap_angle(a - b)
 
 
+def range_bearing_rows(order: np.ndarray, distance: np.ndarray, bearing: np.ndarray, heading: np.ndarray, age: np.ndarray) -> np.ndarray:
+    """(n, k, 7) float32 ``range_bearing`` rows (:data:`RB_FIELDS`, not clipped) of the links in ``order``
+    (n, k) (from :func:`nearest_slots`; -1: an all-zero row), from per-link range (m), bearing and
+    heading (rad) and age (steps). cos and sin are taken by numpy on the kept links only; a compiled pass
+    writes the rows (the same float32 values as stacking in float64 and casting)."""
+    valid = order >= 0
+    if len(distance) == 0:
+        return np.zeros(order.shape + (7,), np.float32)
+    kept = np.where(valid, order, 0)  # empty slots read link 0 and are zeroed
+    b, h = bearing[kept], heading[kept]
+    trig = np.stack([np.cos(b), np.sin(b), np.cos(h), np.sin(h)], axis=-1)
+    if _HAVE_NUMBA:
+        return _range_bearing_kernel(np.ascontiguousarray(order, dtype=np.int64), np.ascontiguousarray(distance, dtype=np.float64), trig, np.ascontiguousarray(age, dtype=np.float64))
+    rows = np.concatenate([np.ones(order.shape + (1,)), distance[kept][..., None], trig, age[kept][..., None]], axis=-1)
+    return np.where(valid[..., None], rows, 0.0).astype(np.float32)
+
+
 def nearest_slots(n_rows: int, row: np.ndarray, key: np.ndarray, k: int) -> np.ndarray:
     """(n_rows, k) link index of the ``k`` smallest ``key`` per row (-1 where a row has fewer links), the
     ``order`` of :func:`pack_nearest` without packing any values."""
@@ -179,6 +196,23 @@ if _HAVE_NUMBA:
         return order
 
     @njit(cache=True)
+    def _range_bearing_kernel(order: np.ndarray, distance: np.ndarray, trig: np.ndarray, age: np.ndarray) -> np.ndarray:
+        """Rows [1, range, trig (4), age] of the kept links as float32; zero rows for empty slots."""
+        n, k = order.shape
+        out = np.zeros((n, k, 7), np.float32)
+        for r in range(n):
+            for c in range(k):
+                o = order[r, c]
+                if o < 0:
+                    continue
+                out[r, c, 0] = 1.0
+                out[r, c, 1] = np.float32(distance[o])
+                for f in range(4):
+                    out[r, c, 2 + f] = np.float32(trig[r, c, f])
+                out[r, c, 6] = np.float32(age[o])
+        return out
+
+    @njit(cache=True)
     def _wrapped_difference_kernel(a: np.ndarray, b: np.ndarray) -> np.ndarray:
         """``pi - np.mod(pi - (a - b), 2 pi)`` elementwise with numpy's remainder rule: ``fmod`` (exact),
         plus 2 pi when it is negative, +0 when it is zero (NaN stays NaN)."""
@@ -204,8 +238,8 @@ if _HAVE_NUMBA:
 
     @njit(cache=True)
     def _clip_float32_kernel(values: np.ndarray, low: np.ndarray, high: np.ndarray) -> np.ndarray:
-        """``np.clip(values.astype(float32), low, high)`` for (n, S) float64 values and (S,) float32 bounds
-        (NaN stays NaN, as with ``np.clip``)."""
+        """``np.clip(values.astype(float32), low, high)`` for (n, S) float64 or float32 values and (S,) float32
+        bounds (NaN stays NaN, as with ``np.clip``)."""
         n, S = values.shape
         out = np.empty((n, S), np.float32)
         for i in range(n):
@@ -277,7 +311,8 @@ class ObservationLayout:
         rigid: np.ndarray,
         proprio: np.ndarray,
     ) -> dict[str, np.ndarray]:
-        """Clip batched parts (leading robot axis) into the space bounds, as float32 arrays."""
+        """Clip batched parts (leading robot axis; float64, or float32 cast from float64) into the space
+        bounds, as float32 arrays."""
         parts = {
             "range_bearing": range_bearing,
             "messages": messages,
@@ -310,10 +345,10 @@ class ObservationLayout:
 
 
 def _clip_to_box(values: np.ndarray, low: np.ndarray, high: np.ndarray) -> np.ndarray:
-    """``np.clip(values as float32, low, high)`` for values (n, *box shape) and float32 bounds of the box
-    shape; one compiled pass when numba is installed (same float32 results)."""
+    """``np.clip(values as float32, low, high)`` for float64 or float32 values (n, *box shape) and float32
+    bounds of the box shape; one compiled pass when numba is installed (same float32 results)."""
     values = np.asarray(values)
-    if _HAVE_NUMBA and values.dtype == np.float64 and values.ndim >= 1 and values.shape[1:] == low.shape and low.dtype == np.float32:
+    if _HAVE_NUMBA and values.dtype in (np.float64, np.float32) and values.ndim >= 1 and values.shape[1:] == low.shape and low.dtype == np.float32:
         n = values.shape[0]
         flat = _clip_float32_kernel(
             np.ascontiguousarray(values).reshape(n, -1), np.ascontiguousarray(low).reshape(-1), np.ascontiguousarray(high).reshape(-1)
