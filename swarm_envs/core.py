@@ -154,8 +154,12 @@ class SwarmCore:
         n, k, m, b = self.n_total, self.layout.n_neighbours, self.layout.n_messages, self.layout.message_bits
         nb = frame.neighbours
         # the k nearest readings per robot; only those are turned into observation rows. Parts are built
-        # in float32 (values cast from float64 as build would), then clipped by build
-        range_bearing = range_bearing_rows(nearest_slots(n, nb.rx, nb.range, k), nb.range, nb.bearing, nb.heading, nb.age)
+        # in float32 (values cast from float64 as build would), then clipped by build. A stack that already
+        # selected the k nearest (the ideal one: NearestNeighbourReadings) hands over its slots and bearing trig
+        slots, cos_sin = getattr(nb, "slots", None), getattr(nb, "slot_cos_sin", None)
+        if slots is None or slots.shape != (n, k):
+            slots, cos_sin = nearest_slots(n, nb.rx, nb.range, k), None
+        range_bearing = range_bearing_rows(slots, nb.range, nb.bearing, nb.heading, nb.age, cos_sin)
         msg = frame.messages
         if len(msg.receiver):
             key = msg.distance_hint if msg.distance_hint is not None else np.arange(len(msg.receiver), dtype=float)

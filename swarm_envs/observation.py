@@ -66,20 +66,37 @@ def wrapped_difference(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return wrap_angle(a - b)
 
 
-def range_bearing_rows(order: np.ndarray, distance: np.ndarray, bearing: np.ndarray, heading: np.ndarray, age: np.ndarray) -> np.ndarray:
+def range_bearing_rows(
+    order: np.ndarray,
+    distance: np.ndarray,
+    bearing: np.ndarray,
+    heading: np.ndarray,
+    age: np.ndarray,
+    bearing_cos_sin: np.ndarray | None = None,
+) -> np.ndarray:
     """(n, k, 7) float32 ``range_bearing`` rows (:data:`RB_FIELDS`, not clipped) of the links in ``order``
     (n, k) (from :func:`nearest_slots`; -1: an all-zero row), from per-link range (m), bearing and
-    heading (rad) and age (steps). cos and sin are taken by numpy on the kept links only; a compiled pass
-    writes the rows (the same float32 values as stacking in float64 and casting)."""
+    heading (rad) and age (steps); ``bearing_cos_sin`` (n, k, 2): cos and sin of the slots' bearings if
+    already known. cos and sin are taken by numpy on the kept links only; a compiled pass writes the rows
+    (the same float32 values as stacking in float64 and casting)."""
     valid = order >= 0
     if len(distance) == 0:
         return np.zeros(order.shape + (7,), np.float32)
     kept = np.where(valid, order, 0)  # empty slots read link 0 and are zeroed
-    b, h = bearing[kept], heading[kept]
-    trig = np.stack([np.cos(b), np.sin(b), np.cos(h), np.sin(h)], axis=-1)
+    if bearing_cos_sin is None:
+        b = bearing[kept]
+        bearing_cos_sin = np.stack([np.cos(b), np.sin(b)], axis=-1)
+    h = heading[kept]
+    heading_cos_sin = np.stack([np.cos(h), np.sin(h)], axis=-1)
     if _HAVE_NUMBA:
-        return _range_bearing_kernel(np.ascontiguousarray(order, dtype=np.int64), np.ascontiguousarray(distance, dtype=np.float64), trig, np.ascontiguousarray(age, dtype=np.float64))
-    rows = np.concatenate([np.ones(order.shape + (1,)), distance[kept][..., None], trig, age[kept][..., None]], axis=-1)
+        return _range_bearing_kernel(
+            np.ascontiguousarray(order, dtype=np.int64),
+            np.ascontiguousarray(distance, dtype=np.float64),
+            np.ascontiguousarray(bearing_cos_sin, dtype=np.float64),
+            heading_cos_sin,
+            np.ascontiguousarray(age, dtype=np.float64),
+        )
+    rows = np.concatenate([np.ones(order.shape + (1,)), distance[kept][..., None], bearing_cos_sin, heading_cos_sin, age[kept][..., None]], axis=-1)
     return np.where(valid[..., None], rows, 0.0).astype(np.float32)
 
 
@@ -196,8 +213,9 @@ if _HAVE_NUMBA:
         return order
 
     @njit(cache=True)
-    def _range_bearing_kernel(order: np.ndarray, distance: np.ndarray, trig: np.ndarray, age: np.ndarray) -> np.ndarray:
-        """Rows [1, range, trig (4), age] of the kept links as float32; zero rows for empty slots."""
+    def _range_bearing_kernel(order: np.ndarray, distance: np.ndarray, bcs: np.ndarray, hcs: np.ndarray, age: np.ndarray) -> np.ndarray:
+        """Rows [1, range, cos, sin bearing, cos, sin heading, age] of the kept links as float32; zero rows
+        for empty slots."""
         n, k = order.shape
         out = np.zeros((n, k, 7), np.float32)
         for r in range(n):
@@ -207,8 +225,10 @@ if _HAVE_NUMBA:
                     continue
                 out[r, c, 0] = 1.0
                 out[r, c, 1] = np.float32(distance[o])
-                for f in range(4):
-                    out[r, c, 2 + f] = np.float32(trig[r, c, f])
+                out[r, c, 2] = np.float32(bcs[r, c, 0])
+                out[r, c, 3] = np.float32(bcs[r, c, 1])
+                out[r, c, 4] = np.float32(hcs[r, c, 0])
+                out[r, c, 5] = np.float32(hcs[r, c, 1])
                 out[r, c, 6] = np.float32(age[o])
         return out
 

@@ -8,6 +8,8 @@ neighbour distance.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 from scipy.spatial import cKDTree
 
@@ -15,7 +17,7 @@ from swarm_envs.observation import nearest_slots, wrapped_difference
 from swarm_envs.platforms import Platform
 from swarm_envs.sensing.base import MessageReadings, NeighbourReadings, ScaleFreeReadings, SensorFrame
 
-__all__ = ["IdealSensing", "candidate_pairs", "copy_pairs", "directed_pairs", "directed_links", "neighbour_pairs"]
+__all__ = ["IdealSensing", "NearestNeighbourReadings", "candidate_pairs", "copy_pairs", "directed_pairs", "directed_links", "neighbour_pairs"]
 
 #: robots per copy up to which :func:`copy_pairs` checks every pair of a copy; larger copies use a cell grid
 BRUTE_FORCE_MAX = 64
@@ -242,6 +244,17 @@ def directed_pairs(pairs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return rx[order], tx[order]
 
 
+@dataclass
+class NearestNeighbourReadings(NeighbourReadings):
+    """:class:`NeighbourReadings` that also carry each robot's ``k`` nearest links, ``slots`` (N, k) (link
+    index, -1 when empty: :func:`swarm_envs.observation.nearest_slots` of ``rx`` by ``range``), and
+    ``slot_cos_sin`` (N, k, 2), cos and sin of their bearings (of link 0 in empty slots). The ideal stack
+    needs both for its scale-free coordinates; the observation builder reuses them."""
+
+    slots: np.ndarray | None = None
+    slot_cos_sin: np.ndarray | None = None
+
+
 class IdealSensing:
     """Ground-truth sensing within IR range (see module docstring), for ``n_copies`` env copies of
     ``n_robots`` robots each (rows = robots of all copies, copy-major)."""
@@ -275,7 +288,16 @@ class IdealSensing:
         heading_rx = headings[rx]
         bearing = wrapped_difference(np.arctan2(y[tx] - y[rx], x[tx] - x[rx]), heading_rx)
         heading = wrapped_difference(headings[tx], heading_rx)
-        neighbours = NeighbourReadings(rx, tx, distance, bearing, heading, np.zeros(len(rx)))
+        # the k nearest links of every robot, for the scale-free coordinates and (reused) the observations
+        order = nearest_slots(self.n, rx, distance, self.k)
+        valid = order >= 0
+        kept = np.where(valid, order, 0)  # empty slots read link 0 and are zeroed below
+        if len(rx):
+            b = bearing[kept]
+            cos_sin = np.stack([np.cos(b), np.sin(b)], -1)
+        else:
+            cos_sin = np.zeros((self.n, self.k, 2))
+        neighbours = NearestNeighbourReadings(rx, tx, distance, bearing, heading, np.zeros(len(rx)), order, cos_sin)
 
         if self.message_bits > 0 and payloads is not None:
             got = np.ones(len(rx), dtype=bool) if sending is None else np.asarray(sending, bool)[tx]
@@ -286,13 +308,11 @@ class IdealSensing:
         # scale-free coordinates [L]: true offsets over the mean neighbour distance, the k nearest per robot
         # (only the kept links are turned into coordinates)
         mean_distance = np.bincount(rx, distance, self.n) / np.maximum(np.bincount(rx, minlength=self.n), 1)
-        order = nearest_slots(self.n, rx, distance, self.k)
-        valid = order >= 0
         if len(rx):
-            kept = np.where(valid, order, 0)  # empty slots read link 0 and are zeroed below
             scale = np.where(mean_distance > 0, mean_distance, 1.0)[rx[kept]]
-            d, b = distance[kept], bearing[kept]
-            packed = np.where(valid[..., None], np.stack([d * np.cos(b), d * np.sin(b)], -1) / scale[..., None], 0.0)
+            packed = distance[kept][..., None] * cos_sin / scale[..., None]
+            if not valid.all():
+                packed = np.where(valid[..., None], packed, 0.0)
         else:
             packed = np.zeros((self.n, self.k, 2))
         scale_free = ScaleFreeReadings(packed, valid, valid.any(axis=1))
