@@ -17,7 +17,7 @@ from pettingzoo.utils.conversions import parallel_to_aec
 
 from swarm_envs.env import SwarmEnv
 from swarm_envs.factories import reports_unknown_kwargs
-from swarm_envs.metrics import largest_component_fraction
+from swarm_envs.metrics import largest_component_fraction, neighbourhood_sums
 from swarm_envs.platforms import Platform
 from swarm_envs.task import BatchState, Task, bump_any
 from swarm_envs.sensing.ideal import copy_pairs
@@ -50,13 +50,8 @@ class FlockingTask(Task):
         vec = np.stack([np.cos(head), np.sin(head)], -1) * weight[..., None]  # (B, A, 2)
         pol = np.linalg.norm(vec.mean(axis=1), axis=1)  # (B,) [polarisation]
         bumped = bump_any(self.agents_of(state.bumps)).astype(float)  # (B, A)
-        # local polarisation over each robot and its IR neighbours: per robot its own vector, then its
-        # neighbours in increasing index (pairs are sorted, so the tx < rx links, then the tx > rx ones)
-        vx, vy = vec[..., 0].reshape(-1), vec[..., 1].reshape(-1)
-        rows = np.concatenate([np.arange(B * A), pairs[:, 1], pairs[:, 0]])
-        src = np.concatenate([np.arange(B * A), pairs[:, 0], pairs[:, 1]])
-        sums = np.stack([np.bincount(rows, vx[src], B * A), np.bincount(rows, vy[src], B * A)], -1)
-        counts = np.bincount(rows, minlength=B * A)
+        # local polarisation over each robot and its IR neighbours
+        sums, counts = neighbourhood_sums(vec.reshape(B * A, 2), pairs)
         local_pol = np.linalg.norm(sums / counts[:, None], axis=1).reshape(B, A)
         global_reward = pol * cohesion - self.penalty * bumped.mean(axis=1)
         local_reward = local_pol * cohesion[:, None] - self.penalty * bumped

@@ -271,3 +271,22 @@ def test_cluster_metrics_equal_the_previous_formulas(monkeypatch, compiled):
         got, ref = metrics.largest_component_fraction(pos, link), _old_largest_component_fraction(pos, link)
         _equal(got[0], ref[0])
         _equal(got[1], ref[1])
+
+
+@pytest.mark.parametrize("compiled", [True, False])
+def test_neighbourhood_sums_equal_add_at_over_sorted_links(monkeypatch, compiled):
+    from swarm_envs import metrics
+
+    if not compiled:
+        monkeypatch.setattr(metrics, "_HAVE_NUMBA", False)
+    rng = np.random.default_rng(9)
+    pos = rng.uniform(0, 2, (400, 2))
+    pairs = copy_pairs(pos, 0.3, 100)
+    values = rng.normal(size=(400, 2))
+    values[::17] = 0.0
+    sums, counts = metrics.neighbourhood_sums(values, pairs)
+    rx, tx = directed_pairs(pairs)
+    ref = values.copy()
+    np.add.at(ref, rx, values[tx])
+    _equal(sums, ref)
+    _equal(counts, 1 + np.bincount(rx, minlength=400))
