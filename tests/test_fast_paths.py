@@ -216,11 +216,22 @@ def _rollout(env_id, B, steps=4, **kwargs):
     return vec
 
 
+def _numpy_only(monkeypatch):
+    """Switch every compiled fast path of this change to its numpy fallback."""
+    from swarm_envs import metrics
+
+    for module in (observation, ideal, metrics):
+        monkeypatch.setattr(module, "_HAVE_NUMBA", False)
+
+
+@pytest.mark.parametrize("compiled", [True, False])
 @pytest.mark.parametrize(
     "B,kwargs",
     [(5, dict(n_robots=10)), (1, dict(n_robots=200, platform="droplet")), (3, dict(n_robots=12, message_bits=2, n_neighbours=5))],
 )
-def test_ideal_sensing_and_observations_equal_the_previous_formulas(B, kwargs):
+def test_ideal_sensing_and_observations_equal_the_previous_formulas(monkeypatch, B, kwargs, compiled):
+    if not compiled:
+        _numpy_only(monkeypatch)
     vec = _rollout("swarm_envs/Flocking-v0", B, sensing="ideal", **kwargs)
     core = vec.core
     frame = core.sensing.step(core.positions, core.headings, None)
@@ -246,8 +257,10 @@ def test_full_sensing_observations_equal_the_previous_formulas():
         _equal(got[name], ref[name], name)
 
 
-@pytest.mark.parametrize("B,n,mode", [(6, 10, "global"), (2, 9, "local"), (1, 1100, "local")])
-def test_flocking_rewards_equal_the_previous_formulas(B, n, mode):
+@pytest.mark.parametrize("B,n,mode,compiled", [(6, 10, "global", True), (2, 9, "local", True), (1, 1100, "local", True), (3, 10, "local", False)])
+def test_flocking_rewards_equal_the_previous_formulas(monkeypatch, B, n, mode, compiled):
+    if not compiled:
+        _numpy_only(monkeypatch)
     vec = _rollout("swarm_envs/Flocking-v0", B, steps=3, sensing="ideal", n_robots=n, reward_mode=mode)
     task, state = vec.core.task, vec.core.state()
     got, ref = task.rewards(state, np.zeros(B, bool)), _old_flocking_rewards(task, state)
