@@ -232,28 +232,33 @@ if _HAVE_NUMBA:
                 out[r, c, 6] = np.float32(age[o])
         return out
 
+    @njit(cache=True, inline="always")
+    def wrap_difference_scalar(a: float, b: float) -> float:
+        """``pi - np.mod(pi - (a - b), 2 pi)`` with numpy's remainder rule: ``fmod`` (exact), plus 2 pi
+        when it is negative, +0 when it is zero (NaN stays NaN). For compiled callers."""
+        two_pi = 2.0 * np.pi
+        y = np.pi - (a - b)
+        # fmod without the library call where its result is known exactly: y itself in [0, 2 pi),
+        # y - 2 pi in [2 pi, 4 pi) (exact by Sterbenz's lemma)
+        if 0.0 <= y < two_pi:
+            m = y
+        elif two_pi <= y < 2.0 * two_pi:
+            m = y - two_pi
+        else:
+            m = np.fmod(y, two_pi)
+        if m != 0.0:
+            if m < 0.0:
+                m += two_pi
+        else:
+            m = 0.0
+        return np.pi - m
+
     @njit(cache=True)
     def _wrapped_difference_kernel(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-        """``pi - np.mod(pi - (a - b), 2 pi)`` elementwise with numpy's remainder rule: ``fmod`` (exact),
-        plus 2 pi when it is negative, +0 when it is zero (NaN stays NaN)."""
-        two_pi = 2.0 * np.pi
+        """:func:`wrap_difference_scalar` elementwise."""
         out = np.empty(len(a))
         for i in range(len(a)):
-            y = np.pi - (a[i] - b[i])
-            # fmod without the library call where its result is known exactly: y itself in [0, 2 pi),
-            # y - 2 pi in [2 pi, 4 pi) (exact by Sterbenz's lemma)
-            if 0.0 <= y < two_pi:
-                m = y
-            elif two_pi <= y < 2.0 * two_pi:
-                m = y - two_pi
-            else:
-                m = np.fmod(y, two_pi)
-            if m != 0.0:
-                if m < 0.0:
-                    m += two_pi
-            else:
-                m = 0.0
-            out[i] = np.pi - m
+            out[i] = wrap_difference_scalar(a[i], b[i])
         return out
 
     @njit(cache=True)

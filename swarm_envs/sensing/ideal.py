@@ -88,7 +88,33 @@ def directed_links(pairs: np.ndarray, n_rows: int) -> tuple[np.ndarray, np.ndarr
     return rx[order], tx[order], np.concatenate([np.arange(len(pairs))] * 2)[order]
 
 
+def _link_geometry(positions: np.ndarray, headings: np.ndarray, rx: np.ndarray, tx: np.ndarray):
+    """Per link: offset ``p_tx - p_rx`` (dx, dy) (m), rx's heading and ``wrap_angle(h_tx - h_rx)`` (rad)."""
+    if _HAVE_NUMBA and len(rx):
+        return _link_geometry_kernel(positions, headings, rx, tx)
+    x, y = positions[:, 0], positions[:, 1]
+    heading_rx = headings[rx]
+    return x[tx] - x[rx], y[tx] - y[rx], heading_rx, wrapped_difference(headings[tx], heading_rx)
+
+
 if _HAVE_NUMBA:
+    from swarm_envs.observation import wrap_difference_scalar
+
+    @njit(cache=True)
+    def _link_geometry_kernel(positions: np.ndarray, headings: np.ndarray, rx: np.ndarray, tx: np.ndarray):  # pragma: no cover - compiled
+        """:func:`_link_geometry` in one pass (the same IEEE operations as the numpy path)."""
+        P = len(rx)
+        dx = np.empty(P)
+        dy = np.empty(P)
+        heading_rx = np.empty(P)
+        heading = np.empty(P)
+        for q in range(P):
+            r, t = rx[q], tx[q]
+            dx[q] = positions[t, 0] - positions[r, 0]
+            dy[q] = positions[t, 1] - positions[r, 1]
+            heading_rx[q] = headings[r]
+            heading[q] = wrap_difference_scalar(headings[t], headings[r])
+        return dx, dy, heading_rx, heading
 
     @njit(cache=True)
     def _copy_pairs_kernel(positions: np.ndarray, m: int, r2: float) -> np.ndarray:  # pragma: no cover - compiled
@@ -282,12 +308,10 @@ class IdealSensing:
         rx, tx, link = directed_links(pairs, self.n)
         # exact pose of tx seen by rx (as observation.relative_pose); the two directions of a pair have
         # opposite offsets, so one hypot per pair gives both distances bit for bit
-        x, y = positions[:, 0].copy(), positions[:, 1].copy()  # 1-D gathers are much faster than row gathers
-        i, j = pairs[:, 0], pairs[:, 1]
-        distance = np.hypot(x[j] - x[i], y[j] - y[i])[link]
-        heading_rx = headings[rx]
-        bearing = wrapped_difference(np.arctan2(y[tx] - y[rx], x[tx] - x[rx]), heading_rx)
-        heading = wrapped_difference(headings[tx], heading_rx)
+        dx, dy, heading_rx, heading = _link_geometry(positions, headings, rx, tx)
+        pair_link = np.flatnonzero(rx < tx)  # each pair's i -> j link (offset p_j - p_i)
+        distance = np.hypot(dx[pair_link], dy[pair_link])[link]
+        bearing = wrapped_difference(np.arctan2(dy, dx), heading_rx)
         # the k nearest links of every robot, for the scale-free coordinates and (reused) the observations
         order = nearest_slots(self.n, rx, distance, self.k)
         valid = order >= 0
