@@ -117,6 +117,21 @@ if _HAVE_NUMBA:
         return dx, dy, heading_rx, heading
 
     @njit(cache=True)
+    def _scale_free_kernel(order: np.ndarray, distance: np.ndarray, cos_sin: np.ndarray, mean_distance: np.ndarray):  # pragma: no cover - compiled
+        """Slot (r, c): ``distance * (cos, sin) / scale`` of its link, scale = robot r's mean neighbour
+        distance (1 if not positive); zero for empty slots (the numpy path's operations, in its order)."""
+        n, k = order.shape
+        out = np.zeros((n, k, 2))
+        for r in range(n):
+            scale = mean_distance[r] if mean_distance[r] > 0 else 1.0
+            for c in range(k):
+                o = order[r, c]
+                if o >= 0:
+                    out[r, c, 0] = distance[o] * cos_sin[r, c, 0] / scale
+                    out[r, c, 1] = distance[o] * cos_sin[r, c, 1] / scale
+        return out
+
+    @njit(cache=True)
     def _copy_pairs_kernel(positions: np.ndarray, m: int, r2: float) -> np.ndarray:  # pragma: no cover - compiled
         """Pairs i < j of each copy of ``m`` rows with dx^2 + dy^2 <= r2, in (i, j) order (count, then fill)."""
         n = positions.shape[0]
@@ -332,11 +347,11 @@ class IdealSensing:
         # scale-free coordinates [L]: true offsets over the mean neighbour distance, the k nearest per robot
         # (only the kept links are turned into coordinates)
         mean_distance = np.bincount(rx, distance, self.n) / np.maximum(np.bincount(rx, minlength=self.n), 1)
-        if len(rx):
+        if len(rx) and _HAVE_NUMBA:
+            packed = _scale_free_kernel(order, distance, cos_sin, mean_distance)
+        elif len(rx):
             scale = np.where(mean_distance > 0, mean_distance, 1.0)[rx[kept]]
-            packed = distance[kept][..., None] * cos_sin / scale[..., None]
-            if not valid.all():
-                packed = np.where(valid[..., None], packed, 0.0)
+            packed = np.where(valid[..., None], distance[kept][..., None] * cos_sin / scale[..., None], 0.0)
         else:
             packed = np.zeros((self.n, self.k, 2))
         scale_free = ScaleFreeReadings(packed, valid, valid.any(axis=1))
