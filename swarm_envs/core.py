@@ -23,7 +23,7 @@ from typing import Any
 
 import numpy as np
 
-from swarm_envs.observation import ObservationLayout, pack_nearest
+from swarm_envs.observation import ObservationLayout, nearest_slots, pack_nearest, range_bearing_rows
 from swarm_envs.sensing.base import SensorFrame
 from swarm_envs.task import BatchState, Task
 from swarm_envs.world import N_BUMP_SECTORS, World, step_worlds
@@ -153,15 +153,13 @@ class SwarmCore:
         frame = self.frame
         n, k, m, b = self.n_total, self.layout.n_neighbours, self.layout.n_messages, self.layout.message_bits
         nb = frame.neighbours
-        rb_values = (
-            np.stack(
-                [np.ones(len(nb.rx)), nb.range, np.cos(nb.bearing), np.sin(nb.bearing), np.cos(nb.heading), np.sin(nb.heading), nb.age],
-                axis=-1,
-            )
-            if len(nb.rx)
-            else np.zeros((0, 7))
-        )
-        range_bearing, _ = pack_nearest(n, nb.rx, nb.range, rb_values, k)
+        # the k nearest readings per robot; only those are turned into observation rows. Parts are built
+        # in float32 (values cast from float64 as build would), then clipped by build. A stack that already
+        # selected the k nearest (the ideal one: NearestNeighbourReadings) hands over its slots and bearing trig
+        slots, cos_sin = getattr(nb, "slots", None), getattr(nb, "slot_cos_sin", None)
+        if slots is None or slots.shape != (n, k):
+            slots, cos_sin = nearest_slots(n, nb.rx, nb.range, k), None
+        range_bearing = range_bearing_rows(slots, nb.range, nb.bearing, nb.heading, nb.age, cos_sin)
         msg = frame.messages
         if len(msg.receiver):
             key = msg.distance_hint if msg.distance_hint is not None else np.arange(len(msg.receiver), dtype=float)
@@ -170,11 +168,15 @@ class SwarmCore:
             )
             messages, _ = pack_nearest(n, msg.receiver, key, msg_values, m)
         else:
-            messages = np.zeros((n, m, 2 + b))
+            messages = np.zeros((n, m, 2 + b), np.float32)
         sf = frame.scale_free
-        scale_free = np.concatenate([sf.valid[..., None].astype(float), np.where(sf.valid[..., None], sf.xy, 0.0)], axis=-1)
-        proprio = np.concatenate([self.bumps.astype(float), self.last_actions], axis=1)
-        return self.layout.build(range_bearing, messages, scale_free, sf.rigid.astype(float), proprio)
+        scale_free = np.empty(sf.xy.shape[:-1] + (3,), np.float32)
+        scale_free[..., 0] = sf.valid
+        scale_free[..., 1:] = np.where(sf.valid[..., None], sf.xy, 0.0)
+        proprio = np.empty((n, N_BUMP_SECTORS + self.last_actions.shape[1]), np.float32)
+        proprio[:, :N_BUMP_SECTORS] = self.bumps
+        proprio[:, N_BUMP_SECTORS:] = self.last_actions
+        return self.layout.build(range_bearing, messages, scale_free, sf.rigid.astype(np.float32), proprio)
 
     def agent_rows(self) -> np.ndarray:
         """(B, n_agents) row index of every agent of every copy."""

@@ -17,10 +17,10 @@ from pettingzoo.utils.conversions import parallel_to_aec
 
 from swarm_envs.env import SwarmEnv
 from swarm_envs.factories import reports_unknown_kwargs
-from swarm_envs.metrics import largest_component_fraction
+from swarm_envs.metrics import largest_component_fraction, neighbourhood_sums
 from swarm_envs.platforms import Platform
 from swarm_envs.task import BatchState, Task, bump_any
-from swarm_envs.sensing.ideal import candidate_pairs
+from swarm_envs.sensing.ideal import copy_pairs
 
 __all__ = ["FlockingTask", "FlockingEnv", "raw_env", "parallel_env", "env"]
 
@@ -44,21 +44,14 @@ class FlockingTask(Task):
         vmax = self.platform.max_speed
         ir_range = self.platform.ir_range
         # IR-range links of every copy, once, for cohesion and local polarisation (never across copies)
-        pairs = candidate_pairs(pos.reshape(B * A, 2), ir_range, np.repeat(np.arange(B), A))
+        pairs = copy_pairs(pos.reshape(B * A, 2), ir_range, A)
         cohesion, _ = largest_component_fraction(pos, ir_range, pairs)
         weight = np.clip(speed / vmax, 0.0, 1.0)
         vec = np.stack([np.cos(head), np.sin(head)], -1) * weight[..., None]  # (B, A, 2)
         pol = np.linalg.norm(vec.mean(axis=1), axis=1)  # (B,) [polarisation]
         bumped = bump_any(self.agents_of(state.bumps)).astype(float)  # (B, A)
-        # local polarisation over each robot and its IR neighbours: both directions of every pair, in
-        # (rx, tx) order as directed_pairs gives them (one integer sort key; the keys are unique)
-        rx, tx = np.concatenate([pairs[:, 0], pairs[:, 1]]), np.concatenate([pairs[:, 1], pairs[:, 0]])
-        order = np.argsort(rx * (B * A) + tx)
-        rx, tx = rx[order], tx[order]
-        flat = vec.reshape(B * A, 2)
-        sums = flat.copy()
-        np.add.at(sums, rx, flat[tx])
-        counts = 1 + np.bincount(rx, minlength=B * A)
+        # local polarisation over each robot and its IR neighbours
+        sums, counts = neighbourhood_sums(vec.reshape(B * A, 2), pairs)
         local_pol = np.linalg.norm(sums / counts[:, None], axis=1).reshape(B, A)
         global_reward = pol * cohesion - self.penalty * bumped.mean(axis=1)
         local_reward = local_pol * cohesion[:, None] - self.penalty * bumped

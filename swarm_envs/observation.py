@@ -26,10 +26,12 @@ from swarm_envs.world import N_BUMP_SECTORS
 
 __all__ = [
     "ObservationLayout",
+    "nearest_slots",
     "pack_nearest",
     "RB_FIELDS",
     "SCALE_FREE_CLIP",
     "relative_pose",
+    "wrapped_difference",
 ]
 
 RB_FIELDS = ("valid", "range", "cos_bearing", "sin_bearing", "cos_heading", "sin_heading", "age")
@@ -45,9 +47,68 @@ def relative_pose(
     """
     delta = positions[tx] - positions[rx]
     distance = np.hypot(delta[:, 0], delta[:, 1])
-    bearing = np.arctan2(delta[:, 1], delta[:, 0]) - headings[rx]
-    heading = headings[tx] - headings[rx]
-    return distance, wrap_angle(bearing), wrap_angle(heading)
+    bearing = wrapped_difference(np.arctan2(delta[:, 1], delta[:, 0]), headings[rx])
+    heading = wrapped_difference(headings[tx], headings[rx])
+    return distance, bearing, heading
+
+
+def wrapped_difference(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """``wrap_angle(a - b)`` (rad, in (-pi, pi]) elementwise; compiled when numba is installed.
+
+    The kernel does the same IEEE operations as :func:`swarm_envs.geometry.wrap_angle` (``np.mod`` is
+    ``fmod``, exact, plus one addition of 2 pi for negative remainders), so the results are the same bits,
+    several times faster than ``np.mod``.
+    """
+    a = np.asarray(a, dtype=np.float64)
+    b = np.asarray(b, dtype=np.float64)
+    if _HAVE_NUMBA and a.ndim == 1 and a.shape == b.shape:
+        return _wrapped_difference_kernel(a, b)
+    return wrap_angle(a - b)
+
+
+def range_bearing_rows(
+    order: np.ndarray,
+    distance: np.ndarray,
+    bearing: np.ndarray,
+    heading: np.ndarray,
+    age: np.ndarray,
+    bearing_cos_sin: np.ndarray | None = None,
+) -> np.ndarray:
+    """(n, k, 7) float32 ``range_bearing`` rows (:data:`RB_FIELDS`, not clipped) of the links in ``order``
+    (n, k) (from :func:`nearest_slots`; -1: an all-zero row), from per-link range (m), bearing and
+    heading (rad) and age (steps); ``bearing_cos_sin`` (n, k, 2): cos and sin of the slots' bearings if
+    already known. cos and sin are taken by numpy on the kept links only; a compiled pass writes the rows
+    (the same float32 values as stacking in float64 and casting)."""
+    valid = order >= 0
+    if len(distance) == 0:
+        return np.zeros(order.shape + (7,), np.float32)
+    kept = np.where(valid, order, 0)  # empty slots read link 0 and are zeroed
+    if bearing_cos_sin is None:
+        b = bearing[kept]
+        bearing_cos_sin = np.stack([np.cos(b), np.sin(b)], axis=-1)
+    h = heading[kept]
+    heading_cos_sin = np.stack([np.cos(h), np.sin(h)], axis=-1)
+    if _HAVE_NUMBA:
+        return _range_bearing_kernel(
+            np.ascontiguousarray(order, dtype=np.int64),
+            np.ascontiguousarray(distance, dtype=np.float64),
+            np.ascontiguousarray(bearing_cos_sin, dtype=np.float64),
+            heading_cos_sin,
+            np.ascontiguousarray(age, dtype=np.float64),
+        )
+    rows = np.concatenate([np.ones(order.shape + (1,)), distance[kept][..., None], bearing_cos_sin, heading_cos_sin, age[kept][..., None]], axis=-1)
+    return np.where(valid[..., None], rows, 0.0).astype(np.float32)
+
+
+def nearest_slots(n_rows: int, row: np.ndarray, key: np.ndarray, k: int) -> np.ndarray:
+    """(n_rows, k) link index of the ``k`` smallest ``key`` per row (-1 where a row has fewer links), the
+    ``order`` of :func:`pack_nearest` without packing any values."""
+    if _HAVE_NUMBA and len(row) and k > 0:
+        row = np.ascontiguousarray(row, dtype=np.int64).reshape(-1)
+        if row.min() < 0 or row.max() >= n_rows:
+            raise ValueError(f"pack_nearest: rows must lie in [0, {n_rows}), got [{row.min()}, {row.max()}]")
+        return _nearest_slots_kernel(int(n_rows), row, np.ascontiguousarray(key, dtype=np.float64).reshape(-1), int(k))
+    return _pack_nearest_numpy(n_rows, row, key, np.zeros((len(row), 0)), k)[1]
 
 
 def pack_nearest(
@@ -115,9 +176,22 @@ if _HAVE_NUMBA:
 
     @njit(cache=True)
     def _pack_nearest_kernel(n_rows: int, row: np.ndarray, key: np.ndarray, values: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray]:
-        """:func:`pack_nearest` in one pass over the links: each row keeps its k first links in
+        """:func:`pack_nearest`: the slots of :func:`_nearest_slots_kernel`, then the values copied in."""
+        F = values.shape[1]
+        order = _nearest_slots_kernel(n_rows, row, key, k)
+        packed = np.zeros((n_rows, k, F))
+        for r in range(n_rows):
+            for c in range(k):
+                if order[r, c] < 0:
+                    break
+                packed[r, c, :] = values[order[r, c]]
+        return packed, order
+
+    @njit(cache=True)
+    def _nearest_slots_kernel(n_rows: int, row: np.ndarray, key: np.ndarray, k: int) -> np.ndarray:
+        """:func:`nearest_slots` in one pass over the links: each row keeps its k first links in
         :func:`_before` order by insertion (links arrive in index order, so ties keep link order)."""
-        P, F = values.shape
+        P = len(row)
         order = np.full((n_rows, k), -1, dtype=np.int64)
         best = np.empty((n_rows, k))
         count = np.zeros(n_rows, dtype=np.int64)
@@ -136,11 +210,73 @@ if _HAVE_NUMBA:
                 c -= 1
             best[r, c] = kp
             order[r, c] = p
-        packed = np.zeros((n_rows, k, F))
-        for r in range(n_rows):
-            for c in range(count[r]):
-                packed[r, c, :] = values[order[r, c]]
-        return packed, order
+        return order
+
+    @njit(cache=True)
+    def _range_bearing_kernel(order: np.ndarray, distance: np.ndarray, bcs: np.ndarray, hcs: np.ndarray, age: np.ndarray) -> np.ndarray:
+        """Rows [1, range, cos, sin bearing, cos, sin heading, age] of the kept links as float32; zero rows
+        for empty slots."""
+        n, k = order.shape
+        out = np.zeros((n, k, 7), np.float32)
+        for r in range(n):
+            for c in range(k):
+                o = order[r, c]
+                if o < 0:
+                    continue
+                out[r, c, 0] = 1.0
+                out[r, c, 1] = np.float32(distance[o])
+                out[r, c, 2] = np.float32(bcs[r, c, 0])
+                out[r, c, 3] = np.float32(bcs[r, c, 1])
+                out[r, c, 4] = np.float32(hcs[r, c, 0])
+                out[r, c, 5] = np.float32(hcs[r, c, 1])
+                out[r, c, 6] = np.float32(age[o])
+        return out
+
+    @njit(cache=True, inline="always")
+    def wrap_difference_scalar(a: float, b: float) -> float:
+        """``pi - np.mod(pi - (a - b), 2 pi)`` with numpy's remainder rule: ``fmod`` (exact), plus 2 pi
+        when it is negative, +0 when it is zero (NaN stays NaN). For compiled callers."""
+        two_pi = 2.0 * np.pi
+        y = np.pi - (a - b)
+        # fmod without the library call where its result is known exactly: y itself in [0, 2 pi),
+        # y - 2 pi in [2 pi, 4 pi) (exact by Sterbenz's lemma)
+        if 0.0 <= y < two_pi:
+            m = y
+        elif two_pi <= y < 2.0 * two_pi:
+            m = y - two_pi
+        else:
+            m = np.fmod(y, two_pi)
+        if m != 0.0:
+            if m < 0.0:
+                m += two_pi
+        else:
+            m = 0.0
+        return np.pi - m
+
+    @njit(cache=True)
+    def _wrapped_difference_kernel(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        """:func:`wrap_difference_scalar` elementwise."""
+        out = np.empty(len(a))
+        for i in range(len(a)):
+            out[i] = wrap_difference_scalar(a[i], b[i])
+        return out
+
+    @njit(cache=True)
+    def _clip_float32_kernel(values: np.ndarray, low: np.ndarray, high: np.ndarray) -> np.ndarray:
+        """``np.clip(values.astype(float32), low, high)`` for (n, S) float64 or float32 values and (S,) float32
+        bounds (NaN stays NaN, as with ``np.clip``)."""
+        n, S = values.shape
+        out = np.empty((n, S), np.float32)
+        for i in range(n):
+            for s in range(S):
+                v = np.float32(values[i, s])
+                if v == v:  # numpy's clip: max then min, each keeping a NaN and taking the bound on ties
+                    if not v > low[s]:
+                        v = low[s]
+                    if not v < high[s]:
+                        v = high[s]
+                out[i, s] = v
+        return out
 
 
 @dataclass
@@ -200,7 +336,8 @@ class ObservationLayout:
         rigid: np.ndarray,
         proprio: np.ndarray,
     ) -> dict[str, np.ndarray]:
-        """Clip batched parts (leading robot axis) into the space bounds, as float32 arrays."""
+        """Clip batched parts (leading robot axis; float64, or float32 cast from float64) into the space
+        bounds, as float32 arrays."""
         parts = {
             "range_bearing": range_bearing,
             "messages": messages,
@@ -210,7 +347,7 @@ class ObservationLayout:
         }
         out = {}
         for name, box in self.dict_space().spaces.items():
-            out[name] = np.clip(np.asarray(parts[name], np.float32), box.low, box.high)
+            out[name] = _clip_to_box(parts[name], box.low, box.high)
         return out
 
     def per_robot(self, batched: dict[str, np.ndarray], i: int) -> np.ndarray | dict[str, np.ndarray]:
@@ -230,3 +367,16 @@ class ObservationLayout:
             out[name] = flat[..., start : start + size].reshape(*lead, *box.shape)
             start += size
         return out
+
+
+def _clip_to_box(values: np.ndarray, low: np.ndarray, high: np.ndarray) -> np.ndarray:
+    """``np.clip(values as float32, low, high)`` for float64 or float32 values (n, *box shape) and float32
+    bounds of the box shape; one compiled pass when numba is installed (same float32 results)."""
+    values = np.asarray(values)
+    if _HAVE_NUMBA and values.dtype in (np.float64, np.float32) and values.ndim >= 1 and values.shape[1:] == low.shape and low.dtype == np.float32:
+        n = values.shape[0]
+        flat = _clip_float32_kernel(
+            np.ascontiguousarray(values).reshape(n, -1), np.ascontiguousarray(low).reshape(-1), np.ascontiguousarray(high).reshape(-1)
+        )
+        return flat.reshape(values.shape)
+    return np.clip(np.asarray(values, np.float32), low, high)

@@ -8,14 +8,26 @@ neighbour distance.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 from scipy.spatial import cKDTree
 
-from swarm_envs.observation import pack_nearest, relative_pose
+from swarm_envs.observation import nearest_slots, wrapped_difference
 from swarm_envs.platforms import Platform
 from swarm_envs.sensing.base import MessageReadings, NeighbourReadings, ScaleFreeReadings, SensorFrame
 
-__all__ = ["IdealSensing", "candidate_pairs", "directed_pairs", "neighbour_pairs"]
+__all__ = ["IdealSensing", "NearestNeighbourReadings", "candidate_pairs", "copy_pairs", "directed_pairs", "directed_links", "neighbour_pairs"]
+
+#: robots per copy up to which :func:`copy_pairs` checks every pair of a copy; larger copies use a cell grid
+BRUTE_FORCE_MAX = 64
+
+try:  # numba is optional: compiled pair search and pair direction
+    from swarm_envs._numba import njit
+
+    _HAVE_NUMBA = True
+except ImportError:  # pragma: no cover - exercised only without numba
+    _HAVE_NUMBA = False
 
 
 def candidate_pairs(positions: np.ndarray, max_range: float, copy: np.ndarray | None = None) -> np.ndarray:
@@ -40,6 +52,220 @@ def candidate_pairs(positions: np.ndarray, max_range: float, copy: np.ndarray | 
     return pairs[np.argsort(pairs[:, 0] * len(points) + pairs[:, 1])]
 
 
+def copy_pairs(positions: np.ndarray, max_range: float, copy_size: int) -> np.ndarray:
+    """:func:`candidate_pairs` of rows grouped in env copies of ``copy_size`` consecutive robots: the same
+    (P, 2) sorted pairs i < j of one copy closer than ``max_range`` (m), squared distance ``<= max_range**2``
+    as in the KD-tree. Compiled (numba): small copies (at most :data:`BRUTE_FORCE_MAX` robots) check every
+    pair of a copy, larger ones the robots of the neighbouring cells of a grid of cells >= ``max_range``;
+    both emit the pairs already sorted. Without numba: :func:`candidate_pairs`."""
+    positions = np.ascontiguousarray(positions, dtype=np.float64).reshape(-1, 2)
+    copy_size = int(copy_size)
+    if copy_size < 1 or len(positions) % copy_size:
+        raise ValueError(f"copy_pairs: {len(positions)} rows are not whole copies of {copy_size} robots")
+    r2 = float(max_range) * float(max_range)
+    if _HAVE_NUMBA and copy_size <= BRUTE_FORCE_MAX:
+        return _copy_pairs_kernel(positions, copy_size, r2)
+    if _HAVE_NUMBA and np.isfinite(positions).all() and max_range > 0:
+        # cells a little larger than the range: a pair in range is never two cells apart despite rounding
+        return _grid_pairs_kernel(positions, copy_size, r2, float(max_range) * (1.0 + 1e-6))
+    n_copies = len(positions) // copy_size
+    copy = np.repeat(np.arange(n_copies), copy_size) if n_copies > 1 else None
+    return candidate_pairs(positions, max_range, copy)
+
+
+def directed_links(pairs: np.ndarray, n_rows: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Both directions of sorted (P, 2) pairs i < j as :func:`directed_pairs` gives them (sorted by
+    (rx, tx)), plus the index of each link's pair; ``n_rows`` > every robot index. O(P) when compiled."""
+    pairs = np.ascontiguousarray(pairs, dtype=np.int64).reshape(-1, 2)
+    if len(pairs) == 0:
+        empty = np.zeros(0, dtype=np.int64)
+        return empty, empty, empty
+    if _HAVE_NUMBA:
+        return _directed_links_kernel(pairs, int(n_rows))
+    rx = np.concatenate([pairs[:, 0], pairs[:, 1]])
+    tx = np.concatenate([pairs[:, 1], pairs[:, 0]])
+    order = np.argsort(rx * int(n_rows) + tx)
+    return rx[order], tx[order], np.concatenate([np.arange(len(pairs))] * 2)[order]
+
+
+def _link_geometry(positions: np.ndarray, headings: np.ndarray, rx: np.ndarray, tx: np.ndarray):
+    """Per link: offset ``p_tx - p_rx`` (dx, dy) (m), rx's heading and ``wrap_angle(h_tx - h_rx)`` (rad)."""
+    if _HAVE_NUMBA and len(rx):
+        return _link_geometry_kernel(positions, headings, rx, tx)
+    x, y = positions[:, 0], positions[:, 1]
+    heading_rx = headings[rx]
+    return x[tx] - x[rx], y[tx] - y[rx], heading_rx, wrapped_difference(headings[tx], heading_rx)
+
+
+if _HAVE_NUMBA:
+    from swarm_envs.observation import wrap_difference_scalar
+
+    @njit(cache=True)
+    def _link_geometry_kernel(positions: np.ndarray, headings: np.ndarray, rx: np.ndarray, tx: np.ndarray):  # pragma: no cover - compiled
+        """:func:`_link_geometry` in one pass (the same IEEE operations as the numpy path)."""
+        P = len(rx)
+        dx = np.empty(P)
+        dy = np.empty(P)
+        heading_rx = np.empty(P)
+        heading = np.empty(P)
+        for q in range(P):
+            r, t = rx[q], tx[q]
+            dx[q] = positions[t, 0] - positions[r, 0]
+            dy[q] = positions[t, 1] - positions[r, 1]
+            heading_rx[q] = headings[r]
+            heading[q] = wrap_difference_scalar(headings[t], headings[r])
+        return dx, dy, heading_rx, heading
+
+    @njit(cache=True)
+    def _scale_free_kernel(order: np.ndarray, distance: np.ndarray, cos_sin: np.ndarray, mean_distance: np.ndarray):  # pragma: no cover - compiled
+        """Slot (r, c): ``distance * (cos, sin) / scale`` of its link, scale = robot r's mean neighbour
+        distance (1 if not positive); zero for empty slots (the numpy path's operations, in its order)."""
+        n, k = order.shape
+        out = np.zeros((n, k, 2))
+        for r in range(n):
+            scale = mean_distance[r] if mean_distance[r] > 0 else 1.0
+            for c in range(k):
+                o = order[r, c]
+                if o >= 0:
+                    out[r, c, 0] = distance[o] * cos_sin[r, c, 0] / scale
+                    out[r, c, 1] = distance[o] * cos_sin[r, c, 1] / scale
+        return out
+
+    @njit(cache=True)
+    def _copy_pairs_kernel(positions: np.ndarray, m: int, r2: float) -> np.ndarray:  # pragma: no cover - compiled
+        """Pairs i < j of each copy of ``m`` rows with dx^2 + dy^2 <= r2, in (i, j) order (count, then fill)."""
+        n = positions.shape[0]
+        count = 0
+        for o in range(0, n, m):
+            for i in range(o, o + m):
+                xi, yi = positions[i, 0], positions[i, 1]
+                for j in range(i + 1, o + m):
+                    dx = positions[j, 0] - xi
+                    dy = positions[j, 1] - yi
+                    if dx * dx + dy * dy <= r2:
+                        count += 1
+        out = np.empty((count, 2), np.int64)
+        p = 0
+        for o in range(0, n, m):
+            for i in range(o, o + m):
+                xi, yi = positions[i, 0], positions[i, 1]
+                for j in range(i + 1, o + m):
+                    dx = positions[j, 0] - xi
+                    dy = positions[j, 1] - yi
+                    if dx * dx + dy * dy <= r2:
+                        out[p, 0] = i
+                        out[p, 1] = j
+                        p += 1
+        return out
+
+    @njit(cache=True)
+    def _grid_pairs_kernel(positions: np.ndarray, m: int, r2: float, cell: float) -> np.ndarray:  # pragma: no cover - compiled
+        """Pairs i < j of each copy of ``m`` rows with dx^2 + dy^2 <= r2, in (i, j) order: robots binned in
+        square cells of side ``cell`` (>= the range; doubled until there are at most ~4 m cells), each
+        robot's partners j > i collected from its 3 x 3 cells and sorted."""
+        n = positions.shape[0]
+        out = np.empty((max(16, 8 * n), 2), np.int64)
+        p = 0
+        buf = np.empty(m, np.int64)
+        for o in range(0, n, m):
+            xmin, ymin = positions[o, 0], positions[o, 1]
+            xmax, ymax = xmin, ymin
+            for i in range(o, o + m):
+                xmin = min(xmin, positions[i, 0])
+                xmax = max(xmax, positions[i, 0])
+                ymin = min(ymin, positions[i, 1])
+                ymax = max(ymax, positions[i, 1])
+            side = cell
+            nx = int((xmax - xmin) / side) + 1
+            ny = int((ymax - ymin) / side) + 1
+            while nx * ny > 4 * m + 16:
+                side *= 2.0
+                nx = int((xmax - xmin) / side) + 1
+                ny = int((ymax - ymin) / side) + 1
+            cx = np.empty(m, np.int64)
+            cy = np.empty(m, np.int64)
+            start = np.zeros(nx * ny + 1, np.int64)
+            for a in range(m):
+                cx[a] = int((positions[o + a, 0] - xmin) / side)
+                cy[a] = int((positions[o + a, 1] - ymin) / side)
+                start[cx[a] * ny + cy[a] + 1] += 1
+            for c in range(nx * ny):
+                start[c + 1] += start[c]
+            fill = start[:-1].copy()
+            members = np.empty(m, np.int64)
+            for a in range(m):  # counting sort: each cell lists its robots in increasing index
+                c = cx[a] * ny + cy[a]
+                members[fill[c]] = a
+                fill[c] += 1
+            for a in range(m):
+                xi, yi = positions[o + a, 0], positions[o + a, 1]
+                cnt = 0
+                for gx in range(max(cx[a] - 1, 0), min(cx[a] + 2, nx)):
+                    for gy in range(max(cy[a] - 1, 0), min(cy[a] + 2, ny)):
+                        c = gx * ny + gy
+                        for q in range(start[c + 1] - 1, start[c] - 1, -1):  # members > a, from the top
+                            b = members[q]
+                            if b <= a:
+                                break
+                            dx = positions[o + b, 0] - xi
+                            dy = positions[o + b, 1] - yi
+                            if dx * dx + dy * dy <= r2:
+                                buf[cnt] = b
+                                cnt += 1
+                if cnt == 0:
+                    continue
+                if cnt > 64:
+                    buf[:cnt] = np.sort(buf[:cnt])
+                else:  # insertion sort of the few partners
+                    for q in range(1, cnt):
+                        v = buf[q]
+                        w = q - 1
+                        while w >= 0 and buf[w] > v:
+                            buf[w + 1] = buf[w]
+                            w -= 1
+                        buf[w + 1] = v
+                if p + cnt > out.shape[0]:
+                    grown = np.empty((2 * out.shape[0] + cnt, 2), np.int64)
+                    grown[:p] = out[:p]
+                    out = grown
+                for q in range(cnt):
+                    out[p, 0] = o + a
+                    out[p, 1] = o + buf[q]
+                    p += 1
+        return out[:p].copy()
+
+    @njit(cache=True)
+    def _directed_links_kernel(pairs: np.ndarray, n_rows: int):  # pragma: no cover - compiled
+        """Row r's links in (rx, tx) order: first tx < r (pairs (tx, r), met in increasing tx), then tx > r
+        (pairs (r, tx), also increasing) -- a counting sort, no comparison sort."""
+        P = pairs.shape[0]
+        lower = np.zeros(n_rows, np.int64)
+        degree = np.zeros(n_rows, np.int64)
+        for p in range(P):
+            lower[pairs[p, 1]] += 1
+            degree[pairs[p, 0]] += 1
+            degree[pairs[p, 1]] += 1
+        low_at = np.empty(n_rows, np.int64)
+        high_at = np.empty(n_rows, np.int64)
+        start = 0
+        for r in range(n_rows):
+            low_at[r] = start
+            high_at[r] = start + lower[r]
+            start += degree[r]
+        rx = np.empty(2 * P, np.int64)
+        tx = np.empty(2 * P, np.int64)
+        link = np.empty(2 * P, np.int64)
+        for p in range(P):
+            i, j = pairs[p, 0], pairs[p, 1]
+            q = low_at[j]
+            rx[q], tx[q], link[q] = j, i, p
+            low_at[j] = q + 1
+            q = high_at[i]
+            rx[q], tx[q], link[q] = i, j, p
+            high_at[i] = q + 1
+        return rx, tx, link
+
+
 def neighbour_pairs(positions: np.ndarray, max_range: float, copy: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Both directions (rx, tx) of every pair of centres closer than ``max_range`` (m), sorted by (rx, tx).
 
@@ -57,6 +283,17 @@ def directed_pairs(pairs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     tx = np.concatenate([pairs[:, 1], pairs[:, 0]])
     order = np.argsort(rx * (int(pairs.max()) + 1) + tx)  # (rx, tx) keys are unique: same order as lexsort
     return rx[order], tx[order]
+
+
+@dataclass
+class NearestNeighbourReadings(NeighbourReadings):
+    """:class:`NeighbourReadings` that also carry each robot's ``k`` nearest links, ``slots`` (N, k) (link
+    index, -1 when empty: :func:`swarm_envs.observation.nearest_slots` of ``rx`` by ``range``), and
+    ``slot_cos_sin`` (N, k, 2), cos and sin of their bearings (of link 0 in empty slots). The ideal stack
+    needs both for its scale-free coordinates; the observation builder reuses them."""
+
+    slots: np.ndarray | None = None
+    slot_cos_sin: np.ndarray | None = None
 
 
 class IdealSensing:
@@ -80,9 +317,26 @@ class IdealSensing:
     ) -> SensorFrame:
         """One step for all robots; ``payloads`` (N, b) bool or None, ``sending`` (N,) bool robots whose
         payload goes out this step (default: all when payloads are given)."""
-        rx, tx = neighbour_pairs(positions, self.platform.ir_range, self.copy if self.n_copies > 1 else None)
-        distance, bearing, heading = relative_pose(positions, headings, rx, tx)
-        neighbours = NeighbourReadings(rx, tx, distance, bearing, heading, np.zeros(len(rx)))
+        positions = np.asarray(positions, dtype=np.float64)
+        headings = np.asarray(headings, dtype=np.float64)
+        pairs = copy_pairs(positions, self.platform.ir_range, self.copy_size)
+        rx, tx, link = directed_links(pairs, self.n)
+        # exact pose of tx seen by rx (as observation.relative_pose); the two directions of a pair have
+        # opposite offsets, so one hypot per pair gives both distances bit for bit
+        dx, dy, heading_rx, heading = _link_geometry(positions, headings, rx, tx)
+        pair_link = np.flatnonzero(rx < tx)  # each pair's i -> j link (offset p_j - p_i)
+        distance = np.hypot(dx[pair_link], dy[pair_link])[link]
+        bearing = wrapped_difference(np.arctan2(dy, dx), heading_rx)
+        # the k nearest links of every robot, for the scale-free coordinates and (reused) the observations
+        order = nearest_slots(self.n, rx, distance, self.k)
+        valid = order >= 0
+        kept = np.where(valid, order, 0)  # empty slots read link 0 and are zeroed below
+        if len(rx):
+            b = bearing[kept]
+            cos_sin = np.stack([np.cos(b), np.sin(b)], -1)
+        else:
+            cos_sin = np.zeros((self.n, self.k, 2))
+        neighbours = NearestNeighbourReadings(rx, tx, distance, bearing, heading, np.zeros(len(rx)), order, cos_sin)
 
         if self.message_bits > 0 and payloads is not None:
             got = np.ones(len(rx), dtype=bool) if sending is None else np.asarray(sending, bool)[tx]
@@ -90,10 +344,15 @@ class IdealSensing:
         else:
             messages = MessageReadings(payload=np.zeros((0, self.message_bits)))
 
+        # scale-free coordinates [L]: true offsets over the mean neighbour distance, the k nearest per robot
+        # (only the kept links are turned into coordinates)
         mean_distance = np.bincount(rx, distance, self.n) / np.maximum(np.bincount(rx, minlength=self.n), 1)
-        scale = np.where(mean_distance > 0, mean_distance, 1.0)[rx]
-        local = np.stack([distance * np.cos(bearing), distance * np.sin(bearing)], -1) / scale[:, None]
-        packed, order = pack_nearest(self.n, rx, distance, local, self.k)
-        valid = order >= 0
+        if len(rx) and _HAVE_NUMBA:
+            packed = _scale_free_kernel(order, distance, cos_sin, mean_distance)
+        elif len(rx):
+            scale = np.where(mean_distance > 0, mean_distance, 1.0)[rx[kept]]
+            packed = np.where(valid[..., None], distance[kept][..., None] * cos_sin / scale[..., None], 0.0)
+        else:
+            packed = np.zeros((self.n, self.k, 2))
         scale_free = ScaleFreeReadings(packed, valid, valid.any(axis=1))
         return SensorFrame(neighbours, messages, scale_free)
