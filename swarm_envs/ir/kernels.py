@@ -57,13 +57,7 @@ if HAVE_NUMBA:
 
     @njit(cache=True, inline="always", error_model="numpy")
     def _gain(kind: int, p0: float, p1: float, p2: float, p3: float, p4: float, p5: float, p6: float, p7: float, d_m: float, cd: float, ce: float) -> float:
-        if kind == 1:  # e-puck [T20 Eqs. (24),(25),(27)]
-            if cd <= 0.0 or ce <= 0.0:
-                return 0.0
-            d_cm = 100.0 * d_m
-            hm = 1.0 if d_cm <= p2 else p1 * math.exp(p0 * math.log(max(d_cm, 1e-12)))
-            ce2 = ce * ce
-            return ce2 * ce2 * ce2 * ce * cd * cd * cd * hm
+        # the e-puck (kind 1) has its own ray loop, _epuck_rays
         if kind == 2:  # r-one binary arcs [L Sec. 3.2]; p3, p4 = cos of the half arcs
             if d_m <= p2 and cd >= p3 and ce >= p4:
                 return 1.0
@@ -91,6 +85,87 @@ if HAVE_NUMBA:
         t = min(1.0, max(0.0, t))
         qx, qy = px - t * sx, py - t * sy
         return qx * qx + qy * qy < r2
+
+
+    _SIGN_TOL = 1e-12  # m: cosine numerators farther than this from 0 have the sign of the reference's cosines
+    _DISC_TOL = 1e-6  # relative: a ray's line this far outside / inside the disc radius gets the reference's verdict
+
+    @njit(cache=True, inline="always", error_model="numpy")
+    def _ray_blocked(dx: float, dy: float, L2: float, x0: float, y0: float, occ_xy: np.ndarray, q0: int, q1: int, r2: float) -> bool:
+        """Whether the ray (x0, y0) -> (x0 + dx, y0 + dy), ``L2 = dx * dx + dy * dy``, crosses one of the discs
+        ``occ_xy[q0:q1]`` (radius^2 ``r2``): the verdicts of :func:`_segment_hits_disc`, without its division
+        except within a relative 1e-6 of the radius (there it decides). When the nearest point is an end
+        (t clamped to 0 or 1) the arithmetic is the same; otherwise the squared distance of the centre from
+        the ray's line is ``cr^2 / L2`` (cr the cross product), compared with r2 with a margin far above
+        rounding (~1e-15 relative)."""
+        r2_hi, r2_lo = r2 * (1.0 + _DISC_TOL), r2 * (1.0 - _DISC_TOL)
+        for q in range(q0, q1):
+            px, py = occ_xy[q, 0] - x0, occ_xy[q, 1] - y0
+            dot = px * dx + py * dy
+            if dot <= 0.0:  # t clamps to 0: nearest point is the start
+                if px * px + py * py < r2:
+                    return True
+            elif dot >= L2:  # t clamps to 1: nearest point is the end
+                qx, qy = px - dx, py - dy
+                if qx * qx + qy * qy < r2:
+                    return True
+            else:
+                cr = px * dy - py * dx
+                cr2 = cr * cr
+                if cr2 >= r2_hi * L2:
+                    continue
+                if cr2 <= r2_lo * L2 or _segment_hits_disc(x0, y0, x0 + dx, y0 + dy, occ_xy[q, 0], occ_xy[q, 1], r2):
+                    return True
+        return False
+
+    @njit(cache=True, inline="always", error_model="numpy")
+    def _epuck_rays(
+        out: np.ndarray, dets: np.ndarray, ems: np.ndarray, det_pos: np.ndarray, dcos: np.ndarray, dsin: np.ndarray,
+        ex: np.ndarray, ey: np.ndarray, eax: np.ndarray, eay: np.ndarray, occ_xy: np.ndarray, q0: int, q1: int, r2: float,
+        k_m: float, o_m: float, d_sat_cm: float,
+    ) -> bool:
+        """e-puck gains of one pair's candidate rays into ``out`` (n_d, n_e) [T20 Eqs. (7),(24),(25),(27)];
+        True if one is lit. Same values as :func:`_gain` without a square root or division per ray: with
+        ``dx`` the ray (detector -> emitter), ``nd = dx . u_i = |dx| cos(detector angle)`` and
+        ``ne = -dx . a_j = |dx| cos(emitter angle)``, ``ce^7 cd^3 h_m = ne^7 nd^3 / L2^5 h_m`` and, beyond
+        d_sat, ``h_m = o_m (100 |dx|)^k_m = o_m 100^k_m L2^(k_m / 2)``. A ray is dark when nd or ne <= 0;
+        when one of them is within 1e-12 m of 0 (where rounding could flip the sign) the reference's
+        cosines decide, so exactly the same rays are lit."""
+        any_lit = False
+        d_sat2 = (d_sat_cm / 100.0) ** 2
+        expo = 0.5 * k_m - 5.0
+        scale = o_m * 100.0**k_m
+        for a in range(dets.shape[0]):
+            i = dets[a]
+            x0, y0, dc, ds = det_pos[i, 0], det_pos[i, 1], dcos[i], dsin[i]
+            for b in range(ems.shape[0]):
+                j = ems[b]
+                dx, dy = ex[j] - x0, ey[j] - y0
+                nd = dx * dc + dy * ds
+                if nd <= -_SIGN_TOL:
+                    continue
+                ne = -(dx * eax[j] + dy * eay[j])
+                if ne <= -_SIGN_TOL:
+                    continue
+                L2 = dx * dx + dy * dy
+                if nd < _SIGN_TOL or ne < _SIGN_TOL or L2 < 1e-12:  # the reference's cosines decide
+                    inv = 1.0 / max(math.sqrt(L2), 1e-12)
+                    ux, uy = dx * inv, dy * inv
+                    if ux * dc + uy * ds <= 0.0 or -(ux * eax[j] + uy * eay[j]) <= 0.0:
+                        continue
+                if _ray_blocked(dx, dy, L2, x0, y0, occ_xy, q0, q1, r2):
+                    continue
+                ne2 = ne * ne
+                num = ne2 * ne2 * ne2 * ne * nd * nd * nd
+                if L2 <= d_sat2:  # h_m = 1
+                    L4 = L2 * L2
+                    g = num / (L4 * L4 * L2)
+                else:
+                    g = num * scale * math.exp(expo * math.log(L2))
+                out[i, j] = g
+                if g > 0.0:
+                    any_lit = True
+        return any_lit
 
     @njit(cache=True, error_model="numpy")
     def gains_kernel(
@@ -178,6 +253,13 @@ if HAVE_NUMBA:
                 if not prune_det or Rx * dcos[i] + Ry * dsin[i] + rho_e - det_self[i] >= -margin:
                     dets[n_det] = i
                     n_det += 1
+            q0, q1 = occ_offsets[p], occ_offsets[p + 1]
+            if kind == 1:
+                any_lit = _epuck_rays(out[row], dets[:n_det], ems[:n_em], det_pos, dcos, dsin, ex, ey, eax, eay, occ_xy, q0, q1, r2, p0, p1, p2)
+                if any_lit:
+                    lit[n_lit] = p
+                    n_lit += 1
+                continue
             any_lit = False
             for a in range(n_det):
                 i = dets[a]
@@ -189,16 +271,11 @@ if HAVE_NUMBA:
                     ux, uy = dx * inv, dy * inv
                     cd = ux * dcos[i] + uy * dsin[i]
                     ce = -(ux * eax[j] + uy * eay[j])
-                    # rays the model leaves dark (e-puck: behind an emitter or detector; r-one: outside the
-                    # arcs or range; the same zero branches as _gain) need no occlusion test
-                    if (kind == 1 and (cd <= 0.0 or ce <= 0.0)) or (kind == 2 and not (d <= p2 and cd >= p3 and ce >= p4)):
+                    # rays the model leaves dark (r-one: outside the arcs or range; the same zero branch as
+                    # _gain) need no occlusion test
+                    if kind == 2 and not (d <= p2 and cd >= p3 and ce >= p4):
                         continue
-                    clear = True
-                    for q in range(occ_offsets[p], occ_offsets[p + 1]):
-                        if _segment_hits_disc(det_pos[i, 0], det_pos[i, 1], ex[j], ey[j], occ_xy[q, 0], occ_xy[q, 1], r2):
-                            clear = False
-                            break
-                    if clear:
+                    if not _ray_blocked(dx, dy, dx * dx + dy * dy, det_pos[i, 0], det_pos[i, 1], occ_xy, q0, q1, r2):
                         g = _gain(kind, p0, p1, p2, p3, p4, p5, p6, p7, d, cd, ce)
                         out[row, i, j] = g
                         if g > 0.0:
