@@ -91,8 +91,11 @@ if HAVE_NUMBA:
     _DISC_TOL = 1e-6  # relative: a ray's line this far outside / inside the disc radius gets the reference's verdict
 
     @njit(cache=True, inline="always", error_model="numpy")
-    def _ray_blocked(dx: float, dy: float, L2: float, x0: float, y0: float, occ_xy: np.ndarray, q0: int, q1: int, r2: float) -> bool:
-        """Whether the ray (x0, y0) -> (x0 + dx, y0 + dy), ``L2 = dx * dx + dy * dy``, crosses one of the discs
+    def _ray_blocked(
+        x0: float, y0: float, x1: float, y1: float, dx: float, dy: float, L2: float, occ_xy: np.ndarray, q0: int, q1: int, r2: float
+    ) -> bool:
+        """Whether the ray (x0, y0) -> (x1, y1), ``dx = x1 - x0``, ``dy = y1 - y0``, ``L2 = dx * dx + dy * dy``
+        (computed so by the caller), crosses one of the discs
         ``occ_xy[q0:q1]`` (radius^2 ``r2``): the verdicts of :func:`_segment_hits_disc`, without its division
         except within a relative 1e-6 of the radius (there it decides). When the nearest point is an end
         (t clamped to 0 or 1) the arithmetic is the same; otherwise the squared distance of the centre from
@@ -114,7 +117,7 @@ if HAVE_NUMBA:
                 cr2 = cr * cr
                 if cr2 >= r2_hi * L2:
                     continue
-                if cr2 <= r2_lo * L2 or _segment_hits_disc(x0, y0, x0 + dx, y0 + dy, occ_xy[q, 0], occ_xy[q, 1], r2):
+                if cr2 <= r2_lo * L2 or _segment_hits_disc(x0, y0, x1, y1, occ_xy[q, 0], occ_xy[q, 1], r2):
                     return True
         return False
 
@@ -130,7 +133,7 @@ if HAVE_NUMBA:
         ``ne = -dx . a_j = |dx| cos(emitter angle)``, ``ce^7 cd^3 h_m = ne^7 nd^3 / L2^5 h_m`` and, beyond
         d_sat, ``h_m = o_m (100 |dx|)^k_m = o_m 100^k_m L2^(k_m / 2)``. A ray is dark when nd or ne <= 0;
         when one of them is within 1e-12 m of 0 (where rounding could flip the sign) the reference's
-        cosines decide, so exactly the same rays are lit."""
+        cosines decide and give the gain, so exactly the same rays are lit."""
         any_lit = False
         d_sat2 = (d_sat_cm / 100.0) ** 2
         expo = 0.5 * k_m - 5.0
@@ -148,12 +151,23 @@ if HAVE_NUMBA:
                 if ne <= -_SIGN_TOL:
                     continue
                 L2 = dx * dx + dy * dy
-                if nd < _SIGN_TOL or ne < _SIGN_TOL or L2 < 1e-12:  # the reference's cosines decide
-                    inv = 1.0 / max(math.sqrt(L2), 1e-12)
+                near_zero = nd < _SIGN_TOL or ne < _SIGN_TOL or L2 < 1e-12
+                if near_zero:  # the reference's cosines decide, and give the gain
+                    d = math.sqrt(L2)
+                    inv = 1.0 / max(d, 1e-12)
                     ux, uy = dx * inv, dy * inv
-                    if ux * dc + uy * ds <= 0.0 or -(ux * eax[j] + uy * eay[j]) <= 0.0:
+                    cd, ce = ux * dc + uy * ds, -(ux * eax[j] + uy * eay[j])
+                    if cd <= 0.0 or ce <= 0.0:
                         continue
-                if _ray_blocked(dx, dy, L2, x0, y0, occ_xy, q0, q1, r2):
+                if _ray_blocked(x0, y0, ex[j], ey[j], dx, dy, L2, occ_xy, q0, q1, r2):
+                    continue
+                if near_zero:
+                    d_cm = 100.0 * d
+                    hm = 1.0 if d_cm <= d_sat_cm else o_m * math.exp(k_m * math.log(max(d_cm, 1e-12)))
+                    ce2 = ce * ce
+                    g = ce2 * ce2 * ce2 * ce * cd * cd * cd * hm
+                    out[i, j] = g
+                    any_lit = any_lit or g > 0.0
                     continue
                 ne2 = ne * ne
                 num = ne2 * ne2 * ne2 * ne * nd * nd * nd
@@ -275,7 +289,7 @@ if HAVE_NUMBA:
                     # _gain) need no occlusion test
                     if kind == 2 and not (d <= p2 and cd >= p3 and ce >= p4):
                         continue
-                    if not _ray_blocked(dx, dy, dx * dx + dy * dy, det_pos[i, 0], det_pos[i, 1], occ_xy, q0, q1, r2):
+                    if not _ray_blocked(det_pos[i, 0], det_pos[i, 1], ex[j], ey[j], dx, dy, dx * dx + dy * dy, occ_xy, q0, q1, r2):
                         g = _gain(kind, p0, p1, p2, p3, p4, p5, p6, p7, d, cd, ce)
                         out[row, i, j] = g
                         if g > 0.0:
