@@ -86,39 +86,43 @@ if HAVE_NUMBA:
         qx, qy = px - t * sx, py - t * sy
         return qx * qx + qy * qy < r2
 
-
     _SIGN_TOL = 1e-12  # m: cosine numerators farther than this from 0 have the sign of the reference's cosines
     _DISC_TOL = 1e-6  # relative: a ray's line this far outside / inside the disc radius gets the reference's verdict
+
+    @njit(cache=True, inline="always", error_model="numpy")
+    def _hits_disc(
+        x0: float, y0: float, x1: float, y1: float, dx: float, dy: float, L2: float, cx: float, cy: float, r2: float, r2_hi: float, r2_lo: float
+    ) -> bool:
+        """:func:`_segment_hits_disc` for a segment with ``dx = x1 - x0``, ``dy = y1 - y0``, ``L2 = dx * dx + dy * dy``
+        computed so by the caller, and ``r2_hi, r2_lo = r2 (1 +- _DISC_TOL)``: the same verdict, without the
+        division except within a relative 1e-6 of the radius (there it decides). When the nearest point is an
+        end (t clamped to 0 or 1) the arithmetic is the same; otherwise the squared distance of the centre
+        from the segment's line is ``cr^2 / L2`` (cr the cross product), compared with r2 with a margin far
+        above rounding (~1e-14 relative)."""
+        px, py = cx - x0, cy - y0
+        dot = px * dx + py * dy
+        if dot <= 0.0:  # t clamps to 0: nearest point is the start
+            return px * px + py * py < r2
+        if dot >= L2:  # t clamps to 1: nearest point is the end
+            qx, qy = px - dx, py - dy
+            return qx * qx + qy * qy < r2
+        cr = px * dy - py * dx
+        cr2 = cr * cr
+        if cr2 >= r2_hi * L2:
+            return False
+        return cr2 <= r2_lo * L2 or _segment_hits_disc(x0, y0, x1, y1, cx, cy, r2)
 
     @njit(cache=True, inline="always", error_model="numpy")
     def _ray_blocked(
         x0: float, y0: float, x1: float, y1: float, dx: float, dy: float, L2: float, occ_xy: np.ndarray, q0: int, q1: int, r2: float
     ) -> bool:
         """Whether the ray (x0, y0) -> (x1, y1), ``dx = x1 - x0``, ``dy = y1 - y0``, ``L2 = dx * dx + dy * dy``
-        (computed so by the caller), crosses one of the discs
-        ``occ_xy[q0:q1]`` (radius^2 ``r2``): the verdicts of :func:`_segment_hits_disc`, without its division
-        except within a relative 1e-6 of the radius (there it decides). When the nearest point is an end
-        (t clamped to 0 or 1) the arithmetic is the same; otherwise the squared distance of the centre from
-        the ray's line is ``cr^2 / L2`` (cr the cross product), compared with r2 with a margin far above
-        rounding (~1e-15 relative)."""
+        (computed so by the caller), crosses one of the discs ``occ_xy[q0:q1]`` (radius^2 ``r2``): the
+        verdicts of :func:`_segment_hits_disc` (:func:`_hits_disc`)."""
         r2_hi, r2_lo = r2 * (1.0 + _DISC_TOL), r2 * (1.0 - _DISC_TOL)
         for q in range(q0, q1):
-            px, py = occ_xy[q, 0] - x0, occ_xy[q, 1] - y0
-            dot = px * dx + py * dy
-            if dot <= 0.0:  # t clamps to 0: nearest point is the start
-                if px * px + py * py < r2:
-                    return True
-            elif dot >= L2:  # t clamps to 1: nearest point is the end
-                qx, qy = px - dx, py - dy
-                if qx * qx + qy * qy < r2:
-                    return True
-            else:
-                cr = px * dy - py * dx
-                cr2 = cr * cr
-                if cr2 >= r2_hi * L2:
-                    continue
-                if cr2 <= r2_lo * L2 or _segment_hits_disc(x0, y0, x1, y1, occ_xy[q, 0], occ_xy[q, 1], r2):
-                    return True
+            if _hits_disc(x0, y0, x1, y1, dx, dy, L2, occ_xy[q, 0], occ_xy[q, 1], r2, r2_hi, r2_lo):
+                return True
         return False
 
     @njit(cache=True, inline="always", error_model="numpy")
