@@ -176,3 +176,20 @@ def test_epuck_kernel_decides_grazing_rays_like_the_reference(offsets):
     if offsets[0] != 0.0:
         np.testing.assert_array_equal(fast > 0, reference > 0)
     np.testing.assert_allclose(fast, reference, rtol=1e-9, atol=1e-12)
+
+
+def test_directed_pairs_kernel_equals_numpy_reference(monkeypatch):
+    """Both directions of the KD-tree pairs sorted by (rx, tx), and their frames: compiled == numpy, bit for bit."""
+    rng = np.random.default_rng(33)
+    pos = rng.uniform(0, 3.0, (300, 2))
+    hd = rng.uniform(-np.pi, np.pi, 300)
+    pairs = cKDTree(pos).query_pairs(0.5, output_type="ndarray")
+    pairs = pairs[rng.permutation(len(pairs))]  # any order of the unordered pairs
+    fast = layer._directed_pairs(pairs, pos, hd)
+    monkeypatch.setattr(kernels, "HAVE_NUMBA", False)
+    reference = layer._directed_pairs(pairs, pos, hd)
+    assert len(reference[0]) == 2 * len(pairs) > 1000
+    key = reference[0] * 300 + reference[1]
+    assert (np.diff(key) > 0).all()
+    for a, b in zip(fast, reference):
+        np.testing.assert_array_equal(a, b)

@@ -22,7 +22,7 @@ try:  # numba is optional: an accelerator, not a requirement
 except ImportError:  # pragma: no cover - exercised only without numba
     HAVE_NUMBA = False
 
-__all__ = ["HAVE_NUMBA", "MODEL_IDS", "model_params", "gains_kernel", "occluders_kernel", "occluder_frames_kernel"]
+__all__ = ["HAVE_NUMBA", "MODEL_IDS", "model_params", "gains_kernel", "occluders_kernel", "occluder_frames_kernel", "directed_pairs_kernel"]
 
 #: model class name -> kernel model id
 MODEL_IDS = {"DropletIR": 0, "EpuckIR": 1, "RoneIR": 2, "DropletLowPowerIR": 3}
@@ -393,3 +393,57 @@ if HAVE_NUMBA:
                 xy[q2, 1] = -s * dx + c * dy
                 q2 += 1
         return out_off, xy
+
+    @njit(cache=True, error_model="numpy")
+    def directed_pairs_kernel(
+        pairs: np.ndarray, positions: np.ndarray, headings: np.ndarray, cos_h: np.ndarray, sin_h: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """Both directions of U unordered pairs ``pairs`` (U, 2), sorted by (rx, tx), and their geometry.
+
+        Counting sort by rx, then an insertion sort by tx within each receiver (its few neighbours): the same
+        order as sorting the unique keys ``rx * N + tx``. Per directed pair p, with ``d = x[tx] - x[rx]``
+        (world frame) and ``cos_h, sin_h`` the robots' heading cosines / sines: ``rel = (c d_x + s d_y,
+        -s d_x + c d_y)`` (tx centre in rx's frame, c, s of rx), ``rel_heading`` = heading of tx - heading
+        of rx wrapped to (-pi, pi] and ``distance = hypot(d)``, the same arithmetic as the numpy layer.
+
+        Returns rx (P,), tx (P,), pair_of (P,) the row of ``pairs`` of each, rel (P, 2), rel_heading (P,),
+        distance (P,), P = 2 U.
+        """
+        U, N = pairs.shape[0], positions.shape[0]
+        P = 2 * U
+        start = np.zeros(N + 1, dtype=np.int64)
+        for u in range(U):
+            start[pairs[u, 0] + 1] += 1
+            start[pairs[u, 1] + 1] += 1
+        for r in range(N):
+            start[r + 1] += start[r]
+        fill = start[:N].copy()
+        rx = np.empty(P, dtype=np.intp)
+        tx = np.empty(P, dtype=np.intp)
+        pair_of = np.empty(P, dtype=np.int64)
+        for u in range(U):
+            for k in range(2):
+                a, b = pairs[u, k], pairs[u, 1 - k]
+                q = fill[a]
+                fill[a] += 1
+                while q > start[a] and tx[q - 1] > b:  # insertion sort by tx within receiver a
+                    tx[q] = tx[q - 1]
+                    pair_of[q] = pair_of[q - 1]
+                    q -= 1
+                tx[q] = b
+                pair_of[q] = u
+        for r in range(N):
+            rx[start[r]:start[r + 1]] = r
+        rel = np.empty((P, 2))
+        rel_heading = np.empty(P)
+        distance = np.empty(P)
+        two_pi = 2.0 * np.pi
+        for p in range(P):
+            a, b = rx[p], tx[p]
+            dx, dy = positions[b, 0] - positions[a, 0], positions[b, 1] - positions[a, 1]
+            c, s = cos_h[a], sin_h[a]
+            rel[p, 0] = c * dx + s * dy
+            rel[p, 1] = -s * dx + c * dy
+            rel_heading[p] = np.pi - (np.pi - (headings[b] - headings[a])) % two_pi
+            distance[p] = math.hypot(dx, dy)
+        return rx, tx, pair_of, rel, rel_heading, distance

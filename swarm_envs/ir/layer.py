@@ -418,31 +418,42 @@ def compute_links(
         return _empty_links(n_d, n_e, N)
     if occlusion == "centre":
         pairs = pairs[line_of_sight(positions, platform.radius, pairs[:, 0], pairs[:, 1], tree)]
-    U = pairs.shape[0]
-    rx = np.concatenate([pairs[:, 0], pairs[:, 1]]).astype(np.intp)
-    tx = np.concatenate([pairs[:, 1], pairs[:, 0]]).astype(np.intp)
-    order = np.argsort(rx.astype(np.int64) * N + tx)  # by (rx, tx); the keys are unique, so any sort agrees
-    rx, tx = rx[order], tx[order]
-    d = positions[tx] - positions[rx]
-    c, s = np.cos(headings)[rx], np.sin(headings)[rx]  # per robot, then per pair
-    rel = np.stack([c * d[:, 0] + s * d[:, 1], -s * d[:, 0] + c * d[:, 1]], axis=-1)
-    rel_heading = wrap_angle(headings[tx] - headings[rx])
+    rx, tx, pair_of, rel, rel_heading, distance = _directed_pairs(pairs, positions, headings)
     occluders = None
     if occlusion == "ray":
         # occluders once per unordered pair, then in each receiver's frame
         a, b = (np.ascontiguousarray(pairs[:, k], dtype=np.int64) for k in (0, 1))
         offsets, idx = _occluder_lists(positions, a, b, occluder_width(platform), tree)
-        occluders = _occluder_frames(positions, headings, rx, order % U, offsets, idx)
+        occluders = _occluder_frames(positions, headings, rx, pair_of, offsets, idx)
     if occluders is None:
         offsets, xy = np.zeros(rx.shape[0] + 1, dtype=np.int64), np.zeros((0, 2))
     else:
         offsets, xy = occluders
     gains, lit = _gains(rel, rel_heading, platform, platform.ir_model, offsets, xy, compact=drop_zero)
-    distance = np.hypot(d[:, 0], d[:, 1])
     rows = np.arange(rx.shape[0])
     if drop_zero and lit.shape[0] < rx.shape[0]:
         rx, tx, rel, rel_heading, distance, rows = rx[lit], tx[lit], rel[lit], rel_heading[lit], distance[lit], rows[lit]
     return IRLinks(rx, tx, distance, rel, rel_heading, gains, N, None if occluders is None else (*occluders, rows))
+
+
+def _directed_pairs(
+    pairs: np.ndarray, positions: np.ndarray, headings: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Both directions of the unordered ``pairs`` (U, 2) sorted by (rx, tx): (rx, tx, row of ``pairs``, tx
+    centre in rx's frame (P, 2) (m), tx heading in rx's frame (P,) (rad, wrapped), centre distance (P,) (m))."""
+    c, s = np.cos(headings), np.sin(headings)  # per robot, then per pair
+    if kernels.HAVE_NUMBA:
+        pairs = np.ascontiguousarray(pairs, dtype=np.int64)
+        return kernels.directed_pairs_kernel(pairs, np.ascontiguousarray(positions), np.ascontiguousarray(headings), c, s)
+    U, N = pairs.shape[0], positions.shape[0]
+    rx = np.concatenate([pairs[:, 0], pairs[:, 1]]).astype(np.intp)
+    tx = np.concatenate([pairs[:, 1], pairs[:, 0]]).astype(np.intp)
+    order = np.argsort(rx.astype(np.int64) * N + tx)  # by (rx, tx); the keys are unique, so any sort agrees
+    rx, tx = rx[order], tx[order]
+    d = positions[tx] - positions[rx]
+    c, s = c[rx], s[rx]
+    rel = np.stack([c * d[:, 0] + s * d[:, 1], -s * d[:, 0] + c * d[:, 1]], axis=-1)
+    return rx, tx, order % U, rel, wrap_angle(headings[tx] - headings[rx]), np.hypot(d[:, 0], d[:, 1])
 
 
 def _empty_links(n_d: int, n_e: int, n_robots: int) -> IRLinks:
