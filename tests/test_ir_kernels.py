@@ -193,3 +193,18 @@ def test_directed_pairs_kernel_equals_numpy_reference(monkeypatch):
     assert (np.diff(key) > 0).all()
     for a, b in zip(fast, reference):
         np.testing.assert_array_equal(a, b)
+
+
+def test_directed_pairs_kernel_wraps_any_heading_like_numpy(monkeypatch):
+    """Relative headings wrapped without fmod where possible: the same bits as numpy's wrap_angle, for
+    wrapped and unwrapped headings (including exact multiples of pi)."""
+    rng = np.random.default_rng(34)
+    n = 200
+    pos = rng.uniform(0, 1.0, (n, 2))
+    hd = np.concatenate([rng.uniform(-np.pi, np.pi, n // 2), rng.uniform(-30, 30, n // 4), np.pi * rng.integers(-6, 7, n - n // 2 - n // 4)])
+    pairs = cKDTree(pos).query_pairs(0.3, output_type="ndarray")
+    fast = layer._directed_pairs(pairs, pos, hd)
+    monkeypatch.setattr(kernels, "HAVE_NUMBA", False)
+    reference = layer._directed_pairs(pairs, pos, hd)
+    np.testing.assert_array_equal(fast[4], reference[4])
+    assert fast[4].min() > -np.pi and fast[4].max() <= np.pi

@@ -400,11 +400,12 @@ if HAVE_NUMBA:
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """Both directions of U unordered pairs ``pairs`` (U, 2), sorted by (rx, tx), and their geometry.
 
-        Counting sort by rx, then an insertion sort by tx within each receiver (its few neighbours): the same
-        order as sorting the unique keys ``rx * N + tx``. Per directed pair p, with ``d = x[tx] - x[rx]``
+        Two counting-sort passes (by tx, then stably by rx): the same order as sorting the unique keys
+        ``rx * N + tx``. Per directed pair p, with ``d = x[tx] - x[rx]``
         (world frame) and ``cos_h, sin_h`` the robots' heading cosines / sines: ``rel = (c d_x + s d_y,
         -s d_x + c d_y)`` (tx centre in rx's frame, c, s of rx), ``rel_heading`` = heading of tx - heading
-        of rx wrapped to (-pi, pi] and ``distance = hypot(d)``, the same arithmetic as the numpy layer.
+        of rx wrapped to (-pi, pi] and ``distance = sqrt(d_x^2 + d_y^2)``: the same values as the numpy
+        fallback (:func:`swarm_envs.ir.layer._directed_pairs`), bit for bit.
 
         Returns rx (P,), tx (P,), pair_of (P,) the row of ``pairs`` of each, rel (P, 2), rel_heading (P,),
         distance (P,), P = 2 U.
@@ -417,23 +418,29 @@ if HAVE_NUMBA:
             start[pairs[u, 1] + 1] += 1
         for r in range(N):
             start[r + 1] += start[r]
+        # each robot is the receiver of as many directed pairs as it is the transmitter of: one bucket layout
         fill = start[:N].copy()
-        rx = np.empty(P, dtype=np.intp)
-        tx = np.empty(P, dtype=np.intp)
-        pair_of = np.empty(P, dtype=np.int64)
+        by_tx_rx = np.empty(P, dtype=np.int64)  # pass 1: directed pairs bucketed by transmitter
+        by_tx_u = np.empty(P, dtype=np.int64)
         for u in range(U):
             for k in range(2):
                 a, b = pairs[u, k], pairs[u, 1 - k]
+                q = fill[b]
+                fill[b] += 1
+                by_tx_rx[q] = a
+                by_tx_u[q] = u
+        fill[:] = start[:N]
+        rx = np.empty(P, dtype=np.intp)
+        tx = np.empty(P, dtype=np.intp)
+        pair_of = np.empty(P, dtype=np.int64)
+        for b in range(N):  # pass 2, stable: by receiver, each bucket in transmitter order
+            for q0 in range(start[b], start[b + 1]):
+                a = by_tx_rx[q0]
                 q = fill[a]
                 fill[a] += 1
-                while q > start[a] and tx[q - 1] > b:  # insertion sort by tx within receiver a
-                    tx[q] = tx[q - 1]
-                    pair_of[q] = pair_of[q - 1]
-                    q -= 1
+                rx[q] = a
                 tx[q] = b
-                pair_of[q] = u
-        for r in range(N):
-            rx[start[r]:start[r + 1]] = r
+                pair_of[q] = by_tx_u[q0]
         rel = np.empty((P, 2))
         rel_heading = np.empty(P)
         distance = np.empty(P)
@@ -444,6 +451,13 @@ if HAVE_NUMBA:
             c, s = cos_h[a], sin_h[a]
             rel[p, 0] = c * dx + s * dy
             rel[p, 1] = -s * dx + c * dy
-            rel_heading[p] = np.pi - (np.pi - (headings[b] - headings[a])) % two_pi
-            distance[p] = math.hypot(dx, dy)
+            y = np.pi - (headings[b] - headings[a])
+            if y >= two_pi and y < 2.0 * two_pi:  # y % 2 pi without fmod; y - 2 pi is exact here (Sterbenz)
+                y -= two_pi
+            elif y < 0.0 and y > -two_pi:
+                y += two_pi
+            elif y < 0.0 or y >= two_pi:
+                y %= two_pi
+            rel_heading[p] = np.pi - y
+            distance[p] = math.sqrt(dx * dx + dy * dy)
         return rx, tx, pair_of, rel, rel_heading, distance

@@ -453,7 +453,7 @@ def _directed_pairs(
     d = positions[tx] - positions[rx]
     c, s = c[rx], s[rx]
     rel = np.stack([c * d[:, 0] + s * d[:, 1], -s * d[:, 0] + c * d[:, 1]], axis=-1)
-    return rx, tx, order % U, rel, wrap_angle(headings[tx] - headings[rx]), np.hypot(d[:, 0], d[:, 1])
+    return rx, tx, order % U, rel, wrap_angle(headings[tx] - headings[rx]), np.sqrt(d[:, 0] * d[:, 0] + d[:, 1] * d[:, 1])
 
 
 def _empty_links(n_d: int, n_e: int, n_robots: int) -> IRLinks:
