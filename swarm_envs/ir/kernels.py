@@ -188,7 +188,7 @@ if HAVE_NUMBA:
     @njit(cache=True, error_model="numpy")
     def gains_kernel(
         rel_position: np.ndarray,
-        rel_heading: np.ndarray,
+        rel_cos_sin: np.ndarray,
         det_pos: np.ndarray,
         det_dir: np.ndarray,
         em_pos: np.ndarray,
@@ -201,7 +201,9 @@ if HAVE_NUMBA:
         occ_radius: float,
         compact: bool = False,
     ) -> tuple[np.ndarray, np.ndarray]:
-        """Gains of P pairs; same geometry as ``pair_cosines`` (SPEC 2), same models.
+        """Gains of P pairs; same geometry as ``pair_cosines`` (SPEC 2), same models. ``rel_position`` (P, 2):
+        transmitter centre in the receiver frame (m); ``rel_cos_sin`` (P, 2): cos and sin of the transmitter's
+        heading in the receiver frame.
 
         Returns ``(gains, lit)``: ``lit`` the indices of the pairs with a nonzero gain, and ``gains`` the
         (P, n_d, n_e) gains of every pair, or with ``compact`` only the rows of the ``lit`` pairs.
@@ -256,7 +258,7 @@ if HAVE_NUMBA:
             Rx, Ry = rel_position[p, 0], rel_position[p, 1]
             if math.sqrt(Rx * Rx + Ry * Ry) > ir_range:
                 continue
-            c, s = math.cos(rel_heading[p]), math.sin(rel_heading[p])
+            c, s = rel_cos_sin[p, 0], rel_cos_sin[p, 1]
             n_em = 0
             for j in range(ne):  # TX emitters and their axes in the RX frame
                 ex[j] = Rx + c * em_pos[j, 0] - s * em_pos[j, 1]
@@ -397,7 +399,7 @@ if HAVE_NUMBA:
     @njit(cache=True, error_model="numpy")
     def directed_pairs_kernel(
         pairs: np.ndarray, positions: np.ndarray, headings: np.ndarray, cos_h: np.ndarray, sin_h: np.ndarray
-    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """Both directions of U unordered pairs ``pairs`` (U, 2), sorted by (rx, tx), and their geometry.
 
         Two counting-sort passes (by tx, then stably by rx): the same order as sorting the unique keys
@@ -407,8 +409,8 @@ if HAVE_NUMBA:
         of rx wrapped to (-pi, pi] and ``distance = sqrt(d_x^2 + d_y^2)``: the same values as the numpy
         fallback (:func:`swarm_envs.ir.layer._directed_pairs`), bit for bit.
 
-        Returns rx (P,), tx (P,), pair_of (P,) the row of ``pairs`` of each, rel (P, 2), rel_heading (P,),
-        distance (P,), P = 2 U.
+        Returns rx (P,), tx (P,), pair_of (P,) the row of ``pairs`` of each, rel (P, 2), (cos, sin) of the
+        relative heading (P, 2) (from the robots' cosines and sines), rel_heading (P,), distance (P,), P = 2 U.
         """
         U, N = pairs.shape[0], positions.shape[0]
         P = 2 * U
@@ -442,6 +444,7 @@ if HAVE_NUMBA:
                 tx[q] = b
                 pair_of[q] = by_tx_u[q0]
         rel = np.empty((P, 2))
+        rel_cs = np.empty((P, 2))
         rel_heading = np.empty(P)
         distance = np.empty(P)
         two_pi = 2.0 * np.pi
@@ -451,6 +454,8 @@ if HAVE_NUMBA:
             c, s = cos_h[a], sin_h[a]
             rel[p, 0] = c * dx + s * dy
             rel[p, 1] = -s * dx + c * dy
+            rel_cs[p, 0] = cos_h[b] * c + sin_h[b] * s
+            rel_cs[p, 1] = sin_h[b] * c - cos_h[b] * s
             y = np.pi - (headings[b] - headings[a])
             if y >= two_pi and y < 2.0 * two_pi:  # y % 2 pi without fmod; y - 2 pi is exact here (Sterbenz)
                 y -= two_pi
@@ -460,4 +465,4 @@ if HAVE_NUMBA:
                 y %= two_pi
             rel_heading[p] = np.pi - y
             distance[p] = math.sqrt(dx * dx + dy * dy)
-        return rx, tx, pair_of, rel, rel_heading, distance
+        return rx, tx, pair_of, rel, rel_cs, rel_heading, distance

@@ -198,14 +198,24 @@ def pair_gains(
 
 
 def _gains(
-    R: np.ndarray, psi: np.ndarray, platform: Platform, model: object, offsets: np.ndarray, xy: np.ndarray, compact: bool
+    R: np.ndarray,
+    psi: np.ndarray,
+    platform: Platform,
+    model: object,
+    offsets: np.ndarray,
+    xy: np.ndarray,
+    compact: bool,
+    cos_sin: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """(gains, lit) of :func:`pair_gains` with checked inputs: ``lit`` the pairs with a nonzero gain, and
-    ``gains`` every pair's rows, or with ``compact`` only the ``lit`` rows (compiled kernel, or numpy)."""
+    ``gains`` every pair's rows, or with ``compact`` only the ``lit`` rows (compiled kernel, or numpy).
+    ``cos_sin`` (P, 2): cos and sin of ``psi`` if known (the kernel uses them; default from ``psi``)."""
     if kernels.HAVE_NUMBA and type(model).__name__ in kernels.MODEL_IDS:
         kind, params = kernels.model_params(model)
+        if cos_sin is None:
+            cos_sin = np.stack([np.cos(psi), np.sin(psi)], axis=-1)
         return kernels.gains_kernel(
-            R, psi, platform.detector_positions, platform.detector_directions,
+            R, cos_sin, platform.detector_positions, platform.detector_directions,
             platform.emitter_positions, platform.emitter_directions, kind, params, float(platform.ir_range),
             offsets, xy, float(platform.radius), compact,
         )
@@ -418,7 +428,7 @@ def compute_links(
         return _empty_links(n_d, n_e, N)
     if occlusion == "centre":
         pairs = pairs[line_of_sight(positions, platform.radius, pairs[:, 0], pairs[:, 1], tree)]
-    rx, tx, pair_of, rel, rel_heading, distance = _directed_pairs(pairs, positions, headings)
+    rx, tx, pair_of, rel, rel_cs, rel_heading, distance = _directed_pairs(pairs, positions, headings)
     occluders = None
     if occlusion == "ray":
         # occluders once per unordered pair, then in each receiver's frame
@@ -429,7 +439,7 @@ def compute_links(
         offsets, xy = np.zeros(rx.shape[0] + 1, dtype=np.int64), np.zeros((0, 2))
     else:
         offsets, xy = occluders
-    gains, lit = _gains(rel, rel_heading, platform, platform.ir_model, offsets, xy, compact=drop_zero)
+    gains, lit = _gains(rel, rel_heading, platform, platform.ir_model, offsets, xy, drop_zero, rel_cs)
     rows = np.arange(rx.shape[0])
     if drop_zero and lit.shape[0] < rx.shape[0]:
         rx, tx, rel, rel_heading, distance, rows = rx[lit], tx[lit], rel[lit], rel_heading[lit], distance[lit], rows[lit]
@@ -438,9 +448,10 @@ def compute_links(
 
 def _directed_pairs(
     pairs: np.ndarray, positions: np.ndarray, headings: np.ndarray
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Both directions of the unordered ``pairs`` (U, 2) sorted by (rx, tx): (rx, tx, row of ``pairs``, tx
-    centre in rx's frame (P, 2) (m), tx heading in rx's frame (P,) (rad, wrapped), centre distance (P,) (m))."""
+    centre in rx's frame (P, 2) (m), (cos, sin) of tx's heading in rx's frame (P, 2) from the robots' own
+    cosines and sines, that heading (P,) (rad, wrapped), centre distance (P,) (m))."""
     c, s = np.cos(headings), np.sin(headings)  # per robot, then per pair
     if kernels.HAVE_NUMBA:
         pairs = np.ascontiguousarray(pairs, dtype=np.int64)
@@ -453,7 +464,9 @@ def _directed_pairs(
     d = positions[tx] - positions[rx]
     c, s = c[rx], s[rx]
     rel = np.stack([c * d[:, 0] + s * d[:, 1], -s * d[:, 0] + c * d[:, 1]], axis=-1)
-    return rx, tx, order % U, rel, wrap_angle(headings[tx] - headings[rx]), np.sqrt(d[:, 0] * d[:, 0] + d[:, 1] * d[:, 1])
+    ct, st = np.cos(headings)[tx], np.sin(headings)[tx]
+    rel_cs = np.stack([ct * c + st * s, st * c - ct * s], axis=-1)
+    return rx, tx, order % U, rel, rel_cs, wrap_angle(headings[tx] - headings[rx]), np.sqrt(d[:, 0] * d[:, 0] + d[:, 1] * d[:, 1])
 
 
 def _empty_links(n_d: int, n_e: int, n_robots: int) -> IRLinks:
