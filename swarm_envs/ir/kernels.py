@@ -320,9 +320,9 @@ if HAVE_NUMBA:
         """Third robots whose centre is closer than ``width`` to the centre segment rx[p]-tx[p], as CSR.
 
         Candidates are the neighbour lists (CSR ``starts``, ``counts``, ``nbrs``) of both ends, which must
-        reach ``|rx tx| / 2 + width``: a centre closer than ``width`` to the segment is closer than
-        ``|rx tx| / 2 + width`` to its nearer end, so each end's list, sorted by distance here, is read only
-        up to that pair's own reach. Returns offsets (P + 1,) and robot indices (K,), each pair's sorted.
+        reach ``sqrt(|rx tx|^2 / 4 + width^2 + 1e-9)``: a centre closer than ``width`` to the segment is closer than
+        ``sqrt(|rx tx|^2 / 4 + width^2)`` (Pythagoras, foot point on the nearer half) to its nearer end, so
+        each end's list, sorted by distance here, is read only up to that pair's own reach. Returns offsets (P + 1,) and robot indices (K,), each pair's sorted.
         """
         P, N = rx.shape[0], positions.shape[0]
         # each robot's neighbours by increasing distance (insertion sort: the lists are short)
@@ -350,8 +350,9 @@ if HAVE_NUMBA:
             ax, ay = positions[a, 0], positions[a, 1]
             sx, sy = positions[b, 0] - ax, positions[b, 1] - ay
             L2 = sx * sx + sy * sy
-            reach = 0.5 * math.sqrt(L2) + width + 1e-9  # margin far above rounding
-            reach2 = reach * reach
+            # a centre within width of the segment is within sqrt(L2 / 4 + width^2) of the end its foot point
+            # is nearer to (or within width of an end); margin far above rounding
+            reach2 = 0.25 * L2 + w2 + 1e-9
             for end in (a, b):
                 for q in range(starts[end], starts[end] + counts[end]):
                     if dist2[q] > reach2:

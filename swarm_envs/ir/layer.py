@@ -291,7 +291,7 @@ def pair_occluders(
     """Candidate occluders of P (receiver, transmitter) pairs: third robots whose centre is closer than
     ``width`` (m) to the segment between the two centres.
 
-    Vectorised over pairs: such a robot lies within ``|rx tx| / 2 + width`` of one end, so the candidates
+    Vectorised over pairs: such a robot lies within ``sqrt(|rx tx|^2 / 4 + width^2)`` of one end, so the candidates
     are the neighbours of both ends within that distance (one KD-tree ``query_pairs`` in CSR form), tested
     by a compiled kernel (numba), or as flat (pair, candidate) numpy arrays without numba.
 
@@ -317,7 +317,10 @@ def _occluder_lists(positions: np.ndarray, a: np.ndarray, b: np.ndarray, width: 
         tree = cKDTree(positions)
     seg = positions[b] - positions[a]
     length = np.hypot(seg[:, 0], seg[:, 1])
-    starts, counts, nbrs = _neighbour_csr(positions, 0.5 * float(length.max()) + float(width), tree)
+    # a centre within width of a segment is within sqrt(length^2 / 4 + width^2) of the segment's nearer end
+    # (foot point on that half, Pythagoras); + 2e-9 m^2 covers the kernel's own margin
+    reach = float(np.sqrt(0.25 * float(length.max()) ** 2 + float(width) ** 2 + 2e-9))
+    starts, counts, nbrs = _neighbour_csr(positions, reach, tree)
     if kernels.HAVE_NUMBA:
         return kernels.occluders_kernel(positions, float(width), a, b, starts, counts, nbrs)
     pairs, cands = [], []
