@@ -308,18 +308,24 @@ def pair_occluders(
     return offsets, idx, xy
 
 
-def _occluder_lists(positions: np.ndarray, a: np.ndarray, b: np.ndarray, width: float, tree: cKDTree | None) -> tuple[np.ndarray, np.ndarray]:
-    """CSR (offsets (P + 1,), robots (K,)) of the third robots closer than ``width`` to segment a[p]-b[p]."""
+def _occluder_lists(
+    positions: np.ndarray, a: np.ndarray, b: np.ndarray, width: float, tree: cKDTree | None, max_length: float | None = None
+) -> tuple[np.ndarray, np.ndarray]:
+    """CSR (offsets (P + 1,), robots (K,)) of the third robots closer than ``width`` to segment a[p]-b[p].
+    ``max_length``: the longest segment (m) if known (to within 1e-12 m), else computed."""
     P, N = a.shape[0], positions.shape[0]
     if P == 0 or N < 3:
         return np.zeros(P + 1, dtype=np.int64), np.zeros(0, dtype=np.int64)
     if tree is None:
         tree = cKDTree(positions)
-    seg = positions[b] - positions[a]
-    length = np.hypot(seg[:, 0], seg[:, 1])
+    seg = length = None
+    if max_length is None or not kernels.HAVE_NUMBA:
+        seg = positions[b] - positions[a]
+        length = np.hypot(seg[:, 0], seg[:, 1])
+        max_length = float(length.max())
     # a centre within width of a segment is within sqrt(length^2 / 4 + width^2) of the segment's nearer end
-    # (foot point on that half, Pythagoras); + 2e-9 m^2 covers the kernel's own margin
-    reach = float(np.sqrt(0.25 * float(length.max()) ** 2 + float(width) ** 2 + 2e-9))
+    # (foot point on that half, Pythagoras); + 2e-9 m^2 covers the kernel's own margin and rounding
+    reach = float(np.sqrt(0.25 * float(max_length) ** 2 + float(width) ** 2 + 2e-9))
     starts, counts, nbrs = _neighbour_csr(positions, reach, tree)
     if kernels.HAVE_NUMBA:
         return kernels.occluders_kernel(positions, float(width), a, b, starts, counts, nbrs)
@@ -436,7 +442,7 @@ def compute_links(
     if occlusion == "ray":
         # occluders once per unordered pair, then in each receiver's frame
         a, b = (np.ascontiguousarray(pairs[:, k], dtype=np.int64) for k in (0, 1))
-        offsets, idx = _occluder_lists(positions, a, b, occluder_width(platform), tree)
+        offsets, idx = _occluder_lists(positions, a, b, occluder_width(platform), tree, float(distance.max()))
         occluders = _occluder_frames(positions, headings, rx, pair_of, offsets, idx)
     if occluders is None:
         offsets, xy = np.zeros(rx.shape[0] + 1, dtype=np.int64), np.zeros((0, 2))
