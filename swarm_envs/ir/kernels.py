@@ -377,10 +377,11 @@ if HAVE_NUMBA:
 
     @njit(cache=True, error_model="numpy")
     def occluder_frames_kernel(
-        positions: np.ndarray, headings: np.ndarray, rx: np.ndarray, pair_of: np.ndarray, offsets: np.ndarray, idx: np.ndarray
+        positions: np.ndarray, cos_h: np.ndarray, sin_h: np.ndarray, rx: np.ndarray, pair_of: np.ndarray, offsets: np.ndarray, idx: np.ndarray
     ) -> tuple[np.ndarray, np.ndarray]:
         """Occluders of pair ``pair_of[p]`` (CSR ``offsets``, ``idx``) as centres in receiver rx[p]'s body
-        frame: returns offsets (P + 1,) and centres (K, 2)."""
+        frame (``cos_h``, ``sin_h``: the robots' heading cosines and sines): returns offsets (P + 1,) and
+        centres (K, 2)."""
         P = rx.shape[0]
         out_off = np.zeros(P + 1, dtype=np.int64)
         for p in range(P):
@@ -388,7 +389,7 @@ if HAVE_NUMBA:
         xy = np.empty((out_off[P], 2))
         for p in range(P):
             a, u = rx[p], pair_of[p]
-            c, s = math.cos(headings[a]), math.sin(headings[a])
+            c, s = cos_h[a], sin_h[a]
             q2 = out_off[p]
             for q in range(offsets[u], offsets[u + 1]):
                 dx, dy = positions[idx[q], 0] - positions[a, 0], positions[idx[q], 1] - positions[a, 1]

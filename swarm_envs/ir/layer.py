@@ -357,7 +357,7 @@ def _occluder_frames(
     rx = np.ascontiguousarray(rx, dtype=np.int64)
     pair_of = np.ascontiguousarray(pair_of, dtype=np.int64)
     if kernels.HAVE_NUMBA:
-        return kernels.occluder_frames_kernel(positions, headings, rx, pair_of, offsets, idx)
+        return kernels.occluder_frames_kernel(positions, np.cos(headings), np.sin(headings), rx, pair_of, offsets, idx)
     counts = np.diff(offsets)[pair_of]
     out = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
     row = np.repeat(np.arange(rx.shape[0]), counts)
