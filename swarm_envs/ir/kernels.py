@@ -265,14 +265,12 @@ if HAVE_NUMBA:
                 ey[j] = Ry + s * em_pos[j, 0] + c * em_pos[j, 1]
                 eax[j] = c * ecos[j] - s * esin[j]
                 eay[j] = s * ecos[j] + c * esin[j]
-                if not prune_em or Rx * eax[j] + Ry * eay[j] + em_self[j] - rho_d <= margin:
-                    ems[n_em] = j
-                    n_em += 1
+                ems[n_em] = j  # branch-free compaction (the bound's outcome is unpredictable): kept if it may light
+                n_em += np.int64((not prune_em) | (Rx * eax[j] + Ry * eay[j] + em_self[j] - rho_d <= margin))
             n_det = 0
             for i in range(nd):
-                if not prune_det or Rx * dcos[i] + Ry * dsin[i] + rho_e - det_self[i] >= -margin:
-                    dets[n_det] = i
-                    n_det += 1
+                dets[n_det] = i
+                n_det += np.int64((not prune_det) | (Rx * dcos[i] + Ry * dsin[i] + rho_e - det_self[i] >= -margin))
             q0, q1 = occ_offsets[p], occ_offsets[p + 1]
             if kind == 1:
                 any_lit = _epuck_rays(out[row], dets[:n_det], ems[:n_em], det_pos, dcos, dsin, ex, ey, eax, eay, occ_xy, q0, q1, r2, p0, p1, p2)
