@@ -320,7 +320,8 @@ if HAVE_NUMBA:
         Candidates are the neighbour lists (CSR ``starts``, ``counts``, ``nbrs``) of both ends, which must
         reach ``sqrt(|rx tx|^2 / 4 + width^2 + 1e-9)``: a centre closer than ``width`` to the segment is closer than
         ``sqrt(|rx tx|^2 / 4 + width^2)`` (Pythagoras, foot point on the nearer half) to its nearer end, so
-        each end's list, sorted by distance here, is read only up to that pair's own reach. Returns offsets (P + 1,) and robot indices (K,), each pair's sorted.
+        each end's list, sorted by distance here, is read only up to that pair's own reach, and each end
+        tests only the candidates whose projection on the segment falls in its own half (none twice). Returns offsets (P + 1,) and robot indices (K,), each pair's sorted.
         """
         P, N = rx.shape[0], positions.shape[0]
         # each robot's neighbours by increasing distance (insertion sort: the lists are short)
@@ -338,7 +339,6 @@ if HAVE_NUMBA:
                     q2 -= 1
                 dist2[q2] = d2
                 near[q2] = k
-        stamp = np.full(N, -1, dtype=np.int64)
         offsets = np.zeros(P + 1, dtype=np.int64)
         idx = np.empty(max(16, 2 * P), dtype=np.int64)
         K = 0
@@ -351,14 +351,18 @@ if HAVE_NUMBA:
             # a centre within width of the segment is within sqrt(L2 / 4 + width^2) of the end its foot point
             # is nearer to (or within width of an end); margin far above rounding
             reach2 = 0.25 * L2 + w2 + 1e-9
-            for end in (a, b):
+            half = 0.5 * L2
+            for e in range(2):
+                end = a if e == 0 else b
                 for q in range(starts[end], starts[end] + counts[end]):
                     if dist2[q] > reach2:
                         break
                     k = near[q]
-                    if k == a or k == b or stamp[k] == p:
+                    if k == a or k == b:
                         continue
-                    stamp[k] = p
+                    # each candidate from one end only: a's half (projection <= L2 / 2) from a, the rest from b
+                    if ((positions[k, 0] - ax) * sx + (positions[k, 1] - ay) * sy <= half) != (e == 0):
+                        continue
                     if _segment_hits_disc(ax, ay, ax + sx, ay + sy, positions[k, 0], positions[k, 1], w2):
                         if K == idx.shape[0]:
                             grown = np.empty(2 * K, dtype=np.int64)
