@@ -45,7 +45,7 @@ def test_gains_kernel_compact_rows_are_the_lit_pairs(name):
     xy = R[pair] * rng.uniform(0.2, 0.8, (len(pair), 1)) + rng.normal(0, platform.radius, (len(pair), 2))
     kind, params = kernels.model_params(platform.ir_model)
     args = (
-        R, psi, platform.detector_positions, platform.detector_directions, platform.emitter_positions,
+        R, np.stack([np.cos(psi), np.sin(psi)], axis=-1), platform.detector_positions, platform.detector_directions, platform.emitter_positions,
         platform.emitter_directions, kind, params, float(platform.ir_range), offsets, xy, float(platform.radius),
     )
     full, lit_full = kernels.gains_kernel(*args, False)
@@ -112,3 +112,99 @@ def test_per_ray_occlusion_kernel_equals_numpy_reference(name, monkeypatch):
     sel = np.isin(key, ref_links.rx * len(pos) + ref_links.tx)
     lost = (free.gains[sel] > 0) & (ref_links.gains == 0)
     assert lost.reshape(len(ref_links), -1).any(axis=1).sum() > 0
+
+
+def test_ray_blocked_verdicts_equal_the_exact_segment_test_near_the_disc_edge():
+    """_ray_blocked skips the division except near the radius: its verdicts equal _segment_hits_disc's,
+    including rays that graze the disc within rounding and discs near either end."""
+    rng = np.random.default_rng(31)
+    r = 0.035
+    n = 0
+    for _ in range(3000):
+        x0, y0 = rng.uniform(-0.05, 0.05, 2)
+        L = rng.uniform(0.0, 1.0)
+        phi = rng.uniform(-np.pi, np.pi)
+        dx, dy = L * np.cos(phi), L * np.sin(phi)
+        t = rng.choice([rng.uniform(-0.2, 1.2), 0.0, 1.0])  # the foot of the centre on the ray's line
+        h = r * (1.0 + rng.choice([0.0, 1e-15, -1e-15, 1e-9, -1e-9, 1e-7, -1e-7, 1e-3, -1e-3]))
+        side = rng.choice([-1.0, 1.0])
+        cx = x0 + t * dx - side * h * np.sin(phi)
+        cy = y0 + t * dy + side * h * np.cos(phi)
+        xy = np.array([[cx, cy]])
+        x1, y1 = x0 + dx, y0 + dy
+        dx, dy = x1 - x0, y1 - y0  # as the kernel computes the ray
+        fast = kernels._ray_blocked(x0, y0, x1, y1, dx, dy, dx * dx + dy * dy, xy, 0, 1, r * r)
+        exact = kernels._segment_hits_disc(x0, y0, x1, y1, cx, cy, r * r)
+        assert fast == exact
+        n += exact
+    assert 100 < n < 2900
+
+
+@pytest.mark.parametrize("offsets", [(1e-14, -1e-14, 1e-13, -1e-13, 1e-11, -1e-11), (0.0, 1e-17, -1e-17)])
+def test_epuck_kernel_decides_grazing_rays_like_the_reference(offsets):
+    """e-puck rays with a cosine near 0 (emitter on a detector's side line, or detector on an emitter's side
+    line): lit exactly when the numpy reference lights them for offsets above the geometry's rounding
+    (~1e-16 m; the kernel's short cut stops at 1e-12 m); within rounding the gains (<< 1e-12) are never
+    negative."""
+    platform = get_platform("epuck")
+    rng = np.random.default_rng(32)
+    dp, dd = platform.detector_positions, platform.detector_directions
+    ep, ed = platform.emitter_positions, platform.emitter_directions
+    R, psi = [], []
+    for _ in range(2000):
+        i, j = rng.integers(0, 8, 2)
+        L = rng.uniform(0.02, 0.8)
+        off = rng.choice(offsets)
+        u = np.array([np.cos(dd[i]), np.sin(dd[i])])
+        side = np.array([-u[1], u[0]]) * rng.choice([-1.0, 1.0])
+        if rng.random() < 0.5:  # emitter on detector i's side line: cos(detector angle) ~ 0
+            target = dp[i] + L * side + off * u
+            # emitter axis towards the detector, within +-60 degrees
+            axis = np.arctan2(*(-side)[::-1]) + rng.uniform(-1.0, 1.0)
+        else:  # detector on emitter j's side line: cos(emitter angle) ~ 0
+            target = dp[i] + L * (u + rng.uniform(-0.5, 0.5) * side)
+            back = dp[i] - target
+            axis = np.arctan2(back[1], back[0]) + np.pi / 2 * rng.choice([-1.0, 1.0]) + off / L
+        h = axis - ed[j]
+        c, s = np.cos(h), np.sin(h)
+        R.append(target - np.array([c * ep[j, 0] - s * ep[j, 1], s * ep[j, 0] + c * ep[j, 1]]))
+        psi.append(h)
+    R, psi = np.array(R), np.array(psi)
+    fast = layer.pair_gains(R, psi, platform)
+    reference = layer._pair_gains_numpy(R, psi, platform, platform.ir_model)
+    assert fast.min() >= 0.0
+    if offsets[0] != 0.0:
+        np.testing.assert_array_equal(fast > 0, reference > 0)
+    np.testing.assert_allclose(fast, reference, rtol=1e-9, atol=1e-12)
+
+
+def test_directed_pairs_kernel_equals_numpy_reference(monkeypatch):
+    """Both directions of the KD-tree pairs sorted by (rx, tx), and their frames: compiled == numpy, bit for bit."""
+    rng = np.random.default_rng(33)
+    pos = rng.uniform(0, 3.0, (300, 2))
+    hd = rng.uniform(-np.pi, np.pi, 300)
+    pairs = cKDTree(pos).query_pairs(0.5, output_type="ndarray")
+    pairs = pairs[rng.permutation(len(pairs))]  # any order of the unordered pairs
+    fast = layer._directed_pairs(pairs, pos, hd)
+    monkeypatch.setattr(kernels, "HAVE_NUMBA", False)
+    reference = layer._directed_pairs(pairs, pos, hd)
+    assert len(reference[0]) == 2 * len(pairs) > 1000
+    key = reference[0] * 300 + reference[1]
+    assert (np.diff(key) > 0).all()
+    for a, b in zip(fast, reference):
+        np.testing.assert_array_equal(a, b)
+
+
+def test_directed_pairs_kernel_wraps_any_heading_like_numpy(monkeypatch):
+    """Relative headings wrapped without fmod where possible: the same bits as numpy's wrap_angle, for
+    wrapped and unwrapped headings (including exact multiples of pi)."""
+    rng = np.random.default_rng(34)
+    n = 200
+    pos = rng.uniform(0, 1.0, (n, 2))
+    hd = np.concatenate([rng.uniform(-np.pi, np.pi, n // 2), rng.uniform(-30, 30, n // 4), np.pi * rng.integers(-6, 7, n - n // 2 - n // 4)])
+    pairs = cKDTree(pos).query_pairs(0.3, output_type="ndarray")
+    fast = layer._directed_pairs(pairs, pos, hd)
+    monkeypatch.setattr(kernels, "HAVE_NUMBA", False)
+    reference = layer._directed_pairs(pairs, pos, hd)
+    np.testing.assert_array_equal(fast[5], reference[5])
+    assert fast[5].min() > -np.pi and fast[5].max() <= np.pi

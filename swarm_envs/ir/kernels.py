@@ -22,7 +22,7 @@ try:  # numba is optional: an accelerator, not a requirement
 except ImportError:  # pragma: no cover - exercised only without numba
     HAVE_NUMBA = False
 
-__all__ = ["HAVE_NUMBA", "MODEL_IDS", "model_params", "gains_kernel", "occluders_kernel", "occluder_frames_kernel"]
+__all__ = ["HAVE_NUMBA", "MODEL_IDS", "model_params", "gains_kernel", "occluders_kernel", "occluder_frames_kernel", "directed_pairs_kernel"]
 
 #: model class name -> kernel model id
 MODEL_IDS = {"DropletIR": 0, "EpuckIR": 1, "RoneIR": 2, "DropletLowPowerIR": 3}
@@ -57,13 +57,7 @@ if HAVE_NUMBA:
 
     @njit(cache=True, inline="always", error_model="numpy")
     def _gain(kind: int, p0: float, p1: float, p2: float, p3: float, p4: float, p5: float, p6: float, p7: float, d_m: float, cd: float, ce: float) -> float:
-        if kind == 1:  # e-puck [T20 Eqs. (24),(25),(27)]
-            if cd <= 0.0 or ce <= 0.0:
-                return 0.0
-            d_cm = 100.0 * d_m
-            hm = 1.0 if d_cm <= p2 else p1 * math.exp(p0 * math.log(max(d_cm, 1e-12)))
-            ce2 = ce * ce
-            return ce2 * ce2 * ce2 * ce * cd * cd * cd * hm
+        # the e-puck (kind 1) has its own ray loop, _epuck_rays
         if kind == 2:  # r-one binary arcs [L Sec. 3.2]; p3, p4 = cos of the half arcs
             if d_m <= p2 and cd >= p3 and ce >= p4:
                 return 1.0
@@ -92,10 +86,109 @@ if HAVE_NUMBA:
         qx, qy = px - t * sx, py - t * sy
         return qx * qx + qy * qy < r2
 
+    _SIGN_TOL = 1e-12  # m: cosine numerators farther than this from 0 have the sign of the reference's cosines
+    _DISC_TOL = 1e-6  # relative: a ray's line this far outside / inside the disc radius gets the reference's verdict
+
+    @njit(cache=True, inline="always", error_model="numpy")
+    def _hits_disc(
+        x0: float, y0: float, x1: float, y1: float, dx: float, dy: float, L2: float, cx: float, cy: float, r2: float, r2_hi: float, r2_lo: float
+    ) -> bool:
+        """:func:`_segment_hits_disc` for a segment with ``dx = x1 - x0``, ``dy = y1 - y0``, ``L2 = dx * dx + dy * dy``
+        computed so by the caller, and ``r2_hi, r2_lo = r2 (1 +- _DISC_TOL)``: the same verdict, without the
+        division except within a relative 1e-6 of the radius (there it decides). When the nearest point is an
+        end (t clamped to 0 or 1) the arithmetic is the same; otherwise the squared distance of the centre
+        from the segment's line is ``cr^2 / L2`` (cr the cross product), compared with r2 with a margin far
+        above rounding (~1e-14 relative)."""
+        px, py = cx - x0, cy - y0
+        dot = px * dx + py * dy
+        if dot <= 0.0:  # t clamps to 0: nearest point is the start
+            return px * px + py * py < r2
+        if dot >= L2:  # t clamps to 1: nearest point is the end
+            qx, qy = px - dx, py - dy
+            return qx * qx + qy * qy < r2
+        cr = px * dy - py * dx
+        cr2 = cr * cr
+        if cr2 >= r2_hi * L2:
+            return False
+        return cr2 <= r2_lo * L2 or _segment_hits_disc(x0, y0, x1, y1, cx, cy, r2)
+
+    @njit(cache=True, inline="always", error_model="numpy")
+    def _ray_blocked(
+        x0: float, y0: float, x1: float, y1: float, dx: float, dy: float, L2: float, occ_xy: np.ndarray, q0: int, q1: int, r2: float
+    ) -> bool:
+        """Whether the ray (x0, y0) -> (x1, y1), ``dx = x1 - x0``, ``dy = y1 - y0``, ``L2 = dx * dx + dy * dy``
+        (computed so by the caller), crosses one of the discs ``occ_xy[q0:q1]`` (radius^2 ``r2``): the
+        verdicts of :func:`_segment_hits_disc` (:func:`_hits_disc`)."""
+        r2_hi, r2_lo = r2 * (1.0 + _DISC_TOL), r2 * (1.0 - _DISC_TOL)
+        for q in range(q0, q1):
+            if _hits_disc(x0, y0, x1, y1, dx, dy, L2, occ_xy[q, 0], occ_xy[q, 1], r2, r2_hi, r2_lo):
+                return True
+        return False
+
+    @njit(cache=True, inline="always", error_model="numpy")
+    def _epuck_rays(
+        out: np.ndarray, dets: np.ndarray, ems: np.ndarray, det_pos: np.ndarray, dcos: np.ndarray, dsin: np.ndarray,
+        ex: np.ndarray, ey: np.ndarray, eax: np.ndarray, eay: np.ndarray, occ_xy: np.ndarray, q0: int, q1: int, r2: float,
+        k_m: float, o_m: float, d_sat_cm: float,
+    ) -> bool:
+        """e-puck gains of one pair's candidate rays into ``out`` (n_d, n_e) [T20 Eqs. (7),(24),(25),(27)];
+        True if one is lit. Same values as :func:`_gain` without a square root or division per ray: with
+        ``dx`` the ray (detector -> emitter), ``nd = dx . u_i = |dx| cos(detector angle)`` and
+        ``ne = -dx . a_j = |dx| cos(emitter angle)``, ``ce^7 cd^3 h_m = ne^7 nd^3 / L2^5 h_m`` and, beyond
+        d_sat, ``h_m = o_m (100 |dx|)^k_m = o_m 100^k_m L2^(k_m / 2)``. A ray is dark when nd or ne <= 0;
+        when one of them is within 1e-12 m of 0 (where rounding could flip the sign) the reference's
+        cosines decide and give the gain, so exactly the same rays are lit."""
+        any_lit = False
+        d_sat2 = (d_sat_cm / 100.0) ** 2
+        expo = 0.5 * k_m - 5.0
+        scale = o_m * 100.0**k_m
+        for a in range(dets.shape[0]):
+            i = dets[a]
+            x0, y0, dc, ds = det_pos[i, 0], det_pos[i, 1], dcos[i], dsin[i]
+            for b in range(ems.shape[0]):
+                j = ems[b]
+                dx, dy = ex[j] - x0, ey[j] - y0
+                nd = dx * dc + dy * ds
+                if nd <= -_SIGN_TOL:
+                    continue
+                ne = -(dx * eax[j] + dy * eay[j])
+                if ne <= -_SIGN_TOL:
+                    continue
+                L2 = dx * dx + dy * dy
+                near_zero = nd < _SIGN_TOL or ne < _SIGN_TOL or L2 < 1e-12
+                if near_zero:  # the reference's cosines decide, and give the gain
+                    d = math.sqrt(L2)
+                    inv = 1.0 / max(d, 1e-12)
+                    ux, uy = dx * inv, dy * inv
+                    cd, ce = ux * dc + uy * ds, -(ux * eax[j] + uy * eay[j])
+                    if cd <= 0.0 or ce <= 0.0:
+                        continue
+                if _ray_blocked(x0, y0, ex[j], ey[j], dx, dy, L2, occ_xy, q0, q1, r2):
+                    continue
+                if near_zero:
+                    d_cm = 100.0 * d
+                    hm = 1.0 if d_cm <= d_sat_cm else o_m * math.exp(k_m * math.log(max(d_cm, 1e-12)))
+                    ce2 = ce * ce
+                    g = ce2 * ce2 * ce2 * ce * cd * cd * cd * hm
+                    out[i, j] = g
+                    any_lit = any_lit or g > 0.0
+                    continue
+                ne2 = ne * ne
+                num = ne2 * ne2 * ne2 * ne * nd * nd * nd
+                if L2 <= d_sat2:  # h_m = 1
+                    L4 = L2 * L2
+                    g = num / (L4 * L4 * L2)
+                else:
+                    g = num * scale * math.exp(expo * math.log(L2))
+                out[i, j] = g
+                if g > 0.0:
+                    any_lit = True
+        return any_lit
+
     @njit(cache=True, error_model="numpy")
     def gains_kernel(
         rel_position: np.ndarray,
-        rel_heading: np.ndarray,
+        rel_cos_sin: np.ndarray,
         det_pos: np.ndarray,
         det_dir: np.ndarray,
         em_pos: np.ndarray,
@@ -108,7 +201,9 @@ if HAVE_NUMBA:
         occ_radius: float,
         compact: bool = False,
     ) -> tuple[np.ndarray, np.ndarray]:
-        """Gains of P pairs; same geometry as ``pair_cosines`` (SPEC 2), same models.
+        """Gains of P pairs; same geometry as ``pair_cosines`` (SPEC 2), same models. ``rel_position`` (P, 2):
+        transmitter centre in the receiver frame (m); ``rel_cos_sin`` (P, 2): cos and sin of the transmitter's
+        heading in the receiver frame.
 
         Returns ``(gains, lit)``: ``lit`` the indices of the pairs with a nonzero gain, and ``gains`` the
         (P, n_d, n_e) gains of every pair, or with ``compact`` only the rows of the ``lit`` pairs.
@@ -163,21 +258,26 @@ if HAVE_NUMBA:
             Rx, Ry = rel_position[p, 0], rel_position[p, 1]
             if math.sqrt(Rx * Rx + Ry * Ry) > ir_range:
                 continue
-            c, s = math.cos(rel_heading[p]), math.sin(rel_heading[p])
+            c, s = rel_cos_sin[p, 0], rel_cos_sin[p, 1]
             n_em = 0
             for j in range(ne):  # TX emitters and their axes in the RX frame
                 ex[j] = Rx + c * em_pos[j, 0] - s * em_pos[j, 1]
                 ey[j] = Ry + s * em_pos[j, 0] + c * em_pos[j, 1]
                 eax[j] = c * ecos[j] - s * esin[j]
                 eay[j] = s * ecos[j] + c * esin[j]
-                if not prune_em or Rx * eax[j] + Ry * eay[j] + em_self[j] - rho_d <= margin:
-                    ems[n_em] = j
-                    n_em += 1
+                ems[n_em] = j  # branch-free compaction (the bound's outcome is unpredictable): kept if it may light
+                n_em += np.int64((not prune_em) | (Rx * eax[j] + Ry * eay[j] + em_self[j] - rho_d <= margin))
             n_det = 0
             for i in range(nd):
-                if not prune_det or Rx * dcos[i] + Ry * dsin[i] + rho_e - det_self[i] >= -margin:
-                    dets[n_det] = i
-                    n_det += 1
+                dets[n_det] = i
+                n_det += np.int64((not prune_det) | (Rx * dcos[i] + Ry * dsin[i] + rho_e - det_self[i] >= -margin))
+            q0, q1 = occ_offsets[p], occ_offsets[p + 1]
+            if kind == 1:
+                any_lit = _epuck_rays(out[row], dets[:n_det], ems[:n_em], det_pos, dcos, dsin, ex, ey, eax, eay, occ_xy, q0, q1, r2, p0, p1, p2)
+                if any_lit:
+                    lit[n_lit] = p
+                    n_lit += 1
+                continue
             any_lit = False
             for a in range(n_det):
                 i = dets[a]
@@ -189,16 +289,11 @@ if HAVE_NUMBA:
                     ux, uy = dx * inv, dy * inv
                     cd = ux * dcos[i] + uy * dsin[i]
                     ce = -(ux * eax[j] + uy * eay[j])
-                    # rays the model leaves dark (e-puck: behind an emitter or detector; r-one: outside the
-                    # arcs or range; the same zero branches as _gain) need no occlusion test
-                    if (kind == 1 and (cd <= 0.0 or ce <= 0.0)) or (kind == 2 and not (d <= p2 and cd >= p3 and ce >= p4)):
+                    # rays the model leaves dark (r-one: outside the arcs or range; the same zero branch as
+                    # _gain) need no occlusion test
+                    if kind == 2 and not (d <= p2 and cd >= p3 and ce >= p4):
                         continue
-                    clear = True
-                    for q in range(occ_offsets[p], occ_offsets[p + 1]):
-                        if _segment_hits_disc(det_pos[i, 0], det_pos[i, 1], ex[j], ey[j], occ_xy[q, 0], occ_xy[q, 1], r2):
-                            clear = False
-                            break
-                    if clear:
+                    if not _ray_blocked(det_pos[i, 0], det_pos[i, 1], ex[j], ey[j], dx, dy, dx * dx + dy * dy, occ_xy, q0, q1, r2):
                         g = _gain(kind, p0, p1, p2, p3, p4, p5, p6, p7, d, cd, ce)
                         out[row, i, j] = g
                         if g > 0.0:
@@ -223,9 +318,10 @@ if HAVE_NUMBA:
         """Third robots whose centre is closer than ``width`` to the centre segment rx[p]-tx[p], as CSR.
 
         Candidates are the neighbour lists (CSR ``starts``, ``counts``, ``nbrs``) of both ends, which must
-        reach ``|rx tx| / 2 + width``: a centre closer than ``width`` to the segment is closer than
-        ``|rx tx| / 2 + width`` to its nearer end, so each end's list, sorted by distance here, is read only
-        up to that pair's own reach. Returns offsets (P + 1,) and robot indices (K,), each pair's sorted.
+        reach ``sqrt(|rx tx|^2 / 4 + width^2 + 1e-9)``: a centre closer than ``width`` to the segment is closer than
+        ``sqrt(|rx tx|^2 / 4 + width^2)`` (Pythagoras, foot point on the nearer half) to its nearer end, so
+        each end's list, sorted by distance here, is read only up to that pair's own reach, and each end
+        tests only the candidates whose projection on the segment falls in its own half (none twice). Returns offsets (P + 1,) and robot indices (K,), each pair's sorted.
         """
         P, N = rx.shape[0], positions.shape[0]
         # each robot's neighbours by increasing distance (insertion sort: the lists are short)
@@ -243,7 +339,6 @@ if HAVE_NUMBA:
                     q2 -= 1
                 dist2[q2] = d2
                 near[q2] = k
-        stamp = np.full(N, -1, dtype=np.int64)
         offsets = np.zeros(P + 1, dtype=np.int64)
         idx = np.empty(max(16, 2 * P), dtype=np.int64)
         K = 0
@@ -253,16 +348,21 @@ if HAVE_NUMBA:
             ax, ay = positions[a, 0], positions[a, 1]
             sx, sy = positions[b, 0] - ax, positions[b, 1] - ay
             L2 = sx * sx + sy * sy
-            reach = 0.5 * math.sqrt(L2) + width + 1e-9  # margin far above rounding
-            reach2 = reach * reach
-            for end in (a, b):
+            # a centre within width of the segment is within sqrt(L2 / 4 + width^2) of the end its foot point
+            # is nearer to (or within width of an end); margin far above rounding
+            reach2 = 0.25 * L2 + w2 + 1e-9
+            half = 0.5 * L2
+            for e in range(2):
+                end = a if e == 0 else b
                 for q in range(starts[end], starts[end] + counts[end]):
                     if dist2[q] > reach2:
                         break
                     k = near[q]
-                    if k == a or k == b or stamp[k] == p:
+                    if k == a or k == b:
                         continue
-                    stamp[k] = p
+                    # each candidate from one end only: a's half (projection <= L2 / 2) from a, the rest from b
+                    if ((positions[k, 0] - ax) * sx + (positions[k, 1] - ay) * sy <= half) != (e == 0):
+                        continue
                     if _segment_hits_disc(ax, ay, ax + sx, ay + sy, positions[k, 0], positions[k, 1], w2):
                         if K == idx.shape[0]:
                             grown = np.empty(2 * K, dtype=np.int64)
@@ -279,10 +379,11 @@ if HAVE_NUMBA:
 
     @njit(cache=True, error_model="numpy")
     def occluder_frames_kernel(
-        positions: np.ndarray, headings: np.ndarray, rx: np.ndarray, pair_of: np.ndarray, offsets: np.ndarray, idx: np.ndarray
+        positions: np.ndarray, cos_h: np.ndarray, sin_h: np.ndarray, rx: np.ndarray, pair_of: np.ndarray, offsets: np.ndarray, idx: np.ndarray
     ) -> tuple[np.ndarray, np.ndarray]:
         """Occluders of pair ``pair_of[p]`` (CSR ``offsets``, ``idx``) as centres in receiver rx[p]'s body
-        frame: returns offsets (P + 1,) and centres (K, 2)."""
+        frame (``cos_h``, ``sin_h``: the robots' heading cosines and sines): returns offsets (P + 1,) and
+        centres (K, 2)."""
         P = rx.shape[0]
         out_off = np.zeros(P + 1, dtype=np.int64)
         for p in range(P):
@@ -290,7 +391,7 @@ if HAVE_NUMBA:
         xy = np.empty((out_off[P], 2))
         for p in range(P):
             a, u = rx[p], pair_of[p]
-            c, s = math.cos(headings[a]), math.sin(headings[a])
+            c, s = cos_h[a], sin_h[a]
             q2 = out_off[p]
             for q in range(offsets[u], offsets[u + 1]):
                 dx, dy = positions[idx[q], 0] - positions[a, 0], positions[idx[q], 1] - positions[a, 1]
@@ -298,3 +399,74 @@ if HAVE_NUMBA:
                 xy[q2, 1] = -s * dx + c * dy
                 q2 += 1
         return out_off, xy
+
+    @njit(cache=True, error_model="numpy")
+    def directed_pairs_kernel(
+        pairs: np.ndarray, positions: np.ndarray, headings: np.ndarray, cos_h: np.ndarray, sin_h: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """Both directions of U unordered pairs ``pairs`` (U, 2), sorted by (rx, tx), and their geometry.
+
+        Two counting-sort passes (by tx, then stably by rx): the same order as sorting the unique keys
+        ``rx * N + tx``. Per directed pair p, with ``d = x[tx] - x[rx]``
+        (world frame) and ``cos_h, sin_h`` the robots' heading cosines / sines: ``rel = (c d_x + s d_y,
+        -s d_x + c d_y)`` (tx centre in rx's frame, c, s of rx), ``rel_heading`` = heading of tx - heading
+        of rx wrapped to (-pi, pi] and ``distance = sqrt(d_x^2 + d_y^2)``: the same values as the numpy
+        fallback (:func:`swarm_envs.ir.layer._directed_pairs`), bit for bit.
+
+        Returns rx (P,), tx (P,), pair_of (P,) the row of ``pairs`` of each, rel (P, 2), (cos, sin) of the
+        relative heading (P, 2) (from the robots' cosines and sines), rel_heading (P,), distance (P,), P = 2 U.
+        """
+        U, N = pairs.shape[0], positions.shape[0]
+        P = 2 * U
+        start = np.zeros(N + 1, dtype=np.int64)
+        for u in range(U):
+            start[pairs[u, 0] + 1] += 1
+            start[pairs[u, 1] + 1] += 1
+        for r in range(N):
+            start[r + 1] += start[r]
+        # each robot is the receiver of as many directed pairs as it is the transmitter of: one bucket layout
+        fill = start[:N].copy()
+        by_tx_rx = np.empty(P, dtype=np.int64)  # pass 1: directed pairs bucketed by transmitter
+        by_tx_u = np.empty(P, dtype=np.int64)
+        for u in range(U):
+            for k in range(2):
+                a, b = pairs[u, k], pairs[u, 1 - k]
+                q = fill[b]
+                fill[b] += 1
+                by_tx_rx[q] = a
+                by_tx_u[q] = u
+        fill[:] = start[:N]
+        rx = np.empty(P, dtype=np.intp)
+        tx = np.empty(P, dtype=np.intp)
+        pair_of = np.empty(P, dtype=np.int64)
+        for b in range(N):  # pass 2, stable: by receiver, each bucket in transmitter order
+            for q0 in range(start[b], start[b + 1]):
+                a = by_tx_rx[q0]
+                q = fill[a]
+                fill[a] += 1
+                rx[q] = a
+                tx[q] = b
+                pair_of[q] = by_tx_u[q0]
+        rel = np.empty((P, 2))
+        rel_cs = np.empty((P, 2))
+        rel_heading = np.empty(P)
+        distance = np.empty(P)
+        two_pi = 2.0 * np.pi
+        for p in range(P):
+            a, b = rx[p], tx[p]
+            dx, dy = positions[b, 0] - positions[a, 0], positions[b, 1] - positions[a, 1]
+            c, s = cos_h[a], sin_h[a]
+            rel[p, 0] = c * dx + s * dy
+            rel[p, 1] = -s * dx + c * dy
+            rel_cs[p, 0] = cos_h[b] * c + sin_h[b] * s
+            rel_cs[p, 1] = sin_h[b] * c - cos_h[b] * s
+            y = np.pi - (headings[b] - headings[a])
+            if y >= two_pi and y < 2.0 * two_pi:  # y % 2 pi without fmod; y - 2 pi is exact here (Sterbenz)
+                y -= two_pi
+            elif y < 0.0 and y > -two_pi:
+                y += two_pi
+            elif y < 0.0 or y >= two_pi:
+                y %= two_pi
+            rel_heading[p] = np.pi - y
+            distance[p] = math.sqrt(dx * dx + dy * dy)
+        return rx, tx, pair_of, rel, rel_cs, rel_heading, distance

@@ -198,14 +198,24 @@ def pair_gains(
 
 
 def _gains(
-    R: np.ndarray, psi: np.ndarray, platform: Platform, model: object, offsets: np.ndarray, xy: np.ndarray, compact: bool
+    R: np.ndarray,
+    psi: np.ndarray,
+    platform: Platform,
+    model: object,
+    offsets: np.ndarray,
+    xy: np.ndarray,
+    compact: bool,
+    cos_sin: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """(gains, lit) of :func:`pair_gains` with checked inputs: ``lit`` the pairs with a nonzero gain, and
-    ``gains`` every pair's rows, or with ``compact`` only the ``lit`` rows (compiled kernel, or numpy)."""
+    ``gains`` every pair's rows, or with ``compact`` only the ``lit`` rows (compiled kernel, or numpy).
+    ``cos_sin`` (P, 2): cos and sin of ``psi`` if known (the kernel uses them; default from ``psi``)."""
     if kernels.HAVE_NUMBA and type(model).__name__ in kernels.MODEL_IDS:
         kind, params = kernels.model_params(model)
+        if cos_sin is None:
+            cos_sin = np.stack([np.cos(psi), np.sin(psi)], axis=-1)
         return kernels.gains_kernel(
-            R, psi, platform.detector_positions, platform.detector_directions,
+            R, cos_sin, platform.detector_positions, platform.detector_directions,
             platform.emitter_positions, platform.emitter_directions, kind, params, float(platform.ir_range),
             offsets, xy, float(platform.radius), compact,
         )
@@ -281,7 +291,7 @@ def pair_occluders(
     """Candidate occluders of P (receiver, transmitter) pairs: third robots whose centre is closer than
     ``width`` (m) to the segment between the two centres.
 
-    Vectorised over pairs: such a robot lies within ``|rx tx| / 2 + width`` of one end, so the candidates
+    Vectorised over pairs: such a robot lies within ``sqrt(|rx tx|^2 / 4 + width^2)`` of one end, so the candidates
     are the neighbours of both ends within that distance (one KD-tree ``query_pairs`` in CSR form), tested
     by a compiled kernel (numba), or as flat (pair, candidate) numpy arrays without numba.
 
@@ -298,16 +308,25 @@ def pair_occluders(
     return offsets, idx, xy
 
 
-def _occluder_lists(positions: np.ndarray, a: np.ndarray, b: np.ndarray, width: float, tree: cKDTree | None) -> tuple[np.ndarray, np.ndarray]:
-    """CSR (offsets (P + 1,), robots (K,)) of the third robots closer than ``width`` to segment a[p]-b[p]."""
+def _occluder_lists(
+    positions: np.ndarray, a: np.ndarray, b: np.ndarray, width: float, tree: cKDTree | None, max_length: float | None = None
+) -> tuple[np.ndarray, np.ndarray]:
+    """CSR (offsets (P + 1,), robots (K,)) of the third robots closer than ``width`` to segment a[p]-b[p].
+    ``max_length``: the longest segment (m) if known (to within 1e-12 m), else computed."""
     P, N = a.shape[0], positions.shape[0]
     if P == 0 or N < 3:
         return np.zeros(P + 1, dtype=np.int64), np.zeros(0, dtype=np.int64)
     if tree is None:
         tree = cKDTree(positions)
-    seg = positions[b] - positions[a]
-    length = np.hypot(seg[:, 0], seg[:, 1])
-    starts, counts, nbrs = _neighbour_csr(positions, 0.5 * float(length.max()) + float(width), tree)
+    seg = length = None
+    if max_length is None or not kernels.HAVE_NUMBA:
+        seg = positions[b] - positions[a]
+        length = np.hypot(seg[:, 0], seg[:, 1])
+        max_length = float(length.max())
+    # a centre within width of a segment is within sqrt(length^2 / 4 + width^2) of the segment's nearer end
+    # (foot point on that half, Pythagoras); + 2e-9 m^2 covers the kernel's own margin and rounding
+    reach = float(np.sqrt(0.25 * float(max_length) ** 2 + float(width) ** 2 + 2e-9))
+    starts, counts, nbrs = _neighbour_csr(positions, reach, tree)
     if kernels.HAVE_NUMBA:
         return kernels.occluders_kernel(positions, float(width), a, b, starts, counts, nbrs)
     pairs, cands = [], []
@@ -338,7 +357,7 @@ def _occluder_frames(
     rx = np.ascontiguousarray(rx, dtype=np.int64)
     pair_of = np.ascontiguousarray(pair_of, dtype=np.int64)
     if kernels.HAVE_NUMBA:
-        return kernels.occluder_frames_kernel(positions, headings, rx, pair_of, offsets, idx)
+        return kernels.occluder_frames_kernel(positions, np.cos(headings), np.sin(headings), rx, pair_of, offsets, idx)
     counts = np.diff(offsets)[pair_of]
     out = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
     row = np.repeat(np.arange(rx.shape[0]), counts)
@@ -418,31 +437,45 @@ def compute_links(
         return _empty_links(n_d, n_e, N)
     if occlusion == "centre":
         pairs = pairs[line_of_sight(positions, platform.radius, pairs[:, 0], pairs[:, 1], tree)]
-    U = pairs.shape[0]
+    rx, tx, pair_of, rel, rel_cs, rel_heading, distance = _directed_pairs(pairs, positions, headings)
+    occluders = None
+    if occlusion == "ray":
+        # occluders once per unordered pair, then in each receiver's frame
+        a, b = (np.ascontiguousarray(pairs[:, k], dtype=np.int64) for k in (0, 1))
+        offsets, idx = _occluder_lists(positions, a, b, occluder_width(platform), tree, float(distance.max()))
+        occluders = _occluder_frames(positions, headings, rx, pair_of, offsets, idx)
+    if occluders is None:
+        offsets, xy = np.zeros(rx.shape[0] + 1, dtype=np.int64), np.zeros((0, 2))
+    else:
+        offsets, xy = occluders
+    gains, lit = _gains(rel, rel_heading, platform, platform.ir_model, offsets, xy, drop_zero, rel_cs)
+    rows = np.arange(rx.shape[0])
+    if drop_zero and lit.shape[0] < rx.shape[0]:
+        rx, tx, rel, rel_heading, distance, rows = rx[lit], tx[lit], rel[lit], rel_heading[lit], distance[lit], rows[lit]
+    return IRLinks(rx, tx, distance, rel, rel_heading, gains, N, None if occluders is None else (*occluders, rows))
+
+
+def _directed_pairs(
+    pairs: np.ndarray, positions: np.ndarray, headings: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Both directions of the unordered ``pairs`` (U, 2) sorted by (rx, tx): (rx, tx, row of ``pairs``, tx
+    centre in rx's frame (P, 2) (m), (cos, sin) of tx's heading in rx's frame (P, 2) from the robots' own
+    cosines and sines, that heading (P,) (rad, wrapped), centre distance (P,) (m))."""
+    c, s = np.cos(headings), np.sin(headings)  # per robot, then per pair
+    if kernels.HAVE_NUMBA:
+        pairs = np.ascontiguousarray(pairs, dtype=np.int64)
+        return kernels.directed_pairs_kernel(pairs, np.ascontiguousarray(positions), np.ascontiguousarray(headings), c, s)
+    U, N = pairs.shape[0], positions.shape[0]
     rx = np.concatenate([pairs[:, 0], pairs[:, 1]]).astype(np.intp)
     tx = np.concatenate([pairs[:, 1], pairs[:, 0]]).astype(np.intp)
     order = np.argsort(rx.astype(np.int64) * N + tx)  # by (rx, tx); the keys are unique, so any sort agrees
     rx, tx = rx[order], tx[order]
     d = positions[tx] - positions[rx]
-    c, s = np.cos(headings)[rx], np.sin(headings)[rx]  # per robot, then per pair
+    c, s = c[rx], s[rx]
     rel = np.stack([c * d[:, 0] + s * d[:, 1], -s * d[:, 0] + c * d[:, 1]], axis=-1)
-    rel_heading = wrap_angle(headings[tx] - headings[rx])
-    occluders = None
-    if occlusion == "ray":
-        # occluders once per unordered pair, then in each receiver's frame
-        a, b = (np.ascontiguousarray(pairs[:, k], dtype=np.int64) for k in (0, 1))
-        offsets, idx = _occluder_lists(positions, a, b, occluder_width(platform), tree)
-        occluders = _occluder_frames(positions, headings, rx, order % U, offsets, idx)
-    if occluders is None:
-        offsets, xy = np.zeros(rx.shape[0] + 1, dtype=np.int64), np.zeros((0, 2))
-    else:
-        offsets, xy = occluders
-    gains, lit = _gains(rel, rel_heading, platform, platform.ir_model, offsets, xy, compact=drop_zero)
-    distance = np.hypot(d[:, 0], d[:, 1])
-    rows = np.arange(rx.shape[0])
-    if drop_zero and lit.shape[0] < rx.shape[0]:
-        rx, tx, rel, rel_heading, distance, rows = rx[lit], tx[lit], rel[lit], rel_heading[lit], distance[lit], rows[lit]
-    return IRLinks(rx, tx, distance, rel, rel_heading, gains, N, None if occluders is None else (*occluders, rows))
+    ct, st = np.cos(headings)[tx], np.sin(headings)[tx]
+    rel_cs = np.stack([ct * c + st * s, st * c - ct * s], axis=-1)
+    return rx, tx, order % U, rel, rel_cs, wrap_angle(headings[tx] - headings[rx]), np.sqrt(d[:, 0] * d[:, 0] + d[:, 1] * d[:, 1])
 
 
 def _empty_links(n_d: int, n_e: int, n_robots: int) -> IRLinks:
