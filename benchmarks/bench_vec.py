@@ -9,6 +9,11 @@ ratios; the process CPU time per step is printed too, as it depends less on othe
     python benchmarks/bench_vec.py                     # the full table (several minutes)
     python benchmarks/bench_vec.py --quick             # N = 10 only
     python benchmarks/bench_vec.py --n 10 --copies 64 --sensing full
+    python benchmarks/bench_vec.py --interleave 5        # VMAS vs N = 10 ideal, alternated, 5 rounds
+
+On a shared machine the load drifts between the VMAS row and ours; ``--interleave R`` alternates the two
+measurements (VMAS, then N = 10 ideal flocking at B = 64 and 256) R times and prints each round's ratio
+and the median ratio, so both sides of every ratio see the same load.
 """
 
 from __future__ import annotations
@@ -49,8 +54,8 @@ def time_swarm(n: int, copies: int, sensing: str, min_steps: int, min_seconds: f
     return statistics.median(times), statistics.median(cpu)
 
 
-def time_vmas(n: int, num_envs: int, steps: int) -> float | None:
-    """Median seconds per VMAS flocking step (num_envs envs of n agents, CPU, 1 torch thread), or None."""
+def make_vmas(n: int, num_envs: int):
+    """VMAS flocking (num_envs envs of n agents, CPU, 1 torch thread), reset and warmed up, or None."""
     try:
         import torch
         import vmas
@@ -61,6 +66,14 @@ def time_vmas(n: int, num_envs: int, steps: int) -> float | None:
     env.reset()
     for _ in range(3):
         env.step([env.get_random_action(agent) for agent in env.agents])
+    return env
+
+
+def time_vmas(n: int, num_envs: int, steps: int, env=None) -> float | None:
+    """Median seconds per VMAS flocking step (num_envs envs of n agents, CPU, 1 torch thread), or None."""
+    env = env if env is not None else make_vmas(n, num_envs)
+    if env is None:
+        return None
     times = []
     for _ in range(steps):
         actions = [env.get_random_action(agent) for agent in env.agents]
@@ -68,6 +81,28 @@ def time_vmas(n: int, num_envs: int, steps: int) -> float | None:
         env.step(actions)
         times.append(time.perf_counter() - t0)
     return statistics.median(times)
+
+
+def interleaved(rounds: int, copies: tuple[int, ...] = (64, 256), vmas_steps: int = 15) -> None:
+    """VMAS (N = 10, 1024 envs) and N = 10 ideal flocking at each of ``copies``, alternated ``rounds`` times."""
+    env = make_vmas(10, 1024)
+    if env is None:
+        print("VMAS: not installed (pip install vmas) - nothing to interleave")
+        return
+    print(f"load average at start: {os.getloadavg()[0]:.2f} on {os.cpu_count()} cores")
+    print("| round | VMAS agent-steps/s | " + " | ".join(f"B={b} agent-steps/s | ratio" for b in copies) + " |")
+    print("|---|---|" + "---|---|" * len(copies))
+    ratios: dict[int, list[float]] = {b: [] for b in copies}
+    for r in range(rounds):
+        vmas_rate = 10 * 1024 / time_vmas(10, 1024, vmas_steps, env)
+        cells = []
+        for b in copies:
+            rate = 10 * b / time_swarm(10, b, "ideal", 5, 2.0)[0]
+            ratios[b].append(rate / vmas_rate)
+            cells.append(f"{rate:,.0f} | {rate / vmas_rate:.2f}x")
+        print(f"| {r + 1} | {vmas_rate:,.0f} | " + " | ".join(cells) + " |", flush=True)
+    print("\nmedian ratio: " + ", ".join(f"B={b} {statistics.median(v):.2f}x (min {min(v):.2f}, max {max(v):.2f})" for b, v in ratios.items()))
+    print(f"load average at end: {os.getloadavg()[0]:.2f}")
 
 
 def main() -> None:
@@ -80,7 +115,11 @@ def main() -> None:
     parser.add_argument("--min-seconds", type=float, default=3.0)
     parser.add_argument("--no-vmas", action="store_true")
     parser.add_argument("--vmas-steps", type=int, default=20, help="timed VMAS steps (median)")
+    parser.add_argument("--interleave", type=int, metavar="R", help="alternate VMAS and N = 10 ideal R times (ratios only)")
     args = parser.parse_args()
+    if args.interleave:
+        interleaved(args.interleave)
+        return
     grid = [(n, b) for n, b in GRID if not args.quick or n == 10]
     if args.n:
         grid = [(n, b) for n, b in grid if n == args.n] or [(args.n, args.copies or 1)]
