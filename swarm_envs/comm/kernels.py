@@ -139,34 +139,46 @@ class GeneratorList:
         return self._list
 
 
-def _draw_copies_py(gens, S, n, n_det, noise_sigma, intensity_sigma, window):
-    """Body of :func:`draw_copies` (compiled with numba; the same code runs in plain Python without)."""
-    B = len(gens)
-    N = B * n
-    ni = S if intensity_sigma > 0 else 0
-    noise = np.empty((S, N, n_det), dtype=np.float32) if noise_sigma > 0 else np.zeros((S, N, n_det), dtype=np.float32)
-    inoise = np.zeros((ni, N if ni else 0, n_det if ni else 0))
-    backoff = np.empty((N, S), dtype=np.int64)
-    access = np.empty(N, dtype=np.int64)
-    sg = np.float32(noise_sigma)
-    for b in range(B):
-        g = gens[b]
-        o = b * n
-        if noise_sigma > 0:
-            noise[:, o : o + n, :] = g.standard_normal(size=(S, n, n_det), dtype=np.float32) * sg
-        if ni:
-            inoise[:, o : o + n, :] = g.normal(0.0, intensity_sigma, size=(S, n, n_det))
-        k = g.integers(0, window, size=n * S + n)  # backoff (row-major (n, S)), then access
-        backoff[o : o + n, :] = k[: n * S].reshape((n, S))
-        access[o : o + n] = k[n * S :]
-    return noise, inoise, backoff, access
-
-
 def _identity(f):  # pragma: no cover - used only without numba
     return f
 
 
 _jit = njit(cache=True) if HAVE_NUMBA else _identity
+
+
+@_jit
+def _draw_buffers(B, n, S, n_det, noise_sigma, intensity_sigma):
+    """The arrays :func:`draw_copies` fills for B copies of n robots: ADC noise (S, B n, n_det) float32 (zeros
+    when ``noise_sigma`` is 0, otherwise left for the draws), intensity noise (S, B n, n_det) or empty,
+    backoff (B n, S) and access (B n,) int64."""
+    N = B * n
+    ni = S if intensity_sigma > 0 else 0
+    noise = np.empty((S, N, n_det), dtype=np.float32) if noise_sigma > 0 else np.zeros((S, N, n_det), dtype=np.float32)
+    inoise = np.zeros((ni, N if ni else 0, n_det if ni else 0))
+    return noise, inoise, np.empty((N, S), dtype=np.int64), np.empty(N, dtype=np.int64)
+
+
+@_jit
+def _store_integers(k, backoff, access, o, n, S):
+    """Copy rows ``o .. o + n``: the first n S integers of ``k`` are the backoff draws (robot-major), the last
+    n the access delays."""
+    backoff[o : o + n, :] = k[: n * S].reshape((n, S))
+    access[o : o + n] = k[n * S :]
+
+
+def _draw_copies_py(gens, S, n, n_det, noise_sigma, intensity_sigma, window):
+    """Body of :func:`draw_copies` (compiled with numba; the same code runs in plain Python without)."""
+    noise, inoise, backoff, access = _draw_buffers(len(gens), n, S, n_det, noise_sigma, intensity_sigma)
+    sg = np.float32(noise_sigma)
+    for b in range(len(gens)):
+        g = gens[b]
+        o = b * n
+        if noise_sigma > 0:
+            noise[:, o : o + n, :] = g.standard_normal(size=(S, n, n_det), dtype=np.float32) * sg
+        if intensity_sigma > 0:
+            inoise[:, o : o + n, :] = g.normal(0.0, intensity_sigma, size=(S, n, n_det))
+        _store_integers(g.integers(0, window, size=n * S + n), backoff, access, o, n, S)
+    return noise, inoise, backoff, access
 
 
 if HAVE_NUMBA:
@@ -211,15 +223,9 @@ if _FAST_NORMAL:
     @njit(cache=True)
     def _draw_copies_nb(gens, S, n, n_det, noise_sigma, intensity_sigma, window, ki, wi, fi, zr, zir):
         """:func:`_draw_copies_py` compiled, with the ADC noise from :func:`_normal_f` (same numbers)."""
-        B = len(gens)
-        N = B * n
-        ni = S if intensity_sigma > 0 else 0
-        noise = np.empty((S, N, n_det), dtype=np.float32) if noise_sigma > 0 else np.zeros((S, N, n_det), dtype=np.float32)
-        inoise = np.zeros((ni, N if ni else 0, n_det if ni else 0))
-        backoff = np.empty((N, S), dtype=np.int64)
-        access = np.empty(N, dtype=np.int64)
+        noise, inoise, backoff, access = _draw_buffers(len(gens), n, S, n_det, noise_sigma, intensity_sigma)
         sg = np.float32(noise_sigma)
-        for b in range(B):
+        for b in range(len(gens)):
             g = gens[b]
             o = b * n
             if noise_sigma > 0:
@@ -228,11 +234,9 @@ if _FAST_NORMAL:
                     for r in range(o, o + n):
                         for d in range(n_det):
                             noise[s, r, d] = _normal_f(bg, ki, wi, fi, zr, zir) * sg
-            if ni:
+            if intensity_sigma > 0:
                 inoise[:, o : o + n, :] = g.normal(0.0, intensity_sigma, size=(S, n, n_det))
-            k = g.integers(0, window, size=n * S + n)  # backoff (row-major (n, S)), then access
-            backoff[o : o + n, :] = k[: n * S].reshape((n, S))
-            access[o : o + n] = k[n * S :]
+            _store_integers(g.integers(0, window, size=n * S + n), backoff, access, o, n, S)
         return noise, inoise, backoff, access
 
     def _draw_copies(gens, S, n, n_det, noise_sigma, intensity_sigma, window):

@@ -133,18 +133,10 @@ if _HAVE_NUMBA:
 
     @njit(cache=True)
     def _copy_pairs_kernel(positions: np.ndarray, m: int, r2: float) -> np.ndarray:  # pragma: no cover - compiled
-        """Pairs i < j of each copy of ``m`` rows with dx^2 + dy^2 <= r2, in (i, j) order (count, then fill)."""
+        """Pairs i < j of each copy of ``m`` rows with dx^2 + dy^2 <= r2, in (i, j) order (one pass into a
+        buffer of the n (m - 1) / 2 pairs the copies have at most)."""
         n = positions.shape[0]
-        count = 0
-        for o in range(0, n, m):
-            for i in range(o, o + m):
-                xi, yi = positions[i, 0], positions[i, 1]
-                for j in range(i + 1, o + m):
-                    dx = positions[j, 0] - xi
-                    dy = positions[j, 1] - yi
-                    if dx * dx + dy * dy <= r2:
-                        count += 1
-        out = np.empty((count, 2), np.int64)
+        out = np.empty((n * (m - 1) // 2, 2), np.int64)
         p = 0
         for o in range(0, n, m):
             for i in range(o, o + m):
@@ -156,7 +148,7 @@ if _HAVE_NUMBA:
                         out[p, 0] = i
                         out[p, 1] = j
                         p += 1
-        return out
+        return out[:p]
 
     @njit(cache=True)
     def _grid_pairs_kernel(positions: np.ndarray, m: int, r2: float, cell: float) -> np.ndarray:  # pragma: no cover - compiled
