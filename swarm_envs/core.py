@@ -155,8 +155,8 @@ class SwarmCore:
         nb = frame.neighbours
         # the k nearest readings per robot; only those are turned into observation rows. Parts are built
         # in float32 (values cast from float64 as build would), then clipped by build. A stack that already
-        # selected the k nearest (the ideal one: NearestNeighbourReadings) hands over its slots and bearing trig
-        slots, cos_sin = getattr(nb, "slots", None), getattr(nb, "slot_cos_sin", None)
+        # selected the k nearest (the ideal one) hands them over in NeighbourReadings.slots / slot_cos_sin
+        slots, cos_sin = nb.slots, nb.slot_cos_sin
         if slots is None or slots.shape != (n, k):
             slots, cos_sin = nearest_slots(n, nb.rx, nb.range, k), None
         range_bearing = range_bearing_rows(slots, nb.range, nb.bearing, nb.heading, nb.age, cos_sin)

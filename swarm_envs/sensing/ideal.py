@@ -8,8 +8,6 @@ neighbour distance.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 from scipy.spatial import cKDTree
 
@@ -17,7 +15,7 @@ from swarm_envs.observation import nearest_slots, wrapped_difference
 from swarm_envs.platforms import Platform
 from swarm_envs.sensing.base import MessageReadings, NeighbourReadings, ScaleFreeReadings, SensorFrame
 
-__all__ = ["IdealSensing", "NearestNeighbourReadings", "candidate_pairs", "copy_pairs", "directed_pairs", "directed_links", "neighbour_pairs"]
+__all__ = ["IdealSensing", "candidate_pairs", "copy_pairs", "directed_pairs", "directed_links", "neighbour_pairs"]
 
 #: robots per copy up to which :func:`copy_pairs` checks every pair of a copy; larger copies use a cell grid
 BRUTE_FORCE_MAX = 64
@@ -277,17 +275,6 @@ def directed_pairs(pairs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return rx[order], tx[order]
 
 
-@dataclass
-class NearestNeighbourReadings(NeighbourReadings):
-    """:class:`NeighbourReadings` that also carry each robot's ``k`` nearest links, ``slots`` (N, k) (link
-    index, -1 when empty: :func:`swarm_envs.observation.nearest_slots` of ``rx`` by ``range``), and
-    ``slot_cos_sin`` (N, k, 2), cos and sin of their bearings (of link 0 in empty slots). The ideal stack
-    needs both for its scale-free coordinates; the observation builder reuses them."""
-
-    slots: np.ndarray | None = None
-    slot_cos_sin: np.ndarray | None = None
-
-
 class IdealSensing:
     """Ground-truth sensing within IR range (see module docstring), for ``n_copies`` env copies of
     ``n_robots`` robots each (rows = robots of all copies, copy-major)."""
@@ -328,7 +315,7 @@ class IdealSensing:
             cos_sin = np.stack([np.cos(b), np.sin(b)], -1)
         else:
             cos_sin = np.zeros((self.n, self.k, 2))
-        neighbours = NearestNeighbourReadings(rx, tx, distance, bearing, heading, np.zeros(len(rx)), order, cos_sin)
+        neighbours = NeighbourReadings(rx, tx, distance, bearing, heading, np.zeros(len(rx)), slots=order, slot_cos_sin=cos_sin)
 
         if self.message_bits > 0 and payloads is not None:
             got = np.ones(len(rx), dtype=bool) if sending is None else np.asarray(sending, bool)[tx]
