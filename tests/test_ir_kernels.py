@@ -48,16 +48,54 @@ def test_gains_kernel_compact_rows_are_the_lit_pairs(name):
         R, np.stack([np.cos(psi), np.sin(psi)], axis=-1), platform.detector_positions, platform.detector_directions, platform.emitter_positions,
         platform.emitter_directions, kind, params, float(platform.ir_range), offsets, xy, float(platform.radius),
     )
-    full, lit_full = kernels.gains_kernel(*args, False)
-    compact, lit = kernels.gains_kernel(*args, True)
+    full, lit_full, sums_full = kernels.gains_kernel(*args, False)
+    compact, lit, sums = kernels.gains_kernel(*args, True)
     expected = np.flatnonzero(full.reshape(P, -1).max(axis=1) > 0)
     assert 0 < len(expected) < P
     np.testing.assert_array_equal(lit, expected)
     np.testing.assert_array_equal(lit_full, expected)
     np.testing.assert_array_equal(compact, full[expected])
+    np.testing.assert_array_equal(sums_full, _sequential_sums(full))
+    np.testing.assert_array_equal(sums, sums_full[expected])
     reference = layer._pair_gains_numpy(R, psi, platform, platform.ir_model) * layer._clear_rays_numpy(R, psi, platform, offsets, xy)
     np.testing.assert_array_equal(full > 0, reference > 0)
     np.testing.assert_allclose(full, reference, rtol=1e-9, atol=1e-12)
+
+
+def _sequential_sums(gains):
+    """sum over emitters, one scalar addition at a time in emitter order from 0.0 (the documented order)."""
+    out = np.zeros(gains.shape[:2])
+    for p in range(gains.shape[0]):
+        for i in range(gains.shape[1]):
+            acc = 0.0
+            for j in range(gains.shape[2]):
+                acc += float(gains[p, i, j])
+            out[p, i] = acc
+    return out
+
+
+@pytest.mark.parametrize("name", ["droplet", "epuck", "rone"])
+@pytest.mark.parametrize("occlusion", ["ray", "centre", "none"])
+@pytest.mark.parametrize("numba", [True, False])
+def test_emitter_sums_are_the_sequential_sums_of_the_gains(name, occlusion, numba, monkeypatch):
+    """IRLinks.emitter_sums: bit for bit the emitter-order sum of each detector's gains, aligned with the
+    rows, for every platform, occlusion rule and both paths (with and without dropped pairs, and empty)."""
+    if not numba:
+        monkeypatch.setattr(kernels, "HAVE_NUMBA", False)
+    platform = get_platform(name)
+    rng = np.random.default_rng(14)
+    pos, hd = _dense_scene(platform, 60, 1.2 * platform.ir_range, rng)
+    for drop_zero in (True, False):
+        L = layer.compute_links(pos, hd, platform, drop_zero=drop_zero, occlusion=occlusion)
+        assert L.emitter_sums.shape == (len(L), platform.n_detectors) and len(L) > 50
+        assert (L.emitter_sums > 0).any()
+        np.testing.assert_array_equal(L.emitter_sums, _sequential_sums(L.gains))
+    # several lit rays per detector, so the order of the additions matters somewhere
+    assert ((L.gains > 0).sum(axis=-1) >= 2).any()
+    empty = layer.compute_links(pos[:1], hd[:1], platform, occlusion=occlusion)
+    assert empty.emitter_sums.shape == (0, platform.n_detectors)
+    far = layer.compute_links(np.array([[0.0, 0.0], [10.0, 0.0]]), np.zeros(2), platform, occlusion=occlusion)
+    assert len(far) == 0 and far.emitter_sums.shape == (0, platform.n_detectors)
 
 
 def test_centre_line_of_sight_kernel_equals_numpy_reference(monkeypatch):

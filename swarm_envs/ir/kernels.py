@@ -127,12 +127,13 @@ if HAVE_NUMBA:
 
     @njit(cache=True, inline="always", error_model="numpy")
     def _epuck_rays(
-        out: np.ndarray, dets: np.ndarray, ems: np.ndarray, det_pos: np.ndarray, dcos: np.ndarray, dsin: np.ndarray,
+        out: np.ndarray, sums: np.ndarray, dets: np.ndarray, ems: np.ndarray, det_pos: np.ndarray, dcos: np.ndarray, dsin: np.ndarray,
         ex: np.ndarray, ey: np.ndarray, eax: np.ndarray, eay: np.ndarray, occ_xy: np.ndarray, q0: int, q1: int, r2: float,
         k_m: float, o_m: float, d_sat_cm: float,
     ) -> bool:
-        """e-puck gains of one pair's candidate rays into ``out`` (n_d, n_e) [T20 Eqs. (7),(24),(25),(27)];
-        True if one is lit. Same values as :func:`_gain` without a square root or division per ray: with
+        """e-puck gains of one pair's candidate rays into ``out`` (n_d, n_e) [T20 Eqs. (7),(24),(25),(27)] and
+        their sums over emitters into ``sums`` (n_d,) (rays in (detector, emitter) order, so each detector's
+        sum runs in emitter order); True if one is lit. Same values as :func:`_gain` without a square root or division per ray: with
         ``dx`` the ray (detector -> emitter), ``nd = dx . u_i = |dx| cos(detector angle)`` and
         ``ne = -dx . a_j = |dx| cos(emitter angle)``, ``ce^7 cd^3 h_m = ne^7 nd^3 / L2^5 h_m`` and, beyond
         d_sat, ``h_m = o_m (100 |dx|)^k_m = o_m 100^k_m L2^(k_m / 2)``. A ray is dark when nd or ne <= 0;
@@ -171,6 +172,7 @@ if HAVE_NUMBA:
                     ce2 = ce * ce
                     g = ce2 * ce2 * ce2 * ce * cd * cd * cd * hm
                     out[i, j] = g
+                    sums[i] += g
                     any_lit = any_lit or g > 0.0
                     continue
                 ne2 = ne * ne
@@ -181,6 +183,7 @@ if HAVE_NUMBA:
                 else:
                     g = num * scale * math.exp(expo * math.log(L2))
                 out[i, j] = g
+                sums[i] += g
                 if g > 0.0:
                     any_lit = True
         return any_lit
@@ -200,13 +203,16 @@ if HAVE_NUMBA:
         occ_xy: np.ndarray,
         occ_radius: float,
         compact: bool = False,
-    ) -> tuple[np.ndarray, np.ndarray]:
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Gains of P pairs; same geometry as ``pair_cosines`` (SPEC 2), same models. ``rel_position`` (P, 2):
         transmitter centre in the receiver frame (m); ``rel_cos_sin`` (P, 2): cos and sin of the transmitter's
         heading in the receiver frame.
 
-        Returns ``(gains, lit)``: ``lit`` the indices of the pairs with a nonzero gain, and ``gains`` the
-        (P, n_d, n_e) gains of every pair, or with ``compact`` only the rows of the ``lit`` pairs.
+        Returns ``(gains, lit, sums)``: ``lit`` the indices of the pairs with a nonzero gain, ``gains`` the
+        (P, n_d, n_e) gains of every pair, or with ``compact`` only the rows of the ``lit`` pairs, and
+        ``sums`` (rows of ``gains``, n_d) each detector's gains summed over the emitters sequentially in
+        emitter order from 0.0 (bit for bit ``acc = 0.0; for j: acc += gains[p, i, j]``; adding a dark
+        ray's 0.0 changes no sum, so only lit rays are added, in that order).
 
         Per-ray line of sight (SPEC 2): the gain of ray (i, j), from emitter j of the transmitter to detector
         i of the receiver, is zero when that segment crosses an occluding disc (radius ``occ_radius``) of pair
@@ -225,6 +231,7 @@ if HAVE_NUMBA:
         P, nd, ne = rel_position.shape[0], det_pos.shape[0], em_pos.shape[0]
         r2 = occ_radius * occ_radius
         out = np.empty((P, nd, ne))  # each row is zeroed just before it is filled (one pass over memory)
+        sums = np.empty((P, nd))
         lit = np.empty(P, dtype=np.int64)
         n_lit = 0
         dcos, dsin = np.cos(det_dir), np.sin(det_dir)
@@ -255,6 +262,7 @@ if HAVE_NUMBA:
         for p in range(P):
             row = n_lit if compact else p
             out[row] = 0.0
+            sums[row] = 0.0
             Rx, Ry = rel_position[p, 0], rel_position[p, 1]
             if math.sqrt(Rx * Rx + Ry * Ry) > ir_range:
                 continue
@@ -273,7 +281,9 @@ if HAVE_NUMBA:
                 n_det += np.int64((not prune_det) | (Rx * dcos[i] + Ry * dsin[i] + rho_e - det_self[i] >= -margin))
             q0, q1 = occ_offsets[p], occ_offsets[p + 1]
             if kind == 1:
-                any_lit = _epuck_rays(out[row], dets[:n_det], ems[:n_em], det_pos, dcos, dsin, ex, ey, eax, eay, occ_xy, q0, q1, r2, p0, p1, p2)
+                any_lit = _epuck_rays(
+                    out[row], sums[row], dets[:n_det], ems[:n_em], det_pos, dcos, dsin, ex, ey, eax, eay, occ_xy, q0, q1, r2, p0, p1, p2
+                )
                 if any_lit:
                     lit[n_lit] = p
                     n_lit += 1
@@ -296,14 +306,15 @@ if HAVE_NUMBA:
                     if not _ray_blocked(det_pos[i, 0], det_pos[i, 1], ex[j], ey[j], dx, dy, dx * dx + dy * dy, occ_xy, q0, q1, r2):
                         g = _gain(kind, p0, p1, p2, p3, p4, p5, p6, p7, d, cd, ce)
                         out[row, i, j] = g
+                        sums[row, i] += g  # rays in (detector, emitter) order: emitter order per detector
                         if g > 0.0:
                             any_lit = True
             if any_lit:
                 lit[n_lit] = p
                 n_lit += 1
         if compact:
-            return out[:n_lit], lit[:n_lit].copy()
-        return out, lit[:n_lit].copy()
+            return out[:n_lit], lit[:n_lit].copy(), sums[:n_lit]
+        return out, lit[:n_lit].copy(), sums
 
     @njit(cache=True, error_model="numpy")
     def occluders_kernel(
