@@ -152,6 +152,42 @@ def test_per_ray_occlusion_kernel_equals_numpy_reference(name, monkeypatch):
     assert lost.reshape(len(ref_links), -1).any(axis=1).sum() > 0
 
 
+def test_occluder_lists_equal_the_exact_segment_test_near_the_disc_edge():
+    """occluders_kernel decides candidates within 1e-6 of the width by the exact segment test: the same
+    lists as _segment_hits_disc over every third robot, for third robots placed at the width (to +-1e-15
+    .. 1e-3 relative) from the centre segment, inside it, beyond either end and near the ends. (The numpy
+    fallback rounds the segment differently and may disagree within ~1e-16 of the width.)"""
+    rng = np.random.default_rng(35)
+    width = 0.0686
+    pos = list(rng.uniform(0, 2.0, (40, 2)))
+    pairs = []
+    for _ in range(150):
+        a, b = rng.integers(0, 40, 2)
+        if a == b:
+            continue
+        pa, pb = pos[a], pos[b]
+        s = pb - pa
+        n = np.array([-s[1], s[0]]) / np.hypot(*s)
+        t = rng.choice([rng.uniform(-0.1, 1.1), 0.0, 1.0, 0.5])
+        h = width * (1.0 + rng.choice([0.0, 1e-15, -1e-15, 1e-9, -1e-9, 1e-7, -1e-7, 1e-3, -1e-3]))
+        pos.append(pa + t * s + rng.choice([-1.0, 1.0]) * h * n)
+        pairs.append((a, b))
+    pos = np.array(pos)
+    pairs = np.array(pairs, dtype=np.int64)
+    a, b = np.ascontiguousarray(pairs[:, 0]), np.ascontiguousarray(pairs[:, 1])
+    offsets, idx = layer._occluder_lists(pos, a, b, width, None)
+    n_edge = 0
+    for p in range(len(a)):
+        pa, s = pos[a[p]], pos[b[p]] - pos[a[p]]
+        expected = [
+            k for k in range(len(pos))
+            if k != a[p] and k != b[p] and kernels._segment_hits_disc(pa[0], pa[1], pa[0] + s[0], pa[1] + s[1], pos[k, 0], pos[k, 1], width**2)
+        ]
+        np.testing.assert_array_equal(idx[offsets[p] : offsets[p + 1]], expected)
+        n_edge += len(expected)
+    assert n_edge > 100
+
+
 def test_ray_blocked_verdicts_equal_the_exact_segment_test_near_the_disc_edge():
     """_ray_blocked skips the division except near the radius: its verdicts equal _segment_hits_disc's,
     including rays that graze the disc within rounding and discs near either end."""

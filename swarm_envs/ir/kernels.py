@@ -333,6 +333,11 @@ if HAVE_NUMBA:
         ``sqrt(|rx tx|^2 / 4 + width^2)`` (Pythagoras, foot point on the nearer half) to its nearer end, so
         each end's list, sorted by distance here, is read only up to that pair's own reach, and each end
         tests only the candidates whose projection on the segment falls in its own half (none twice). Returns offsets (P + 1,) and robot indices (K,), each pair's sorted.
+
+        The disc test is :func:`_hits_disc`'s (the verdict of :func:`_segment_hits_disc`: nearest end, or the
+        cross product against the width with a 1e-6 relative margin) evaluated without branching on its
+        outcome, candidates kept by an index increment; the few within the margin get the exact test after
+        the pair's loop.
         """
         P, N = rx.shape[0], positions.shape[0]
         # each robot's neighbours by increasing distance (insertion sort: the lists are short)
@@ -354,6 +359,8 @@ if HAVE_NUMBA:
         idx = np.empty(max(16, 2 * P), dtype=np.int64)
         K = 0
         w2 = width * width
+        w2_hi, w2_lo = w2 * (1.0 + _DISC_TOL), w2 * (1.0 - _DISC_TOL)
+        grey = np.empty(max(1, 2 * N), dtype=np.int64)  # one pair's candidates near the disc edge
         for p in range(P):
             a, b = rx[p], tx[p]
             ax, ay = positions[a, 0], positions[a, 1]
@@ -363,28 +370,48 @@ if HAVE_NUMBA:
             # is nearer to (or within width of an end); margin far above rounding
             reach2 = 0.25 * L2 + w2 + 1e-9
             half = 0.5 * L2
+            # the segment as _segment_hits_disc(ax, ay, ax + sx, ay + sy, ...) computes it
+            x1, y1 = ax + sx, ay + sy
+            tx_, ty_ = x1 - ax, y1 - ay
+            T2 = tx_ * tx_ + ty_ * ty_
+            if K + counts[a] + counts[b] > idx.shape[0]:
+                grown = np.empty(2 * (K + counts[a] + counts[b]), dtype=np.int64)
+                grown[:K] = idx[:K]
+                idx = grown
+            n_grey = 0
             for e in range(2):
                 end = a if e == 0 else b
                 for q in range(starts[end], starts[end] + counts[end]):
                     if dist2[q] > reach2:
                         break
                     k = near[q]
-                    if k == a or k == b:
-                        continue
+                    px, py = positions[k, 0] - ax, positions[k, 1] - ay
                     # each candidate from one end only: a's half (projection <= L2 / 2) from a, the rest from b
-                    if ((positions[k, 0] - ax) * sx + (positions[k, 1] - ay) * sy <= half) != (e == 0):
-                        continue
-                    if _segment_hits_disc(ax, ay, ax + sx, ay + sy, positions[k, 0], positions[k, 1], w2):
-                        if K == idx.shape[0]:
-                            grown = np.empty(2 * K, dtype=np.int64)
-                            grown[:K] = idx
-                            idx = grown
-                        idx[K] = k
-                        K += 1
-                        q2 = K - 1  # insertion sort: each pair's occluders in robot order
-                        while q2 > offsets[p] and idx[q2 - 1] > idx[q2]:
-                            idx[q2 - 1], idx[q2] = idx[q2], idx[q2 - 1]
-                            q2 -= 1
+                    mine = ((px * sx + py * sy <= half) == (e == 0)) & (k != a) & (k != b)
+                    # the verdict of _hits_disc (== _segment_hits_disc) without a branch on its outcome
+                    dot = px * tx_ + py * ty_
+                    qx, qy = px - tx_, py - ty_
+                    cr = px * ty_ - py * tx_
+                    cr2 = cr * cr
+                    at_start = dot <= 0.0
+                    at_end = (dot >= T2) & (not at_start)
+                    inner = (not at_start) & (not at_end)
+                    hit = (at_start & (px * px + py * py < w2)) | (at_end & (qx * qx + qy * qy < w2)) | (inner & (cr2 <= w2_lo * T2))
+                    idx[K] = k
+                    K += np.int64(mine & hit)
+                    # within 1e-6 of the radius the exact test decides, after the loop (rare)
+                    grey[n_grey] = k
+                    n_grey += np.int64(mine & inner & (cr2 < w2_hi * T2) & (cr2 > w2_lo * T2))
+            for t in range(n_grey):
+                k = grey[t]
+                if _segment_hits_disc(ax, ay, x1, y1, positions[k, 0], positions[k, 1], w2):
+                    idx[K] = k
+                    K += 1
+            for q in range(offsets[p] + 1, K):  # insertion sort: each pair's occluders in robot order
+                q2 = q
+                while q2 > offsets[p] and idx[q2 - 1] > idx[q2]:
+                    idx[q2 - 1], idx[q2] = idx[q2], idx[q2 - 1]
+                    q2 -= 1
             offsets[p + 1] = K
         return offsets, idx[:K].copy()
 
