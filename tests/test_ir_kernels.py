@@ -188,6 +188,31 @@ def test_occluder_lists_equal_the_exact_segment_test_near_the_disc_edge():
     assert n_edge > 100
 
 
+@pytest.mark.parametrize("name", ["droplet", "epuck"])
+def test_neighbour_lists_from_the_candidate_pairs_give_the_same_occluders(name):
+    """compute_links takes the occluder search's neighbour lists from its candidate pairs (no second
+    KD-tree query): the same occluder lists as with the KD-tree query, bit for bit."""
+    platform = get_platform(name)
+    rng = np.random.default_rng(36)
+    pos, _ = _dense_scene(platform, 150, 1.5 * platform.ir_range, rng)
+    tree = cKDTree(pos)
+    pairs = tree.query_pairs(platform.ir_range, output_type="ndarray")
+    a, b = np.ascontiguousarray(pairs[:, 0], dtype=np.int64), np.ascontiguousarray(pairs[:, 1], dtype=np.int64)
+    w = layer.occluder_width(platform)
+    length = float(np.hypot(*(pos[b] - pos[a]).T).max())
+    via_tree = layer._occluder_lists(pos, a, b, w, tree, length)
+    via_pairs = layer._occluder_lists(pos, a, b, w, tree, length, pairs, platform.ir_range)
+    assert len(via_tree[1]) > 100
+    np.testing.assert_array_equal(via_pairs[0], via_tree[0])
+    np.testing.assert_array_equal(via_pairs[1], via_tree[1])
+    reach2 = 0.25 * length**2 + w**2 + 2e-9
+    starts, counts, nbrs = kernels.neighbour_csr_kernel(pos, pairs.astype(np.int64), reach2)
+    ref = layer._neighbour_csr(pos, np.sqrt(reach2), tree)
+    np.testing.assert_array_equal(counts, ref[1])
+    for r in range(len(pos)):
+        assert sorted(nbrs[starts[r] : starts[r] + counts[r]]) == sorted(ref[2][ref[0][r] : ref[0][r] + ref[1][r]])
+
+
 def test_ray_blocked_verdicts_equal_the_exact_segment_test_near_the_disc_edge():
     """_ray_blocked skips the division except near the radius: its verdicts equal _segment_hits_disc's,
     including rays that graze the disc within rounding and discs near either end."""

@@ -22,7 +22,7 @@ try:  # numba is optional: an accelerator, not a requirement
 except ImportError:  # pragma: no cover - exercised only without numba
     HAVE_NUMBA = False
 
-__all__ = ["HAVE_NUMBA", "MODEL_IDS", "model_params", "gains_kernel", "occluders_kernel", "occluder_frames_kernel", "directed_pairs_kernel"]
+__all__ = ["HAVE_NUMBA", "MODEL_IDS", "model_params", "gains_kernel", "occluders_kernel", "neighbour_csr_kernel", "occluder_frames_kernel", "directed_pairs_kernel"]
 
 #: model class name -> kernel model id
 MODEL_IDS = {"DropletIR": 0, "EpuckIR": 1, "RoneIR": 2, "DropletLowPowerIR": 3}
@@ -414,6 +414,40 @@ if HAVE_NUMBA:
                     q2 -= 1
             offsets[p + 1] = K
         return offsets, idx[:K].copy()
+
+    @njit(cache=True, error_model="numpy")
+    def neighbour_csr_kernel(positions: np.ndarray, pairs: np.ndarray, reach2: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Neighbour lists as CSR (starts (N,), counts (N,), neighbours) from the unordered ``pairs`` (U, 2):
+        both ends of every pair whose squared centre distance (computed as :func:`occluders_kernel` does)
+        is at most ``reach2`` (m^2). Equal to the lists of a KD-tree query within ``sqrt(reach2)`` when
+        ``pairs`` holds every pair closer than a larger range (up to the order within a list)."""
+        N, U = positions.shape[0], pairs.shape[0]
+        keep = np.empty(U, dtype=np.int64)
+        counts = np.zeros(N, dtype=np.int64)
+        n = 0
+        for u in range(U):
+            a, b = pairs[u, 0], pairs[u, 1]
+            d2 = (positions[b, 0] - positions[a, 0]) ** 2 + (positions[b, 1] - positions[a, 1]) ** 2
+            keep[n] = u
+            n += np.int64(d2 <= reach2)
+        for t in range(n):
+            counts[pairs[keep[t], 0]] += 1
+            counts[pairs[keep[t], 1]] += 1
+        starts = np.empty(N, dtype=np.int64)
+        fill = np.empty(N, dtype=np.int64)
+        acc = 0
+        for r in range(N):
+            starts[r] = acc
+            fill[r] = acc
+            acc += counts[r]
+        nbrs = np.empty(acc, dtype=np.int64)
+        for t in range(n):
+            a, b = pairs[keep[t], 0], pairs[keep[t], 1]
+            nbrs[fill[a]] = b
+            fill[a] += 1
+            nbrs[fill[b]] = a
+            fill[b] += 1
+        return starts, counts, nbrs
 
     @njit(cache=True, error_model="numpy")
     def occluder_frames_kernel(

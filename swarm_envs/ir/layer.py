@@ -328,10 +328,20 @@ def pair_occluders(
 
 
 def _occluder_lists(
-    positions: np.ndarray, a: np.ndarray, b: np.ndarray, width: float, tree: cKDTree | None, max_length: float | None = None
+    positions: np.ndarray,
+    a: np.ndarray,
+    b: np.ndarray,
+    width: float,
+    tree: cKDTree | None,
+    max_length: float | None = None,
+    near_pairs: np.ndarray | None = None,
+    near_range: float = 0.0,
 ) -> tuple[np.ndarray, np.ndarray]:
     """CSR (offsets (P + 1,), robots (K,)) of the third robots closer than ``width`` to segment a[p]-b[p].
-    ``max_length``: the longest segment (m) if known (to within 1e-12 m), else computed."""
+    ``max_length``: the longest segment (m) if known (to within 1e-12 m), else computed. ``near_pairs``
+    (U, 2): unordered pairs known to include every pair of robots closer than ``near_range`` (m) (e.g.
+    the KD-tree's candidate pairs): the neighbour lists are taken from them instead of a second KD-tree
+    query when the lists' reach is shorter (compiled path)."""
     P, N = a.shape[0], positions.shape[0]
     if P == 0 or N < 3:
         return np.zeros(P + 1, dtype=np.int64), np.zeros(0, dtype=np.int64)
@@ -344,10 +354,15 @@ def _occluder_lists(
         max_length = float(length.max())
     # a centre within width of a segment is within sqrt(length^2 / 4 + width^2) of the segment's nearer end
     # (foot point on that half, Pythagoras); + 2e-9 m^2 covers the kernel's own margin and rounding
-    reach = float(np.sqrt(0.25 * float(max_length) ** 2 + float(width) ** 2 + 2e-9))
-    starts, counts, nbrs = _neighbour_csr(positions, reach, tree)
+    reach2 = 0.25 * float(max_length) ** 2 + float(width) ** 2 + 2e-9
+    reach = float(np.sqrt(reach2))
     if kernels.HAVE_NUMBA:
+        if near_pairs is not None and reach < near_range * (1.0 - 1e-9):  # lists from the pairs, no second query
+            starts, counts, nbrs = kernels.neighbour_csr_kernel(positions, np.ascontiguousarray(near_pairs, dtype=np.int64), reach2)
+        else:
+            starts, counts, nbrs = _neighbour_csr(positions, reach, tree)
         return kernels.occluders_kernel(positions, float(width), a, b, starts, counts, nbrs)
+    starts, counts, nbrs = _neighbour_csr(positions, reach, tree)
     pairs, cands = [], []
     L2 = np.where(length > 0, length * length, 1.0)
     for end in (a, b):  # two vectorised passes: neighbours of a, then of b
@@ -461,7 +476,7 @@ def compute_links(
     if occlusion == "ray":
         # occluders once per unordered pair, then in each receiver's frame
         a, b = (np.ascontiguousarray(pairs[:, k], dtype=np.int64) for k in (0, 1))
-        offsets, idx = _occluder_lists(positions, a, b, occluder_width(platform), tree, float(distance.max()))
+        offsets, idx = _occluder_lists(positions, a, b, occluder_width(platform), tree, float(distance.max()), pairs, r)
         occluders = _occluder_frames(positions, headings, rx, pair_of, offsets, idx)
     if occluders is None:
         offsets, xy = np.zeros(rx.shape[0] + 1, dtype=np.int64), np.zeros((0, 2))
