@@ -48,16 +48,54 @@ def test_gains_kernel_compact_rows_are_the_lit_pairs(name):
         R, np.stack([np.cos(psi), np.sin(psi)], axis=-1), platform.detector_positions, platform.detector_directions, platform.emitter_positions,
         platform.emitter_directions, kind, params, float(platform.ir_range), offsets, xy, float(platform.radius),
     )
-    full, lit_full = kernels.gains_kernel(*args, False)
-    compact, lit = kernels.gains_kernel(*args, True)
+    full, lit_full, sums_full = kernels.gains_kernel(*args, False)
+    compact, lit, sums = kernels.gains_kernel(*args, True)
     expected = np.flatnonzero(full.reshape(P, -1).max(axis=1) > 0)
     assert 0 < len(expected) < P
     np.testing.assert_array_equal(lit, expected)
     np.testing.assert_array_equal(lit_full, expected)
     np.testing.assert_array_equal(compact, full[expected])
+    np.testing.assert_array_equal(sums_full, _sequential_sums(full))
+    np.testing.assert_array_equal(sums, sums_full[expected])
     reference = layer._pair_gains_numpy(R, psi, platform, platform.ir_model) * layer._clear_rays_numpy(R, psi, platform, offsets, xy)
     np.testing.assert_array_equal(full > 0, reference > 0)
     np.testing.assert_allclose(full, reference, rtol=1e-9, atol=1e-12)
+
+
+def _sequential_sums(gains):
+    """sum over emitters, one scalar addition at a time in emitter order from 0.0 (the documented order)."""
+    out = np.zeros(gains.shape[:2])
+    for p in range(gains.shape[0]):
+        for i in range(gains.shape[1]):
+            acc = 0.0
+            for j in range(gains.shape[2]):
+                acc += float(gains[p, i, j])
+            out[p, i] = acc
+    return out
+
+
+@pytest.mark.parametrize("name", ["droplet", "epuck", "rone"])
+@pytest.mark.parametrize("occlusion", ["ray", "centre", "none"])
+@pytest.mark.parametrize("numba", [True, False])
+def test_emitter_sums_are_the_sequential_sums_of_the_gains(name, occlusion, numba, monkeypatch):
+    """IRLinks.emitter_sums: bit for bit the emitter-order sum of each detector's gains, aligned with the
+    rows, for every platform, occlusion rule and both paths (with and without dropped pairs, and empty)."""
+    if not numba:
+        monkeypatch.setattr(kernels, "HAVE_NUMBA", False)
+    platform = get_platform(name)
+    rng = np.random.default_rng(14)
+    pos, hd = _dense_scene(platform, 60, 1.2 * platform.ir_range, rng)
+    for drop_zero in (True, False):
+        L = layer.compute_links(pos, hd, platform, drop_zero=drop_zero, occlusion=occlusion)
+        assert L.emitter_sums.shape == (len(L), platform.n_detectors) and len(L) > 50
+        assert (L.emitter_sums > 0).any()
+        np.testing.assert_array_equal(L.emitter_sums, _sequential_sums(L.gains))
+    # several lit rays per detector, so the order of the additions matters somewhere
+    assert ((L.gains > 0).sum(axis=-1) >= 2).any()
+    empty = layer.compute_links(pos[:1], hd[:1], platform, occlusion=occlusion)
+    assert empty.emitter_sums.shape == (0, platform.n_detectors)
+    far = layer.compute_links(np.array([[0.0, 0.0], [10.0, 0.0]]), np.zeros(2), platform, occlusion=occlusion)
+    assert len(far) == 0 and far.emitter_sums.shape == (0, platform.n_detectors)
 
 
 def test_centre_line_of_sight_kernel_equals_numpy_reference(monkeypatch):
@@ -112,6 +150,67 @@ def test_per_ray_occlusion_kernel_equals_numpy_reference(name, monkeypatch):
     sel = np.isin(key, ref_links.rx * len(pos) + ref_links.tx)
     lost = (free.gains[sel] > 0) & (ref_links.gains == 0)
     assert lost.reshape(len(ref_links), -1).any(axis=1).sum() > 0
+
+
+def test_occluder_lists_equal_the_exact_segment_test_near_the_disc_edge():
+    """occluders_kernel decides candidates within 1e-6 of the width by the exact segment test: the same
+    lists as _segment_hits_disc over every third robot, for third robots placed at the width (to +-1e-15
+    .. 1e-3 relative) from the centre segment, inside it, beyond either end and near the ends. (The numpy
+    fallback rounds the segment differently and may disagree within ~1e-16 of the width.)"""
+    rng = np.random.default_rng(35)
+    width = 0.0686
+    pos = list(rng.uniform(0, 2.0, (40, 2)))
+    pairs = []
+    for _ in range(150):
+        a, b = rng.integers(0, 40, 2)
+        if a == b:
+            continue
+        pa, pb = pos[a], pos[b]
+        s = pb - pa
+        n = np.array([-s[1], s[0]]) / np.hypot(*s)
+        t = rng.choice([rng.uniform(-0.1, 1.1), 0.0, 1.0, 0.5])
+        h = width * (1.0 + rng.choice([0.0, 1e-15, -1e-15, 1e-9, -1e-9, 1e-7, -1e-7, 1e-3, -1e-3]))
+        pos.append(pa + t * s + rng.choice([-1.0, 1.0]) * h * n)
+        pairs.append((a, b))
+    pos = np.array(pos)
+    pairs = np.array(pairs, dtype=np.int64)
+    a, b = np.ascontiguousarray(pairs[:, 0]), np.ascontiguousarray(pairs[:, 1])
+    offsets, idx = layer._occluder_lists(pos, a, b, width, None)
+    n_edge = 0
+    for p in range(len(a)):
+        pa, s = pos[a[p]], pos[b[p]] - pos[a[p]]
+        expected = [
+            k for k in range(len(pos))
+            if k != a[p] and k != b[p] and kernels._segment_hits_disc(pa[0], pa[1], pa[0] + s[0], pa[1] + s[1], pos[k, 0], pos[k, 1], width**2)
+        ]
+        np.testing.assert_array_equal(idx[offsets[p] : offsets[p + 1]], expected)
+        n_edge += len(expected)
+    assert n_edge > 100
+
+
+@pytest.mark.parametrize("name", ["droplet", "epuck"])
+def test_neighbour_lists_from_the_candidate_pairs_give_the_same_occluders(name):
+    """compute_links takes the occluder search's neighbour lists from its candidate pairs (no second
+    KD-tree query): the same occluder lists as with the KD-tree query, bit for bit."""
+    platform = get_platform(name)
+    rng = np.random.default_rng(36)
+    pos, _ = _dense_scene(platform, 150, 1.5 * platform.ir_range, rng)
+    tree = cKDTree(pos)
+    pairs = tree.query_pairs(platform.ir_range, output_type="ndarray")
+    a, b = np.ascontiguousarray(pairs[:, 0], dtype=np.int64), np.ascontiguousarray(pairs[:, 1], dtype=np.int64)
+    w = layer.occluder_width(platform)
+    length = float(np.hypot(*(pos[b] - pos[a]).T).max())
+    via_tree = layer._occluder_lists(pos, a, b, w, tree, length)
+    via_pairs = layer._occluder_lists(pos, a, b, w, tree, length, pairs, platform.ir_range)
+    assert len(via_tree[1]) > 100
+    np.testing.assert_array_equal(via_pairs[0], via_tree[0])
+    np.testing.assert_array_equal(via_pairs[1], via_tree[1])
+    reach2 = 0.25 * length**2 + w**2 + 2e-9
+    starts, counts, nbrs = kernels.neighbour_csr_kernel(pos, pairs.astype(np.int64), reach2)
+    ref = layer._neighbour_csr(pos, np.sqrt(reach2), tree)
+    np.testing.assert_array_equal(counts, ref[1])
+    for r in range(len(pos)):
+        assert sorted(nbrs[starts[r] : starts[r] + counts[r]]) == sorted(ref[2][ref[0][r] : ref[0][r] + ref[1][r]])
 
 
 def test_ray_blocked_verdicts_equal_the_exact_segment_test_near_the_disc_edge():

@@ -22,7 +22,7 @@ try:  # numba is optional: an accelerator, not a requirement
 except ImportError:  # pragma: no cover - exercised only without numba
     HAVE_NUMBA = False
 
-__all__ = ["HAVE_NUMBA", "MODEL_IDS", "model_params", "gains_kernel", "occluders_kernel", "occluder_frames_kernel", "directed_pairs_kernel"]
+__all__ = ["HAVE_NUMBA", "MODEL_IDS", "model_params", "gains_kernel", "occluders_kernel", "neighbour_csr_kernel", "occluder_frames_kernel", "directed_pairs_kernel"]
 
 #: model class name -> kernel model id
 MODEL_IDS = {"DropletIR": 0, "EpuckIR": 1, "RoneIR": 2, "DropletLowPowerIR": 3}
@@ -127,12 +127,13 @@ if HAVE_NUMBA:
 
     @njit(cache=True, inline="always", error_model="numpy")
     def _epuck_rays(
-        out: np.ndarray, dets: np.ndarray, ems: np.ndarray, det_pos: np.ndarray, dcos: np.ndarray, dsin: np.ndarray,
+        out: np.ndarray, sums: np.ndarray, dets: np.ndarray, ems: np.ndarray, det_pos: np.ndarray, dcos: np.ndarray, dsin: np.ndarray,
         ex: np.ndarray, ey: np.ndarray, eax: np.ndarray, eay: np.ndarray, occ_xy: np.ndarray, q0: int, q1: int, r2: float,
         k_m: float, o_m: float, d_sat_cm: float,
     ) -> bool:
-        """e-puck gains of one pair's candidate rays into ``out`` (n_d, n_e) [T20 Eqs. (7),(24),(25),(27)];
-        True if one is lit. Same values as :func:`_gain` without a square root or division per ray: with
+        """e-puck gains of one pair's candidate rays into ``out`` (n_d, n_e) [T20 Eqs. (7),(24),(25),(27)] and
+        their sums over emitters into ``sums`` (n_d,) (rays in (detector, emitter) order, so each detector's
+        sum runs in emitter order); True if one is lit. Same values as :func:`_gain` without a square root or division per ray: with
         ``dx`` the ray (detector -> emitter), ``nd = dx . u_i = |dx| cos(detector angle)`` and
         ``ne = -dx . a_j = |dx| cos(emitter angle)``, ``ce^7 cd^3 h_m = ne^7 nd^3 / L2^5 h_m`` and, beyond
         d_sat, ``h_m = o_m (100 |dx|)^k_m = o_m 100^k_m L2^(k_m / 2)``. A ray is dark when nd or ne <= 0;
@@ -171,6 +172,7 @@ if HAVE_NUMBA:
                     ce2 = ce * ce
                     g = ce2 * ce2 * ce2 * ce * cd * cd * cd * hm
                     out[i, j] = g
+                    sums[i] += g
                     any_lit = any_lit or g > 0.0
                     continue
                 ne2 = ne * ne
@@ -181,6 +183,7 @@ if HAVE_NUMBA:
                 else:
                     g = num * scale * math.exp(expo * math.log(L2))
                 out[i, j] = g
+                sums[i] += g
                 if g > 0.0:
                     any_lit = True
         return any_lit
@@ -200,13 +203,16 @@ if HAVE_NUMBA:
         occ_xy: np.ndarray,
         occ_radius: float,
         compact: bool = False,
-    ) -> tuple[np.ndarray, np.ndarray]:
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Gains of P pairs; same geometry as ``pair_cosines`` (SPEC 2), same models. ``rel_position`` (P, 2):
         transmitter centre in the receiver frame (m); ``rel_cos_sin`` (P, 2): cos and sin of the transmitter's
         heading in the receiver frame.
 
-        Returns ``(gains, lit)``: ``lit`` the indices of the pairs with a nonzero gain, and ``gains`` the
-        (P, n_d, n_e) gains of every pair, or with ``compact`` only the rows of the ``lit`` pairs.
+        Returns ``(gains, lit, sums)``: ``lit`` the indices of the pairs with a nonzero gain, ``gains`` the
+        (P, n_d, n_e) gains of every pair, or with ``compact`` only the rows of the ``lit`` pairs, and
+        ``sums`` (rows of ``gains``, n_d) each detector's gains summed over the emitters sequentially in
+        emitter order from 0.0 (bit for bit ``acc = 0.0; for j: acc += gains[p, i, j]``; adding a dark
+        ray's 0.0 changes no sum, so only lit rays are added, in that order).
 
         Per-ray line of sight (SPEC 2): the gain of ray (i, j), from emitter j of the transmitter to detector
         i of the receiver, is zero when that segment crosses an occluding disc (radius ``occ_radius``) of pair
@@ -225,6 +231,7 @@ if HAVE_NUMBA:
         P, nd, ne = rel_position.shape[0], det_pos.shape[0], em_pos.shape[0]
         r2 = occ_radius * occ_radius
         out = np.empty((P, nd, ne))  # each row is zeroed just before it is filled (one pass over memory)
+        sums = np.empty((P, nd))
         lit = np.empty(P, dtype=np.int64)
         n_lit = 0
         dcos, dsin = np.cos(det_dir), np.sin(det_dir)
@@ -255,6 +262,7 @@ if HAVE_NUMBA:
         for p in range(P):
             row = n_lit if compact else p
             out[row] = 0.0
+            sums[row] = 0.0
             Rx, Ry = rel_position[p, 0], rel_position[p, 1]
             if math.sqrt(Rx * Rx + Ry * Ry) > ir_range:
                 continue
@@ -273,7 +281,9 @@ if HAVE_NUMBA:
                 n_det += np.int64((not prune_det) | (Rx * dcos[i] + Ry * dsin[i] + rho_e - det_self[i] >= -margin))
             q0, q1 = occ_offsets[p], occ_offsets[p + 1]
             if kind == 1:
-                any_lit = _epuck_rays(out[row], dets[:n_det], ems[:n_em], det_pos, dcos, dsin, ex, ey, eax, eay, occ_xy, q0, q1, r2, p0, p1, p2)
+                any_lit = _epuck_rays(
+                    out[row], sums[row], dets[:n_det], ems[:n_em], det_pos, dcos, dsin, ex, ey, eax, eay, occ_xy, q0, q1, r2, p0, p1, p2
+                )
                 if any_lit:
                     lit[n_lit] = p
                     n_lit += 1
@@ -296,14 +306,15 @@ if HAVE_NUMBA:
                     if not _ray_blocked(det_pos[i, 0], det_pos[i, 1], ex[j], ey[j], dx, dy, dx * dx + dy * dy, occ_xy, q0, q1, r2):
                         g = _gain(kind, p0, p1, p2, p3, p4, p5, p6, p7, d, cd, ce)
                         out[row, i, j] = g
+                        sums[row, i] += g  # rays in (detector, emitter) order: emitter order per detector
                         if g > 0.0:
                             any_lit = True
             if any_lit:
                 lit[n_lit] = p
                 n_lit += 1
         if compact:
-            return out[:n_lit], lit[:n_lit].copy()
-        return out, lit[:n_lit].copy()
+            return out[:n_lit], lit[:n_lit].copy(), sums[:n_lit]
+        return out, lit[:n_lit].copy(), sums
 
     @njit(cache=True, error_model="numpy")
     def occluders_kernel(
@@ -322,6 +333,11 @@ if HAVE_NUMBA:
         ``sqrt(|rx tx|^2 / 4 + width^2)`` (Pythagoras, foot point on the nearer half) to its nearer end, so
         each end's list, sorted by distance here, is read only up to that pair's own reach, and each end
         tests only the candidates whose projection on the segment falls in its own half (none twice). Returns offsets (P + 1,) and robot indices (K,), each pair's sorted.
+
+        The disc test is :func:`_hits_disc`'s (the verdict of :func:`_segment_hits_disc`: nearest end, or the
+        cross product against the width with a 1e-6 relative margin) evaluated without branching on its
+        outcome, candidates kept by an index increment; the few within the margin get the exact test after
+        the pair's loop.
         """
         P, N = rx.shape[0], positions.shape[0]
         # each robot's neighbours by increasing distance (insertion sort: the lists are short)
@@ -343,6 +359,8 @@ if HAVE_NUMBA:
         idx = np.empty(max(16, 2 * P), dtype=np.int64)
         K = 0
         w2 = width * width
+        w2_hi, w2_lo = w2 * (1.0 + _DISC_TOL), w2 * (1.0 - _DISC_TOL)
+        grey = np.empty(max(1, 2 * N), dtype=np.int64)  # one pair's candidates near the disc edge
         for p in range(P):
             a, b = rx[p], tx[p]
             ax, ay = positions[a, 0], positions[a, 1]
@@ -352,30 +370,84 @@ if HAVE_NUMBA:
             # is nearer to (or within width of an end); margin far above rounding
             reach2 = 0.25 * L2 + w2 + 1e-9
             half = 0.5 * L2
+            # the segment as _segment_hits_disc(ax, ay, ax + sx, ay + sy, ...) computes it
+            x1, y1 = ax + sx, ay + sy
+            tx_, ty_ = x1 - ax, y1 - ay
+            T2 = tx_ * tx_ + ty_ * ty_
+            if K + counts[a] + counts[b] > idx.shape[0]:
+                grown = np.empty(2 * (K + counts[a] + counts[b]), dtype=np.int64)
+                grown[:K] = idx[:K]
+                idx = grown
+            n_grey = 0
             for e in range(2):
                 end = a if e == 0 else b
                 for q in range(starts[end], starts[end] + counts[end]):
                     if dist2[q] > reach2:
                         break
                     k = near[q]
-                    if k == a or k == b:
-                        continue
+                    px, py = positions[k, 0] - ax, positions[k, 1] - ay
                     # each candidate from one end only: a's half (projection <= L2 / 2) from a, the rest from b
-                    if ((positions[k, 0] - ax) * sx + (positions[k, 1] - ay) * sy <= half) != (e == 0):
-                        continue
-                    if _segment_hits_disc(ax, ay, ax + sx, ay + sy, positions[k, 0], positions[k, 1], w2):
-                        if K == idx.shape[0]:
-                            grown = np.empty(2 * K, dtype=np.int64)
-                            grown[:K] = idx
-                            idx = grown
-                        idx[K] = k
-                        K += 1
-                        q2 = K - 1  # insertion sort: each pair's occluders in robot order
-                        while q2 > offsets[p] and idx[q2 - 1] > idx[q2]:
-                            idx[q2 - 1], idx[q2] = idx[q2], idx[q2 - 1]
-                            q2 -= 1
+                    mine = ((px * sx + py * sy <= half) == (e == 0)) & (k != a) & (k != b)
+                    # the verdict of _hits_disc (== _segment_hits_disc) without a branch on its outcome
+                    dot = px * tx_ + py * ty_
+                    qx, qy = px - tx_, py - ty_
+                    cr = px * ty_ - py * tx_
+                    cr2 = cr * cr
+                    at_start = dot <= 0.0
+                    at_end = (dot >= T2) & (not at_start)
+                    inner = (not at_start) & (not at_end)
+                    hit = (at_start & (px * px + py * py < w2)) | (at_end & (qx * qx + qy * qy < w2)) | (inner & (cr2 <= w2_lo * T2))
+                    idx[K] = k
+                    K += np.int64(mine & hit)
+                    # within 1e-6 of the radius the exact test decides, after the loop (rare)
+                    grey[n_grey] = k
+                    n_grey += np.int64(mine & inner & (cr2 < w2_hi * T2) & (cr2 > w2_lo * T2))
+            for t in range(n_grey):
+                k = grey[t]
+                if _segment_hits_disc(ax, ay, x1, y1, positions[k, 0], positions[k, 1], w2):
+                    idx[K] = k
+                    K += 1
+            for q in range(offsets[p] + 1, K):  # insertion sort: each pair's occluders in robot order
+                q2 = q
+                while q2 > offsets[p] and idx[q2 - 1] > idx[q2]:
+                    idx[q2 - 1], idx[q2] = idx[q2], idx[q2 - 1]
+                    q2 -= 1
             offsets[p + 1] = K
         return offsets, idx[:K].copy()
+
+    @njit(cache=True, error_model="numpy")
+    def neighbour_csr_kernel(positions: np.ndarray, pairs: np.ndarray, reach2: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Neighbour lists as CSR (starts (N,), counts (N,), neighbours) from the unordered ``pairs`` (U, 2):
+        both ends of every pair whose squared centre distance (computed as :func:`occluders_kernel` does)
+        is at most ``reach2`` (m^2). Equal to the lists of a KD-tree query within ``sqrt(reach2)`` when
+        ``pairs`` holds every pair closer than a larger range (up to the order within a list)."""
+        N, U = positions.shape[0], pairs.shape[0]
+        keep = np.empty(U, dtype=np.int64)
+        counts = np.zeros(N, dtype=np.int64)
+        n = 0
+        for u in range(U):
+            a, b = pairs[u, 0], pairs[u, 1]
+            d2 = (positions[b, 0] - positions[a, 0]) ** 2 + (positions[b, 1] - positions[a, 1]) ** 2
+            keep[n] = u
+            n += np.int64(d2 <= reach2)
+        for t in range(n):
+            counts[pairs[keep[t], 0]] += 1
+            counts[pairs[keep[t], 1]] += 1
+        starts = np.empty(N, dtype=np.int64)
+        fill = np.empty(N, dtype=np.int64)
+        acc = 0
+        for r in range(N):
+            starts[r] = acc
+            fill[r] = acc
+            acc += counts[r]
+        nbrs = np.empty(acc, dtype=np.int64)
+        for t in range(n):
+            a, b = pairs[keep[t], 0], pairs[keep[t], 1]
+            nbrs[fill[a]] = b
+            fill[a] += 1
+            nbrs[fill[b]] = a
+            fill[b] += 1
+        return starts, counts, nbrs
 
     @njit(cache=True, error_model="numpy")
     def occluder_frames_kernel(

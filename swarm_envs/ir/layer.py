@@ -60,6 +60,12 @@ class IRLinks:
         occluders: per-ray occluders of the pairs, ``(offsets, centres in the receiver frame, rows)``:
             pair p's discs are ``centres[offsets[rows[p]]:offsets[rows[p] + 1]]`` (None: no per-ray
             occlusion); use :meth:`ray_clear`.
+        emitter_sums: (P, n_detectors) the light each detector of rx receives from all of tx's emitters
+            lit at once, ``sum_j gains[p, i, j]`` (SwarmCom's all-emitters-on light "G" per detector
+            [T20 Eq. (10)] before its intensity scale). Summed sequentially in emitter order from 0.0, so
+            it equals ``acc = 0.0; for j in range(n_e): acc += gains[p, i, j]`` bit for bit (numpy's
+            ``gains.sum(axis=-1)`` adds pairwise and may differ in the last bit). Filled by
+            :func:`compute_links`; None for links built by hand.
     """
 
     rx: np.ndarray
@@ -70,6 +76,7 @@ class IRLinks:
     gains: np.ndarray
     n_robots: int = 0
     occluders: tuple[np.ndarray, np.ndarray, np.ndarray] | None = field(default=None, repr=False)
+    emitter_sums: np.ndarray | None = field(default=None, repr=False)
 
     def __len__(self) -> int:
         return int(self.rx.shape[0])
@@ -206,10 +213,12 @@ def _gains(
     xy: np.ndarray,
     compact: bool,
     cos_sin: np.ndarray | None = None,
-) -> tuple[np.ndarray, np.ndarray]:
-    """(gains, lit) of :func:`pair_gains` with checked inputs: ``lit`` the pairs with a nonzero gain, and
-    ``gains`` every pair's rows, or with ``compact`` only the ``lit`` rows (compiled kernel, or numpy).
-    ``cos_sin`` (P, 2): cos and sin of ``psi`` if known (the kernel uses them; default from ``psi``)."""
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(gains, lit, sums) of :func:`pair_gains` with checked inputs: ``lit`` the pairs with a nonzero gain,
+    ``gains`` every pair's rows, or with ``compact`` only the ``lit`` rows (compiled kernel, or numpy), and
+    ``sums`` (rows, n_d) the gains summed over emitters sequentially in emitter order (:class:`IRLinks`
+    ``emitter_sums``). ``cos_sin`` (P, 2): cos and sin of ``psi`` if known (the kernel uses them; default
+    from ``psi``)."""
     if kernels.HAVE_NUMBA and type(model).__name__ in kernels.MODEL_IDS:
         kind, params = kernels.model_params(model)
         if cos_sin is None:
@@ -223,7 +232,17 @@ def _gains(
     if xy.shape[0]:
         g = g * _clear_rays_numpy(R, psi, platform, offsets, xy)
     lit = np.flatnonzero(g.reshape(g.shape[0], -1).max(axis=1, initial=0.0) > 0)
-    return (g[lit] if compact else g), lit
+    g = g[lit] if compact else g
+    return g, lit, _emitter_sums(g)
+
+
+def _emitter_sums(gains: np.ndarray) -> np.ndarray:
+    """(P, n_d) sums of ``gains`` (P, n_d, n_e) over emitters, sequentially in emitter order from 0.0
+    (:class:`IRLinks` ``emitter_sums``; numpy fallback of the kernel's sums)."""
+    acc = np.zeros(gains.shape[:2])
+    for j in range(gains.shape[2]):
+        acc += gains[:, :, j]
+    return acc
 
 
 def _pair_gains_numpy(R: np.ndarray, psi: np.ndarray, platform: Platform, model: object) -> np.ndarray:
@@ -309,10 +328,20 @@ def pair_occluders(
 
 
 def _occluder_lists(
-    positions: np.ndarray, a: np.ndarray, b: np.ndarray, width: float, tree: cKDTree | None, max_length: float | None = None
+    positions: np.ndarray,
+    a: np.ndarray,
+    b: np.ndarray,
+    width: float,
+    tree: cKDTree | None,
+    max_length: float | None = None,
+    near_pairs: np.ndarray | None = None,
+    near_range: float = 0.0,
 ) -> tuple[np.ndarray, np.ndarray]:
     """CSR (offsets (P + 1,), robots (K,)) of the third robots closer than ``width`` to segment a[p]-b[p].
-    ``max_length``: the longest segment (m) if known (to within 1e-12 m), else computed."""
+    ``max_length``: the longest segment (m) if known (to within 1e-12 m), else computed. ``near_pairs``
+    (U, 2): unordered pairs known to include every pair of robots closer than ``near_range`` (m) (e.g.
+    the KD-tree's candidate pairs): the neighbour lists are taken from them instead of a second KD-tree
+    query when the lists' reach is shorter (compiled path)."""
     P, N = a.shape[0], positions.shape[0]
     if P == 0 or N < 3:
         return np.zeros(P + 1, dtype=np.int64), np.zeros(0, dtype=np.int64)
@@ -325,10 +354,15 @@ def _occluder_lists(
         max_length = float(length.max())
     # a centre within width of a segment is within sqrt(length^2 / 4 + width^2) of the segment's nearer end
     # (foot point on that half, Pythagoras); + 2e-9 m^2 covers the kernel's own margin and rounding
-    reach = float(np.sqrt(0.25 * float(max_length) ** 2 + float(width) ** 2 + 2e-9))
-    starts, counts, nbrs = _neighbour_csr(positions, reach, tree)
+    reach2 = 0.25 * float(max_length) ** 2 + float(width) ** 2 + 2e-9
+    reach = float(np.sqrt(reach2))
     if kernels.HAVE_NUMBA:
+        if near_pairs is not None and reach < near_range * (1.0 - 1e-9):  # lists from the pairs, no second query
+            starts, counts, nbrs = kernels.neighbour_csr_kernel(positions, np.ascontiguousarray(near_pairs, dtype=np.int64), reach2)
+        else:
+            starts, counts, nbrs = _neighbour_csr(positions, reach, tree)
         return kernels.occluders_kernel(positions, float(width), a, b, starts, counts, nbrs)
+    starts, counts, nbrs = _neighbour_csr(positions, reach, tree)
     pairs, cands = [], []
     L2 = np.where(length > 0, length * length, 1.0)
     for end in (a, b):  # two vectorised passes: neighbours of a, then of b
@@ -442,17 +476,17 @@ def compute_links(
     if occlusion == "ray":
         # occluders once per unordered pair, then in each receiver's frame
         a, b = (np.ascontiguousarray(pairs[:, k], dtype=np.int64) for k in (0, 1))
-        offsets, idx = _occluder_lists(positions, a, b, occluder_width(platform), tree, float(distance.max()))
+        offsets, idx = _occluder_lists(positions, a, b, occluder_width(platform), tree, float(distance.max()), pairs, r)
         occluders = _occluder_frames(positions, headings, rx, pair_of, offsets, idx)
     if occluders is None:
         offsets, xy = np.zeros(rx.shape[0] + 1, dtype=np.int64), np.zeros((0, 2))
     else:
         offsets, xy = occluders
-    gains, lit = _gains(rel, rel_heading, platform, platform.ir_model, offsets, xy, drop_zero, rel_cs)
+    gains, lit, sums = _gains(rel, rel_heading, platform, platform.ir_model, offsets, xy, drop_zero, rel_cs)
     rows = np.arange(rx.shape[0])
     if drop_zero and lit.shape[0] < rx.shape[0]:
         rx, tx, rel, rel_heading, distance, rows = rx[lit], tx[lit], rel[lit], rel_heading[lit], distance[lit], rows[lit]
-    return IRLinks(rx, tx, distance, rel, rel_heading, gains, N, None if occluders is None else (*occluders, rows))
+    return IRLinks(rx, tx, distance, rel, rel_heading, gains, N, None if occluders is None else (*occluders, rows), sums)
 
 
 def _directed_pairs(
@@ -487,4 +521,5 @@ def _empty_links(n_d: int, n_e: int, n_robots: int) -> IRLinks:
         np.zeros(0),
         np.zeros((0, n_d, n_e)),
         n_robots,
+        emitter_sums=np.zeros((0, n_d)),
     )
