@@ -117,7 +117,10 @@ class CopyStream:
             row = self._buf[b]
             row[:rem] = row[self._pos[b] : self._end[b]]
             g = self.generators[b]
-            row[rem:] = g.standard_normal(cap - rem) if self.kind == "normal" else g.random(cap - rem)
+            if self.kind == "normal":  # written in place (out=): the same values as a new array, no copy
+                g.standard_normal(out=row[rem:])
+            else:
+                g.random(out=row[rem:])
             self._pos[b], self._end[b] = 0, cap
 
     def draw(self, row_copy: np.ndarray, tail: tuple[int, ...] = ()) -> np.ndarray:

@@ -54,6 +54,10 @@ from typing import Any
 import numpy as np
 
 from swarm_envs.copies import CopyRandom
+from swarm_envs.sensing.kernels import HAVE_NUMBA
+
+if HAVE_NUMBA:
+    from swarm_envs.sensing.kernels import expire_tables
 
 __all__ = ["BearingExchange", "NeighbourKnowledge", "encode_rows", "decode_rows", "thesis_round_time", "readings_table"]
 
@@ -399,6 +403,16 @@ class BearingExchange:
         self.row_time[r, slot] = self._now[r]
 
     def _expire(self) -> None:
+        if HAVE_NUMBA:  # one pass over the (N, K) slots instead of a dozen masked numpy operations
+            expire_tables(
+                self._now, self.max_age, self.tab_ids, self.tab_bear, self.tab_time, self.row_ids, self.row_bear,
+                self.row_time, -(10**9),
+            )
+            return
+        self._expire_numpy()
+
+    def _expire_numpy(self) -> None:
+        """Reference of the compiled :func:`swarm_envs.sensing.kernels.expire_tables` (same tables after)."""
         now = self._now[:, None]
         old = (now - self.tab_time > self.max_age) | (self.tab_ids < 0)
         self.tab_ids[old] = -1
@@ -414,29 +428,33 @@ class BearingExchange:
         self.row_time[r, s] = -(10**9)
 
     # ------------------------------------------------------------------ common
-    def knowledge(self) -> NeighbourKnowledge:
-        """What each robot knows now (own row + received rows with ages)."""
+    def knowledge(self, copy: bool = True) -> NeighbourKnowledge:
+        """What each robot knows now (own row + received rows with ages). ``copy=False`` returns views of
+        the live tables (valid until the next :meth:`send` / :meth:`step`; saves copying the (N, K, K2)
+        rows when the caller consumes them at once)."""
         age = np.where(self.row_time > -(10**9), self._now[:, None] - self.row_time, -1)
+        c = np.copy if copy else (lambda a: a)
         return NeighbourKnowledge(
-            ids=self.tab_ids.copy(),
-            bearings=self.tab_bear.copy(),
-            row_ids=self.row_ids.copy(),
-            row_bearings=self.row_bear.copy(),
+            ids=c(self.tab_ids),
+            bearings=c(self.tab_bear),
+            row_ids=c(self.row_ids),
+            row_bearings=c(self.row_bear),
             row_age=age,
         )
 
-    def step(self, readings: Any, deliveries: Any = None) -> NeighbourKnowledge:
+    def step(self, readings: Any, deliveries: Any = None, copy: bool = True) -> NeighbourKnowledge:
         """Advance one control step.
 
         ideal: ``step(readings)`` returns the full, fresh knowledge. network: call :meth:`send` before the
         network step, then ``step(readings, deliveries)`` after it (it decodes, expires stale entries and
-        returns the knowledge).
+        returns the knowledge). ``copy``: as in :meth:`knowledge` (network mode; ideal knowledge is
+        always fresh arrays).
         """
         if self.mode == "ideal":
             k = self._ideal(readings)
         else:
             self.receive(deliveries, readings)
             self._expire()
-            k = self.knowledge()
+            k = self.knowledge(copy)
         self.t += 1
         return k

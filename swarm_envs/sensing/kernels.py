@@ -494,3 +494,162 @@ if HAVE_NUMBA:
                             crc[h] |= np.int64(1) << (k - id_bits)
                 h += 1
         return ident, crc
+
+
+# -- range & bearing sensor glue (references in swarm_envs.sensing.range_bearing / exchange) ------------------
+
+if HAVE_NUMBA:
+
+    @njit(cache=True)
+    def adc_pass(lam, rows, noise, p, scale, top):  # pragma: no cover - compiled
+        """One power-ladder pass of :func:`swarm_envs.sensing.range_bearing.measure` on matrices ``lam[rows]``
+        (flattened to (P, m)): ``clip(round(p * lam * scale + noise), 0, top)`` with numpy's operation order
+        and its clip (a rounded -0.0 stays -0.0). ``noise`` (R, m), or (0, m) for
+        none. Returns counts (R, m) and saturated (R,) (max count >= top)."""
+        R = rows.size
+        m = lam.shape[1]
+        counts = np.empty((R, m), np.float64)
+        sat = np.zeros(R, np.bool_)
+        has_noise = noise.shape[0] > 0
+        for r in range(R):
+            src = rows[r]
+            big = -np.inf
+            for j in range(m):
+                c = p * lam[src, j]
+                c = c * scale
+                if has_noise:
+                    c = c + noise[r, j]
+                c = np.rint(c)
+                if c < 0.0:  # numpy's clip: a bound replaces only a value strictly beyond it (-0.0 and NaN stay)
+                    c = 0.0
+                if c > top:
+                    c = top
+                counts[r, j] = c
+                if c > big:
+                    big = c
+            sat[r] = big >= top
+        return counts, sat
+
+    @njit(cache=True)
+    def group_brightest(gains, starts, labels):  # pragma: no cover - compiled
+        """Per contiguous group of rows (``starts``), the label of the row holding the group's largest entry
+        (first such row on ties); ``gains`` (L, m) without NaN. Reference:
+        :func:`swarm_envs.sensing.range_bearing._group_argmax` of the row maxima."""
+        G = starts.size
+        L, m = gains.shape
+        out = np.empty(G, labels.dtype)
+        for g in range(G):
+            s = starts[g]
+            e = starts[g + 1] if g + 1 < G else L
+            best = -np.inf
+            arg = s
+            for l in range(s, e):
+                v = gains[l, 0]
+                for j in range(1, m):
+                    if gains[l, j] > v:
+                        v = gains[l, j]
+                if v > best:
+                    best = v
+                    arg = l
+            out[g] = labels[arg]
+        return out
+
+    @njit(cache=True)
+    def pick_ids(heard, ident_h, crc_h, crc16, id_check, not_heard, conflict):  # pragma: no cover - compiled
+        """Decode rule of :func:`swarm_envs.sensing.range_bearing.decode_ids` (reference
+        :func:`swarm_envs.sensing.range_bearing.pick_ids_numpy`): per group, the id every checking channel
+        names, ``not_heard`` if none checks, ``conflict`` if they disagree. ``ident_h``/``crc_h`` are the words
+        of the heard channels in ``np.nonzero(heard)`` order."""
+        G, n_d = heard.shape
+        out = np.empty(G, np.int64)
+        h = 0
+        for g in range(G):
+            lo = np.int64(-1)
+            hi = np.int64(-1)
+            for i in range(n_d):
+                if not heard[g, i]:
+                    continue
+                w = ident_h[h]
+                good = (not id_check) or crc16[w] == crc_h[h]
+                h += 1
+                if good:
+                    if lo < 0 or w < lo:
+                        lo = w
+                    if w > hi:
+                        hi = w
+            if lo < 0:
+                out[g] = not_heard
+            elif lo == hi:
+                out[g] = lo
+            else:
+                out[g] = conflict
+        return out
+
+    @njit(cache=True)
+    def merge_readings(old_key, old_f, old_i, max_age, new_key, new_f, new_i):  # pragma: no cover - compiled
+        """Reading table update of :meth:`swarm_envs.sensing.range_bearing.RangeBearingSensor.step` for sorted
+        unique ``old_key`` and non-decreasing ``new_key``: old rows age by one, rows older than ``max_age``
+        or refreshed by a new key are dropped, new rows enter with age 0, and the result is sorted by key
+        (old before new on equal keys, as a stable sort of the concatenation). ``old_f`` (3, K) float
+        columns (range, bearing, heading), ``old_i`` (3, K) int columns (age, true tx, overlap); ``new_f`` /
+        ``new_i`` the same for the new rows (their age column is ignored). Returns key, floats, ints."""
+        K = old_key.size
+        M = new_key.size
+        keep = np.zeros(K, np.bool_)
+        n = M
+        b = 0
+        for a in range(K):
+            while b < M and new_key[b] < old_key[a]:
+                b += 1
+            if old_i[0, a] + 1 <= max_age and not (b < M and new_key[b] == old_key[a]):
+                keep[a] = True
+                n += 1
+        key = np.empty(n, np.int64)
+        fl = np.empty((3, n), np.float64)
+        it = np.empty((3, n), np.int64)
+        a = 0
+        b = 0
+        o = 0
+        while o < n:
+            while a < K and not keep[a]:
+                a += 1
+            if a < K and (b >= M or old_key[a] <= new_key[b]):
+                key[o] = old_key[a]
+                for c in range(3):
+                    fl[c, o] = old_f[c, a]
+                it[0, o] = old_i[0, a] + 1
+                it[1, o] = old_i[1, a]
+                it[2, o] = old_i[2, a]
+                a += 1
+            else:
+                key[o] = new_key[b]
+                for c in range(3):
+                    fl[c, o] = new_f[c, b]
+                it[0, o] = 0
+                it[1, o] = new_i[1, b]
+                it[2, o] = new_i[2, b]
+                b += 1
+            o += 1
+        return key, fl, it
+
+    @njit(cache=True)
+    def expire_tables(now, max_age, tab_ids, tab_bear, tab_time, row_ids, row_bear, row_time, never):  # pragma: no cover - compiled
+        """In place :meth:`swarm_envs.sensing.exchange.BearingExchange._expire` (reference
+        ``_expire_numpy``): table entries older than ``max_age`` (or without an id) and rows older than
+        ``max_age`` (or whose entry expired) are cleared; ``now`` (N,) each robot's clock, ``never`` the
+        time of an empty slot."""
+        n, k = tab_ids.shape
+        w = row_ids.shape[2]
+        for u in range(n):
+            t = now[u]
+            for s in range(k):
+                old = (t - tab_time[u, s] > max_age) or tab_ids[u, s] < 0
+                if old:
+                    tab_ids[u, s] = -1
+                    tab_bear[u, s] = np.nan
+                    tab_time[u, s] = never
+                if (old or t - row_time[u, s] > max_age) and row_time[u, s] != never:
+                    for j in range(w):
+                        row_ids[u, s, j] = -1
+                        row_bear[u, s, j] = np.nan
+                    row_time[u, s] = never

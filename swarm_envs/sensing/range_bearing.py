@@ -79,7 +79,15 @@ from swarm_envs.platforms import Platform, get_platform
 from swarm_envs.sensing.kernels import HAVE_NUMBA, segment_sum, sum_last
 
 if HAVE_NUMBA:
-    from swarm_envs.sensing.kernels import FRAME_WORDS_MAX_GROUP, frame_words, priority_independent_set
+    from swarm_envs.sensing.kernels import (
+        FRAME_WORDS_MAX_GROUP,
+        adc_pass,
+        frame_words,
+        group_brightest,
+        merge_readings,
+        pick_ids,
+        priority_independent_set,
+    )
 
 __all__ = [
     "POWER_LADDER",
@@ -203,6 +211,18 @@ def decode_ids(
         light, np.asarray(frames, dtype=bool), np.asarray(starts, dtype=np.int64), heard, noise,
         float(model.adc_scale), float(model.adc_max), float(model.no_reading_floor), ID_BITS,
     )
+    if HAVE_NUMBA:
+        return pick_ids(heard, ident_h, crc_h, _CRC16, bool(id_check), NOT_HEARD, CONFLICT)
+    return pick_ids_numpy(heard, ident_h, crc_h, id_check)
+
+
+def pick_ids_numpy(heard: np.ndarray, ident_h: np.ndarray, crc_h: np.ndarray, id_check: bool = True) -> np.ndarray:
+    """The decode rule of :func:`decode_ids` (reference of the compiled
+    :func:`swarm_envs.sensing.kernels.pick_ids`): ``heard`` (G, n_d) bool, ``ident_h``/``crc_h`` (H,) the id
+    and CRC words of the heard channels in ``np.nonzero(heard)`` order. Returns (G,) the id all checking
+    channels name, :data:`NOT_HEARD` or :data:`CONFLICT`."""
+    G, n_d = heard.shape
+    hg, hi = np.nonzero(heard)
     ident = np.zeros((G, n_d), dtype=np.int64)
     crc = np.zeros((G, n_d), dtype=np.int64)
     ident[hg, hi] = ident_h
@@ -315,14 +335,22 @@ def measure(
     out = np.empty_like(lam)
     power = np.full(P, float(ladder[-1]))
     todo = np.arange(P)
+    flat = np.ascontiguousarray(lam).reshape(P, -1)
     for k, p in enumerate(ladder):
         if todo.size == 0:
             break
-        counts = p * lam[todo] * scale
-        if sigma > 0:
-            counts = counts + _noise(rng, sigma, counts.shape, None if row_copy is None else row_copy[todo])
-        counts = np.clip(np.round(counts), 0.0, top)
-        sat = counts.reshape(todo.size, -1).max(axis=1) >= top
+        shape = (todo.size, *lam.shape[1:])
+        noise = _noise(rng, sigma, shape, None if row_copy is None else row_copy[todo]) if sigma > 0 else None
+        if HAVE_NUMBA and lam.size:  # the same formula in one pass (kernels.adc_pass)
+            empty = np.zeros((0, flat.shape[1]))
+            counts, sat = adc_pass(flat, todo, empty if noise is None else noise.reshape(todo.size, -1), float(p), scale, top)
+            counts = counts.reshape(shape)
+        else:
+            counts = p * lam[todo] * scale
+            if noise is not None:
+                counts = counts + noise
+            counts = np.clip(np.round(counts), 0.0, top)
+            sat = counts.reshape(todo.size, -1).max(axis=1) >= top
         done = ~sat if k < len(ladder) - 1 else np.ones(todo.size, dtype=bool)
         out[todo[done]] = counts[done] / scale
         power[todo[done]] = p
@@ -653,6 +681,8 @@ class RangeBearingSensor:
         # ground truth: the firing TX with the brightest entry of each group
         if starts.size == sel.size:
             true = links.tx[sel]
+        elif HAVE_NUMBA:
+            true = group_brightest(gains.reshape(sel.size, -1), starts.astype(np.int64), links.tx[sel])
         else:
             true = _group_argmax(gains.reshape(sel.size, -1).max(axis=1), starts, links.tx[sel])
 
@@ -688,18 +718,18 @@ class RangeBearingSensor:
         else:
             R = th = ph = np.zeros(0)
         new_key = grx[g].astype(np.int64) * N + tx_dec[g]
-
-        age = self._age + 1
-        keep = (age <= self.max_age) & ~_member(self._key, new_key)
-        key = np.concatenate([self._key[keep], new_key])
-        order = np.argsort(key, kind="stable")
-        self._key = key[order]
-        self._range = np.concatenate([self._range[keep], R])[order]
-        self._bearing = np.concatenate([self._bearing[keep], th])[order]
-        self._heading = np.concatenate([self._heading[keep], ph])[order]
-        self._age = np.concatenate([age[keep], np.zeros(new_key.size, dtype=np.int64)])[order]
-        self._true = np.concatenate([self._true[keep], true[g].astype(np.int64)])[order]
-        self._overlap = np.concatenate([self._overlap[keep], n_over[g]])[order]
+        new_true, new_over = true[g].astype(np.int64), n_over[g].astype(np.int64)
+        args = (
+            self._key, np.stack([self._range, self._bearing, self._heading]),
+            np.stack([self._age, self._true, self._overlap]).astype(np.int64), self.max_age, new_key,
+            np.stack([R, th, ph]).astype(float).reshape(3, -1), np.stack([new_over, new_true, new_over]),
+        )
+        if HAVE_NUMBA and (new_key.size < 2 or bool(np.all(new_key[1:] >= new_key[:-1]))):
+            key, fl, it = merge_readings(*args)  # one merge of the two sorted tables
+        else:
+            key, fl, it = merge_readings_numpy(*args)
+        self._key, (self._range, self._bearing, self._heading) = key, fl
+        self._age, self._true, self._overlap = it
         return self.readings()
 
     def readings(self) -> RangeBearingReadings:
@@ -709,6 +739,24 @@ class RangeBearingSensor:
             rx.astype(np.intp), tx.astype(np.intp), self._range.copy(), self._bearing.copy(),
             self._heading.copy(), self._age.copy(), self._true.astype(np.intp), self._overlap.copy(),
         )
+
+
+def merge_readings_numpy(
+    old_key: np.ndarray, old_f: np.ndarray, old_i: np.ndarray, max_age: int, new_key: np.ndarray, new_f: np.ndarray,
+    new_i: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Reading table update (reference of the compiled :func:`swarm_envs.sensing.kernels.merge_readings`;
+    any order of ``new_key``): old rows (sorted ``old_key``, float columns ``old_f`` (3, K) = range, bearing,
+    heading; int columns ``old_i`` (3, K) = age, true tx, overlap) age by one and are dropped when older
+    than ``max_age`` or refreshed by a new key; new rows enter with age 0; the result is stably sorted
+    by key. Returns key (K',), floats (3, K'), ints (3, K')."""
+    age = old_i[0] + 1
+    keep = (age <= max_age) & ~_member(old_key, new_key)
+    key = np.concatenate([old_key[keep], new_key])
+    order = np.argsort(key, kind="stable")
+    fl = np.concatenate([old_f[:, keep], new_f], axis=1)[:, order]
+    it = np.concatenate([np.stack([age[keep], old_i[1, keep], old_i[2, keep]]), np.stack([np.zeros_like(new_i[0]), new_i[1], new_i[2]])], axis=1)
+    return key[order], fl, it[:, order]
 
 
 def independent_set_numpy(prio: np.ndarray, u: np.ndarray, v: np.ndarray) -> np.ndarray:

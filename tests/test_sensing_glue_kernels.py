@@ -1,0 +1,127 @@
+"""Compiled glue of the range & bearing sensor and the bearing exchange (swarm_envs.sensing.kernels) against
+their numpy references, bit for bit."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from swarm_envs.sensing import range_bearing as rbmod
+from swarm_envs.sensing.exchange import BearingExchange
+from swarm_envs.sensing.kernels import HAVE_NUMBA
+
+pytestmark = pytest.mark.skipif(not HAVE_NUMBA, reason="numba not installed")
+
+
+def _same_bits(a: np.ndarray, b: np.ndarray) -> None:
+    """Equal including the sign of zeros and NaN positions."""
+    assert a.shape == b.shape and a.dtype == b.dtype
+    np.testing.assert_array_equal(np.asarray(a).view(np.int64), np.asarray(b).view(np.int64))
+
+
+def test_adc_pass_equals_the_numpy_ladder_pass():
+    """kernels.adc_pass = clip(round(p * lam * scale + noise), 0, top) and its saturation flag, with
+    negative noise (a rounded -0.0 must stay -0.0 as in numpy's clip), saturating rows, no noise,
+    and a subset of rows."""
+    from swarm_envs.sensing.kernels import adc_pass
+
+    rng = np.random.default_rng(3)
+    for scale, top in [(1.0, 255.0), (0.37, 1023.0)]:
+        for _ in range(20):
+            P, m = int(rng.integers(1, 60)), int(rng.choice([36, 64]))
+            lam = rng.uniform(0, 400, (P, m)) * (rng.random((P, m)) < 0.6)
+            rows = np.sort(rng.choice(P, int(rng.integers(1, P + 1)), replace=False)).astype(np.int64)
+            p = float(rng.choice([1.0, 0.5, 2.0**-8]))
+            for noise in (rng.normal(0, 2.0, (rows.size, m)), None):
+                ref = p * lam[rows] * scale
+                if noise is not None:
+                    ref = ref + noise
+                ref = np.clip(np.round(ref), 0.0, top)
+                got, sat = adc_pass(lam, rows, np.zeros((0, m)) if noise is None else noise, p, scale, top)
+                _same_bits(got, ref)
+                np.testing.assert_array_equal(sat, ref.max(axis=1) >= top)
+    # the -0.0 case explicitly
+    got, _ = adc_pass(np.zeros((1, 2)), np.array([0]), np.array([[-0.3, 0.2]]), 1.0, 1.0, 255.0)
+    _same_bits(got, np.clip(np.round(np.array([[-0.3, 0.2]])), 0.0, 255.0))
+
+
+def test_group_brightest_equals_group_argmax_of_row_maxima():
+    from swarm_envs.sensing.kernels import group_brightest
+
+    rng = np.random.default_rng(5)
+    for _ in range(50):
+        sizes = rng.integers(1, 6, int(rng.integers(1, 20)))
+        L = int(sizes.sum())
+        starts = np.r_[0, np.cumsum(sizes)[:-1]].astype(np.int64)
+        gains = np.round(rng.uniform(0, 5, (L, 8)))  # rounded: ties between rows are common
+        labels = rng.integers(0, 1000, L)
+        ref = rbmod._group_argmax(gains.max(axis=1), starts, labels)
+        np.testing.assert_array_equal(group_brightest(gains, starts, labels), ref)
+
+
+@pytest.mark.parametrize("id_check", [True, False])
+def test_pick_ids_equals_the_numpy_decode_rule(id_check):
+    from swarm_envs.sensing.kernels import pick_ids
+
+    rng = np.random.default_rng(6)
+    outcomes = set()
+    for _ in range(100):
+        G, n_d = int(rng.integers(1, 30)), int(rng.choice([6, 8]))
+        heard = rng.random((G, n_d)) < 0.4
+        H = int(heard.sum())
+        ident = rng.integers(0, 4, H)  # few ids: agreeing and conflicting channels
+        crc = np.where(rng.random(H) < 0.7, rbmod._CRC16[ident], rng.integers(0, 2**16, H))
+        got = pick_ids(heard, ident, crc, rbmod._CRC16, id_check, rbmod.NOT_HEARD, rbmod.CONFLICT)
+        ref = rbmod.pick_ids_numpy(heard, ident, crc, id_check)
+        np.testing.assert_array_equal(got, ref)
+        outcomes.update(np.sign(ref).tolist())
+    assert outcomes == {-1, 0, 1}  # not heard / conflict, id 0, ids > 0 all exercised
+
+
+def test_merge_readings_equals_the_numpy_reference():
+    from swarm_envs.sensing.kernels import merge_readings
+
+    rng = np.random.default_rng(7)
+    for _ in range(100):
+        K, M = int(rng.integers(0, 40)), int(rng.integers(0, 20))
+        old_key = np.sort(rng.choice(200, K, replace=False)).astype(np.int64)
+        new_key = np.sort(rng.choice(200, M, replace=False)).astype(np.int64)  # overlaps old keys
+        old_f, new_f = rng.normal(size=(3, K)), rng.normal(size=(3, M))
+        old_i = np.stack([rng.integers(0, 12, K), rng.integers(0, 50, K), rng.integers(1, 4, K)]).astype(np.int64)
+        new_i = np.stack([np.zeros(M), rng.integers(0, 50, M), rng.integers(1, 4, M)]).astype(np.int64)
+        got = merge_readings(old_key, old_f, old_i, 10, new_key, new_f, new_i)
+        ref = rbmod.merge_readings_numpy(old_key, old_f, old_i, 10, new_key, new_f, new_i)
+        for a, b in zip(got, ref):
+            np.testing.assert_array_equal(a, b)
+        assert np.all(np.diff(got[0]) > 0)
+
+
+def test_compiled_expire_equals_the_numpy_expire():
+    rng = np.random.default_rng(9)
+    for _ in range(20):
+        exs = [BearingExchange(30, mode="network", k_max=6, period=3, rng=np.random.default_rng(1), n_copies=2) for _ in range(2)]
+        seed = int(rng.integers(1 << 30))
+        for ex in exs:  # identical random tables: entries and rows of many ages, some slots empty
+            r = np.random.default_rng(seed)
+            ex.t[:] = r.integers(0, 30, ex.n_copies)
+            ex.tab_time[:] = np.where(r.random(ex.tab_time.shape) < 0.3, -(10**9), r.integers(-5, 30, ex.tab_time.shape))
+            ex.tab_ids[:] = np.where(ex.tab_time > -(10**9), r.integers(-1, 30, ex.tab_ids.shape), -1)
+            ex.tab_bear[:] = np.where(ex.tab_ids >= 0, r.normal(size=ex.tab_ids.shape), np.nan)
+            ex.row_time[:] = np.where(r.random(ex.row_time.shape) < 0.3, -(10**9), r.integers(-5, 30, ex.row_time.shape))
+            ex.row_ids[:] = np.where((ex.row_time > -(10**9))[:, :, None], r.integers(-1, 30, ex.row_ids.shape), -1)
+            ex.row_bear[:] = np.where(ex.row_ids >= 0, r.normal(size=ex.row_ids.shape), np.nan)
+        before = exs[0].row_time.copy()
+        exs[0]._expire()
+        exs[1]._expire_numpy()
+        for name in ("tab_ids", "tab_bear", "tab_time", "row_ids", "row_bear", "row_time"):
+            np.testing.assert_array_equal(getattr(exs[0], name), getattr(exs[1], name))
+        assert np.any(exs[0].row_time != before)  # something expired
+
+
+def test_knowledge_views_equal_copies():
+    ex = BearingExchange(10, mode="network", k_max=4, rng=np.random.default_rng(0))
+    ex.tab_ids[0, 0], ex.tab_bear[0, 0], ex.tab_time[0, 0] = 3, 0.5, 0
+    a, b = ex.knowledge(), ex.knowledge(copy=False)
+    for name in ("ids", "bearings", "row_ids", "row_bearings", "row_age"):
+        np.testing.assert_array_equal(getattr(a, name), getattr(b, name))
+    assert np.shares_memory(b.ids, ex.tab_ids) and not np.shares_memory(a.ids, ex.tab_ids)
