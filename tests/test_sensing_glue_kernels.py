@@ -125,3 +125,36 @@ def test_knowledge_views_equal_copies():
     for name in ("ids", "bearings", "row_ids", "row_bearings", "row_age"):
         np.testing.assert_array_equal(getattr(a, name), getattr(b, name))
     assert np.shares_memory(b.ids, ex.tab_ids) and not np.shares_memory(a.ids, ex.tab_ids)
+
+
+def _random_tables(ex: BearingExchange, seed: int) -> None:
+    r = np.random.default_rng(seed)
+    shape = ex.tab_ids.shape
+    ex.tab_time[:] = np.where(r.random(shape) < 0.3, -(10**9), r.integers(0, 4, shape))  # many equal times: ties
+    ex.tab_ids[:] = np.where(ex.tab_time > -(10**9), ex.offset[:, None] + r.integers(0, ex.copy_size, shape), -1)
+    ex.tab_bear[:] = np.where(ex.tab_ids >= 0, r.uniform(-4, 4, shape), np.nan)
+    ex.tab_bear[r.random(shape) < 0.05] = np.nan  # an entry without a bearing is sent as sector 0
+
+
+@pytest.mark.parametrize("n, k_max", [(30, 6), (1000, 20)])  # 1000 robots, 20 slots: max_entries (17) < k_max
+def test_compiled_message_encoding_equals_encode_rows(n, k_max, monkeypatch):
+    from swarm_envs.sensing import exchange as exmod
+
+    ex = BearingExchange(n, mode="network", k_max=k_max, rng=np.random.default_rng(0), n_copies=2)
+    assert (ex.max_entries < k_max) == (n == 1000)
+    for seed in range(10):
+        _random_tables(ex, seed)
+        robots = np.sort(np.random.default_rng(seed).choice(ex.n, 25, replace=False))
+        bits, lens = ex.encode(robots, compiled=True)
+        ref_bits, ref_lens = ex.encode(robots, compiled=False)
+        np.testing.assert_array_equal(bits, ref_bits)
+        np.testing.assert_array_equal(lens, ref_lens)
+        assert lens.min() < lens.max()
+        # and back: the compiled decoding equals the numpy one, on whole rows and on rows cut at their length
+        for rows in (bits, np.where(np.arange(bits.shape[1]) < lens.min(), bits, 0)[:, : max(lens.min(), 1)]):
+            got = exmod.decode_rows(rows, ex.id_bits, ex.count_bits, ex.max_entries, ex.bearing_bits)
+            with monkeypatch.context() as m:
+                m.setattr(exmod, "HAVE_NUMBA", False)
+                ref = exmod.decode_rows(rows, ex.id_bits, ex.count_bits, ex.max_entries, ex.bearing_bits)
+            np.testing.assert_array_equal(got[0], ref[0])
+            _same_bits(got[1], ref[1])

@@ -57,7 +57,7 @@ from swarm_envs.copies import CopyRandom
 from swarm_envs.sensing.kernels import HAVE_NUMBA
 
 if HAVE_NUMBA:
-    from swarm_envs.sensing.kernels import expire_tables
+    from swarm_envs.sensing.kernels import decode_bits, encode_tables, expire_tables
 
 __all__ = ["BearingExchange", "NeighbourKnowledge", "encode_rows", "decode_rows", "thesis_round_time", "readings_table"]
 
@@ -142,6 +142,9 @@ def decode_rows(bits: np.ndarray, id_bits: int, count_bits: int, max_entries: in
     """Inverse of :func:`encode_rows`: bits (R, >= needed) -> ids (R, max_entries) (-1 pad), bearings (rad)."""
     bits = np.asarray(bits, dtype=np.uint8)
     R = bits.shape[0]
+    if HAVE_NUMBA and bits.ndim == 2:  # integers compiled (kernels.decode_bits), the bearing formula below
+        ids, q = decode_bits(np.ascontiguousarray(bits), int(id_bits), int(count_bits), int(max_entries), int(bearing_bits))
+        return ids, np.where(ids >= 0, _dequantise(q, bearing_bits), np.nan)
     e = id_bits + bearing_bits
     need = count_bits + max_entries * e
     if bits.shape[1] < need:
@@ -307,19 +310,34 @@ class BearingExchange:
         robots = self.due()
         if robots.size == 0:
             return 0
-        # most recently heard first
+        bits, lens = self.encode(robots)
+        if hasattr(net, "send_many") and self.kind != "app":  # a Network: all lengths in one call
+            net.send_many(robots, bits[:, : int(lens.max())].astype(bool), self.kind, lengths=lens)
+        else:
+            for L in np.unique(lens):  # queue_system takes robots sharing one payload length
+                g = lens == L
+                net.queue_system(robots[g], bits[g, :L].astype(bool), self.kind)
+        self.stats["sent"] += int(robots.size)
+        self.stats["bits_sent"] += int(lens.sum())
+        return int(robots.size)
+
+    def encode(self, robots: np.ndarray, compiled: bool | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """Message bits (R, n_bits) uint8 (zero padded) and payload lengths (R,) of ``robots``' current
+        tables: most recently heard first, at most ``max_entries``, ids in a copy's own numbering.
+        ``compiled=False`` forces the numpy reference (:func:`encode_rows`)."""
+        robots = np.asarray(robots, dtype=np.int64)
+        if HAVE_NUMBA if compiled is None else compiled:
+            return encode_tables(
+                self.tab_ids, self.tab_bear, self.tab_time, robots, self.offset.astype(np.int64), self.max_entries,
+                self.id_bits, self.count_bits, self.bearing_bits,
+            )
         o = np.argsort(-self.tab_time[robots], axis=1, kind="stable")
         ids = np.take_along_axis(self.tab_ids[robots], o, 1)[:, : self.max_entries]
         th = np.take_along_axis(self.tab_bear[robots], o, 1)[:, : self.max_entries]
         local = np.where(ids >= 0, ids - self.offset[robots][:, None], -1)  # ids in a copy's own numbering
         bits = encode_rows(local, th, self.id_bits, self.count_bits, self.bearing_bits)
         lens = self.count_bits + (ids >= 0).sum(1) * (self.id_bits + self.bearing_bits)
-        for L in np.unique(lens):  # queue_system takes robots sharing one payload length
-            g = lens == L
-            net.queue_system(robots[g], bits[g, :L].astype(bool), self.kind)
-        self.stats["sent"] += int(robots.size)
-        self.stats["bits_sent"] += int(lens.sum())
-        return int(robots.size)
+        return bits, lens
 
     def receive(self, deliveries: Any, readings: Any) -> None:
         """Decode this step's deliveries (network mode) and update tables.

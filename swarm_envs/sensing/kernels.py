@@ -653,3 +653,79 @@ if HAVE_NUMBA:
                         row_ids[u, s, j] = -1
                         row_bear[u, s, j] = np.nan
                     row_time[u, s] = never
+
+    @njit(cache=True)
+    def encode_tables(tab_ids, tab_bear, tab_time, robots, offset, max_entries, id_bits, count_bits, bearing_bits):  # pragma: no cover - compiled
+        """Bit rows of the bearing-exchange messages of ``robots`` (reference: the numpy path of
+        :meth:`swarm_envs.sensing.exchange.BearingExchange.send` with :func:`~swarm_envs.sensing.exchange.encode_rows`):
+        each robot's table slots, most recently heard first (stable in slot order), the first
+        ``max_entries`` of them, present ones (id >= 0) compacted to the front; count then, per entry, the id
+        minus the robot's ``offset`` and the bearing sector ``rint(theta / (2 pi / 2**bearing_bits)) mod
+        2**bearing_bits`` (NaN: sector 0), MSB first, zero padded. Returns bits (R, count_bits + max_entries
+        * (id_bits + bearing_bits)) uint8 and the payload lengths (R,)."""
+        R = robots.size
+        k = tab_ids.shape[1]
+        e = id_bits + bearing_bits
+        nq = np.int64(1) << bearing_bits
+        width = 2.0 * np.pi / nq
+        bits = np.zeros((R, count_bits + max_entries * e), np.uint8)
+        lens = np.empty(R, np.int64)
+        order = np.empty(k, np.int64)
+        for r in range(R):
+            u = robots[r]
+            for s in range(k):  # stable insertion sort by descending time
+                order[s] = s
+            for a in range(1, k):
+                x = order[a]
+                b = a - 1
+                while b >= 0 and tab_time[u, x] > tab_time[u, order[b]]:
+                    order[b + 1] = order[b]
+                    b -= 1
+                order[b + 1] = x
+            c = 0
+            for s in range(min(k, max_entries)):
+                slot = order[s]
+                v = tab_ids[u, slot]
+                if v < 0:
+                    continue
+                th = tab_bear[u, slot]
+                if np.isnan(th):
+                    th = 0.0
+                q = np.int64(np.rint(th / width)) % nq
+                o = count_bits + c * e
+                lid = v - offset[u]
+                for j in range(id_bits):
+                    bits[r, o + j] = (lid >> (id_bits - 1 - j)) & 1
+                for j in range(bearing_bits):
+                    bits[r, o + id_bits + j] = (q >> (bearing_bits - 1 - j)) & 1
+                c += 1
+            for j in range(count_bits):
+                bits[r, j] = (c >> (count_bits - 1 - j)) & 1
+            lens[r] = count_bits + c * e
+        return bits, lens
+
+    @njit(cache=True)
+    def decode_bits(bits, id_bits, count_bits, max_entries, bearing_bits):  # pragma: no cover - compiled
+        """Integer part of :func:`swarm_envs.sensing.exchange.decode_rows`: count (capped at ``max_entries``),
+        ids and bearing sectors of each row's first ``count`` entries (-1 beyond; bits beyond a row's
+        width read as 0). Returns ids, sectors (R, max_entries) int64."""
+        R, W = bits.shape
+        e = id_bits + bearing_bits
+        ids = np.full((R, max_entries), -1, np.int64)
+        qs = np.full((R, max_entries), -1, np.int64)
+        for r in range(R):
+            c = np.int64(0)
+            for j in range(count_bits):
+                c = (c << 1) | (np.int64(bits[r, j]) if j < W else 0)
+            c = min(c, max_entries)
+            for m in range(c):
+                o = count_bits + m * e
+                v = np.int64(0)
+                for j in range(id_bits):
+                    v = (v << 1) | (np.int64(bits[r, o + j]) if o + j < W else 0)
+                q = np.int64(0)
+                for j in range(bearing_bits):
+                    q = (q << 1) | (np.int64(bits[r, o + id_bits + j]) if o + id_bits + j < W else 0)
+                ids[r, m] = v
+                qs[r, m] = q
+        return ids, qs
