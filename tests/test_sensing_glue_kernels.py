@@ -158,3 +158,42 @@ def test_compiled_message_encoding_equals_encode_rows(n, k_max, monkeypatch):
                 ref = exmod.decode_rows(rows, ex.id_bits, ex.count_bits, ex.max_entries, ex.bearing_bits)
             np.testing.assert_array_equal(got[0], ref[0])
             _same_bits(got[1], ref[1])
+
+
+def test_firing_sums_equal_the_gathered_numpy_sums():
+    """kernels.firing_sums = segment_sum / sum_last / brightest link of gains[sel], bit for bit, for groups of
+    1 to 40 links (reduceat's short and pairwise branches)."""
+    from swarm_envs.sensing.kernels import _PAIRWISE_INIT, firing_sums, segment_sum, sum_last
+
+    rng = np.random.default_rng(11)
+    for n_d in (6, 8):
+        for _ in range(20):
+            L = int(rng.integers(50, 400))
+            gains = rng.exponential(50, (L, n_d, n_d)) * (rng.random((L, n_d, n_d)) < 0.5)
+            sizes = rng.choice([1, 1, 2, 3, 8, 9, 12, 40], size=int(rng.integers(1, 8)))
+            sel = np.sort(rng.choice(L, int(min(sizes.sum(), L)), replace=False)).astype(np.int64)
+            sizes = sizes[np.cumsum(sizes) <= sel.size]
+            if sizes.size == 0:
+                continue
+            sel = sel[: int(sizes.sum())]
+            starts = np.r_[0, np.cumsum(sizes)[:-1]].astype(np.int64)
+            lam, light, start, best = firing_sums(gains.reshape(L, -1), sel, starts, n_d, _PAIRWISE_INIT)
+            g = gains[sel]
+            _same_bits(lam.reshape(-1, n_d, n_d), np.add.reduceat(g, starts, axis=0))
+            _same_bits(light, sum_last(g))
+            _same_bits(start, segment_sum(sum_last(g), starts))
+            np.testing.assert_array_equal(sel[best], rbmod._group_argmax(g.reshape(sel.size, -1).max(axis=1), starts, sel))
+
+
+def test_adc_bits_equal_the_numpy_start_bit_reading():
+    from swarm_envs.sensing.kernels import adc_bits
+
+    rng = np.random.default_rng(12)
+    for scale, top, floor in [(1.0, 255.0, 7.0), (0.37, 1023.0, 3.0)]:
+        level = rng.uniform(0, 3 * floor / scale, (200, 8))
+        for noise in (rng.normal(0, 2.0, level.shape), None):
+            counts = level * scale + (0.0 if noise is None else noise)
+            ref = np.clip(np.round(counts), 0.0, top) / scale >= floor
+            got = adc_bits(level, np.zeros((0, 8)) if noise is None else noise, scale, top, floor)
+            np.testing.assert_array_equal(got, ref)
+            assert 0 < ref.mean() < 1

@@ -729,3 +729,92 @@ if HAVE_NUMBA:
                 ids[r, m] = v
                 qs[r, m] = q
         return ids, qs
+
+    @njit(cache=True)
+    def firing_sums(gains, sel, starts, n_d, init):  # pragma: no cover - compiled
+        """Sums of the firing links' gains per receiving group, without gathering ``gains[sel]`` first.
+
+        ``gains`` (L, n_d * n_e) all links' matrices, ``sel`` (S,) the firing links, grouped by ``starts``
+        (G,) (groups of at most :data:`FRAME_WORDS_MAX_GROUP` links). Returns, bit for bit as the numpy path
+        of :meth:`swarm_envs.sensing.range_bearing.RangeBearingSensor.step`:
+        ``lam`` (G, n_d * n_e) = ``segment_sum(gains[sel], starts)``, ``light`` (S, n_d) =
+        ``sum_last(gains[sel])`` per detector, ``start`` (G, n_d) = ``segment_sum(light, starts)`` and
+        ``best`` (G,) the position in ``sel`` of each group's link with the largest entry (first on ties).
+        """
+        G = starts.size
+        S = sel.size
+        m = gains.shape[1]
+        n_e = m // n_d
+        lam = np.empty((G, m), np.float64)
+        light = np.empty((S, n_d), np.float64)
+        start = np.empty((G, n_d), np.float64)
+        best = np.empty(G, np.int64)
+        buf = np.empty(max(S, 1), np.float64)
+        for g in range(G):
+            s = starts[g]
+            e = starts[g + 1] if g + 1 < G else S
+            n = e - s
+            top = -np.inf
+            for l in range(s, e):
+                row = sel[l]
+                v = gains[row, 0]
+                for c in range(1, m):
+                    if gains[row, c] > v:
+                        v = gains[row, c]
+                if v > top:
+                    top = v
+                    best[g] = l
+                for i in range(n_d):  # sum_last: left to right
+                    r = gains[row, i * n_e]
+                    for j in range(1, n_e):
+                        r += gains[row, i * n_e + j]
+                    light[l, i] = r
+            # reduceat order: first row + (short: sequential from init; else numpy's unrolled pairwise block)
+            for c in range(m):
+                first = gains[sel[s], c]
+                if n == 1:
+                    lam[g, c] = first
+                elif n - 1 < 8:
+                    res = init
+                    for l in range(s + 1, e):
+                        res += gains[sel[l], c]
+                    lam[g, c] = first + res
+                else:
+                    for l in range(s + 1, e):
+                        buf[l - s - 1] = gains[sel[l], c]
+                    lam[g, c] = first + _pairwise_block(buf, n - 1)
+            for i in range(n_d):
+                first = light[s, i]
+                if n == 1:
+                    start[g, i] = first
+                elif n - 1 < 8:
+                    res = init
+                    for l in range(s + 1, e):
+                        res += light[l, i]
+                    start[g, i] = first + res
+                else:
+                    for l in range(s + 1, e):
+                        buf[l - s - 1] = light[l, i]
+                    start[g, i] = first + _pairwise_block(buf, n - 1)
+        return lam, light, start, best
+
+    @njit(cache=True)
+    def adc_bits(level, noise, scale, top, floor):  # pragma: no cover - compiled
+        """(R, m) bool ``clip(round(level * scale + noise), 0, top) / scale >= floor`` (the ADC and the
+        no-reading floor of :func:`swarm_envs.sensing.range_bearing.decode_ids`' start bits); ``noise``
+        (R, m), or (0, m) for none."""
+        R, m = level.shape
+        out = np.empty((R, m), np.bool_)
+        has_noise = noise.shape[0] > 0
+        for r in range(R):
+            for j in range(m):
+                c = level[r, j] * scale
+                if has_noise:
+                    c = c + noise[r, j]
+                c = np.rint(c)
+                if c < 0.0:
+                    c = 0.0
+                if c > top:
+                    c = top
+                out[r, j] = c / scale >= floor
+        return out

@@ -76,12 +76,14 @@ import numpy as np
 from swarm_envs.copies import CopyRandom, CopyStream
 from swarm_envs.ir.layer import IRLinks, pair_gains, wrap_angle
 from swarm_envs.platforms import Platform, get_platform
-from swarm_envs.sensing.kernels import HAVE_NUMBA, segment_sum, sum_last
+from swarm_envs.sensing.kernels import _PAIRWISE_INIT, HAVE_NUMBA, segment_sum, sum_last
 
 if HAVE_NUMBA:
     from swarm_envs.sensing.kernels import (
         FRAME_WORDS_MAX_GROUP,
+        adc_bits,
         adc_pass,
+        firing_sums,
         frame_words,
         group_brightest,
         merge_readings,
@@ -157,6 +159,7 @@ def decode_ids(
     platform: Platform | str = "droplet",
     id_check: bool = True,
     row_copy: np.ndarray | None = None,
+    group_light: np.ndarray | None = None,
 ) -> np.ndarray:
     """Ids that receivers decode from the (possibly colliding) ``rnb_r`` frames of the TXs they see.
 
@@ -175,6 +178,8 @@ def decode_ids(
         sigma: ADC noise (counts).
         platform: platform of the robots (ADC constants and floor).
         id_check: apply the CRC check.
+        group_light: optional (G, n_d) ``light`` summed per group as here (``segment_sum(light, starts)``),
+            if the caller has it already.
 
     Returns:
         (G,) decoded id (a copy's own robot number), or :data:`NOT_HEARD` (-1: no channel's frame checks)
@@ -195,8 +200,17 @@ def decode_ids(
         return counts / float(model.adc_scale) >= float(model.no_reading_floor)
 
     # start bit (1 in every frame): which channels hear a frame at all
-    start = segment_sum(light, starts) if G < L else light
-    heard = read_bits(start[:, :, None], np.arange(G))[:, :, 0]  # (G, n_d)
+    if group_light is not None:
+        start = np.asarray(group_light, dtype=float)
+    else:
+        start = segment_sum(light, starts) if G < L else light
+    if HAVE_NUMBA:  # the same ADC formula in one pass (kernels.adc_bits)
+        noise0 = _noise(rng, sigma, (G, n_d), row_copy) if sigma > 0 else np.zeros((0, n_d))
+        heard = adc_bits(
+            np.ascontiguousarray(start), noise0, float(model.adc_scale), float(model.adc_max), float(model.no_reading_floor)
+        )
+    else:
+        heard = read_bits(start[:, :, None], np.arange(G))[:, :, 0]  # (G, n_d)
     # the rest of the frame, only on channels that heard a start bit (draws: per copy, after the start bits)
     hg, hi = np.nonzero(heard)
     H = hg.size
@@ -676,21 +690,31 @@ class RangeBearingSensor:
             starts = np.arange(sel.size)
         grx = rx_sel[starts]
         n_over = np.diff(np.r_[starts, sel.size]).astype(np.int64)
-        gains = links.gains[sel]
-        lam = segment_sum(gains, starts) if starts.size < sel.size else gains
-        # ground truth: the firing TX with the brightest entry of each group
-        if starts.size == sel.size:
-            true = links.tx[sel]
-        elif HAVE_NUMBA:
-            true = group_brightest(gains.reshape(sel.size, -1), starts.astype(np.int64), links.tx[sel])
+        tx_sel = links.tx[sel]
+        n_d = links.gains.shape[1]
+        fused = HAVE_NUMBA and sel.size > 0 and links.gains.dtype == np.float64 and int(n_over.max()) <= FRAME_WORDS_MAX_GROUP
+        if fused:  # sums straight from the links' gains (kernels.firing_sums): no gains[sel] copy
+            flat = np.ascontiguousarray(links.gains).reshape(links.gains.shape[0], -1)
+            lam, light, group_light, best = firing_sums(flat, sel.astype(np.int64), starts.astype(np.int64), n_d, _PAIRWISE_INIT)
+            lam = lam.reshape(starts.size, *links.gains.shape[1:])
+            true = tx_sel[best]  # ground truth: the firing TX with the brightest entry of each group
         else:
-            true = _group_argmax(gains.reshape(sel.size, -1).max(axis=1), starts, links.tx[sel])
+            gains = links.gains[sel]
+            lam = segment_sum(gains, starts) if starts.size < sel.size else gains
+            light, group_light = (sum_last(gains) if self.collisions and sel.size else None), None
+            # ground truth: the firing TX with the brightest entry of each group
+            if starts.size == sel.size:
+                true = tx_sel
+            elif HAVE_NUMBA:
+                true = group_brightest(gains.reshape(sel.size, -1), starts.astype(np.int64), tx_sel)
+            else:
+                true = _group_argmax(gains.reshape(sel.size, -1).max(axis=1), starts, tx_sel)
 
         if self.collisions and sel.size:
-            local = np.asarray(links.tx[sel], dtype=np.int64) % self.copy_size
+            local = np.asarray(tx_sel, dtype=np.int64) % self.copy_size
             dec = decode_ids(
-                sum_last(gains), self._frames[local], starts, self.id_rng, self.noise_sigma, self.platform,
-                self.id_check, self.copy_of[grx],
+                light, self._frames[local], starts, self.id_rng, self.noise_sigma, self.platform,
+                self.id_check, self.copy_of[grx], group_light,
             )
             base = self.copy_of[grx].astype(np.int64) * self.copy_size
             ok = (dec >= 0) & (dec < self.copy_size) & (base + dec != grx)
@@ -705,7 +729,7 @@ class RangeBearingSensor:
                 from swarm_envs.ir.models import DropletLowPowerIR
 
                 low_l = pair_gains(links.rel_position[sel], links.rel_heading[sel], self.platform, model=DropletLowPowerIR(self.platform))
-                low_l = low_l * (gains > 0)  # rays occluded at full power stay dark
+                low_l = low_l * (links.gains[sel] > 0)  # rays occluded at full power stay dark
                 low = (segment_sum(low_l, starts) if starts.size < sel.size else low_l)[g]
             single = starts.size == sel.size
             R, th, ph, _ = read(
