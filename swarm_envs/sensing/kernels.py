@@ -770,19 +770,24 @@ if HAVE_NUMBA:
                         r += gains[row, i * n_e + j]
                     light[l, i] = r
             # reduceat order: first row + (short: sequential from init; else numpy's unrolled pairwise block)
-            for c in range(m):
-                first = gains[sel[s], c]
-                if n == 1:
-                    lam[g, c] = first
-                elif n - 1 < 8:
-                    res = init
-                    for l in range(s + 1, e):
-                        res += gains[sel[l], c]
-                    lam[g, c] = first + res
-                else:
+            if n == 1:
+                for c in range(m):
+                    lam[g, c] = gains[sel[s], c]
+            elif n - 1 < 8:  # row by row (contiguous), each column still summed in link order
+                for c in range(m):
+                    lam[g, c] = init
+                for l in range(s + 1, e):
+                    row = sel[l]
+                    for c in range(m):
+                        lam[g, c] += gains[row, c]
+                row = sel[s]
+                for c in range(m):
+                    lam[g, c] = gains[row, c] + lam[g, c]
+            else:
+                for c in range(m):
                     for l in range(s + 1, e):
                         buf[l - s - 1] = gains[sel[l], c]
-                    lam[g, c] = first + _pairwise_block(buf, n - 1)
+                    lam[g, c] = gains[sel[s], c] + _pairwise_block(buf, n - 1)
             for i in range(n_d):
                 first = light[s, i]
                 if n == 1:
@@ -818,3 +823,42 @@ if HAVE_NUMBA:
                     c = top
                 out[r, j] = c / scale >= floor
         return out
+
+    @njit(cache=True)
+    def unit_mean_positions(e, valid, inv, cos_t, sin_t, init):  # pragma: no cover - compiled
+        """End of :func:`swarm_envs.sensing.scale_free.coordinates_all` after the (numpy) ``exp``: lengths
+        ``e`` (N, K) where ``valid`` (sorted slots), NaN elsewhere, divided by each robot's mean valid length
+        (summed as numpy's ``nansum`` over the row: its pairwise sum of all K entries), put back in
+        the input slot order ``f[u, s] = f_sorted[u, inv[u, s]]``, and positions ``f cos(theta), f sin(theta)``
+        from the given ``cos_t``/``sin_t`` (N, K). Rows of at most 128 slots. Returns f, valid (input slot
+        order) and xy (N, K, 2)."""
+        n, k = e.shape
+        f = np.empty((n, k), np.float64)
+        vout = np.empty((n, k), np.bool_)
+        xy = np.empty((n, k, 2), np.float64)
+        w = np.empty(k, np.float64)
+        fs = np.empty(k, np.float64)
+        for u in range(n):
+            nv = 0
+            for j in range(k):
+                if valid[u, j]:
+                    nv += 1
+                    w[j] = 0.0 if np.isnan(e[u, j]) else e[u, j]
+                else:
+                    w[j] = 0.0
+            if k < 8:  # np.sum over a row: numpy's pairwise sum of all k entries (sequential from init below 8)
+                tot = init
+                for j in range(k):
+                    tot += w[j]
+            else:
+                tot = _pairwise_block(w, k)
+            denom = tot / max(nv, 1) if nv > 0 else 1.0
+            for j in range(k):
+                fs[j] = (e[u, j] if valid[u, j] else np.nan) / denom
+            for s in range(k):
+                src = inv[u, s]
+                f[u, s] = fs[src]
+                vout[u, s] = valid[u, src]
+                xy[u, s, 0] = fs[src] * cos_t[u, s]
+                xy[u, s, 1] = fs[src] * sin_t[u, s]
+        return f, vout, xy

@@ -72,7 +72,7 @@ from swarm_envs.sensing.exchange import BearingExchange, NeighbourKnowledge
 from swarm_envs.sensing.kernels import HAVE_NUMBA
 
 if HAVE_NUMBA:
-    from swarm_envs.sensing.kernels import two_hop_propagate, two_hop_triangles
+    from swarm_envs.sensing.kernels import _PAIRWISE_INIT, two_hop_propagate, two_hop_triangles, unit_mean_positions
 
 __all__ = [
     "coordinates",
@@ -189,6 +189,9 @@ def coordinates_all(
     else:
         weight = np.zeros(0)
     logf, known, rigid = two_hop_propagate(ok, starts, ti, tj, logratio, weight, noise_sensitivity)
+    if k <= 128:  # normalisation, slot order and positions in one pass (kernels.unit_mean_positions)
+        f, valid, xy = unit_mean_positions(np.exp(logf), known & ok, inv, np.cos(th_in), np.sin(th_in), _PAIRWISE_INIT)
+        return ScaleFreeResult(xy=xy, valid=valid, rigid=rigid, ids=ids_in.copy(), length=f)
     f, valid = _unit_mean_lengths(logf, known & ok)
     # undo the slot permutation before the (element-wise) positions
     f = np.take_along_axis(f, inv, 1)
