@@ -464,6 +464,10 @@ if HAVE_NUMBA:
         ident = np.zeros(H, np.int64)
         crc = np.zeros(H, np.int64)
         buf = np.empty(max(L, 1), np.float64)  # scratch for the pairwise sums of large groups
+        fr = np.empty((L, nb), np.float64)  # frame bits as 0.0 / 1.0: the products below without branches
+        for l in range(L):
+            for k in range(nb):
+                fr[l, k] = 1.0 if frames[l, k + 1] else 0.0
         h = 0
         for g in range(G):
             s = starts[g]
@@ -472,26 +476,31 @@ if HAVE_NUMBA:
             for i in range(n_d):
                 if not heard[g, i]:
                     continue
+                word_id = np.int64(0)
+                word_crc = np.int64(0)
                 for k in range(nb):
-                    first = light[s, i] * (1.0 if frames[s, k + 1] else 0.0)
+                    first = light[s, i] * fr[s, k]
                     if m <= 1:
                         lev = first
                     elif m - 1 < 8:  # reduceat: first + sequential sum of the rest from init
                         res = init
                         for l in range(s + 1, e):
-                            res += light[l, i] * (1.0 if frames[l, k + 1] else 0.0)
+                            res += light[l, i] * fr[l, k]
                         lev = first + res
                     else:  # 9 to 129 links (the caller checks): numpy's unrolled pairwise block
                         for l in range(s + 1, e):
-                            buf[l - s - 1] = light[l, i] * (1.0 if frames[l, k + 1] else 0.0)
+                            buf[l - s - 1] = light[l, i] * fr[l, k]
                         lev = first + _pairwise_block(buf, m - 1)
                     c = np.rint(lev * scale + noise[h, k])
-                    c = min(max(c, 0.0), top)
-                    if c / scale >= floor:
-                        if k < id_bits:
-                            ident[h] |= np.int64(1) << k
-                        else:
-                            crc[h] |= np.int64(1) << (k - id_bits)
+                    c = 0.0 if c < 0.0 else c  # numpy's clip (a bound replaces only values beyond it)
+                    c = top if c > top else c
+                    bit = np.int64(c / scale >= floor)  # arithmetic, not a branch: the bits are random
+                    if k < id_bits:
+                        word_id |= bit << k
+                    else:
+                        word_crc |= bit << (k - id_bits)
+                ident[h] = word_id
+                crc[h] = word_crc
                 h += 1
         return ident, crc
 
