@@ -161,7 +161,7 @@ def test_compiled_message_encoding_equals_encode_rows(n, k_max, monkeypatch):
 
 
 def test_firing_sums_equal_the_gathered_numpy_sums():
-    """kernels.firing_sums = segment_sum / sum_last / brightest link of gains[sel], bit for bit, for groups of
+    """kernels.firing_sums = segment_sum / sum_last / brightest row of the firing links' gains, bit for bit, for groups of
     1 to 40 links (reduceat's short and pairwise branches)."""
     from swarm_envs.sensing.kernels import _PAIRWISE_INIT, firing_sums, segment_sum, sum_last
 
@@ -177,8 +177,8 @@ def test_firing_sums_equal_the_gathered_numpy_sums():
                 continue
             sel = sel[: int(sizes.sum())]
             starts = np.r_[0, np.cumsum(sizes)[:-1]].astype(np.int64)
-            lam, light, start, best = firing_sums(gains.reshape(L, -1), sel, starts, n_d, _PAIRWISE_INIT)
             g = gains[sel]
+            lam, light, start, best = firing_sums(g.reshape(sel.size, -1), starts, n_d, _PAIRWISE_INIT)
             _same_bits(lam.reshape(-1, n_d, n_d), np.add.reduceat(g, starts, axis=0))
             _same_bits(light, sum_last(g))
             _same_bits(start, segment_sum(sum_last(g), starts))

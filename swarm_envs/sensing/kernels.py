@@ -740,18 +740,18 @@ if HAVE_NUMBA:
         return ids, qs
 
     @njit(cache=True)
-    def firing_sums(gains, sel, starts, n_d, init):  # pragma: no cover - compiled
-        """Sums of the firing links' gains per receiving group, without gathering ``gains[sel]`` first.
+    def firing_sums(gains, starts, n_d, init):  # pragma: no cover - compiled
+        """Sums of the firing links' gains per receiving group, in one pass.
 
-        ``gains`` (L, n_d * n_e) all links' matrices, ``sel`` (S,) the firing links, grouped by ``starts``
-        (G,) (groups of at most :data:`FRAME_WORDS_MAX_GROUP` links). Returns, bit for bit as the numpy path
-        of :meth:`swarm_envs.sensing.range_bearing.RangeBearingSensor.step`:
-        ``lam`` (G, n_d * n_e) = ``segment_sum(gains[sel], starts)``, ``light`` (S, n_d) =
-        ``sum_last(gains[sel])`` per detector, ``start`` (G, n_d) = ``segment_sum(light, starts)`` and
-        ``best`` (G,) the position in ``sel`` of each group's link with the largest entry (first on ties).
+        ``gains`` (S, n_d * n_e) the firing links' matrices (``links.gains[sel]``), grouped by ``starts`` (G,)
+        (groups of at most :data:`FRAME_WORDS_MAX_GROUP` links). Returns, bit for bit as the numpy path of
+        :meth:`swarm_envs.sensing.range_bearing.RangeBearingSensor.step`: ``lam`` (G, n_d * n_e) =
+        ``segment_sum(gains, starts)``, ``light`` (S, n_d) = ``sum_last`` per detector, ``start`` (G, n_d) =
+        ``segment_sum(light, starts)`` and ``best`` (G,) each group's row with the largest entry (first on
+        ties).
         """
         G = starts.size
-        S = sel.size
+        S = gains.shape[0]
         m = gains.shape[1]
         n_e = m // n_d
         lam = np.empty((G, m), np.float64)
@@ -765,7 +765,7 @@ if HAVE_NUMBA:
             n = e - s
             top = -np.inf
             for l in range(s, e):
-                row = sel[l]
+                row = l
                 v = gains[row, 0]
                 for c in range(1, m):
                     if gains[row, c] > v:
@@ -781,22 +781,22 @@ if HAVE_NUMBA:
             # reduceat order: first row + (short: sequential from init; else numpy's unrolled pairwise block)
             if n == 1:
                 for c in range(m):
-                    lam[g, c] = gains[sel[s], c]
+                    lam[g, c] = gains[s, c]
             elif n - 1 < 8:  # row by row (contiguous), each column still summed in link order
                 for c in range(m):
                     lam[g, c] = init
                 for l in range(s + 1, e):
-                    row = sel[l]
+                    row = l
                     for c in range(m):
                         lam[g, c] += gains[row, c]
-                row = sel[s]
+                row = s
                 for c in range(m):
                     lam[g, c] = gains[row, c] + lam[g, c]
             else:
                 for c in range(m):
                     for l in range(s + 1, e):
-                        buf[l - s - 1] = gains[sel[l], c]
-                    lam[g, c] = gains[sel[s], c] + _pairwise_block(buf, n - 1)
+                        buf[l - s - 1] = gains[l, c]
+                    lam[g, c] = gains[s, c] + _pairwise_block(buf, n - 1)
             for i in range(n_d):
                 first = light[s, i]
                 if n == 1:

@@ -693,9 +693,9 @@ class RangeBearingSensor:
         tx_sel = links.tx[sel]
         n_d = links.gains.shape[1]
         fused = HAVE_NUMBA and sel.size > 0 and links.gains.dtype == np.float64 and int(n_over.max()) <= FRAME_WORDS_MAX_GROUP
-        if fused:  # sums straight from the links' gains (kernels.firing_sums): no gains[sel] copy
-            flat = np.ascontiguousarray(links.gains).reshape(links.gains.shape[0], -1)
-            lam, light, group_light, best = firing_sums(flat, sel.astype(np.int64), starts.astype(np.int64), n_d, _PAIRWISE_INIT)
+        if fused:  # the sums and the brightest link of every group in one pass (kernels.firing_sums)
+            gains = links.gains[sel]
+            lam, light, group_light, best = firing_sums(gains.reshape(sel.size, -1), starts.astype(np.int64), n_d, _PAIRWISE_INIT)
             lam = lam.reshape(starts.size, *links.gains.shape[1:])
             true = tx_sel[best]  # ground truth: the firing TX with the brightest entry of each group
         else:
@@ -729,7 +729,7 @@ class RangeBearingSensor:
                 from swarm_envs.ir.models import DropletLowPowerIR
 
                 low_l = pair_gains(links.rel_position[sel], links.rel_heading[sel], self.platform, model=DropletLowPowerIR(self.platform))
-                low_l = low_l * (links.gains[sel] > 0)  # rays occluded at full power stay dark
+                low_l = low_l * (gains > 0)  # rays occluded at full power stay dark
                 low = (segment_sum(low_l, starts) if starts.size < sel.size else low_l)[g]
             single = starts.size == sel.size
             R, th, ph, _ = read(
