@@ -197,3 +197,24 @@ def test_adc_bits_equal_the_numpy_start_bit_reading():
             got = adc_bits(level, np.zeros((0, 8)) if noise is None else noise, scale, top, floor)
             np.testing.assert_array_equal(got, ref)
             assert 0 < ref.mean() < 1
+
+
+def test_sorted_independent_set_equals_the_adjacency_version():
+    """kernels.priority_independent_set_sorted (edges sorted by u, possibly one-directional) equals
+    priority_independent_set and the numpy Luby rounds; unsorted edges are refused."""
+    from swarm_envs.ir.layer import compute_links
+    from swarm_envs.sensing.kernels import priority_independent_set, priority_independent_set_sorted
+
+    rng = np.random.default_rng(13)
+    for n, side in [(1, 0.1), (5, 0.1), (40, 0.3), (300, 1.0), (300, 3.0)]:
+        links = compute_links(rng.uniform(0, side, (n, 2)), rng.uniform(-np.pi, np.pi, n), "epuck")
+        u, v = links.rx.astype(np.int64), links.tx.astype(np.int64)
+        for drop in (0.0, 0.3):  # 0.3: many links only one way
+            keep = rng.random(u.size) >= drop
+            prio = rng.random(n)
+            got, ok = priority_independent_set_sorted(prio, u[keep], v[keep])
+            assert ok
+            np.testing.assert_array_equal(got, priority_independent_set(prio, u[keep], v[keep]))
+            np.testing.assert_array_equal(got, rbmod.independent_set_numpy(prio, u[keep], v[keep]))
+    if u.size > 1:
+        assert not priority_independent_set_sorted(prio, u[::-1].copy(), v[::-1].copy())[1]

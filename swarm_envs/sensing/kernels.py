@@ -871,3 +871,38 @@ if HAVE_NUMBA:
                 xy[u, s, 0] = fs[src] * cos_t[u, s]
                 xy[u, s, 1] = fs[src] * sin_t[u, s]
         return f, vout, xy
+
+    @njit(cache=True)
+    def priority_independent_set_sorted(prio, u, v):  # pragma: no cover - compiled
+        """:func:`priority_independent_set` for edges sorted by ``u`` (the IR links, sorted by receiver),
+        without building an adjacency list: in decreasing priority a node fires unless a fired node listed
+        it (its ``u`` range, marked when that node fired) or it lists a fired node (its own ``u`` range,
+        checked now; a listed node that fired has the higher priority). Returns (fired (N,) bool, ok); ok
+        is False (and fired meaningless) when ``u`` is not sorted."""
+        n = prio.size
+        m = u.size
+        start = np.zeros(n + 1, np.int64)
+        for e in range(m):
+            if e > 0 and u[e] < u[e - 1]:
+                return np.zeros(n, np.bool_), False
+            start[u[e] + 1] += 1
+        for i in range(n):
+            start[i + 1] += start[i]
+        order = np.argsort(-prio)
+        fired = np.zeros(n, np.bool_)
+        blocked = np.zeros(n, np.bool_)
+        for k in range(n):
+            x = order[k]
+            if blocked[x]:
+                continue
+            free = True
+            for e in range(start[x], start[x + 1]):
+                if fired[v[e]]:
+                    free = False
+                    break
+            if not free:
+                continue
+            fired[x] = True
+            for e in range(start[x], start[x + 1]):
+                blocked[v[e]] = True
+        return fired, True

@@ -89,6 +89,7 @@ if HAVE_NUMBA:
         merge_readings,
         pick_ids,
         priority_independent_set,
+        priority_independent_set_sorted,
     )
 
 __all__ = [
@@ -664,7 +665,9 @@ class RangeBearingSensor:
             return np.ones(N, dtype=bool)
         prio = self.prio_rng.draw(self.copy_of)
         if HAVE_NUMBA:
-            return priority_independent_set(prio, np.asarray(links.rx, np.int64), np.asarray(links.tx, np.int64))
+            rx, tx = np.asarray(links.rx, np.int64), np.asarray(links.tx, np.int64)
+            fired, ok = priority_independent_set_sorted(prio, rx, tx)  # links sorted by receiver: no adjacency list
+            return fired if ok else priority_independent_set(prio, rx, tx)
         return independent_set_numpy(prio, links.rx, links.tx)
 
     # -- one control step ------------------------------------------------------------------------------
