@@ -218,3 +218,26 @@ def test_sorted_independent_set_equals_the_adjacency_version():
             np.testing.assert_array_equal(got, rbmod.independent_set_numpy(prio, u[keep], v[keep]))
     if u.size > 1:
         assert not priority_independent_set_sorted(prio, u[::-1].copy(), v[::-1].copy())[1]
+
+
+def test_slot_keys_equal_the_numpy_keys():
+    """kernels.slot_keys = the validity, np.mod bearing keys and id keys of coordinates_all, bit for bit,
+    on bearings that include exact multiples of 2 pi, -0.0, tiny negatives, NaN and inf."""
+    from swarm_envs.sensing.kernels import slot_keys
+
+    rng = np.random.default_rng(14)
+    two_pi = 2.0 * np.pi
+    special = np.array([0.0, -0.0, two_pi, -two_pi, np.pi, -np.pi, -1e-300, 1e-300, 3 * two_pi, np.nan, np.inf, -np.inf])
+    for _ in range(20):
+        ids = rng.integers(-1, 50, (40, 16))
+        th = rng.uniform(-10, 10, ids.shape)
+        pick = rng.random(ids.shape) < 0.3
+        th[pick] = rng.choice(special, int(pick.sum()))
+        ok, key_b, key_id, cap = slot_keys(ids, th, two_pi, np.iinfo(np.int64).max)
+        ref_ok = (ids >= 0) & np.isfinite(th)
+        np.testing.assert_array_equal(ok, ref_ok)
+        with np.errstate(invalid="ignore"):  # mod(inf)
+            _same_bits(key_b, np.where(ref_ok, np.mod(th, two_pi), np.inf))
+        np.testing.assert_array_equal(key_id, np.where(ref_ok, ids, np.iinfo(np.int64).max))
+        deg = ref_ok.sum(1)
+        assert cap == int((deg * (deg - 1)).sum())

@@ -906,3 +906,36 @@ if HAVE_NUMBA:
             for e in range(start[x], start[x + 1]):
                 blocked[v[e]] = True
         return fired, True
+
+    @njit(cache=True)
+    def slot_keys(ids, th, two_pi, id_max):  # pragma: no cover - compiled
+        """Slot validity and sort keys of :func:`swarm_envs.sensing.scale_free.coordinates_all` in one pass:
+        ``ok = (ids >= 0) & isfinite(th)``, ``key_b = mod(th, two_pi)`` where ok else inf (numpy's float mod:
+        ``fmod`` (exact), plus ``two_pi`` when the signs differ, +0.0 for a zero remainder), ``key_id = ids``
+        where ok else ``id_max``, and ``sum(deg * (deg - 1))`` over robots (deg = ok slots)."""
+        n, k = ids.shape
+        ok = np.empty((n, k), np.bool_)
+        key_b = np.empty((n, k), np.float64)
+        key_id = np.empty((n, k), np.int64)
+        cap = 0
+        for u in range(n):
+            deg = 0
+            for s in range(k):
+                t = th[u, s]
+                good = ids[u, s] >= 0 and np.isfinite(t)
+                ok[u, s] = good
+                if good:
+                    r = np.fmod(t, two_pi)
+                    if r != 0.0:
+                        if (two_pi < 0.0) != (r < 0.0):
+                            r += two_pi
+                    else:
+                        r = np.copysign(0.0, two_pi)
+                    key_b[u, s] = r
+                    key_id[u, s] = ids[u, s]
+                    deg += 1
+                else:
+                    key_b[u, s] = np.inf
+                    key_id[u, s] = id_max
+            cap += deg * (deg - 1)
+        return ok, key_b, key_id, cap
