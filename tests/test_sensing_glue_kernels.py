@@ -241,3 +241,34 @@ def test_slot_keys_equal_the_numpy_keys():
         np.testing.assert_array_equal(key_id, np.where(ref_ok, ids, np.iinfo(np.int64).max))
         deg = ref_ok.sum(1)
         assert cap == int((deg * (deg - 1)).sum())
+
+
+def test_compiled_delivery_store_equals_the_numpy_waves():
+    """kernels.store_deliveries (one delivery after the other) leaves the same tables as the numpy waves
+    (one delivery per receiver and wave), with receivers hearing several senders, a sender twice, and
+    deliveries without an own bearing."""
+    from swarm_envs.sensing.kernels import store_deliveries
+
+    rng = np.random.default_rng(15)
+    for _ in range(30):
+        exs = [BearingExchange(12, mode="network", k_max=4, period=3, rng=np.random.default_rng(1), n_copies=2) for _ in range(2)]
+        seed = int(rng.integers(1 << 30))
+        for ex in exs:
+            _random_tables(ex, seed)
+            ex.t[:] = 5
+            ex.row_time[:] = ex.tab_time
+        D = int(rng.integers(1, 60))
+        recv = np.sort(rng.integers(0, exs[0].n, D))
+        origin = exs[0].offset[recv] + rng.integers(0, 12, D)
+        hit = rng.random(D) < 0.7
+        own_b = np.where(hit, rng.uniform(-3, 3, D), np.nan)
+        w = exs[0].row_ids.shape[2]
+        ids = np.where(rng.random((D, w)) < 0.5, rng.integers(0, 24, (D, w)), -1)
+        th = np.where(ids >= 0, rng.uniform(-3, 3, (D, w)), np.nan)
+        perm = rng.permutation(D)  # deliveries in any order (not grouped by receiver)
+        recv, origin, hit, own_b, ids, th = recv[perm], origin[perm], hit[perm], own_b[perm], ids[perm], th[perm]
+        a, b = exs
+        store_deliveries(recv, origin, own_b, hit, ids, th, a._now, a.tab_ids, a.tab_bear, a.tab_time, a.row_ids, a.row_bear, a.row_time)
+        b._store_waves(recv, origin, own_b, hit, ids, th)
+        for name in ("tab_ids", "tab_bear", "tab_time", "row_ids", "row_bear", "row_time"):
+            np.testing.assert_array_equal(getattr(a, name), getattr(b, name))

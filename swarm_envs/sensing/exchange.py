@@ -57,7 +57,7 @@ from swarm_envs.copies import CopyRandom
 from swarm_envs.sensing.kernels import HAVE_NUMBA
 
 if HAVE_NUMBA:
-    from swarm_envs.sensing.kernels import decode_bits, encode_tables, expire_tables
+    from swarm_envs.sensing.kernels import decode_bits, encode_tables, expire_tables, store_deliveries
 
 __all__ = ["BearingExchange", "NeighbourKnowledge", "encode_rows", "decode_rows", "thesis_round_time", "readings_table"]
 
@@ -397,6 +397,16 @@ class BearingExchange:
         hit = (key_l[pos] == key) if found else np.zeros(key.size, bool)
         own_b = np.where(hit, bear_l[pos] if found else np.nan, np.nan)
         self.stats["received"] += int(recv.size)
+        if HAVE_NUMBA and ids.shape[1] == self.row_ids.shape[2]:  # one delivery after the other, compiled
+            store_deliveries(
+                recv, origin, own_b.astype(float), hit, ids, np.asarray(th, float), self._now, self.tab_ids, self.tab_bear,
+                self.tab_time, self.row_ids, self.row_bear, self.row_time,
+            )
+            return
+        self._store_waves(recv, origin, own_b, hit, ids, th)
+
+    def _store_waves(self, recv, origin, own_b, hit, ids, th) -> None:
+        """Numpy reference of the compiled :func:`swarm_envs.sensing.kernels.store_deliveries`."""
         # process in waves so that one receiver gets at most one delivery per wave
         todo = np.arange(recv.size)
         while todo.size:

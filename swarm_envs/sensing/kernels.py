@@ -939,3 +939,36 @@ if HAVE_NUMBA:
                     key_id[u, s] = id_max
             cap += deg * (deg - 1)
         return ok, key_b, key_id, cap
+
+    @njit(cache=True)
+    def store_deliveries(r, o, own_b, hit, ids, th, now, tab_ids, tab_bear, tab_time, row_ids, row_bear, row_time):  # pragma: no cover - compiled
+        """In place table update of :meth:`swarm_envs.sensing.exchange.BearingExchange.receive`, one delivery
+        after the other (reference: the numpy waves of ``_store``, one delivery per receiver and wave, which
+        is the same order per receiver): the entry of sender ``o[d]`` in receiver ``r[d]``'s table (else
+        the oldest slot; empty slots are the oldest) gets its row ``ids[d]``, ``th[d]`` and, when the
+        receiver has a bearing of the sender (``hit[d]``), that bearing and a fresh time; a delivery
+        without a bearing only refreshes an existing entry."""
+        k = tab_ids.shape[1]
+        w = row_ids.shape[2]
+        for d in range(r.size):
+            u = r[d]
+            slot = -1
+            for s in range(k):
+                if tab_ids[u, s] == o[d]:
+                    slot = s
+                    break
+            if slot < 0:
+                if not hit[d]:
+                    continue
+                slot = 0
+                for s in range(1, k):
+                    if tab_time[u, s] < tab_time[u, slot]:
+                        slot = s
+            tab_ids[u, slot] = o[d]
+            if hit[d]:
+                tab_bear[u, slot] = own_b[d]
+                tab_time[u, slot] = now[u]
+            for j in range(w):
+                row_ids[u, slot, j] = ids[d, j]
+                row_bear[u, slot, j] = th[d, j]
+            row_time[u, slot] = now[u]
