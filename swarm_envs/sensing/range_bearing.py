@@ -382,7 +382,7 @@ def _noise(
     if isinstance(rng, CopyStream):
         if rng.kind != "normal":
             raise ValueError("noise needs a 'normal' CopyStream")
-        return sigma * rng.draw(rows, shape[1:])
+        return rng.draw(rows, shape[1:], scale=sigma)
     if isinstance(rng, CopyRandom):
         return rng.normal(sigma, rows, shape[1:])
     return rng.normal(0.0, sigma, shape)
