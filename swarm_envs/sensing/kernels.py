@@ -3,16 +3,24 @@
 :func:`swarm_envs.sensing.scale_free.coordinates_all_numpy` is the reference: vectorised numpy over robots,
 but built from many (N, K, K) temporaries (slot sort, id matching, reachability by matrix squaring,
 lock-step BFS / Prim). These kernels do the integer and graph work robot by robot with K-sized local
-arrays; every floating-point value that is not a plain copy or the additions of the length propagation
-(inner angles, rounding, ANGLEBALANCE, law-of-sines logs, sensitivities, exp, normalisation, sin/cos) is
-still computed by numpy in :func:`swarm_envs.sensing.scale_free.coordinates_all`, so the compiled path
-gives the reference's results bit for bit (``tests/test_scale_free_kernels.py``). Also
-:func:`segment_sum`, a compiled ``np.add.reduceat`` over rows for the range & bearing sensor, and
-:func:`priority_independent_set`, its contention schedule (reference: the vectorised Luby rounds of
-:func:`swarm_envs.sensing.range_bearing.independent_set_numpy`), and :func:`frame_words`, the id and CRC
-words its receivers read from colliding request frames (reference:
-:func:`swarm_envs.sensing.range_bearing.frame_words_numpy`). Used only
-when numba is importable (``fast`` extra).
+arrays; the transcendental and rounded formulas (inner angles, rounding, ANGLEBALANCE, law-of-sines logs,
+sensitivities, exp, sin/cos) are still computed by numpy in
+:func:`swarm_envs.sensing.scale_free.coordinates_all`; the kernels only do correctly rounded IEEE
+operations (+, -, *, /, fmod, comparisons) in numpy's order (the length propagation, the mean-length
+normalisation of :func:`unit_mean_positions` with numpy's pairwise row sum, the bearing keys of
+:func:`slot_keys`), so the compiled path gives the reference's results bit for bit
+(``tests/test_scale_free_kernels.py``).
+
+Also the range & bearing sensor's and the bearing exchange's compiled glue, each with its numpy reference
+compared bit for bit in ``tests/test_sensing_glue_kernels.py`` (or the files named): :func:`segment_sum`
+(``np.add.reduceat`` over rows), :func:`priority_independent_set` and
+:func:`priority_independent_set_sorted` (the contention schedule; reference: the Luby rounds of
+:func:`swarm_envs.sensing.range_bearing.independent_set_numpy`), :func:`frame_words` (id and CRC words read
+from colliding request frames; reference :func:`swarm_envs.sensing.range_bearing.frame_words_numpy`),
+:func:`firing_sums`, :func:`adc_bits`, :func:`adc_pass`, :func:`pick_ids`, :func:`merge_readings`
+(the sensor's per-step sums, ADC reads, decode rule and reading table), :func:`encode_tables`,
+:func:`decode_bits`, :func:`expire_tables`, :func:`store_deliveries` (the exchange's messages and
+tables). Used only when numba is importable (``fast`` extra).
 """
 
 from __future__ import annotations
@@ -26,7 +34,12 @@ try:  # numba is optional: an accelerator, not a requirement
 except ImportError:  # pragma: no cover - exercised only without numba
     HAVE_NUMBA = False
 
-__all__ = ["HAVE_NUMBA", "two_hop_triangles", "two_hop_propagate", "segment_sum", "sum_last", "priority_independent_set", "frame_words"]
+__all__ = [
+    "HAVE_NUMBA", "two_hop_triangles", "two_hop_propagate", "segment_sum", "sum_last", "priority_independent_set",
+    "priority_independent_set_sorted", "frame_words", "firing_sums", "adc_bits", "adc_pass", "pick_ids",
+    "merge_readings", "encode_tables", "decode_bits", "expire_tables", "store_deliveries", "slot_keys",
+    "unit_mean_positions",
+]
 
 
 if HAVE_NUMBA:
