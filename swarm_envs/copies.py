@@ -117,16 +117,21 @@ class CopyStream:
             row = self._buf[b]
             row[:rem] = row[self._pos[b] : self._end[b]]
             g = self.generators[b]
-            row[rem:] = g.standard_normal(cap - rem) if self.kind == "normal" else g.random(cap - rem)
+            if self.kind == "normal":  # written in place (out=): the same values as a new array, no copy
+                g.standard_normal(out=row[rem:])
+            else:
+                g.random(out=row[rem:])
             self._pos[b], self._end[b] = 0, cap
 
-    def draw(self, row_copy: np.ndarray, tail: tuple[int, ...] = ()) -> np.ndarray:
-        """(R, *tail) draws; rows of copy b are the next values of copy b's stream (``row_copy`` sorted)."""
+    def draw(self, row_copy: np.ndarray, tail: tuple[int, ...] = (), scale: float | None = None) -> np.ndarray:
+        """(R, *tail) draws; rows of copy b are the next values of copy b's stream (``row_copy`` sorted).
+        ``scale``: return ``scale * draws`` (computed while copying out of the buffer)."""
         row_copy = np.asarray(row_copy, dtype=np.int64).reshape(-1)
         t = int(np.prod(tail, dtype=np.int64))
         R = row_copy.size
         if R == 0 or t == 0:
             return np.zeros((R, *tail))
+        mul = None if scale is None else float(scale)
         rows = copy_counts(row_copy, self.n_copies)
         need = rows * t
         short = np.flatnonzero(self._pos + need > self._end)
@@ -137,10 +142,16 @@ class CopyStream:
         n_used = need[used]
         total = int(n_used.sum())
         cap = self._buf.shape[1]
-        if used.size <= 8:  # few copies: slices
+        if used.size == 1:  # one copy: a slice, copied (or scaled) out
+            b = used[0]
+            run = self._buf[b, self._pos[b] : self._pos[b] + total]
+            out, mul = (run.copy() if mul is None else np.multiply(run, mul)), None
+        elif used.size <= 8:  # few copies: slices
             out = np.concatenate([self._buf[b, self._pos[b] : self._pos[b] + n] for b, n in zip(used, n_used)])
         else:
             shift = used * cap + self._pos[used] - (np.cumsum(n_used) - n_used)
             out = np.take(self._buf.reshape(-1), np.repeat(shift, n_used) + np.arange(total))
+        if mul is not None:
+            out *= mul
         self._pos += need
         return out.reshape(R, *tail)

@@ -7,7 +7,7 @@ from swarm_envs.copies import CopyStream
 
 
 @pytest.mark.parametrize("kind", ["normal", "uniform"])
-@pytest.mark.parametrize("n_copies", [3, 12])  # few copies (gathered by slices) and many (one indexed take)
+@pytest.mark.parametrize("n_copies", [1, 3, 12])  # one copy (a slice), few (slices) and many (one indexed take)
 def test_copy_stream_serves_each_copy_its_own_stream_whatever_the_chunking(kind, n_copies):
     seeds = list(range(3, 3 + n_copies))
     stream = CopyStream([np.random.default_rng(s) for s in seeds], kind, chunk=7)
@@ -37,3 +37,17 @@ def test_copy_stream_new_generator_drops_the_buffer_and_rows_must_be_grouped():
         stream.draw(np.array([1, 0]))
     with pytest.raises(ValueError):
         CopyStream([np.random.default_rng(0)], "poisson")
+
+
+@pytest.mark.parametrize("n_copies", [1, 3, 12])
+def test_copy_stream_scaled_draws_equal_scaled_values(n_copies):
+    """draw(scale=s) gives exactly s * draw() of the same stream (the product computed while copying)."""
+    a = CopyStream([np.random.default_rng(s) for s in range(n_copies)], "normal", chunk=5)
+    b = CopyStream([np.random.default_rng(s) for s in range(n_copies)], "normal", chunk=5)
+    rng = np.random.default_rng(1)
+    for _ in range(30):
+        row_copy = np.sort(rng.integers(0, n_copies, int(rng.integers(0, 9))))
+        got = a.draw(row_copy, (3,), scale=1.58)
+        ref = 1.58 * b.draw(row_copy, (3,))
+        np.testing.assert_array_equal(got.view(np.int64), ref.view(np.int64))
+        assert got.shape == (row_copy.size, 3)

@@ -54,6 +54,10 @@ from typing import Any
 import numpy as np
 
 from swarm_envs.copies import CopyRandom
+from swarm_envs.sensing.kernels import HAVE_NUMBA
+
+if HAVE_NUMBA:
+    from swarm_envs.sensing.kernels import decode_bits, encode_tables, expire_tables, store_deliveries
 
 __all__ = ["BearingExchange", "NeighbourKnowledge", "encode_rows", "decode_rows", "thesis_round_time", "readings_table"]
 
@@ -138,6 +142,9 @@ def decode_rows(bits: np.ndarray, id_bits: int, count_bits: int, max_entries: in
     """Inverse of :func:`encode_rows`: bits (R, >= needed) -> ids (R, max_entries) (-1 pad), bearings (rad)."""
     bits = np.asarray(bits, dtype=np.uint8)
     R = bits.shape[0]
+    if HAVE_NUMBA and bits.ndim == 2:  # integers compiled (kernels.decode_bits), the bearing formula below
+        ids, q = decode_bits(np.ascontiguousarray(bits), int(id_bits), int(count_bits), int(max_entries), int(bearing_bits))
+        return ids, np.where(ids >= 0, _dequantise(q, bearing_bits), np.nan)
     e = id_bits + bearing_bits
     need = count_bits + max_entries * e
     if bits.shape[1] < need:
@@ -303,19 +310,34 @@ class BearingExchange:
         robots = self.due()
         if robots.size == 0:
             return 0
-        # most recently heard first
+        bits, lens = self.encode(robots)
+        if hasattr(net, "send_many") and self.kind != "app":  # a Network: all lengths in one call
+            net.send_many(robots, bits[:, : int(lens.max())].astype(bool), self.kind, lengths=lens)
+        else:
+            for L in np.unique(lens):  # queue_system takes robots sharing one payload length
+                g = lens == L
+                net.queue_system(robots[g], bits[g, :L].astype(bool), self.kind)
+        self.stats["sent"] += int(robots.size)
+        self.stats["bits_sent"] += int(lens.sum())
+        return int(robots.size)
+
+    def encode(self, robots: np.ndarray, compiled: bool | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """Message bits (R, n_bits) uint8 (zero padded) and payload lengths (R,) of ``robots``' current
+        tables: most recently heard first, at most ``max_entries``, ids in a copy's own numbering.
+        ``compiled=False`` forces the numpy reference (:func:`encode_rows`)."""
+        robots = np.asarray(robots, dtype=np.int64)
+        if HAVE_NUMBA if compiled is None else compiled:
+            return encode_tables(
+                self.tab_ids, self.tab_bear, self.tab_time, robots, self.offset.astype(np.int64), self.max_entries,
+                self.id_bits, self.count_bits, self.bearing_bits,
+            )
         o = np.argsort(-self.tab_time[robots], axis=1, kind="stable")
         ids = np.take_along_axis(self.tab_ids[robots], o, 1)[:, : self.max_entries]
         th = np.take_along_axis(self.tab_bear[robots], o, 1)[:, : self.max_entries]
         local = np.where(ids >= 0, ids - self.offset[robots][:, None], -1)  # ids in a copy's own numbering
         bits = encode_rows(local, th, self.id_bits, self.count_bits, self.bearing_bits)
         lens = self.count_bits + (ids >= 0).sum(1) * (self.id_bits + self.bearing_bits)
-        for L in np.unique(lens):  # queue_system takes robots sharing one payload length
-            g = lens == L
-            net.queue_system(robots[g], bits[g, :L].astype(bool), self.kind)
-        self.stats["sent"] += int(robots.size)
-        self.stats["bits_sent"] += int(lens.sum())
-        return int(robots.size)
+        return bits, lens
 
     def receive(self, deliveries: Any, readings: Any) -> None:
         """Decode this step's deliveries (network mode) and update tables.
@@ -375,6 +397,16 @@ class BearingExchange:
         hit = (key_l[pos] == key) if found else np.zeros(key.size, bool)
         own_b = np.where(hit, bear_l[pos] if found else np.nan, np.nan)
         self.stats["received"] += int(recv.size)
+        if HAVE_NUMBA and ids.shape[1] == self.row_ids.shape[2]:  # one delivery after the other, compiled
+            store_deliveries(
+                recv, origin, own_b.astype(float), hit, ids, np.asarray(th, float), self._now, self.tab_ids, self.tab_bear,
+                self.tab_time, self.row_ids, self.row_bear, self.row_time,
+            )
+            return
+        self._store_waves(recv, origin, own_b, hit, ids, th)
+
+    def _store_waves(self, recv, origin, own_b, hit, ids, th) -> None:
+        """Numpy reference of the compiled :func:`swarm_envs.sensing.kernels.store_deliveries`."""
         # process in waves so that one receiver gets at most one delivery per wave
         todo = np.arange(recv.size)
         while todo.size:
@@ -399,6 +431,16 @@ class BearingExchange:
         self.row_time[r, slot] = self._now[r]
 
     def _expire(self) -> None:
+        if HAVE_NUMBA:  # one pass over the (N, K) slots instead of a dozen masked numpy operations
+            expire_tables(
+                self._now, self.max_age, self.tab_ids, self.tab_bear, self.tab_time, self.row_ids, self.row_bear,
+                self.row_time, -(10**9),
+            )
+            return
+        self._expire_numpy()
+
+    def _expire_numpy(self) -> None:
+        """Reference of the compiled :func:`swarm_envs.sensing.kernels.expire_tables` (same tables after)."""
         now = self._now[:, None]
         old = (now - self.tab_time > self.max_age) | (self.tab_ids < 0)
         self.tab_ids[old] = -1
@@ -414,29 +456,33 @@ class BearingExchange:
         self.row_time[r, s] = -(10**9)
 
     # ------------------------------------------------------------------ common
-    def knowledge(self) -> NeighbourKnowledge:
-        """What each robot knows now (own row + received rows with ages)."""
+    def knowledge(self, copy: bool = True) -> NeighbourKnowledge:
+        """What each robot knows now (own row + received rows with ages). ``copy=False`` returns views of
+        the live tables (valid until the next :meth:`send` / :meth:`step`; saves copying the (N, K, K2)
+        rows when the caller consumes them at once)."""
         age = np.where(self.row_time > -(10**9), self._now[:, None] - self.row_time, -1)
+        c = np.copy if copy else (lambda a: a)
         return NeighbourKnowledge(
-            ids=self.tab_ids.copy(),
-            bearings=self.tab_bear.copy(),
-            row_ids=self.row_ids.copy(),
-            row_bearings=self.row_bear.copy(),
+            ids=c(self.tab_ids),
+            bearings=c(self.tab_bear),
+            row_ids=c(self.row_ids),
+            row_bearings=c(self.row_bear),
             row_age=age,
         )
 
-    def step(self, readings: Any, deliveries: Any = None) -> NeighbourKnowledge:
+    def step(self, readings: Any, deliveries: Any = None, copy: bool = True) -> NeighbourKnowledge:
         """Advance one control step.
 
         ideal: ``step(readings)`` returns the full, fresh knowledge. network: call :meth:`send` before the
         network step, then ``step(readings, deliveries)`` after it (it decodes, expires stale entries and
-        returns the knowledge).
+        returns the knowledge). ``copy``: as in :meth:`knowledge` (network mode; ideal knowledge is
+        always fresh arrays).
         """
         if self.mode == "ideal":
             k = self._ideal(readings)
         else:
             self.receive(deliveries, readings)
             self._expire()
-            k = self.knowledge()
+            k = self.knowledge(copy)
         self.t += 1
         return k

@@ -193,7 +193,8 @@ class FullSensing:
         else:
             messages = MessageReadings(payload=np.zeros((0, self.message_bits)))
 
-        knowledge = self.exchange.step(bearing_readings, deliveries if self.exchange.mode == "network" else None)
+        # views of the exchange's tables: consumed by _scale_free right away (the result holds no view)
+        knowledge = self.exchange.step(bearing_readings, deliveries if self.exchange.mode == "network" else None, copy=False)
         scale_free = self._scale_free(knowledge)
 
         stats = {name: np.asarray(deliveries.stats[f"{name}_per_robot"]) for name in _STAT_NAMES if f"{name}_per_robot" in deliveries.stats}

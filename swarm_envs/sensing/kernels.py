@@ -3,16 +3,24 @@
 :func:`swarm_envs.sensing.scale_free.coordinates_all_numpy` is the reference: vectorised numpy over robots,
 but built from many (N, K, K) temporaries (slot sort, id matching, reachability by matrix squaring,
 lock-step BFS / Prim). These kernels do the integer and graph work robot by robot with K-sized local
-arrays; every floating-point value that is not a plain copy or the additions of the length propagation
-(inner angles, rounding, ANGLEBALANCE, law-of-sines logs, sensitivities, exp, normalisation, sin/cos) is
-still computed by numpy in :func:`swarm_envs.sensing.scale_free.coordinates_all`, so the compiled path
-gives the reference's results bit for bit (``tests/test_scale_free_kernels.py``). Also
-:func:`segment_sum`, a compiled ``np.add.reduceat`` over rows for the range & bearing sensor, and
-:func:`priority_independent_set`, its contention schedule (reference: the vectorised Luby rounds of
-:func:`swarm_envs.sensing.range_bearing.independent_set_numpy`), and :func:`frame_words`, the id and CRC
-words its receivers read from colliding request frames (reference:
-:func:`swarm_envs.sensing.range_bearing.frame_words_numpy`). Used only
-when numba is importable (``fast`` extra).
+arrays; the transcendental and rounded formulas (inner angles, rounding, ANGLEBALANCE, law-of-sines logs,
+sensitivities, exp, sin/cos) are still computed by numpy in
+:func:`swarm_envs.sensing.scale_free.coordinates_all`; the kernels only do correctly rounded IEEE
+operations (+, -, *, /, fmod, comparisons) in numpy's order (the length propagation, the mean-length
+normalisation of :func:`unit_mean_positions` with numpy's pairwise row sum, the bearing keys of
+:func:`slot_keys`), so the compiled path gives the reference's results bit for bit
+(``tests/test_scale_free_kernels.py``).
+
+Also the range & bearing sensor's and the bearing exchange's compiled glue, each with its numpy reference
+compared bit for bit in ``tests/test_sensing_glue_kernels.py`` (or the files named): :func:`segment_sum`
+(``np.add.reduceat`` over rows), :func:`priority_independent_set` and
+:func:`priority_independent_set_sorted` (the contention schedule; reference: the Luby rounds of
+:func:`swarm_envs.sensing.range_bearing.independent_set_numpy`), :func:`frame_words` (id and CRC words read
+from colliding request frames; reference :func:`swarm_envs.sensing.range_bearing.frame_words_numpy`),
+:func:`firing_sums`, :func:`adc_bits`, :func:`adc_pass`, :func:`pick_ids`, :func:`merge_readings`
+(the sensor's per-step sums, ADC reads, decode rule and reading table), :func:`encode_tables`,
+:func:`decode_bits`, :func:`expire_tables`, :func:`store_deliveries` (the exchange's messages and
+tables). Used only when numba is importable (``fast`` extra).
 """
 
 from __future__ import annotations
@@ -26,7 +34,12 @@ try:  # numba is optional: an accelerator, not a requirement
 except ImportError:  # pragma: no cover - exercised only without numba
     HAVE_NUMBA = False
 
-__all__ = ["HAVE_NUMBA", "two_hop_triangles", "two_hop_propagate", "segment_sum", "sum_last", "priority_independent_set", "frame_words"]
+__all__ = [
+    "HAVE_NUMBA", "two_hop_triangles", "two_hop_propagate", "segment_sum", "sum_last", "priority_independent_set",
+    "priority_independent_set_sorted", "frame_words", "firing_sums", "adc_bits", "adc_pass", "pick_ids",
+    "merge_readings", "encode_tables", "decode_bits", "expire_tables", "store_deliveries", "slot_keys",
+    "unit_mean_positions",
+]
 
 
 if HAVE_NUMBA:
@@ -464,6 +477,10 @@ if HAVE_NUMBA:
         ident = np.zeros(H, np.int64)
         crc = np.zeros(H, np.int64)
         buf = np.empty(max(L, 1), np.float64)  # scratch for the pairwise sums of large groups
+        fr = np.empty((L, nb), np.float64)  # frame bits as 0.0 / 1.0: the products below without branches
+        for l in range(L):
+            for k in range(nb):
+                fr[l, k] = 1.0 if frames[l, k + 1] else 0.0
         h = 0
         for g in range(G):
             s = starts[g]
@@ -472,25 +489,499 @@ if HAVE_NUMBA:
             for i in range(n_d):
                 if not heard[g, i]:
                     continue
+                word_id = np.int64(0)
+                word_crc = np.int64(0)
                 for k in range(nb):
-                    first = light[s, i] * (1.0 if frames[s, k + 1] else 0.0)
+                    first = light[s, i] * fr[s, k]
                     if m <= 1:
                         lev = first
                     elif m - 1 < 8:  # reduceat: first + sequential sum of the rest from init
                         res = init
                         for l in range(s + 1, e):
-                            res += light[l, i] * (1.0 if frames[l, k + 1] else 0.0)
+                            res += light[l, i] * fr[l, k]
                         lev = first + res
                     else:  # 9 to 129 links (the caller checks): numpy's unrolled pairwise block
                         for l in range(s + 1, e):
-                            buf[l - s - 1] = light[l, i] * (1.0 if frames[l, k + 1] else 0.0)
+                            buf[l - s - 1] = light[l, i] * fr[l, k]
                         lev = first + _pairwise_block(buf, m - 1)
                     c = np.rint(lev * scale + noise[h, k])
-                    c = min(max(c, 0.0), top)
-                    if c / scale >= floor:
-                        if k < id_bits:
-                            ident[h] |= np.int64(1) << k
-                        else:
-                            crc[h] |= np.int64(1) << (k - id_bits)
+                    c = 0.0 if c < 0.0 else c  # numpy's clip (a bound replaces only values beyond it)
+                    c = top if c > top else c
+                    bit = np.int64(c / scale >= floor)  # arithmetic, not a branch: the bits are random
+                    if k < id_bits:
+                        word_id |= bit << k
+                    else:
+                        word_crc |= bit << (k - id_bits)
+                ident[h] = word_id
+                crc[h] = word_crc
                 h += 1
         return ident, crc
+
+
+# -- range & bearing sensor glue (references in swarm_envs.sensing.range_bearing / exchange) ------------------
+
+if HAVE_NUMBA:
+
+    @njit(cache=True)
+    def adc_pass(lam, rows, noise, p, scale, top):  # pragma: no cover - compiled
+        """One power-ladder pass of :func:`swarm_envs.sensing.range_bearing.measure` on matrices ``lam[rows]``
+        (flattened to (P, m)): ``clip(round(p * lam * scale + noise), 0, top)`` with numpy's operation order
+        and its clip (a rounded -0.0 stays -0.0). ``noise`` (R, m), or (0, m) for
+        none. Returns counts (R, m) and saturated (R,) (max count >= top)."""
+        R = rows.size
+        m = lam.shape[1]
+        counts = np.empty((R, m), np.float64)
+        sat = np.zeros(R, np.bool_)
+        has_noise = noise.shape[0] > 0
+        for r in range(R):
+            src = rows[r]
+            big = -np.inf
+            for j in range(m):
+                c = p * lam[src, j]
+                c = c * scale
+                if has_noise:
+                    c = c + noise[r, j]
+                c = np.rint(c)
+                if c < 0.0:  # numpy's clip: a bound replaces only a value strictly beyond it (-0.0 and NaN stay)
+                    c = 0.0
+                if c > top:
+                    c = top
+                counts[r, j] = c
+                if c > big:
+                    big = c
+            sat[r] = big >= top
+        return counts, sat
+
+    @njit(cache=True)
+    def group_brightest(gains, starts, labels):  # pragma: no cover - compiled
+        """Per contiguous group of rows (``starts``), the label of the row holding the group's largest entry
+        (first such row on ties); ``gains`` (L, m) without NaN. Reference:
+        :func:`swarm_envs.sensing.range_bearing._group_argmax` of the row maxima."""
+        G = starts.size
+        L, m = gains.shape
+        out = np.empty(G, labels.dtype)
+        for g in range(G):
+            s = starts[g]
+            e = starts[g + 1] if g + 1 < G else L
+            best = -np.inf
+            arg = s
+            for l in range(s, e):
+                v = gains[l, 0]
+                for j in range(1, m):
+                    if gains[l, j] > v:
+                        v = gains[l, j]
+                if v > best:
+                    best = v
+                    arg = l
+            out[g] = labels[arg]
+        return out
+
+    @njit(cache=True)
+    def pick_ids(heard, ident_h, crc_h, crc16, id_check, not_heard, conflict):  # pragma: no cover - compiled
+        """Decode rule of :func:`swarm_envs.sensing.range_bearing.decode_ids` (reference
+        :func:`swarm_envs.sensing.range_bearing.pick_ids_numpy`): per group, the id every checking channel
+        names, ``not_heard`` if none checks, ``conflict`` if they disagree. ``ident_h``/``crc_h`` are the words
+        of the heard channels in ``np.nonzero(heard)`` order."""
+        G, n_d = heard.shape
+        out = np.empty(G, np.int64)
+        h = 0
+        for g in range(G):
+            lo = np.int64(-1)
+            hi = np.int64(-1)
+            for i in range(n_d):
+                if not heard[g, i]:
+                    continue
+                w = ident_h[h]
+                good = (not id_check) or crc16[w] == crc_h[h]
+                h += 1
+                if good:
+                    if lo < 0 or w < lo:
+                        lo = w
+                    if w > hi:
+                        hi = w
+            if lo < 0:
+                out[g] = not_heard
+            elif lo == hi:
+                out[g] = lo
+            else:
+                out[g] = conflict
+        return out
+
+    @njit(cache=True)
+    def merge_readings(old_key, old_f, old_i, max_age, new_key, new_f, new_i):  # pragma: no cover - compiled
+        """Reading table update of :meth:`swarm_envs.sensing.range_bearing.RangeBearingSensor.step` for sorted
+        unique ``old_key`` and non-decreasing ``new_key``: old rows age by one, rows older than ``max_age``
+        or refreshed by a new key are dropped, new rows enter with age 0, and the result is sorted by key
+        (old before new on equal keys, as a stable sort of the concatenation). ``old_f`` (3, K) float
+        columns (range, bearing, heading), ``old_i`` (3, K) int columns (age, true tx, overlap); ``new_f`` /
+        ``new_i`` the same for the new rows (their age column is ignored). Returns key, floats, ints."""
+        K = old_key.size
+        M = new_key.size
+        keep = np.zeros(K, np.bool_)
+        n = M
+        b = 0
+        for a in range(K):
+            while b < M and new_key[b] < old_key[a]:
+                b += 1
+            if old_i[0, a] + 1 <= max_age and not (b < M and new_key[b] == old_key[a]):
+                keep[a] = True
+                n += 1
+        key = np.empty(n, np.int64)
+        fl = np.empty((3, n), np.float64)
+        it = np.empty((3, n), np.int64)
+        a = 0
+        b = 0
+        o = 0
+        while o < n:
+            while a < K and not keep[a]:
+                a += 1
+            if a < K and (b >= M or old_key[a] <= new_key[b]):
+                key[o] = old_key[a]
+                for c in range(3):
+                    fl[c, o] = old_f[c, a]
+                it[0, o] = old_i[0, a] + 1
+                it[1, o] = old_i[1, a]
+                it[2, o] = old_i[2, a]
+                a += 1
+            else:
+                key[o] = new_key[b]
+                for c in range(3):
+                    fl[c, o] = new_f[c, b]
+                it[0, o] = 0
+                it[1, o] = new_i[1, b]
+                it[2, o] = new_i[2, b]
+                b += 1
+            o += 1
+        return key, fl, it
+
+    @njit(cache=True)
+    def expire_tables(now, max_age, tab_ids, tab_bear, tab_time, row_ids, row_bear, row_time, never):  # pragma: no cover - compiled
+        """In place :meth:`swarm_envs.sensing.exchange.BearingExchange._expire` (reference
+        ``_expire_numpy``): table entries older than ``max_age`` (or without an id) and rows older than
+        ``max_age`` (or whose entry expired) are cleared; ``now`` (N,) each robot's clock, ``never`` the
+        time of an empty slot."""
+        n, k = tab_ids.shape
+        w = row_ids.shape[2]
+        for u in range(n):
+            t = now[u]
+            for s in range(k):
+                old = (t - tab_time[u, s] > max_age) or tab_ids[u, s] < 0
+                if old:
+                    tab_ids[u, s] = -1
+                    tab_bear[u, s] = np.nan
+                    tab_time[u, s] = never
+                if (old or t - row_time[u, s] > max_age) and row_time[u, s] != never:
+                    for j in range(w):
+                        row_ids[u, s, j] = -1
+                        row_bear[u, s, j] = np.nan
+                    row_time[u, s] = never
+
+    @njit(cache=True)
+    def encode_tables(tab_ids, tab_bear, tab_time, robots, offset, max_entries, id_bits, count_bits, bearing_bits):  # pragma: no cover - compiled
+        """Bit rows of the bearing-exchange messages of ``robots`` (reference: the numpy path of
+        :meth:`swarm_envs.sensing.exchange.BearingExchange.send` with :func:`~swarm_envs.sensing.exchange.encode_rows`):
+        each robot's table slots, most recently heard first (stable in slot order), the first
+        ``max_entries`` of them, present ones (id >= 0) compacted to the front; count then, per entry, the id
+        minus the robot's ``offset`` and the bearing sector ``rint(theta / (2 pi / 2**bearing_bits)) mod
+        2**bearing_bits`` (NaN: sector 0), MSB first, zero padded. Returns bits (R, count_bits + max_entries
+        * (id_bits + bearing_bits)) uint8 and the payload lengths (R,)."""
+        R = robots.size
+        k = tab_ids.shape[1]
+        e = id_bits + bearing_bits
+        nq = np.int64(1) << bearing_bits
+        width = 2.0 * np.pi / nq
+        bits = np.zeros((R, count_bits + max_entries * e), np.uint8)
+        lens = np.empty(R, np.int64)
+        order = np.empty(k, np.int64)
+        for r in range(R):
+            u = robots[r]
+            for s in range(k):  # stable insertion sort by descending time
+                order[s] = s
+            for a in range(1, k):
+                x = order[a]
+                b = a - 1
+                while b >= 0 and tab_time[u, x] > tab_time[u, order[b]]:
+                    order[b + 1] = order[b]
+                    b -= 1
+                order[b + 1] = x
+            c = 0
+            for s in range(min(k, max_entries)):
+                slot = order[s]
+                v = tab_ids[u, slot]
+                if v < 0:
+                    continue
+                th = tab_bear[u, slot]
+                if np.isnan(th):
+                    th = 0.0
+                q = np.int64(np.rint(th / width)) % nq
+                o = count_bits + c * e
+                lid = v - offset[u]
+                for j in range(id_bits):
+                    bits[r, o + j] = (lid >> (id_bits - 1 - j)) & 1
+                for j in range(bearing_bits):
+                    bits[r, o + id_bits + j] = (q >> (bearing_bits - 1 - j)) & 1
+                c += 1
+            for j in range(count_bits):
+                bits[r, j] = (c >> (count_bits - 1 - j)) & 1
+            lens[r] = count_bits + c * e
+        return bits, lens
+
+    @njit(cache=True)
+    def decode_bits(bits, id_bits, count_bits, max_entries, bearing_bits):  # pragma: no cover - compiled
+        """Integer part of :func:`swarm_envs.sensing.exchange.decode_rows`: count (capped at ``max_entries``),
+        ids and bearing sectors of each row's first ``count`` entries (-1 beyond; bits beyond a row's
+        width read as 0). Returns ids, sectors (R, max_entries) int64."""
+        R, W = bits.shape
+        e = id_bits + bearing_bits
+        ids = np.full((R, max_entries), -1, np.int64)
+        qs = np.full((R, max_entries), -1, np.int64)
+        for r in range(R):
+            c = np.int64(0)
+            for j in range(count_bits):
+                c = (c << 1) | (np.int64(bits[r, j]) if j < W else 0)
+            c = min(c, max_entries)
+            for m in range(c):
+                o = count_bits + m * e
+                v = np.int64(0)
+                for j in range(id_bits):
+                    v = (v << 1) | (np.int64(bits[r, o + j]) if o + j < W else 0)
+                q = np.int64(0)
+                for j in range(bearing_bits):
+                    q = (q << 1) | (np.int64(bits[r, o + id_bits + j]) if o + id_bits + j < W else 0)
+                ids[r, m] = v
+                qs[r, m] = q
+        return ids, qs
+
+    @njit(cache=True)
+    def firing_sums(gains, starts, n_d, init):  # pragma: no cover - compiled
+        """Sums of the firing links' gains per receiving group, in one pass.
+
+        ``gains`` (S, n_d * n_e) the firing links' matrices (``links.gains[sel]``), grouped by ``starts`` (G,)
+        (groups of at most :data:`FRAME_WORDS_MAX_GROUP` links). Returns, bit for bit as the numpy path of
+        :meth:`swarm_envs.sensing.range_bearing.RangeBearingSensor.step`: ``lam`` (G, n_d * n_e) =
+        ``segment_sum(gains, starts)``, ``light`` (S, n_d) = ``sum_last`` per detector, ``start`` (G, n_d) =
+        ``segment_sum(light, starts)`` and ``best`` (G,) each group's row with the largest entry (first on
+        ties).
+        """
+        G = starts.size
+        S = gains.shape[0]
+        m = gains.shape[1]
+        n_e = m // n_d
+        lam = np.empty((G, m), np.float64)
+        light = np.empty((S, n_d), np.float64)
+        start = np.empty((G, n_d), np.float64)
+        best = np.empty(G, np.int64)
+        buf = np.empty(max(S, 1), np.float64)
+        for g in range(G):
+            s = starts[g]
+            e = starts[g + 1] if g + 1 < G else S
+            n = e - s
+            top = -np.inf
+            for l in range(s, e):
+                row = l
+                v = gains[row, 0]
+                for c in range(1, m):
+                    if gains[row, c] > v:
+                        v = gains[row, c]
+                if v > top:
+                    top = v
+                    best[g] = l
+                for i in range(n_d):  # sum_last: left to right
+                    r = gains[row, i * n_e]
+                    for j in range(1, n_e):
+                        r += gains[row, i * n_e + j]
+                    light[l, i] = r
+            # reduceat order: first row + (short: sequential from init; else numpy's unrolled pairwise block)
+            if n == 1:
+                for c in range(m):
+                    lam[g, c] = gains[s, c]
+            elif n - 1 < 8:  # row by row (contiguous), each column still summed in link order
+                for c in range(m):
+                    lam[g, c] = init
+                for l in range(s + 1, e):
+                    row = l
+                    for c in range(m):
+                        lam[g, c] += gains[row, c]
+                row = s
+                for c in range(m):
+                    lam[g, c] = gains[row, c] + lam[g, c]
+            else:
+                for c in range(m):
+                    for l in range(s + 1, e):
+                        buf[l - s - 1] = gains[l, c]
+                    lam[g, c] = gains[s, c] + _pairwise_block(buf, n - 1)
+            for i in range(n_d):
+                first = light[s, i]
+                if n == 1:
+                    start[g, i] = first
+                elif n - 1 < 8:
+                    res = init
+                    for l in range(s + 1, e):
+                        res += light[l, i]
+                    start[g, i] = first + res
+                else:
+                    for l in range(s + 1, e):
+                        buf[l - s - 1] = light[l, i]
+                    start[g, i] = first + _pairwise_block(buf, n - 1)
+        return lam, light, start, best
+
+    @njit(cache=True)
+    def adc_bits(level, noise, scale, top, floor):  # pragma: no cover - compiled
+        """(R, m) bool ``clip(round(level * scale + noise), 0, top) / scale >= floor`` (the ADC and the
+        no-reading floor of :func:`swarm_envs.sensing.range_bearing.decode_ids`' start bits); ``noise``
+        (R, m), or (0, m) for none."""
+        R, m = level.shape
+        out = np.empty((R, m), np.bool_)
+        has_noise = noise.shape[0] > 0
+        for r in range(R):
+            for j in range(m):
+                c = level[r, j] * scale
+                if has_noise:
+                    c = c + noise[r, j]
+                c = np.rint(c)
+                if c < 0.0:
+                    c = 0.0
+                if c > top:
+                    c = top
+                out[r, j] = c / scale >= floor
+        return out
+
+    @njit(cache=True)
+    def unit_mean_positions(e, valid, inv, cos_t, sin_t, init):  # pragma: no cover - compiled
+        """End of :func:`swarm_envs.sensing.scale_free.coordinates_all` after the (numpy) ``exp``: lengths
+        ``e`` (N, K) where ``valid`` (sorted slots), NaN elsewhere, divided by each robot's mean valid length
+        (summed as numpy's ``nansum`` over the row: its pairwise sum of all K entries), put back in
+        the input slot order ``f[u, s] = f_sorted[u, inv[u, s]]``, and positions ``f cos(theta), f sin(theta)``
+        from the given ``cos_t``/``sin_t`` (N, K). Rows of at most 128 slots. Returns f, valid (input slot
+        order) and xy (N, K, 2)."""
+        n, k = e.shape
+        f = np.empty((n, k), np.float64)
+        vout = np.empty((n, k), np.bool_)
+        xy = np.empty((n, k, 2), np.float64)
+        w = np.empty(k, np.float64)
+        fs = np.empty(k, np.float64)
+        for u in range(n):
+            nv = 0
+            for j in range(k):
+                if valid[u, j]:
+                    nv += 1
+                    w[j] = 0.0 if np.isnan(e[u, j]) else e[u, j]
+                else:
+                    w[j] = 0.0
+            if k < 8:  # np.sum over a row: numpy's pairwise sum of all k entries (sequential from init below 8)
+                tot = init
+                for j in range(k):
+                    tot += w[j]
+            else:
+                tot = _pairwise_block(w, k)
+            denom = tot / max(nv, 1) if nv > 0 else 1.0
+            for j in range(k):
+                fs[j] = (e[u, j] if valid[u, j] else np.nan) / denom
+            for s in range(k):
+                src = inv[u, s]
+                f[u, s] = fs[src]
+                vout[u, s] = valid[u, src]
+                xy[u, s, 0] = fs[src] * cos_t[u, s]
+                xy[u, s, 1] = fs[src] * sin_t[u, s]
+        return f, vout, xy
+
+    @njit(cache=True)
+    def priority_independent_set_sorted(prio, u, v):  # pragma: no cover - compiled
+        """:func:`priority_independent_set` for edges sorted by ``u`` (the IR links, sorted by receiver),
+        without building an adjacency list: in decreasing priority a node fires unless a fired node listed
+        it (its ``u`` range, marked when that node fired) or it lists a fired node (its own ``u`` range,
+        checked now; a listed node that fired has the higher priority). Returns (fired (N,) bool, ok); ok
+        is False (and fired meaningless) when ``u`` is not sorted."""
+        n = prio.size
+        m = u.size
+        start = np.zeros(n + 1, np.int64)
+        for e in range(m):
+            if e > 0 and u[e] < u[e - 1]:
+                return np.zeros(n, np.bool_), False
+            start[u[e] + 1] += 1
+        for i in range(n):
+            start[i + 1] += start[i]
+        order = np.argsort(-prio)
+        fired = np.zeros(n, np.bool_)
+        blocked = np.zeros(n, np.bool_)
+        for k in range(n):
+            x = order[k]
+            if blocked[x]:
+                continue
+            free = True
+            for e in range(start[x], start[x + 1]):
+                if fired[v[e]]:
+                    free = False
+                    break
+            if not free:
+                continue
+            fired[x] = True
+            for e in range(start[x], start[x + 1]):
+                blocked[v[e]] = True
+        return fired, True
+
+    @njit(cache=True)
+    def slot_keys(ids, th, two_pi, id_max):  # pragma: no cover - compiled
+        """Slot validity and sort keys of :func:`swarm_envs.sensing.scale_free.coordinates_all` in one pass:
+        ``ok = (ids >= 0) & isfinite(th)``, ``key_b = mod(th, two_pi)`` where ok else inf (numpy's float mod:
+        ``fmod`` (exact), plus ``two_pi`` when the signs differ, +0.0 for a zero remainder), ``key_id = ids``
+        where ok else ``id_max``, and ``sum(deg * (deg - 1))`` over robots (deg = ok slots)."""
+        n, k = ids.shape
+        ok = np.empty((n, k), np.bool_)
+        key_b = np.empty((n, k), np.float64)
+        key_id = np.empty((n, k), np.int64)
+        cap = 0
+        for u in range(n):
+            deg = 0
+            for s in range(k):
+                t = th[u, s]
+                good = ids[u, s] >= 0 and np.isfinite(t)
+                ok[u, s] = good
+                if good:
+                    r = np.fmod(t, two_pi)
+                    if r != 0.0:
+                        if (two_pi < 0.0) != (r < 0.0):
+                            r += two_pi
+                    else:
+                        r = np.copysign(0.0, two_pi)
+                    key_b[u, s] = r
+                    key_id[u, s] = ids[u, s]
+                    deg += 1
+                else:
+                    key_b[u, s] = np.inf
+                    key_id[u, s] = id_max
+            cap += deg * (deg - 1)
+        return ok, key_b, key_id, cap
+
+    @njit(cache=True)
+    def store_deliveries(r, o, own_b, hit, ids, th, now, tab_ids, tab_bear, tab_time, row_ids, row_bear, row_time):  # pragma: no cover - compiled
+        """In place table update of :meth:`swarm_envs.sensing.exchange.BearingExchange.receive`, one delivery
+        after the other (reference: the numpy waves of ``_store``, one delivery per receiver and wave, which
+        is the same order per receiver): the entry of sender ``o[d]`` in receiver ``r[d]``'s table (else
+        the oldest slot; empty slots are the oldest) gets its row ``ids[d]``, ``th[d]`` and, when the
+        receiver has a bearing of the sender (``hit[d]``), that bearing and a fresh time; a delivery
+        without a bearing only refreshes an existing entry."""
+        k = tab_ids.shape[1]
+        w = row_ids.shape[2]
+        for d in range(r.size):
+            u = r[d]
+            slot = -1
+            for s in range(k):
+                if tab_ids[u, s] == o[d]:
+                    slot = s
+                    break
+            if slot < 0:
+                if not hit[d]:
+                    continue
+                slot = 0
+                for s in range(1, k):
+                    if tab_time[u, s] < tab_time[u, slot]:
+                        slot = s
+            tab_ids[u, slot] = o[d]
+            if hit[d]:
+                tab_bear[u, slot] = own_b[d]
+                tab_time[u, slot] = now[u]
+            for j in range(w):
+                row_ids[u, slot, j] = ids[d, j]
+                row_bear[u, slot, j] = th[d, j]
+            row_time[u, slot] = now[u]

@@ -76,10 +76,21 @@ import numpy as np
 from swarm_envs.copies import CopyRandom, CopyStream
 from swarm_envs.ir.layer import IRLinks, pair_gains, wrap_angle
 from swarm_envs.platforms import Platform, get_platform
-from swarm_envs.sensing.kernels import HAVE_NUMBA, segment_sum, sum_last
+from swarm_envs.sensing.kernels import _PAIRWISE_INIT, HAVE_NUMBA, segment_sum, sum_last
 
 if HAVE_NUMBA:
-    from swarm_envs.sensing.kernels import FRAME_WORDS_MAX_GROUP, frame_words, priority_independent_set
+    from swarm_envs.sensing.kernels import (
+        FRAME_WORDS_MAX_GROUP,
+        adc_bits,
+        adc_pass,
+        firing_sums,
+        frame_words,
+        group_brightest,
+        merge_readings,
+        pick_ids,
+        priority_independent_set,
+        priority_independent_set_sorted,
+    )
 
 __all__ = [
     "POWER_LADDER",
@@ -149,6 +160,7 @@ def decode_ids(
     platform: Platform | str = "droplet",
     id_check: bool = True,
     row_copy: np.ndarray | None = None,
+    group_light: np.ndarray | None = None,
 ) -> np.ndarray:
     """Ids that receivers decode from the (possibly colliding) ``rnb_r`` frames of the TXs they see.
 
@@ -167,6 +179,8 @@ def decode_ids(
         sigma: ADC noise (counts).
         platform: platform of the robots (ADC constants and floor).
         id_check: apply the CRC check.
+        group_light: optional (G, n_d) ``light`` summed per group as here (``segment_sum(light, starts)``),
+            if the caller has it already.
 
     Returns:
         (G,) decoded id (a copy's own robot number), or :data:`NOT_HEARD` (-1: no channel's frame checks)
@@ -187,8 +201,17 @@ def decode_ids(
         return counts / float(model.adc_scale) >= float(model.no_reading_floor)
 
     # start bit (1 in every frame): which channels hear a frame at all
-    start = segment_sum(light, starts) if G < L else light
-    heard = read_bits(start[:, :, None], np.arange(G))[:, :, 0]  # (G, n_d)
+    if group_light is not None:
+        start = np.asarray(group_light, dtype=float)
+    else:
+        start = segment_sum(light, starts) if G < L else light
+    if HAVE_NUMBA:  # the same ADC formula in one pass (kernels.adc_bits)
+        noise0 = _noise(rng, sigma, (G, n_d), row_copy) if sigma > 0 else np.zeros((0, n_d))
+        heard = adc_bits(
+            np.ascontiguousarray(start), noise0, float(model.adc_scale), float(model.adc_max), float(model.no_reading_floor)
+        )
+    else:
+        heard = read_bits(start[:, :, None], np.arange(G))[:, :, 0]  # (G, n_d)
     # the rest of the frame, only on channels that heard a start bit (draws: per copy, after the start bits)
     hg, hi = np.nonzero(heard)
     H = hg.size
@@ -203,6 +226,18 @@ def decode_ids(
         light, np.asarray(frames, dtype=bool), np.asarray(starts, dtype=np.int64), heard, noise,
         float(model.adc_scale), float(model.adc_max), float(model.no_reading_floor), ID_BITS,
     )
+    if HAVE_NUMBA:
+        return pick_ids(heard, ident_h, crc_h, _CRC16, bool(id_check), NOT_HEARD, CONFLICT)
+    return pick_ids_numpy(heard, ident_h, crc_h, id_check)
+
+
+def pick_ids_numpy(heard: np.ndarray, ident_h: np.ndarray, crc_h: np.ndarray, id_check: bool = True) -> np.ndarray:
+    """The decode rule of :func:`decode_ids` (reference of the compiled
+    :func:`swarm_envs.sensing.kernels.pick_ids`): ``heard`` (G, n_d) bool, ``ident_h``/``crc_h`` (H,) the id
+    and CRC words of the heard channels in ``np.nonzero(heard)`` order. Returns (G,) the id all checking
+    channels name, :data:`NOT_HEARD` or :data:`CONFLICT`."""
+    G, n_d = heard.shape
+    hg, hi = np.nonzero(heard)
     ident = np.zeros((G, n_d), dtype=np.int64)
     crc = np.zeros((G, n_d), dtype=np.int64)
     ident[hg, hi] = ident_h
@@ -315,14 +350,22 @@ def measure(
     out = np.empty_like(lam)
     power = np.full(P, float(ladder[-1]))
     todo = np.arange(P)
+    flat = np.ascontiguousarray(lam).reshape(P, -1)
     for k, p in enumerate(ladder):
         if todo.size == 0:
             break
-        counts = p * lam[todo] * scale
-        if sigma > 0:
-            counts = counts + _noise(rng, sigma, counts.shape, None if row_copy is None else row_copy[todo])
-        counts = np.clip(np.round(counts), 0.0, top)
-        sat = counts.reshape(todo.size, -1).max(axis=1) >= top
+        shape = (todo.size, *lam.shape[1:])
+        noise = _noise(rng, sigma, shape, None if row_copy is None else row_copy[todo]) if sigma > 0 else None
+        if HAVE_NUMBA and lam.size:  # the same formula in one pass (kernels.adc_pass)
+            empty = np.zeros((0, flat.shape[1]))
+            counts, sat = adc_pass(flat, todo, empty if noise is None else noise.reshape(todo.size, -1), float(p), scale, top)
+            counts = counts.reshape(shape)
+        else:
+            counts = p * lam[todo] * scale
+            if noise is not None:
+                counts = counts + noise
+            counts = np.clip(np.round(counts), 0.0, top)
+            sat = counts.reshape(todo.size, -1).max(axis=1) >= top
         done = ~sat if k < len(ladder) - 1 else np.ones(todo.size, dtype=bool)
         out[todo[done]] = counts[done] / scale
         power[todo[done]] = p
@@ -339,7 +382,7 @@ def _noise(
     if isinstance(rng, CopyStream):
         if rng.kind != "normal":
             raise ValueError("noise needs a 'normal' CopyStream")
-        return sigma * rng.draw(rows, shape[1:])
+        return rng.draw(rows, shape[1:], scale=sigma)
     if isinstance(rng, CopyRandom):
         return rng.normal(sigma, rows, shape[1:])
     return rng.normal(0.0, sigma, shape)
@@ -622,7 +665,9 @@ class RangeBearingSensor:
             return np.ones(N, dtype=bool)
         prio = self.prio_rng.draw(self.copy_of)
         if HAVE_NUMBA:
-            return priority_independent_set(prio, np.asarray(links.rx, np.int64), np.asarray(links.tx, np.int64))
+            rx, tx = np.asarray(links.rx, np.int64), np.asarray(links.tx, np.int64)
+            fired, ok = priority_independent_set_sorted(prio, rx, tx)  # links sorted by receiver: no adjacency list
+            return fired if ok else priority_independent_set(prio, rx, tx)
         return independent_set_numpy(prio, links.rx, links.tx)
 
     # -- one control step ------------------------------------------------------------------------------
@@ -648,19 +693,31 @@ class RangeBearingSensor:
             starts = np.arange(sel.size)
         grx = rx_sel[starts]
         n_over = np.diff(np.r_[starts, sel.size]).astype(np.int64)
-        gains = links.gains[sel]
-        lam = segment_sum(gains, starts) if starts.size < sel.size else gains
-        # ground truth: the firing TX with the brightest entry of each group
-        if starts.size == sel.size:
-            true = links.tx[sel]
+        tx_sel = links.tx[sel]
+        n_d = links.gains.shape[1]
+        fused = HAVE_NUMBA and sel.size > 0 and links.gains.dtype == np.float64 and int(n_over.max()) <= FRAME_WORDS_MAX_GROUP
+        if fused:  # the sums and the brightest link of every group in one pass (kernels.firing_sums)
+            gains = links.gains[sel]
+            lam, light, group_light, best = firing_sums(gains.reshape(sel.size, -1), starts.astype(np.int64), n_d, _PAIRWISE_INIT)
+            lam = lam.reshape(starts.size, *links.gains.shape[1:])
+            true = tx_sel[best]  # ground truth: the firing TX with the brightest entry of each group
         else:
-            true = _group_argmax(gains.reshape(sel.size, -1).max(axis=1), starts, links.tx[sel])
+            gains = links.gains[sel]
+            lam = segment_sum(gains, starts) if starts.size < sel.size else gains
+            light, group_light = (sum_last(gains) if self.collisions and sel.size else None), None
+            # ground truth: the firing TX with the brightest entry of each group
+            if starts.size == sel.size:
+                true = tx_sel
+            elif HAVE_NUMBA:
+                true = group_brightest(gains.reshape(sel.size, -1), starts.astype(np.int64), tx_sel)
+            else:
+                true = _group_argmax(gains.reshape(sel.size, -1).max(axis=1), starts, tx_sel)
 
         if self.collisions and sel.size:
-            local = np.asarray(links.tx[sel], dtype=np.int64) % self.copy_size
+            local = np.asarray(tx_sel, dtype=np.int64) % self.copy_size
             dec = decode_ids(
-                sum_last(gains), self._frames[local], starts, self.id_rng, self.noise_sigma, self.platform,
-                self.id_check, self.copy_of[grx],
+                light, self._frames[local], starts, self.id_rng, self.noise_sigma, self.platform,
+                self.id_check, self.copy_of[grx], group_light,
             )
             base = self.copy_of[grx].astype(np.int64) * self.copy_size
             ok = (dec >= 0) & (dec < self.copy_size) & (base + dec != grx)
@@ -688,18 +745,18 @@ class RangeBearingSensor:
         else:
             R = th = ph = np.zeros(0)
         new_key = grx[g].astype(np.int64) * N + tx_dec[g]
-
-        age = self._age + 1
-        keep = (age <= self.max_age) & ~_member(self._key, new_key)
-        key = np.concatenate([self._key[keep], new_key])
-        order = np.argsort(key, kind="stable")
-        self._key = key[order]
-        self._range = np.concatenate([self._range[keep], R])[order]
-        self._bearing = np.concatenate([self._bearing[keep], th])[order]
-        self._heading = np.concatenate([self._heading[keep], ph])[order]
-        self._age = np.concatenate([age[keep], np.zeros(new_key.size, dtype=np.int64)])[order]
-        self._true = np.concatenate([self._true[keep], true[g].astype(np.int64)])[order]
-        self._overlap = np.concatenate([self._overlap[keep], n_over[g]])[order]
+        new_true, new_over = true[g].astype(np.int64), n_over[g].astype(np.int64)
+        args = (
+            self._key, np.stack([self._range, self._bearing, self._heading]),
+            np.stack([self._age, self._true, self._overlap]).astype(np.int64), self.max_age, new_key,
+            np.stack([R, th, ph]).astype(float).reshape(3, -1), np.stack([new_over, new_true, new_over]),
+        )
+        if HAVE_NUMBA and (new_key.size < 2 or bool(np.all(new_key[1:] >= new_key[:-1]))):
+            key, fl, it = merge_readings(*args)  # one merge of the two sorted tables
+        else:
+            key, fl, it = merge_readings_numpy(*args)
+        self._key, (self._range, self._bearing, self._heading) = key, fl
+        self._age, self._true, self._overlap = it
         return self.readings()
 
     def readings(self) -> RangeBearingReadings:
@@ -709,6 +766,24 @@ class RangeBearingSensor:
             rx.astype(np.intp), tx.astype(np.intp), self._range.copy(), self._bearing.copy(),
             self._heading.copy(), self._age.copy(), self._true.astype(np.intp), self._overlap.copy(),
         )
+
+
+def merge_readings_numpy(
+    old_key: np.ndarray, old_f: np.ndarray, old_i: np.ndarray, max_age: int, new_key: np.ndarray, new_f: np.ndarray,
+    new_i: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Reading table update (reference of the compiled :func:`swarm_envs.sensing.kernels.merge_readings`;
+    any order of ``new_key``): old rows (sorted ``old_key``, float columns ``old_f`` (3, K) = range, bearing,
+    heading; int columns ``old_i`` (3, K) = age, true tx, overlap) age by one and are dropped when older
+    than ``max_age`` or refreshed by a new key; new rows enter with age 0; the result is stably sorted
+    by key. Returns key (K',), floats (3, K'), ints (3, K')."""
+    age = old_i[0] + 1
+    keep = (age <= max_age) & ~_member(old_key, new_key)
+    key = np.concatenate([old_key[keep], new_key])
+    order = np.argsort(key, kind="stable")
+    fl = np.concatenate([old_f[:, keep], new_f], axis=1)[:, order]
+    it = np.concatenate([np.stack([age[keep], old_i[1, keep], old_i[2, keep]]), np.stack([np.zeros_like(new_i[0]), new_i[1], new_i[2]])], axis=1)
+    return key[order], fl, it[:, order]
 
 
 def independent_set_numpy(prio: np.ndarray, u: np.ndarray, v: np.ndarray) -> np.ndarray:

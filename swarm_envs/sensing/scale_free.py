@@ -72,7 +72,7 @@ from swarm_envs.sensing.exchange import BearingExchange, NeighbourKnowledge
 from swarm_envs.sensing.kernels import HAVE_NUMBA
 
 if HAVE_NUMBA:
-    from swarm_envs.sensing.kernels import two_hop_propagate, two_hop_triangles
+    from swarm_envs.sensing.kernels import _PAIRWISE_INIT, slot_keys, two_hop_propagate, two_hop_triangles, unit_mean_positions
 
 __all__ = [
     "coordinates",
@@ -171,12 +171,10 @@ def coordinates_all(
     self_ids = (
         np.arange(n, dtype=np.int64) if knowledge.robot_ids is None else np.asarray(knowledge.robot_ids, np.int64)
     )
-    slot_ok_in = (ids_in >= 0) & np.isfinite(th_in)
-    key_b = np.where(slot_ok_in, np.mod(th_in, 2.0 * np.pi), np.inf)
-    key_id = np.where(slot_ok_in, ids_in, np.iinfo(np.int64).max)
-    deg = slot_ok_in.sum(1)
+    # slot validity and sort keys (bearing in [0, 2pi), then id; see coordinates_all_numpy), one pass
+    slot_ok_in, key_b, key_id, cap = slot_keys(ids_in, th_in, 2.0 * np.pi, np.iinfo(np.int64).max)
     order, inv, ok, th, starts, tu, ti, tj, vals = two_hop_triangles(
-        key_b, key_id, ids_in, th_in, slot_ok_in, rid_in, rth_in, self_ids, int((deg * (deg - 1)).sum())
+        key_b, key_id, ids_in, th_in, slot_ok_in, rid_in, rth_in, self_ids, int(cap)
     )
     # the reference's float formulas on the same triangle list (see coordinates_all_numpy)
     Pij, Pji, good = _triangle_angles(vals[:, 0], vals[:, 1], vals[:, 2], vals[:, 3], vals[:, 4], vals[:, 5], angle_balance)
@@ -189,6 +187,9 @@ def coordinates_all(
     else:
         weight = np.zeros(0)
     logf, known, rigid = two_hop_propagate(ok, starts, ti, tj, logratio, weight, noise_sensitivity)
+    if k <= 128:  # normalisation, slot order and positions in one pass (kernels.unit_mean_positions)
+        f, valid, xy = unit_mean_positions(np.exp(logf), known & ok, inv, np.cos(th_in), np.sin(th_in), _PAIRWISE_INIT)
+        return ScaleFreeResult(xy=xy, valid=valid, rigid=rigid, ids=ids_in.copy(), length=f)
     f, valid = _unit_mean_lengths(logf, known & ok)
     # undo the slot permutation before the (element-wise) positions
     f = np.take_along_axis(f, inv, 1)
