@@ -266,7 +266,8 @@ def link_tables(n, rx, tx, gains, scale, ambient, m_min, m_tr):
 
     Returns (tx_ptr (n+1,), rx (P,), G (P, n_det), sig_ptr (n+1,), sig_rx (Ps,)); the links of
     transmitter t are ``tx_ptr[t]:tx_ptr[t+1]`` (same for ``sig_ptr``). ``Network`` does the same in
-    numpy for the reference backend."""
+    numpy for the reference backend. ``gains`` may also be the emitter sums (P, n_det, 1) when the IR layer
+    provides them: the sum from 0.0 is then the sum itself (same G, an eighth of the memory read)."""
     P, nd, ne = gains.shape
     tx_ptr = np.zeros(n + 1, dtype=np.int64)
     for p in range(P):

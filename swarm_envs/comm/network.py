@@ -439,6 +439,7 @@ class Network:
         self._step_stats = self._new_step_stats()
         n, nd = self.n, self.n_det
         a = self.adc_model
+        sums = None if links is None else getattr(links, "emitter_sums", None)
         if links is None or len(links.rx) == 0:
             rx = np.zeros(0, dtype=np.int64)
             tx = np.zeros(0, dtype=np.int64)
@@ -446,13 +447,22 @@ class Network:
         else:
             rx = np.asarray(links.rx, dtype=np.int64)
             tx = np.asarray(links.tx, dtype=np.int64)
-            gains = np.asarray(links.gains, dtype=np.float64)
+            if sums is not None:
+                # the IR layer's all-emitters-on sums (accumulated from 0.0 in emitter order, as below) as gains
+                # of a single emitter: 0.0 + sum is the sum, so every backend gets the same G bit for bit while
+                # reading (P, nd) instead of the (P, nd, n_emitters) gains
+                sums = np.asarray(sums, dtype=np.float64)
+                if sums.shape != (len(rx), nd):
+                    raise ValueError(f"links.emitter_sums must have shape {(len(rx), nd)}, got {sums.shape}")
+                gains = sums[:, :, None]
+            else:
+                gains = np.asarray(links.gains, dtype=np.float64)
         if self.backend == "numba":
             tx_ptr, rx, G, sig_ptr, sig_rx = link_tables(n, rx, tx, gains, float(a.intensity_scale), self.ambient, float(a.m_min), self.m_tr)
         else:
-            # all emitters on, summed in emitter order (as the kernel); links grouped by transmitter
-            acc = gains[..., 0].copy() if gains.shape[-1] else np.zeros(gains.shape[:2])
-            for e in range(1, gains.shape[-1]):
+            # all emitters on, summed from 0.0 in emitter order (as the kernel); links grouped by transmitter
+            acc = np.zeros(gains.shape[:2])
+            for e in range(gains.shape[-1]):
                 acc += gains[..., e]
             G = a.intensity_scale * acc  # (P, nd)
             order = np.argsort(tx, kind="stable")
