@@ -250,3 +250,36 @@ def test_ir_emitter_sums_give_the_same_network(backend):
     links.emitter_sums = sums[:, :4]
     with pytest.raises(ValueError, match="emitter_sums"):
         nets[1].step(links)
+
+
+@pytest.mark.parametrize("code", [(15, 15), (15, 11), (15, 5), (15, 1)])
+@pytest.mark.parametrize("with_sender,crc_bits", [(False, 0), (True, 8), (False, 8)])
+def test_compiled_frame_builder_equals_reference(code, with_sender, crc_bits):
+    """kernels.build_frames gives FrameFormat.build's frames bit for bit (same array shape), for mixed
+    lengths including 0 and the maximum."""
+    from swarm_envs.comm.kernels import build_frames
+    from swarm_envs.comm.protocol import MAX_PAYLOAD, FrameFormat, crc8_table
+
+    rng = np.random.default_rng(hash((code, with_sender, crc_bits)) % 2**32)
+    for n_robots, M, lmax in ((12, 7, 40), (1000, 30, MAX_PAYLOAD), (300, 1, 0)):
+        fmt = FrameFormat.for_swarm(n_robots, code, with_sender=with_sender, crc_bits=crc_bits)
+        c = fmt.code
+        length = rng.integers(0, lmax + 1, M)
+        length[0] = lmax
+        payload = rng.random((M, lmax + 3)) < 0.5
+        args = (rng.integers(1, 8, M), rng.integers(0, 300, M), rng.integers(0, n_robots, M), rng.integers(0, n_robots, M))
+        ref_bits, ref_slots = fmt.build(*args, payload, length)
+        bits, slots = build_frames(*args, payload, length, fmt.header_bits, fmt.id_bits, fmt.with_sender, fmt.crc_bits,
+                                   crc8_table(fmt.header_bits + MAX_PAYLOAD + 8), c.n, c.k, c._codewords)
+        np.testing.assert_array_equal(slots, ref_slots)
+        assert bits.shape == ref_bits.shape and bits.dtype == ref_bits.dtype
+        np.testing.assert_array_equal(bits, ref_bits)
+        assert bits[:, 1:].any()
+
+
+def test_send_rejects_bad_payload_lengths():
+    for backend in ("numpy", "numba"):
+        net = Network("epuck", 4, np.random.default_rng(0), backend=backend)
+        for lengths in ([3, -1], [3, 9]):
+            with pytest.raises(ValueError, match="payload length"):
+                net.send_many(np.array([0, 1]), np.zeros((2, 8), bool), lengths=np.array(lengths))
