@@ -216,3 +216,70 @@ def test_copy_draws_equal_single_env_draws():
 def test_bad_backend():
     with pytest.raises(ValueError, match="backend"):
         Network("epuck", 3, np.random.default_rng(0), backend="cuda")
+
+
+@pytest.mark.parametrize("backend", ["numpy", "numba"])
+def test_ir_emitter_sums_give_the_same_network(backend):
+    """``links.emitter_sums`` (the IR layer's all-emitters-on sums, accumulated from 0.0 in emitter order) is
+    used instead of the (P, n_det, n_emitters) gains: same deliveries, counters and detector levels, bit for
+    bit, as summing the gains in the network."""
+    n = 40
+    scene_rng = np.random.default_rng(5)
+    pos, head = _scene(scene_rng, n, 150.0)
+    nets = [Network("epuck", n, np.random.default_rng(3), bitrate=1080, backend=backend) for _ in range(2)]
+    lit = 0
+    for step in range(15):
+        for net in nets:
+            _traffic(net, np.random.default_rng(500 + step), 0.4, 0.2, 24)
+        pos = pos + scene_rng.normal(0, 0.003, pos.shape)
+        head = head + scene_rng.normal(0, 0.1, n)
+        links = compute_links(pos, head, "epuck")
+        d_plain = nets[0].step(links)
+        g = np.asarray(links.gains, dtype=np.float64)
+        sums = np.zeros(g.shape[:2])
+        for e in range(g.shape[2]):  # sequential from 0.0, emitter order
+            sums += g[:, :, e]
+        links.emitter_sums = sums
+        links.gains = np.full_like(g, np.nan)  # the sums must be what is read
+        d_sums = nets[1].step(links)
+        _assert_same(d_plain, d_sums, step)
+        np.testing.assert_array_equal(nets[0].rx_level, nets[1].rx_level)
+        lit += len(d_plain)
+    assert lit > 0
+    np.testing.assert_array_equal(nets[0].det.m_max_est, nets[1].det.m_max_est)
+    links.emitter_sums = sums[:, :4]
+    with pytest.raises(ValueError, match="emitter_sums"):
+        nets[1].step(links)
+
+
+@pytest.mark.parametrize("code", [(15, 15), (15, 11), (15, 5), (15, 1)])
+@pytest.mark.parametrize("with_sender,crc_bits", [(False, 0), (True, 8), (False, 8)])
+def test_compiled_frame_builder_equals_reference(code, with_sender, crc_bits):
+    """kernels.build_frames gives FrameFormat.build's frames bit for bit (same array shape), for mixed
+    lengths including 0 and the maximum."""
+    from swarm_envs.comm.kernels import build_frames
+    from swarm_envs.comm.protocol import MAX_PAYLOAD, FrameFormat, crc8_table
+
+    rng = np.random.default_rng(hash((code, with_sender, crc_bits)) % 2**32)
+    for n_robots, M, lmax in ((12, 7, 40), (1000, 30, MAX_PAYLOAD), (300, 1, 0)):
+        fmt = FrameFormat.for_swarm(n_robots, code, with_sender=with_sender, crc_bits=crc_bits)
+        c = fmt.code
+        length = rng.integers(0, lmax + 1, M)
+        length[0] = lmax
+        payload = rng.random((M, lmax + 3)) < 0.5
+        args = (rng.integers(1, 8, M), rng.integers(0, 300, M), rng.integers(0, n_robots, M), rng.integers(0, n_robots, M))
+        ref_bits, ref_slots = fmt.build(*args, payload, length)
+        bits, slots = build_frames(*args, payload, length, fmt.header_bits, fmt.id_bits, fmt.with_sender, fmt.crc_bits,
+                                   crc8_table(fmt.header_bits + MAX_PAYLOAD + 8), c.n, c.k, c._codewords)
+        np.testing.assert_array_equal(slots, ref_slots)
+        assert bits.shape == ref_bits.shape and bits.dtype == ref_bits.dtype
+        np.testing.assert_array_equal(bits, ref_bits)
+        assert bits[:, 1:].any()
+
+
+def test_send_rejects_bad_payload_lengths():
+    for backend in ("numpy", "numba"):
+        net = Network("epuck", 4, np.random.default_rng(0), backend=backend)
+        for lengths in ([3, -1], [3, 9]):
+            with pytest.raises(ValueError, match="payload length"):
+                net.send_many(np.array([0, 1]), np.zeros((2, 8), bool), lengths=np.array(lengths))

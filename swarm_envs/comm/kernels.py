@@ -43,7 +43,7 @@ try:  # numba is optional: an accelerator, not a requirement
 except ImportError:  # pragma: no cover - exercised only without numba
     HAVE_NUMBA = False
 
-__all__ = ["HAVE_NUMBA", "COUNTERS", "PER_ROBOT", "DELIVERY_FIELDS", "StepDraws", "GeneratorList", "draw_step", "draw_copies", "link_tables", "slot_loop", "decode_words"]
+__all__ = ["HAVE_NUMBA", "COUNTERS", "PER_ROBOT", "DELIVERY_FIELDS", "StepDraws", "GeneratorList", "draw_step", "draw_copies", "link_tables", "build_frames", "slot_loop", "decode_words"]
 
 COUNTERS = (
     "slots",
@@ -266,7 +266,8 @@ def link_tables(n, rx, tx, gains, scale, ambient, m_min, m_tr):
 
     Returns (tx_ptr (n+1,), rx (P,), G (P, n_det), sig_ptr (n+1,), sig_rx (Ps,)); the links of
     transmitter t are ``tx_ptr[t]:tx_ptr[t+1]`` (same for ``sig_ptr``). ``Network`` does the same in
-    numpy for the reference backend."""
+    numpy for the reference backend. ``gains`` may also be the emitter sums (P, n_det, 1) when the IR layer
+    provides them: the sum from 0.0 is then the sum itself (same G, an eighth of the memory read)."""
     P, nd, ne = gains.shape
     tx_ptr = np.zeros(n + 1, dtype=np.int64)
     for p in range(P):
@@ -305,6 +306,56 @@ def link_tables(n, rx, tx, gains, scale, ambient, m_min, m_tr):
             sig_rx[k] = lrx[q]
             k += 1
     return tx_ptr, lrx, G, sig_ptr, sig_rx
+
+
+@_jit
+def build_frames(type_code, seq, origin, sender, payload, length, header_bits, id_bits, with_sender, crc_bits, crc_table, code_n, code_k, codewords):
+    """Compiled :meth:`swarm_envs.comm.protocol.FrameFormat.build` (the reference; same bits, same array
+    shape): M frames from (M,) type codes, sequence numbers (mod 128), origins, senders (flooding), lengths and
+    the payload bits (M, >= max length), each the start symbol then the BCH-encoded blocks of header,
+    payload and optional CRC-8, zero beyond the frame. Returns (bits (M, 1 + B n) bool, slots (M,))."""
+    M = type_code.shape[0]
+    lmax = 0
+    for i in range(M):
+        lmax = max(lmax, length[i])
+    cols = header_bits + lmax + (8 if crc_bits > 0 else 0)  # information columns of the reference
+    nb = max(1, (cols + code_k - 1) // code_k)
+    bits = np.zeros((M, 1 + nb * code_n), dtype=np.bool_)
+    slots = np.empty(M, dtype=np.int64)
+    info = np.zeros(nb * code_k, dtype=np.bool_)
+    for i in range(M):
+        info[:] = False
+        o = 0
+        for f in range(5 if with_sender else 4):  # marker 1 | type 3 | length 8 | seq 7 | origin | [sender]
+            if f == 0:
+                v, w = (1 << 3) | (type_code[i] & 7), 4
+            elif f == 1:
+                v, w = length[i], 8
+            elif f == 2:
+                v, w = seq[i] % 128, 7
+            elif f == 3:
+                v, w = origin[i], id_bits
+            else:
+                v, w = sender[i], id_bits
+            for j in range(w):
+                info[o + j] = (v >> (w - 1 - j)) & 1 == 1
+            o += w
+        L = length[i]
+        for j in range(L):
+            info[o + j] = payload[i, j]
+        end = header_bits + L
+        if crc_bits > 0:
+            c = _crc8(info, end, crc_table)
+            for j in range(8):
+                info[end + j] = (c >> (7 - j)) & 1 == 1
+        nblk = (end + crc_bits + code_k - 1) // code_k
+        slots[i] = 1 + nblk * code_n
+        bits[i, 0] = True
+        for b in range(nblk):
+            cw = _word(info, b * code_k, code_k)
+            for j in range(code_n):
+                bits[i, 1 + b * code_n + j] = codewords[cw, j]
+    return bits, slots
 
 
 @_jit

@@ -54,7 +54,7 @@ import numpy as np
 from swarm_envs.copies import CopyRandom
 from swarm_envs.comm.bch import BCHCode, code as bch_code
 from swarm_envs.comm.channel import ADCModel, adc_model_for, detector_response
-from swarm_envs.comm.kernels import COUNTERS, DELIVERY_FIELDS, HAVE_NUMBA, PER_ROBOT, GeneratorList, StepDraws, draw_copies, link_tables, slot_loop
+from swarm_envs.comm.kernels import COUNTERS, DELIVERY_FIELDS, HAVE_NUMBA, PER_ROBOT, GeneratorList, StepDraws, build_frames, draw_copies, link_tables, slot_loop
 from swarm_envs.comm.protocol import (
     CSMA,
     IDLE,
@@ -399,9 +399,26 @@ class Network:
         seq = (self.seq_next[robots] + rank) % (1 << SEQ_BITS)
         np.add.at(self.seq_next, robots, 1)
         local = robots - self.offset[robots]  # frames carry a copy's own robot numbers
-        bits, slots = self.fmt.build(np.full(M, tcode), seq, local, local, payloads, lengths)
+        bits, slots = self._build(np.full(M, tcode), seq, local, local, payloads, lengths)
         self._enqueue(robots, bits, slots, rank)
         return seq
+
+    def _build(self, type_code, seq, origin, sender, payload, length) -> tuple[np.ndarray, np.ndarray]:
+        """Frames on air (:meth:`swarm_envs.comm.protocol.FrameFormat.build`); the numba backend uses the compiled
+        builder :func:`swarm_envs.comm.kernels.build_frames` (same bits and shape, tested against it)."""
+        if self.backend != "numba":
+            return self.fmt.build(type_code, seq, origin, sender, payload, length)
+        fmt, c = self.fmt, self.code
+        M = int(np.asarray(type_code).shape[0])
+        payload = np.ascontiguousarray(np.asarray(payload, dtype=bool).reshape(M, -1))
+        length = np.asarray(length, dtype=np.int64).reshape(M)
+        if (length > MAX_PAYLOAD).any() or (length > payload.shape[1]).any() or (length < 0).any():
+            raise ValueError(f"payload length negative, longer than {MAX_PAYLOAD} bits or than the given array")
+        as_int = lambda v: np.ascontiguousarray(np.asarray(v, dtype=np.int64).reshape(M))  # noqa: E731
+        return build_frames(
+            as_int(type_code), as_int(seq), as_int(origin), as_int(sender), payload, length, fmt.header_bits, fmt.id_bits,
+            fmt.with_sender, fmt.crc_bits, crc8_table(fmt.header_bits + MAX_PAYLOAD + 8), c.n, c.k, c._codewords,
+        )  # fmt: skip
 
     def queue_system(self, robot: int | np.ndarray, bits: np.ndarray, kind: str) -> np.ndarray:
         """Queue system traffic (any kind name other than ``"app"``, at most 255 bits, local broadcast)
@@ -439,6 +456,7 @@ class Network:
         self._step_stats = self._new_step_stats()
         n, nd = self.n, self.n_det
         a = self.adc_model
+        sums = None if links is None else getattr(links, "emitter_sums", None)
         if links is None or len(links.rx) == 0:
             rx = np.zeros(0, dtype=np.int64)
             tx = np.zeros(0, dtype=np.int64)
@@ -446,13 +464,22 @@ class Network:
         else:
             rx = np.asarray(links.rx, dtype=np.int64)
             tx = np.asarray(links.tx, dtype=np.int64)
-            gains = np.asarray(links.gains, dtype=np.float64)
+            if sums is not None:
+                # the IR layer's all-emitters-on sums (accumulated from 0.0 in emitter order, as below) as gains
+                # of a single emitter: 0.0 + sum is the sum, so every backend gets the same G bit for bit while
+                # reading (P, nd) instead of the (P, nd, n_emitters) gains
+                sums = np.asarray(sums, dtype=np.float64)
+                if sums.shape != (len(rx), nd):
+                    raise ValueError(f"links.emitter_sums must have shape {(len(rx), nd)}, got {sums.shape}")
+                gains = sums[:, :, None]
+            else:
+                gains = np.asarray(links.gains, dtype=np.float64)
         if self.backend == "numba":
             tx_ptr, rx, G, sig_ptr, sig_rx = link_tables(n, rx, tx, gains, float(a.intensity_scale), self.ambient, float(a.m_min), self.m_tr)
         else:
-            # all emitters on, summed in emitter order (as the kernel); links grouped by transmitter
-            acc = gains[..., 0].copy() if gains.shape[-1] else np.zeros(gains.shape[:2])
-            for e in range(1, gains.shape[-1]):
+            # all emitters on, summed from 0.0 in emitter order (as the kernel); links grouped by transmitter
+            acc = np.zeros(gains.shape[:2])
+            for e in range(gains.shape[-1]):
                 acc += gains[..., e]
             G = a.intensity_scale * acc  # (P, nd)
             order = np.argsort(tx, kind="stable")
@@ -878,7 +905,7 @@ class Network:
         """Flooding: queue one re-send of each new message (same origin/seq/payload, sender = relay)."""
         robots = d["receiver"][idx]
         base = self.offset[robots]
-        bits, slots = self.fmt.build(d["type"][idx], d["seq"][idx], d["origin"][idx] - base, robots - base, d["payload"][idx], d["length"][idx])
+        bits, slots = self._build(d["type"][idx], d["seq"][idx], d["origin"][idx] - base, robots - base, d["payload"][idx], d["length"][idx])
         order = np.argsort(robots, kind="stable")
         rs = robots[order]
         firsts = np.r_[True, rs[1:] != rs[:-1]]

@@ -227,8 +227,8 @@ class FrameFormat:
         M = int(np.asarray(type_code).shape[0])
         payload = np.asarray(payload, dtype=bool).reshape(M, -1)
         length = np.asarray(length, dtype=np.int64)
-        if (length > MAX_PAYLOAD).any() or (length > payload.shape[1]).any():
-            raise ValueError(f"payload longer than {MAX_PAYLOAD} bits or than the given array")
+        if (length > MAX_PAYLOAD).any() or (length > payload.shape[1]).any() or (length < 0).any():
+            raise ValueError(f"payload length negative, longer than {MAX_PAYLOAD} bits or than the given array")
         fields = [
             np.ones((M, 1), dtype=bool),
             uint_to_bits(type_code, TYPE_BITS),
