@@ -62,6 +62,52 @@ def test_gains_kernel_compact_rows_are_the_lit_pairs(name):
     np.testing.assert_allclose(full, reference, rtol=1e-9, atol=1e-12)
 
 
+@pytest.mark.parametrize("name", ["droplet", "epuck", "rone"])
+def test_threaded_gain_kernel_equals_the_serial_kernel_bit_for_bit(name):
+    """The threaded kernel (pairs cut into chunks, compacted, chunks moved together) gives exactly the serial
+    kernel's rows, lit pairs and sums, for any chunk count, including chunks with no lit pair."""
+    platform = get_platform(name)
+    rng = np.random.default_rng(31)
+    P = 2500
+    R = rng.uniform(-1.1, 1.1, (P, 2)) * platform.ir_range
+    R[:300] = rng.uniform(-1, 1, (300, 2)) * 3 * platform.radius
+    R[1000:1400] = 2.0 * platform.ir_range  # a run of out-of-range pairs: a whole chunk can be dark
+    psi = rng.uniform(-np.pi, np.pi, P)
+    counts = rng.integers(0, 3, P)
+    offsets = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
+    pair = np.repeat(np.arange(P), counts)
+    xy = R[pair] * rng.uniform(0.2, 0.8, (len(pair), 1)) + rng.normal(0, platform.radius, (len(pair), 2))
+    kind, params = kernels.model_params(platform.ir_model)
+    args = (
+        R, np.stack([np.cos(psi), np.sin(psi)], axis=-1), platform.detector_positions, platform.detector_directions, platform.emitter_positions,
+        platform.emitter_directions, kind, params, float(platform.ir_range), offsets, xy, float(platform.radius),
+    )
+    serial, lit, sums = kernels.gains_kernel(*args, True)
+    assert 0 < len(lit) < P
+    for chunks in (1, 2, 3, 7, 40, P + 5):
+        threaded, lit_t, sums_t = kernels.gains_kernel_threaded(*args, chunks)
+        np.testing.assert_array_equal(lit_t, lit)
+        np.testing.assert_array_equal(threaded, serial)
+        np.testing.assert_array_equal(sums_t, sums)
+
+
+def test_compute_links_on_threads_equals_one_thread(monkeypatch):
+    """A scene large enough for the threaded gain kernel gives the same links as with one thread."""
+    platform = get_platform("epuck")
+    rng = np.random.default_rng(5)
+    positions, headings = _dense_scene(platform, 500, 5.0, rng)
+    threaded = layer.compute_links(positions, headings, platform)
+    assert len(threaded) >= layer.THREADED_MIN_PAIRS * 0.5
+    monkeypatch.setattr(layer, "THREADED_MIN_PAIRS", 1)
+    monkeypatch.setattr(layer, "gain_threads", lambda n_pairs: 3)
+    on_three = layer.compute_links(positions, headings, platform)
+    monkeypatch.setattr(layer, "gain_threads", lambda n_pairs: 1)
+    serial = layer.compute_links(positions, headings, platform)
+    for links in (threaded, on_three):
+        for name in ("rx", "tx", "distance", "rel_position", "rel_heading", "gains", "emitter_sums"):
+            np.testing.assert_array_equal(getattr(links, name), getattr(serial, name))
+
+
 def _sequential_sums(gains):
     """sum over emitters, one scalar addition at a time in emitter order from 0.0 (the documented order)."""
     out = np.zeros(gains.shape[:2])
@@ -307,3 +353,17 @@ def test_directed_pairs_kernel_wraps_any_heading_like_numpy(monkeypatch):
     reference = layer._directed_pairs(pairs, pos, hd)
     np.testing.assert_array_equal(fast[5], reference[5])
     assert fast[5].min() > -np.pi and fast[5].max() <= np.pi
+
+
+def test_gain_threads_only_for_large_scenes_on_the_main_thread():
+    import threading
+
+    assert layer.gain_threads(layer.THREADED_MIN_PAIRS - 1) == 1
+    import numba
+
+    assert layer.gain_threads(layer.THREADED_MIN_PAIRS) == numba.get_num_threads()
+    seen = []
+    worker = threading.Thread(target=lambda: seen.append(layer.gain_threads(10 * layer.THREADED_MIN_PAIRS)))
+    worker.start()
+    worker.join()
+    assert seen == [1]

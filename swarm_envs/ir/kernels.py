@@ -16,13 +16,15 @@ import math
 import numpy as np
 
 try:  # numba is optional: an accelerator, not a requirement
+    from numba import prange
+
     from swarm_envs._numba import njit  # numba.njit whose cache recovers from corrupted files
 
     HAVE_NUMBA = True
 except ImportError:  # pragma: no cover - exercised only without numba
     HAVE_NUMBA = False
 
-__all__ = ["HAVE_NUMBA", "MODEL_IDS", "model_params", "gains_kernel", "occluders_kernel", "neighbour_csr_kernel", "occluder_frames_kernel", "directed_pairs_kernel"]
+__all__ = ["HAVE_NUMBA", "MODEL_IDS", "model_params", "gains_kernel", "gains_kernel_threaded", "occluders_kernel", "neighbour_csr_kernel", "occluder_frames_kernel", "directed_pairs_kernel"]
 
 #: model class name -> kernel model id
 MODEL_IDS = {"DropletIR": 0, "EpuckIR": 1, "RoneIR": 2, "DropletLowPowerIR": 3}
@@ -188,6 +190,64 @@ if HAVE_NUMBA:
                     any_lit = True
         return any_lit
 
+    @njit(cache=True, inline="always", error_model="numpy")
+    def _pair_row(
+        out_row: np.ndarray, sums_row: np.ndarray, Rx: float, Ry: float, c: float, s: float, q0: int, q1: int,
+        det_pos: np.ndarray, dcos: np.ndarray, dsin: np.ndarray, det_self: np.ndarray, rho_d: float,
+        em_pos: np.ndarray, ecos: np.ndarray, esin: np.ndarray, em_self: np.ndarray, rho_e: float,
+        kind: int, prm: np.ndarray, ir_range: float, occ_xy: np.ndarray, r2: float,
+        ex: np.ndarray, ey: np.ndarray, eax: np.ndarray, eay: np.ndarray, dets: np.ndarray, ems: np.ndarray,
+    ) -> bool:
+        """One pair's gain row ``out_row`` (n_d, n_e) and its emitter sums ``sums_row`` (n_d,), zeroed then
+        filled (:func:`gains_kernel`): transmitter centre (Rx, Ry) and heading (c, s) in the receiver frame,
+        candidate occluders ``occ_xy[q0:q1]``; ``ex`` .. ``ems`` are scratch arrays. True if a ray is lit."""
+        nd, ne = dcos.shape[0], ecos.shape[0]
+        margin = 1e-9
+        prune_det = kind == 1 or (kind == 2 and prm[3] > 0.0)
+        prune_em = kind == 1 or (kind == 2 and prm[4] > 0.0)
+        out_row[:] = 0.0
+        sums_row[:] = 0.0
+        if math.sqrt(Rx * Rx + Ry * Ry) > ir_range:
+            return False
+        n_em = 0
+        for j in range(ne):  # TX emitters and their axes in the RX frame
+            ex[j] = Rx + c * em_pos[j, 0] - s * em_pos[j, 1]
+            ey[j] = Ry + s * em_pos[j, 0] + c * em_pos[j, 1]
+            eax[j] = c * ecos[j] - s * esin[j]
+            eay[j] = s * ecos[j] + c * esin[j]
+            ems[n_em] = j  # branch-free compaction (the bound's outcome is unpredictable): kept if it may light
+            n_em += np.int64((not prune_em) | (Rx * eax[j] + Ry * eay[j] + em_self[j] - rho_d <= margin))
+        n_det = 0
+        for i in range(nd):
+            dets[n_det] = i
+            n_det += np.int64((not prune_det) | (Rx * dcos[i] + Ry * dsin[i] + rho_e - det_self[i] >= -margin))
+        if kind == 1:
+            return _epuck_rays(
+                out_row, sums_row, dets[:n_det], ems[:n_em], det_pos, dcos, dsin, ex, ey, eax, eay, occ_xy, q0, q1, r2, prm[0], prm[1], prm[2]
+            )
+        any_lit = False
+        for a in range(n_det):
+            i = dets[a]
+            for b in range(n_em):
+                j = ems[b]
+                dx, dy = ex[j] - det_pos[i, 0], ey[j] - det_pos[i, 1]
+                d = math.sqrt(dx * dx + dy * dy)
+                inv = 1.0 / max(d, 1e-12)
+                ux, uy = dx * inv, dy * inv
+                cd = ux * dcos[i] + uy * dsin[i]
+                ce = -(ux * eax[j] + uy * eay[j])
+                # rays the model leaves dark (r-one: outside the arcs or range; the same zero branch as
+                # _gain) need no occlusion test
+                if kind == 2 and not (d <= prm[2] and cd >= prm[3] and ce >= prm[4]):
+                    continue
+                if not _ray_blocked(det_pos[i, 0], det_pos[i, 1], ex[j], ey[j], dx, dy, dx * dx + dy * dy, occ_xy, q0, q1, r2):
+                    g = _gain(kind, prm[0], prm[1], prm[2], prm[3], prm[4], prm[5], prm[6], prm[7], d, cd, ce)
+                    out_row[i, j] = g
+                    sums_row[i] += g  # rays in (detector, emitter) order: emitter order per detector
+                    if g > 0.0:
+                        any_lit = True
+        return any_lit
+
     @njit(cache=True, error_model="numpy")
     def gains_kernel(
         rel_position: np.ndarray,
@@ -229,20 +289,93 @@ if HAVE_NUMBA:
         the bound.
         """
         P, nd, ne = rel_position.shape[0], det_pos.shape[0], em_pos.shape[0]
-        r2 = occ_radius * occ_radius
         out = np.empty((P, nd, ne))  # each row is zeroed just before it is filled (one pass over memory)
         sums = np.empty((P, nd))
         lit = np.empty(P, dtype=np.int64)
-        n_lit = 0
+        n_lit = _gains_chunk(
+            0, P, out, sums, lit, rel_position, rel_cos_sin, det_pos, det_dir, em_pos, em_dir, kind, params,
+            ir_range, occ_offsets, occ_xy, occ_radius, compact,
+        )
+        if compact:
+            return out[:n_lit], lit[:n_lit].copy(), sums[:n_lit]
+        return out, lit[:n_lit].copy(), sums
+
+    @njit(cache=True, error_model="numpy", parallel=True)
+    def gains_kernel_threaded(
+        rel_position: np.ndarray,
+        rel_cos_sin: np.ndarray,
+        det_pos: np.ndarray,
+        det_dir: np.ndarray,
+        em_pos: np.ndarray,
+        em_dir: np.ndarray,
+        kind: int,
+        params: np.ndarray,
+        ir_range: float,
+        occ_offsets: np.ndarray,
+        occ_xy: np.ndarray,
+        occ_radius: float,
+        n_chunks: int,
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """:func:`gains_kernel` with ``compact=True`` on numba's threads: the pairs are cut into ``n_chunks``
+        contiguous chunks, each filled (and compacted within its own rows) by one thread, then the chunks'
+        lit rows are moved together in order. Every row is computed by the same code as the serial kernel,
+        so the result is the same bit for bit, whatever the number of chunks or threads."""
+        P, nd, ne = rel_position.shape[0], det_pos.shape[0], em_pos.shape[0]
+        out = np.empty((P, nd, ne))
+        sums = np.empty((P, nd))
+        lit = np.empty(P, dtype=np.int64)
+        n_chunks = max(1, min(n_chunks, P))
+        bounds = np.empty(n_chunks + 1, dtype=np.int64)
+        for k in range(n_chunks + 1):
+            bounds[k] = (P * k) // n_chunks
+        counts = np.zeros(n_chunks, dtype=np.int64)
+        for k in prange(n_chunks):
+            counts[k] = _gains_chunk(
+                bounds[k], bounds[k + 1], out, sums, lit, rel_position, rel_cos_sin, det_pos, det_dir, em_pos,
+                em_dir, kind, params, ir_range, occ_offsets, occ_xy, occ_radius, True,
+            )
+        n_lit = counts[0]
+        for k in range(1, n_chunks):  # rows only move towards the front: a forward copy is safe
+            for q in range(counts[k]):
+                src, dst = bounds[k] + q, n_lit + q
+                if src != dst:
+                    out[dst] = out[src]
+                    sums[dst] = sums[src]
+                    lit[dst] = lit[src]
+            n_lit += counts[k]
+        return out[:n_lit], lit[:n_lit].copy(), sums[:n_lit]
+
+    @njit(cache=True, error_model="numpy")
+    def _gains_chunk(
+        start: int,
+        stop: int,
+        out: np.ndarray,
+        sums: np.ndarray,
+        lit: np.ndarray,
+        rel_position: np.ndarray,
+        rel_cos_sin: np.ndarray,
+        det_pos: np.ndarray,
+        det_dir: np.ndarray,
+        em_pos: np.ndarray,
+        em_dir: np.ndarray,
+        kind: int,
+        params: np.ndarray,
+        ir_range: float,
+        occ_offsets: np.ndarray,
+        occ_xy: np.ndarray,
+        occ_radius: float,
+        compact: bool,
+    ) -> int:
+        """Gain rows of pairs ``start:stop`` (:func:`gains_kernel`) into ``out``/``sums`` rows from ``start``
+        on: row ``p`` each, or with ``compact`` the lit pairs' rows one after the other, their pair indices
+        into ``lit`` from ``start`` on. Returns the number of lit pairs."""
+        nd, ne = det_pos.shape[0], em_pos.shape[0]
+        r2 = occ_radius * occ_radius
         dcos, dsin = np.cos(det_dir), np.sin(det_dir)
         ecos, esin = np.cos(em_dir), np.sin(em_dir)
         prm = np.zeros(8)
         prm[: params.shape[0]] = params
-        p0, p1, p2, p3, p4, p5, p6, p7 = prm[0], prm[1], prm[2], prm[3], prm[4], prm[5], prm[6], prm[7]
-        # front-only bounds (docstring): which sides may be pruned, and the per-element constants
-        margin = 1e-9
-        prune_det = kind == 1 or (kind == 2 and p3 > 0.0)
-        prune_em = kind == 1 or (kind == 2 and p4 > 0.0)
+        # per-element constants of the front-only bounds (gains_kernel docstring)
         det_self = np.empty(nd)  # d_i . u_i
         rho_d = 0.0
         for i in range(nd):
@@ -259,62 +392,17 @@ if HAVE_NUMBA:
         eay = np.empty(ne)
         dets = np.empty(nd, dtype=np.int64)
         ems = np.empty(ne, dtype=np.int64)
-        for p in range(P):
-            row = n_lit if compact else p
-            out[row] = 0.0
-            sums[row] = 0.0
-            Rx, Ry = rel_position[p, 0], rel_position[p, 1]
-            if math.sqrt(Rx * Rx + Ry * Ry) > ir_range:
-                continue
-            c, s = rel_cos_sin[p, 0], rel_cos_sin[p, 1]
-            n_em = 0
-            for j in range(ne):  # TX emitters and their axes in the RX frame
-                ex[j] = Rx + c * em_pos[j, 0] - s * em_pos[j, 1]
-                ey[j] = Ry + s * em_pos[j, 0] + c * em_pos[j, 1]
-                eax[j] = c * ecos[j] - s * esin[j]
-                eay[j] = s * ecos[j] + c * esin[j]
-                ems[n_em] = j  # branch-free compaction (the bound's outcome is unpredictable): kept if it may light
-                n_em += np.int64((not prune_em) | (Rx * eax[j] + Ry * eay[j] + em_self[j] - rho_d <= margin))
-            n_det = 0
-            for i in range(nd):
-                dets[n_det] = i
-                n_det += np.int64((not prune_det) | (Rx * dcos[i] + Ry * dsin[i] + rho_e - det_self[i] >= -margin))
-            q0, q1 = occ_offsets[p], occ_offsets[p + 1]
-            if kind == 1:
-                any_lit = _epuck_rays(
-                    out[row], sums[row], dets[:n_det], ems[:n_em], det_pos, dcos, dsin, ex, ey, eax, eay, occ_xy, q0, q1, r2, p0, p1, p2
-                )
-                if any_lit:
-                    lit[n_lit] = p
-                    n_lit += 1
-                continue
-            any_lit = False
-            for a in range(n_det):
-                i = dets[a]
-                for b in range(n_em):
-                    j = ems[b]
-                    dx, dy = ex[j] - det_pos[i, 0], ey[j] - det_pos[i, 1]
-                    d = math.sqrt(dx * dx + dy * dy)
-                    inv = 1.0 / max(d, 1e-12)
-                    ux, uy = dx * inv, dy * inv
-                    cd = ux * dcos[i] + uy * dsin[i]
-                    ce = -(ux * eax[j] + uy * eay[j])
-                    # rays the model leaves dark (r-one: outside the arcs or range; the same zero branch as
-                    # _gain) need no occlusion test
-                    if kind == 2 and not (d <= p2 and cd >= p3 and ce >= p4):
-                        continue
-                    if not _ray_blocked(det_pos[i, 0], det_pos[i, 1], ex[j], ey[j], dx, dy, dx * dx + dy * dy, occ_xy, q0, q1, r2):
-                        g = _gain(kind, p0, p1, p2, p3, p4, p5, p6, p7, d, cd, ce)
-                        out[row, i, j] = g
-                        sums[row, i] += g  # rays in (detector, emitter) order: emitter order per detector
-                        if g > 0.0:
-                            any_lit = True
-            if any_lit:
-                lit[n_lit] = p
+        n_lit = 0
+        for p in range(start, stop):
+            row = start + n_lit if compact else p
+            if _pair_row(
+                out[row], sums[row], rel_position[p, 0], rel_position[p, 1], rel_cos_sin[p, 0], rel_cos_sin[p, 1],
+                occ_offsets[p], occ_offsets[p + 1], det_pos, dcos, dsin, det_self, rho_d, em_pos, ecos, esin, em_self,
+                rho_e, kind, prm, ir_range, occ_xy, r2, ex, ey, eax, eay, dets, ems,
+            ):
+                lit[start + n_lit] = p
                 n_lit += 1
-        if compact:
-            return out[:n_lit], lit[:n_lit].copy(), sums[:n_lit]
-        return out, lit[:n_lit].copy(), sums
+        return n_lit
 
     @njit(cache=True, error_model="numpy")
     def occluders_kernel(

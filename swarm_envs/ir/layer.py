@@ -27,6 +27,7 @@ All public inputs/outputs are SI (metres, radians, angles wrapped to (-pi, pi]).
 
 from __future__ import annotations
 
+import threading
 from dataclasses import dataclass, field
 import numpy as np
 from scipy.spatial import cKDTree
@@ -37,10 +38,13 @@ from swarm_envs.platforms import Platform, get_platform
 
 __all__ = [
     "IRLinks", "compute_links", "pair_geometry", "pair_cosines", "pair_gains", "pair_occluders", "line_of_sight",
-    "occluder_width", "wrap_angle",
+    "occluder_width", "wrap_angle", "gain_threads", "THREADED_MIN_PAIRS",
 ]
 
 OCCLUSION_RULES = ("ray", "centre", "none")
+
+#: candidate directed pairs of one scene from which its gain kernel uses numba's threads (:func:`gain_threads`)
+THREADED_MIN_PAIRS = 16384
 
 
 @dataclass
@@ -213,21 +217,26 @@ def _gains(
     xy: np.ndarray,
     compact: bool,
     cos_sin: np.ndarray | None = None,
+    threads: int = 1,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(gains, lit, sums) of :func:`pair_gains` with checked inputs: ``lit`` the pairs with a nonzero gain,
     ``gains`` every pair's rows, or with ``compact`` only the ``lit`` rows (compiled kernel, or numpy), and
     ``sums`` (rows, n_d) the gains summed over emitters sequentially in emitter order (:class:`IRLinks`
     ``emitter_sums``). ``cos_sin`` (P, 2): cos and sin of ``psi`` if known (the kernel uses them; default
-    from ``psi``)."""
+    from ``psi``). ``threads`` > 1 (with ``compact``): the compiled kernel splits the pairs over that many
+    of numba's threads (same result bit for bit)."""
     if kernels.HAVE_NUMBA and type(model).__name__ in kernels.MODEL_IDS:
         kind, params = kernels.model_params(model)
         if cos_sin is None:
             cos_sin = np.stack([np.cos(psi), np.sin(psi)], axis=-1)
-        return kernels.gains_kernel(
+        args = (
             R, cos_sin, platform.detector_positions, platform.detector_directions,
             platform.emitter_positions, platform.emitter_directions, kind, params, float(platform.ir_range),
-            offsets, xy, float(platform.radius), compact,
+            offsets, xy, float(platform.radius),
         )
+        if compact and threads > 1:
+            return kernels.gains_kernel_threaded(*args, int(threads))
+        return kernels.gains_kernel(*args, compact)
     g = _pair_gains_numpy(R, psi, platform, model)
     if xy.shape[0]:
         g = g * _clear_rays_numpy(R, psi, platform, offsets, xy)
@@ -482,11 +491,29 @@ def compute_links(
         offsets, xy = np.zeros(rx.shape[0] + 1, dtype=np.int64), np.zeros((0, 2))
     else:
         offsets, xy = occluders
-    gains, lit, sums = _gains(rel, rel_heading, platform, platform.ir_model, offsets, xy, drop_zero, rel_cs)
+    threads = gain_threads(rx.shape[0]) if copy is None else 1
+    gains, lit, sums = _gains(rel, rel_heading, platform, platform.ir_model, offsets, xy, drop_zero, rel_cs, threads)
     rows = np.arange(rx.shape[0])
     if drop_zero and lit.shape[0] < rx.shape[0]:
         rx, tx, rel, rel_heading, distance, rows = rx[lit], tx[lit], rel[lit], rel_heading[lit], distance[lit], rows[lit]
     return IRLinks(rx, tx, distance, rel, rel_heading, gains, N, None if occluders is None else (*occluders, rows), sums)
+
+
+def gain_threads(n_pairs: int) -> int:
+    """Threads for the gain kernel of one scene of ``n_pairs`` candidate directed pairs: numba's thread
+    count (``NUMBA_NUM_THREADS``, default all cores; ``numba.set_num_threads``) from
+    :data:`THREADED_MIN_PAIRS` pairs on (about 370 e-puck robots at the flocking default density), else 1.
+
+    Only :func:`compute_links` of a single scene (``copy=None``: one env, as a large swarm is stepped)
+    uses threads; a batch of copies stays on one thread (batched training scales with copies and worker
+    processes instead), and only from the main Python thread: numba's default threading layer
+    (workqueue) must not be entered from two Python threads at once. The result is the same bit for bit
+    either way."""
+    if n_pairs < THREADED_MIN_PAIRS or not kernels.HAVE_NUMBA or threading.current_thread() is not threading.main_thread():
+        return 1
+    import numba
+
+    return int(numba.get_num_threads())
 
 
 def _directed_pairs(
