@@ -105,6 +105,14 @@ def interleaved(rounds: int, copies: tuple[int, ...] = (64, 256), vmas_steps: in
     print(f"load average at end: {os.getloadavg()[0]:.2f}")
 
 
+def _numba_threads() -> int | str:
+    try:
+        import numba
+    except ImportError:
+        return "none (numba not installed)"
+    return numba.get_num_threads()
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="N = 10 rows only")
@@ -127,6 +135,8 @@ def main() -> None:
         grid = [(n, b) for n, b in grid if b == args.copies] or [(args.n or 10, args.copies)]
     modes = [args.sensing] if args.sensing else ["full", "ideal"]
     print(f"load average at start: {os.getloadavg()[0]:.2f} on {os.cpu_count()} cores")
+    print(f"numba threads: {_numba_threads()} (the IR gain kernel of one copy with >= 16384 candidate pairs, i.e. the N = 1000 full row, "
+          "runs on them; everything else on one thread; NUMBA_NUM_THREADS=1 for one core)")
     vmas_rate = None
     if not args.no_vmas:
         t = time_vmas(10, 1024, args.vmas_steps)

@@ -749,7 +749,7 @@ class RangeBearingSensor:
         args = (
             self._key, np.stack([self._range, self._bearing, self._heading]),
             np.stack([self._age, self._true, self._overlap]).astype(np.int64), self.max_age, new_key,
-            np.stack([R, th, ph]).astype(float).reshape(3, -1), np.stack([new_over, new_true, new_over]),
+            np.stack([R, th, ph]).astype(float).reshape(3, -1), np.stack([np.zeros_like(new_over), new_true, new_over]),
         )
         if HAVE_NUMBA and (new_key.size < 2 or bool(np.all(new_key[1:] >= new_key[:-1]))):
             key, fl, it = merge_readings(*args)  # one merge of the two sorted tables
