@@ -29,16 +29,15 @@ def test_gains_kernel_equals_numpy_reference(name):
     np.testing.assert_array_equal(fast > 0, reference > 0)
 
 
-@pytest.mark.parametrize("name", ["droplet", "epuck", "rone"])
-def test_gains_kernel_compact_rows_are_the_lit_pairs(name):
-    """compact=True returns only the pairs with light, in order, with the same values as the full output."""
-    platform = get_platform(name)
-    rng = np.random.default_rng(21)
-    P = 3000
+def _occluded_pairs(platform, rng, P, dark=None):
+    """P random (receiver, transmitter) pairs, 10 % close, with 0-2 occluders each in the receiver frame (so
+    that some pairs are dark); ``dark``: pairs put out of range. Returns R, psi, offsets, xy and the
+    gain kernels' leading arguments."""
     R = rng.uniform(-1.1, 1.1, (P, 2)) * platform.ir_range
-    R[:300] = rng.uniform(-1, 1, (300, 2)) * 3 * platform.radius
+    R[: P // 10] = rng.uniform(-1, 1, (P // 10, 2)) * 3 * platform.radius
+    if dark is not None:
+        R[dark] = 2.0 * platform.ir_range
     psi = rng.uniform(-np.pi, np.pi, P)
-    # a few occluders per pair, in the receiver frame, so that some pairs are dark
     counts = rng.integers(0, 3, P)
     offsets = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
     pair = np.repeat(np.arange(P), counts)
@@ -48,6 +47,15 @@ def test_gains_kernel_compact_rows_are_the_lit_pairs(name):
         R, np.stack([np.cos(psi), np.sin(psi)], axis=-1), platform.detector_positions, platform.detector_directions, platform.emitter_positions,
         platform.emitter_directions, kind, params, float(platform.ir_range), offsets, xy, float(platform.radius),
     )
+    return R, psi, offsets, xy, args
+
+
+@pytest.mark.parametrize("name", ["droplet", "epuck", "rone"])
+def test_gains_kernel_compact_rows_are_the_lit_pairs(name):
+    """compact=True returns only the pairs with light, in order, with the same values as the full output."""
+    platform = get_platform(name)
+    P = 3000
+    R, psi, offsets, xy, args = _occluded_pairs(platform, np.random.default_rng(21), P)
     full, lit_full, sums_full = kernels.gains_kernel(*args, False)
     compact, lit, sums = kernels.gains_kernel(*args, True)
     expected = np.flatnonzero(full.reshape(P, -1).max(axis=1) > 0)
@@ -67,21 +75,9 @@ def test_threaded_gain_kernel_equals_the_serial_kernel_bit_for_bit(name):
     """The threaded kernel (pairs cut into chunks, compacted, chunks moved together) gives exactly the serial
     kernel's rows, lit pairs and sums, for any chunk count, including chunks with no lit pair."""
     platform = get_platform(name)
-    rng = np.random.default_rng(31)
     P = 2500
-    R = rng.uniform(-1.1, 1.1, (P, 2)) * platform.ir_range
-    R[:300] = rng.uniform(-1, 1, (300, 2)) * 3 * platform.radius
-    R[1000:1400] = 2.0 * platform.ir_range  # a run of out-of-range pairs: a whole chunk can be dark
-    psi = rng.uniform(-np.pi, np.pi, P)
-    counts = rng.integers(0, 3, P)
-    offsets = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
-    pair = np.repeat(np.arange(P), counts)
-    xy = R[pair] * rng.uniform(0.2, 0.8, (len(pair), 1)) + rng.normal(0, platform.radius, (len(pair), 2))
-    kind, params = kernels.model_params(platform.ir_model)
-    args = (
-        R, np.stack([np.cos(psi), np.sin(psi)], axis=-1), platform.detector_positions, platform.detector_directions, platform.emitter_positions,
-        platform.emitter_directions, kind, params, float(platform.ir_range), offsets, xy, float(platform.radius),
-    )
+    # a run of out-of-range pairs: a whole chunk can be dark
+    *_, args = _occluded_pairs(platform, np.random.default_rng(31), P, dark=slice(1000, 1400))
     serial, lit, sums = kernels.gains_kernel(*args, True)
     assert 0 < len(lit) < P
     for chunks in (1, 2, 3, 7, 40, P + 5):
