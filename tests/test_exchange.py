@@ -29,11 +29,12 @@ class FakeNetwork:
     def __init__(self, loss: float, rng: np.random.Generator) -> None:
         self.loss, self.rng, self.queue = loss, rng, []
 
-    def queue_system(self, robot, bits, kind):
+    def queue_system(self, robot, bits, kind, lengths=None):
         robots = np.atleast_1d(robot)
         b = np.asarray(bits, bool).reshape(robots.size, -1)
-        for r, row in zip(robots, b):
-            self.queue.append((int(r), row.copy(), kind))
+        lengths = np.full(robots.size, b.shape[1]) if lengths is None else np.asarray(lengths)
+        for r, row, n in zip(robots, b, lengths):
+            self.queue.append((int(r), row[:n].copy(), kind))
         return np.zeros(robots.size, int)
 
     def step(self, links):

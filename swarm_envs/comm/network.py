@@ -420,14 +420,15 @@ class Network:
             fmt.with_sender, fmt.crc_bits, crc8_table(fmt.header_bits + MAX_PAYLOAD + 8), c.n, c.k, c._codewords,
         )  # fmt: skip
 
-    def queue_system(self, robot: int | np.ndarray, bits: np.ndarray, kind: str) -> np.ndarray:
+    def queue_system(self, robot: int | np.ndarray, bits: np.ndarray, kind: str, lengths: np.ndarray | None = None) -> np.ndarray:
         """Queue system traffic (any kind name other than ``"app"``, at most 255 bits, local broadcast)
-        for one robot or an array of robots sharing the same payload shape ``(M, L)``."""
+        for one robot or an array of robots, payloads ``(M, L)``: all of length L, or of ``lengths`` (M,)
+        (the first ``lengths[m]`` bits of row m)."""
         if kind == "app":
             raise ValueError("use send()/send_many() for application messages")
         robots = np.atleast_1d(np.asarray(robot, dtype=np.int64))
         b = np.asarray(bits, dtype=bool).reshape(robots.size, -1)
-        return self.send_many(robots, b, kind=kind)
+        return self.send_many(robots, b, kind=kind, lengths=lengths)
 
     def _enqueue(self, robots: np.ndarray, bits: np.ndarray, slots: np.ndarray, rank: np.ndarray) -> None:
         self._ensure_frame_capacity(bits.shape[1])

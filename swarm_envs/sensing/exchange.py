@@ -13,8 +13,8 @@ Modes
 neighbour's current row instantly and losslessly (ages 0). For ablations.
 
 ``mode="network"``: the rows travel as SwarmCom *system* traffic. Every ``period`` steps (each robot with
-its own random phase, drawn from the generator passed in) a robot queues one message with
-``network.queue_system(robot, bits, kind)``; the env advances the network
+its own random phase, drawn from the generator passed in) a robot queues one message; all due robots at
+once with ``network.queue_system(robots, bits, kind, lengths=...)``; the env advances the network
 (``network.step(links) -> Deliveries``) and hands the deliveries back to :meth:`BearingExchange.receive`.
 A robot's own neighbour table holds the robots it *received a message from*, with the receiver's own
 bearing of the robot the frame *says* sent it: the header's decoded ``origin`` looked up in the receiver's
@@ -311,12 +311,7 @@ class BearingExchange:
         if robots.size == 0:
             return 0
         bits, lens = self.encode(robots)
-        if hasattr(net, "send_many") and self.kind != "app":  # a Network: all lengths in one call
-            net.send_many(robots, bits[:, : int(lens.max())].astype(bool), self.kind, lengths=lens)
-        else:
-            for L in np.unique(lens):  # queue_system takes robots sharing one payload length
-                g = lens == L
-                net.queue_system(robots[g], bits[g, :L].astype(bool), self.kind)
+        net.queue_system(robots, bits[:, : int(lens.max())].astype(bool), self.kind, lengths=lens)  # all lengths at once
         self.stats["sent"] += int(robots.size)
         self.stats["bits_sent"] += int(lens.sum())
         return int(robots.size)
