@@ -119,3 +119,46 @@ def test_droplet_near_model_in_the_env():
     assert near.sum() > 20 and abs(err.mean()) + err.std() < env.platform.diameter
     with pytest.raises(ValueError, match="rb_near_model"):
         swarm_envs.make("swarm_envs/Aggregation-v0", platform="epuck", rb_near_model=True)
+
+
+@pytest.mark.parametrize("platform", ["droplet", "epuck"])
+def test_range_bearing_on_the_worker_thread_gives_the_same_steps(platform, monkeypatch):
+    """Range & bearing on the worker thread, alongside SwarmCom (large single scenes), gives the same
+    observations, rewards and sensing statistics bit for bit as on the calling thread."""
+    import swarm_envs.sensing.full as full
+
+    def run(on_worker):
+        monkeypatch.setattr(full, "rb_on_worker_thread", lambda n_links, n_copies: on_worker)
+        env = swarm_envs.make("swarm_envs/Aggregation-v0", n_robots=40, sensing="full", platform=platform)
+        obs, _ = env.reset(seed=11)
+        rng = np.random.default_rng(3)
+        trace = []
+        for _ in range(25):
+            actions = {a: rng.uniform(-1, 1, env.action_space(a).shape).astype(np.float32) for a in env.agents}
+            obs, rewards, _, _, infos = env.step(actions)
+            a = env.agents[0]
+            trace.append((obs[a], rewards[a], {k: v for k, v in infos[a].items() if isinstance(k, tuple)}))
+        return trace
+
+    on_worker, here = run(True), run(False)
+    for (o1, r1, i1), (o2, r2, i2) in zip(on_worker, here):
+        assert r1 == r2 and i1.keys() == i2.keys()
+        for k in o1:
+            np.testing.assert_array_equal(o1[k], o2[k])
+        for k in i1:
+            np.testing.assert_array_equal(i1[k], i2[k])
+
+
+def test_an_error_on_the_worker_thread_reaches_the_caller(monkeypatch):
+    import swarm_envs.sensing.full as full
+
+    monkeypatch.setattr(full, "rb_on_worker_thread", lambda n_links, n_copies: True)
+    env = swarm_envs.make("swarm_envs/Aggregation-v0", n_robots=10, sensing="full", platform="epuck")
+    env.reset(seed=0)
+
+    def broken(links):
+        raise RuntimeError("range & bearing failed")
+
+    monkeypatch.setattr(env.unwrapped.core.sensing.rb, "step", broken)
+    with pytest.raises(RuntimeError, match="range & bearing failed"):
+        env.step({a: np.zeros(env.action_space(a).shape, np.float32) for a in env.agents})

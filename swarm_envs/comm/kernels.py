@@ -143,7 +143,7 @@ def _identity(f):  # pragma: no cover - used only without numba
     return f
 
 
-_jit = njit(cache=True) if HAVE_NUMBA else _identity
+_jit = njit(cache=True, nogil=True) if HAVE_NUMBA else _identity
 
 
 @_jit
@@ -195,7 +195,7 @@ except ImportError:  # pragma: no cover - other numba versions: numba's Generato
 if _FAST_NORMAL:
     _ZIG = (ki_float.copy(), wi_float.copy(), fi_float.copy(), np.float32(ziggurat_nor_r_f), np.float32(ziggurat_nor_inv_r_f))
 
-    @njit(cache=True)
+    @njit(cache=True, nogil=True)
     def _normal_f(bg, ki, wi, fi, zr, zir):
         """One float32 standard normal: NumPy's ``random_standard_normal_f`` (ziggurat, 256 layers) step for
         step, drawing the same 32-bit words from the same bit generator, so the stream is NumPy's
@@ -220,7 +220,7 @@ if _FAST_NORMAL:
             elif np.float64((fi[idx - 1] - fi[idx]) * next_float(bg) + fi[idx]) < np.exp(-0.5 * np.float64(x) * np.float64(x)):
                 return x
 
-    @njit(cache=True)
+    @njit(cache=True, nogil=True)
     def _draw_copies_nb(gens, S, n, n_det, noise_sigma, intensity_sigma, window, ki, wi, fi, zr, zir):
         """:func:`_draw_copies_py` compiled, with the ADC noise from :func:`_normal_f` (same numbers)."""
         noise, inoise, backoff, access = _draw_buffers(len(gens), n, S, n_det, noise_sigma, intensity_sigma)

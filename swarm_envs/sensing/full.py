@@ -36,6 +36,7 @@ Channel and sensor statistics go to ``infos[agent]["sensing", name]``.
 
 from __future__ import annotations
 
+from concurrent.futures import ThreadPoolExecutor
 from typing import Any
 
 import numpy as np
@@ -43,7 +44,7 @@ import numpy as np
 from swarm_envs.comm.channel import recommended_relative_threshold
 from swarm_envs.comm.network import Network
 from swarm_envs.copies import CopyRandom
-from swarm_envs.ir.layer import compute_links
+from swarm_envs.ir.layer import compute_links, gain_threads
 from swarm_envs.ir.models import RoneIR
 from swarm_envs.observation import pack_nearest
 from swarm_envs.platforms import Platform
@@ -53,7 +54,7 @@ from swarm_envs.sensing.exchange import BearingExchange, thesis_round_time
 from swarm_envs.sensing.range_bearing import RangeBearingSensor
 from swarm_envs.sensing.scale_free import coordinates, coordinates_all
 
-__all__ = ["FullSensing", "BEACON_PERIOD"]
+__all__ = ["FullSensing", "BEACON_PERIOD", "rb_on_worker_thread"]
 
 #: steps between two broadcasts of a robot (bearing beacons / exchange lists on the sector source): the
 #: thesis round 2 (1 + 5)^2 x 32.8 ms = 2.36 s [L Sec. 3.2.1] in 0.1 s control steps, rounded up
@@ -62,6 +63,26 @@ BEACON_PERIOD = int(np.ceil(round(thesis_round_time(5) / 0.1, 9)))
 BEACON_KIND = "bearing_beacon"  # SwarmCom system kind of the header-only beacons
 
 _STAT_NAMES = ("tx_started", "deferrals", "rx_delivered", "rx_lost", "collisions", "bits_checked", "bit_errors")
+
+
+_WORKER: ThreadPoolExecutor | None = None
+
+
+def _worker() -> ThreadPoolExecutor:
+    """The process's one worker thread of :func:`rb_on_worker_thread` (created on first use)."""
+    global _WORKER
+    if _WORKER is None:
+        _WORKER = ThreadPoolExecutor(max_workers=1, thread_name_prefix="swarm_envs-sensing")
+    return _WORKER
+
+
+def rb_on_worker_thread(n_links: int, n_copies: int) -> bool:
+    """Whether range & bearing runs on a worker thread while SwarmCom runs on the calling thread: for a
+    single scene (``n_copies == 1``) large enough for the gain kernel's threads (:func:`gain_threads` of its
+    ``n_links`` links: numba on more than one thread, called from the main thread). The two read the same
+    links, draw from their own streams and touch disjoint state, and their compiled kernels release the
+    GIL (``nogil``), so the result is the same bit for bit either way; batches of copies stay on one thread."""
+    return n_copies == 1 and gain_threads(n_links) > 1
 
 
 class FullSensing:
@@ -153,10 +174,14 @@ class FullSensing:
         (N,) bool: robots whose payload may be queued this step (default all)."""
         links = compute_links(positions, headings, self.platform, copy=self.copy_of if self.n_copies > 1 else None)
 
-        # range & bearing
+        # range & bearing (large single scenes: on the worker thread, while SwarmCom runs here)
+        rb_future = None
         if self.has_range:
-            rb = self.rb.step(links)
-            neighbours = NeighbourReadings(rb.rx, rb.tx, rb.range, rb.bearing, rb.heading, rb.age.astype(float))
+            if rb_on_worker_thread(len(links), self.n_copies):
+                rb_future = _worker().submit(self.rb.step, links)
+            else:
+                rb = self.rb.step(links)
+                neighbours = NeighbourReadings(rb.rx, rb.tx, rb.range, rb.bearing, rb.heading, rb.age.astype(float))
 
         # SwarmCom: application payloads and the bearing exchange share the channel
         net = self.network
@@ -171,7 +196,14 @@ class FullSensing:
             self.exchange.send(net)
         elif self.bearings is not None:
             self.bearings.send_beacons(net, BEACON_KIND)
-        deliveries = net.step(links)
+        try:
+            deliveries = net.step(links)
+        finally:  # never leave the worker running on this sensor's state
+            if rb_future is not None:
+                rb_future.exception()  # waits
+        if rb_future is not None:
+            rb = rb_future.result()
+            neighbours = NeighbourReadings(rb.rx, rb.tx, rb.range, rb.bearing, rb.heading, rb.age.astype(float))
         # sector bearings measured on the decoded frames (any kind)
         sectors = self.bearings.step(deliveries, links) if self.bearings is not None else None
         if not self.has_range:

@@ -44,7 +44,7 @@ __all__ = [
 
 if HAVE_NUMBA:
 
-    @njit(cache=True)
+    @njit(cache=True, nogil=True)
     def two_hop_triangles(key_b, key_id, ids_in, th_in, ok_in, rid_in, rth_in, self_ids, cap):  # pragma: no cover - compiled
         """Slot order and usable triangles of every robot (the reference's first half).
 
@@ -137,7 +137,7 @@ if HAVE_NUMBA:
             starts[u + 1] = t
         return order, inv, ok, th, starts, tu[:t], ti[:t], tj[:t], vals[:t]
 
-    @njit(cache=True)
+    @njit(cache=True, nogil=True)
     def two_hop_propagate(ok, starts, ti, tj, logratio, weight, noise_sensitivity):  # pragma: no cover - compiled
         """Components, root, rigidity and length propagation of every robot (the reference's second half).
 
@@ -302,7 +302,7 @@ _PAIRWISE_INIT = -0.0 if np.signbit(np.add.reduceat(np.full((3, 1), -0.0), [0], 
 
 if HAVE_NUMBA:
 
-    @njit(cache=True)
+    @njit(cache=True, nogil=True)
     def _pairwise_sum(a, lo, n, c, init):  # pragma: no cover - compiled
         """numpy's ``DOUBLE_pairwise_sum`` of ``a[lo:lo+n, c]`` (numpy/_core/src/umath/loops_utils.h.src)."""
         if n < 8:
@@ -334,7 +334,7 @@ if HAVE_NUMBA:
         n2 -= n2 % 8
         return _pairwise_sum(a, lo, n2, c, init) + _pairwise_sum(a, lo + n2, n - n2, c, init)
 
-    @njit(cache=True)
+    @njit(cache=True, nogil=True)
     def _segment_sum(a, starts, init):  # pragma: no cover - compiled
         G = starts.size
         L, m = a.shape
@@ -380,7 +380,7 @@ def sum_last_numpy(a: np.ndarray) -> np.ndarray:
 
 if HAVE_NUMBA:
 
-    @njit(cache=True)
+    @njit(cache=True, nogil=True)
     def _sum_last(a):  # pragma: no cover - compiled
         m, k = a.shape
         out = np.empty(m, np.float64)
@@ -391,7 +391,7 @@ if HAVE_NUMBA:
             out[i] = r
         return out
 
-    @njit(cache=True)
+    @njit(cache=True, nogil=True)
     def priority_independent_set(prio, u, v):  # pragma: no cover - compiled
         """Greedy maximal independent set in decreasing ``prio`` of the graph with edges (u[e], v[e]) (either
         direction): a node is in the set iff no neighbour of higher priority is. Equals the Luby rounds of
@@ -445,7 +445,7 @@ def frame_words(light, frames, starts, heard, noise, scale, top, floor, id_bits)
 
 if HAVE_NUMBA:
 
-    @njit(cache=True)
+    @njit(cache=True, nogil=True)
     def _pairwise_block(a, n):  # pragma: no cover - compiled
         """numpy's pairwise sum of ``a[:n]`` for 8 <= n <= 128 (the unrolled, non-recursive branch)."""
         r0, r1, r2, r3 = a[0], a[1], a[2], a[3]
@@ -468,7 +468,7 @@ if HAVE_NUMBA:
             i += 1
         return res
 
-    @njit(cache=True)
+    @njit(cache=True, nogil=True)
     def _frame_words(light, frames, starts, heard, noise, scale, top, floor, id_bits, init):  # pragma: no cover - compiled
         G, n_d = heard.shape
         L = light.shape[0]
@@ -522,7 +522,7 @@ if HAVE_NUMBA:
 
 if HAVE_NUMBA:
 
-    @njit(cache=True)
+    @njit(cache=True, nogil=True)
     def adc_pass(lam, rows, noise, p, scale, top):  # pragma: no cover - compiled
         """One power-ladder pass of :func:`swarm_envs.sensing.range_bearing.measure` on matrices ``lam[rows]``
         (flattened to (P, m)): ``clip(round(p * lam * scale + noise), 0, top)`` with numpy's operation order
@@ -552,7 +552,7 @@ if HAVE_NUMBA:
             sat[r] = big >= top
         return counts, sat
 
-    @njit(cache=True)
+    @njit(cache=True, nogil=True)
     def group_brightest(gains, starts, labels):  # pragma: no cover - compiled
         """Per contiguous group of rows (``starts``), the label of the row holding the group's largest entry
         (first such row on ties); ``gains`` (L, m) without NaN. Reference:
@@ -576,7 +576,7 @@ if HAVE_NUMBA:
             out[g] = labels[arg]
         return out
 
-    @njit(cache=True)
+    @njit(cache=True, nogil=True)
     def pick_ids(heard, ident_h, crc_h, crc16, id_check, not_heard, conflict):  # pragma: no cover - compiled
         """Decode rule of :func:`swarm_envs.sensing.range_bearing.decode_ids` (reference
         :func:`swarm_envs.sensing.range_bearing.pick_ids_numpy`): per group, the id every checking channel
@@ -607,7 +607,7 @@ if HAVE_NUMBA:
                 out[g] = conflict
         return out
 
-    @njit(cache=True)
+    @njit(cache=True, nogil=True)
     def merge_readings(old_key, old_f, old_i, max_age, new_key, new_f, new_i):  # pragma: no cover - compiled
         """Reading table update of :meth:`swarm_envs.sensing.range_bearing.RangeBearingSensor.step` for sorted
         unique ``old_key`` and non-decreasing ``new_key``: old rows age by one, rows older than ``max_age``
@@ -654,7 +654,7 @@ if HAVE_NUMBA:
             o += 1
         return key, fl, it
 
-    @njit(cache=True)
+    @njit(cache=True, nogil=True)
     def expire_tables(now, max_age, tab_ids, tab_bear, tab_time, row_ids, row_bear, row_time, never):  # pragma: no cover - compiled
         """In place :meth:`swarm_envs.sensing.exchange.BearingExchange._expire` (reference
         ``_expire_numpy``): table entries older than ``max_age`` (or without an id) and rows older than
@@ -676,7 +676,7 @@ if HAVE_NUMBA:
                         row_bear[u, s, j] = np.nan
                     row_time[u, s] = never
 
-    @njit(cache=True)
+    @njit(cache=True, nogil=True)
     def encode_tables(tab_ids, tab_bear, tab_time, robots, offset, max_entries, id_bits, count_bits, bearing_bits):  # pragma: no cover - compiled
         """Bit rows of the bearing-exchange messages of ``robots`` (reference: the numpy path of
         :meth:`swarm_envs.sensing.exchange.BearingExchange.send` with :func:`~swarm_envs.sensing.exchange.encode_rows`):
@@ -726,7 +726,7 @@ if HAVE_NUMBA:
             lens[r] = count_bits + c * e
         return bits, lens
 
-    @njit(cache=True)
+    @njit(cache=True, nogil=True)
     def decode_bits(bits, id_bits, count_bits, max_entries, bearing_bits):  # pragma: no cover - compiled
         """Integer part of :func:`swarm_envs.sensing.exchange.decode_rows`: count (capped at ``max_entries``),
         ids and bearing sectors of each row's first ``count`` entries (-1 beyond; bits beyond a row's
@@ -752,7 +752,7 @@ if HAVE_NUMBA:
                 qs[r, m] = q
         return ids, qs
 
-    @njit(cache=True)
+    @njit(cache=True, nogil=True)
     def firing_sums(gains, starts, n_d, init):  # pragma: no cover - compiled
         """Sums of the firing links' gains per receiving group, in one pass.
 
@@ -825,7 +825,7 @@ if HAVE_NUMBA:
                     start[g, i] = first + _pairwise_block(buf, n - 1)
         return lam, light, start, best
 
-    @njit(cache=True)
+    @njit(cache=True, nogil=True)
     def adc_bits(level, noise, scale, top, floor):  # pragma: no cover - compiled
         """(R, m) bool ``clip(round(level * scale + noise), 0, top) / scale >= floor`` (the ADC and the
         no-reading floor of :func:`swarm_envs.sensing.range_bearing.decode_ids`' start bits); ``noise``
@@ -846,7 +846,7 @@ if HAVE_NUMBA:
                 out[r, j] = c / scale >= floor
         return out
 
-    @njit(cache=True)
+    @njit(cache=True, nogil=True)
     def unit_mean_positions(e, valid, inv, cos_t, sin_t, init):  # pragma: no cover - compiled
         """End of :func:`swarm_envs.sensing.scale_free.coordinates_all` after the (numpy) ``exp``: lengths
         ``e`` (N, K) where ``valid`` (sorted slots), NaN elsewhere, divided by each robot's mean valid length
@@ -885,7 +885,7 @@ if HAVE_NUMBA:
                 xy[u, s, 1] = fs[src] * sin_t[u, s]
         return f, vout, xy
 
-    @njit(cache=True)
+    @njit(cache=True, nogil=True)
     def priority_independent_set_sorted(prio, u, v):  # pragma: no cover - compiled
         """:func:`priority_independent_set` for edges sorted by ``u`` (the IR links, sorted by receiver),
         without building an adjacency list: in decreasing priority a node fires unless a fired node listed
@@ -920,7 +920,7 @@ if HAVE_NUMBA:
                 blocked[v[e]] = True
         return fired, True
 
-    @njit(cache=True)
+    @njit(cache=True, nogil=True)
     def slot_keys(ids, th, two_pi, id_max):  # pragma: no cover - compiled
         """Slot validity and sort keys of :func:`swarm_envs.sensing.scale_free.coordinates_all` in one pass:
         ``ok = (ids >= 0) & isfinite(th)``, ``key_b = mod(th, two_pi)`` where ok else inf (numpy's float mod:
@@ -953,7 +953,7 @@ if HAVE_NUMBA:
             cap += deg * (deg - 1)
         return ok, key_b, key_id, cap
 
-    @njit(cache=True)
+    @njit(cache=True, nogil=True)
     def store_deliveries(r, o, own_b, hit, ids, th, now, tab_ids, tab_bear, tab_time, row_ids, row_bear, row_time):  # pragma: no cover - compiled
         """In place table update of :meth:`swarm_envs.sensing.exchange.BearingExchange.receive`, one delivery
         after the other (reference: the numpy waves of ``_store``, one delivery per receiver and wave, which
