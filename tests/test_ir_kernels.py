@@ -88,7 +88,8 @@ def test_threaded_gain_kernel_equals_the_serial_kernel_bit_for_bit(name):
 
 
 def test_compute_links_on_threads_equals_one_thread(monkeypatch):
-    """A scene large enough for the threaded gain kernel gives the same links as with one thread."""
+    """A scene large enough for the threaded gain kernel and occluder search gives the same links as with
+    one thread."""
     platform = get_platform("epuck")
     rng = np.random.default_rng(5)
     positions, headings = _dense_scene(platform, 500, 5.0, rng)
@@ -102,6 +103,8 @@ def test_compute_links_on_threads_equals_one_thread(monkeypatch):
     for links in (threaded, on_three):
         for name in ("rx", "tx", "distance", "rel_position", "rel_heading", "gains", "emitter_sums"):
             np.testing.assert_array_equal(getattr(links, name), getattr(serial, name))
+        for got, expected in zip(links.occluders, serial.occluders):  # the threaded occluder search too
+            np.testing.assert_array_equal(got, expected)
 
 
 def _sequential_sums(gains):
@@ -228,6 +231,25 @@ def test_occluder_lists_equal_the_exact_segment_test_near_the_disc_edge():
         np.testing.assert_array_equal(idx[offsets[p] : offsets[p + 1]], expected)
         n_edge += len(expected)
     assert n_edge > 100
+
+
+@pytest.mark.parametrize("name", ["droplet", "epuck"])
+def test_threaded_occluder_search_equals_the_serial_search_bit_for_bit(name):
+    """occluders_kernel_threaded (robots' lists sorted and pairs searched in chunks, gathered in order)
+    gives exactly the serial kernel's lists for any chunk count, more chunks than pairs included."""
+    platform = get_platform(name)
+    pos, _ = _dense_scene(platform, 150, 1.5 * platform.ir_range, np.random.default_rng(37))
+    tree = cKDTree(pos)
+    pairs = tree.query_pairs(platform.ir_range, output_type="ndarray")
+    a, b = np.ascontiguousarray(pairs[:, 0], dtype=np.int64), np.ascontiguousarray(pairs[:, 1], dtype=np.int64)
+    w = layer.occluder_width(platform)
+    length = float(np.hypot(*(pos[b] - pos[a]).T).max())
+    serial = layer._occluder_lists(pos, a, b, w, tree, length, pairs, platform.ir_range)
+    assert len(serial[1]) > 100 and (np.diff(serial[0]) == 0).any()
+    for chunks in (1, 2, 3, 7, len(a) + 5):
+        threaded = layer._occluder_lists(pos, a, b, w, tree, length, pairs, platform.ir_range, chunks)
+        np.testing.assert_array_equal(threaded[0], serial[0])
+        np.testing.assert_array_equal(threaded[1], serial[1])
 
 
 @pytest.mark.parametrize("name", ["droplet", "epuck"])

@@ -24,7 +24,7 @@ try:  # numba is optional: an accelerator, not a requirement
 except ImportError:  # pragma: no cover - exercised only without numba
     HAVE_NUMBA = False
 
-__all__ = ["HAVE_NUMBA", "MODEL_IDS", "model_params", "gains_kernel", "gains_kernel_threaded", "occluders_kernel", "neighbour_csr_kernel", "occluder_frames_kernel", "directed_pairs_kernel"]
+__all__ = ["HAVE_NUMBA", "MODEL_IDS", "model_params", "gains_kernel", "gains_kernel_threaded", "occluders_kernel", "occluders_kernel_threaded", "neighbour_csr_kernel", "occluder_frames_kernel", "directed_pairs_kernel"]
 
 #: model class name -> kernel model id
 MODEL_IDS = {"DropletIR": 0, "EpuckIR": 1, "RoneIR": 2, "DropletLowPowerIR": 3}
@@ -427,11 +427,42 @@ if HAVE_NUMBA:
         outcome, candidates kept by an index increment; the few within the margin get the exact test after
         the pair's loop.
         """
-        P, N = rx.shape[0], positions.shape[0]
-        # each robot's neighbours by increasing distance (insertion sort: the lists are short)
-        near = nbrs.copy()
-        dist2 = np.empty(nbrs.shape[0])
-        for r in range(N):
+        N = positions.shape[0]
+        near, dist2 = nbrs.copy(), np.empty(nbrs.shape[0])
+        _sort_neighbours(0, N, positions, starts, counts, near, dist2)
+        base, cnt, idx = _occluder_buffers(rx, tx, counts, 1)
+        _occluders_chunk(0, rx.shape[0], base[0], positions, width, rx, tx, starts, counts, near, dist2, cnt, idx)
+        return _occluders_gather(base, cnt, idx, 1)
+
+    @njit(cache=True, error_model="numpy", parallel=True)
+    def occluders_kernel_threaded(
+        positions: np.ndarray,
+        width: float,
+        rx: np.ndarray,
+        tx: np.ndarray,
+        starts: np.ndarray,
+        counts: np.ndarray,
+        nbrs: np.ndarray,
+        n_chunks: int,
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """:func:`occluders_kernel` on numba's threads: robots' lists sorted and pairs searched in ``n_chunks``
+        contiguous chunks, one thread each, every pair by the same code into its own part of the buffer,
+        then gathered in order; the same result bit for bit, whatever the number of chunks or threads."""
+        N, P = positions.shape[0], rx.shape[0]
+        n_chunks = max(1, n_chunks)
+        near, dist2 = nbrs.copy(), np.empty(nbrs.shape[0])
+        for k in prange(n_chunks):
+            _sort_neighbours((N * k) // n_chunks, (N * (k + 1)) // n_chunks, positions, starts, counts, near, dist2)
+        base, cnt, idx = _occluder_buffers(rx, tx, counts, n_chunks)
+        for k in prange(n_chunks):
+            _occluders_chunk((P * k) // n_chunks, (P * (k + 1)) // n_chunks, base[k], positions, width, rx, tx, starts, counts, near, dist2, cnt, idx)
+        return _occluders_gather(base, cnt, idx, n_chunks)
+
+    @njit(cache=True, error_model="numpy")
+    def _sort_neighbours(r0: int, r1: int, positions: np.ndarray, starts: np.ndarray, counts: np.ndarray, near: np.ndarray, dist2: np.ndarray) -> None:
+        """Neighbour lists of robots ``r0:r1`` (``near``, in place) by increasing distance, squared distances
+        into ``dist2`` (insertion sort: the lists are short)."""
+        for r in range(r0, r1):
             s0 = starts[r]
             for q in range(s0, s0 + counts[r]):
                 k = near[q]
@@ -443,13 +474,33 @@ if HAVE_NUMBA:
                     q2 -= 1
                 dist2[q2] = d2
                 near[q2] = k
-        offsets = np.zeros(P + 1, dtype=np.int64)
-        idx = np.empty(max(16, 2 * P), dtype=np.int64)
-        K = 0
+
+    @njit(cache=True, error_model="numpy")
+    def _occluder_buffers(rx: np.ndarray, tx: np.ndarray, counts: np.ndarray, n_chunks: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Buffers of an occluder search in ``n_chunks`` chunks of pairs: the start of each chunk's part of
+        ``idx`` (n_chunks + 1,), per-pair counts (P,) and ``idx``, sized by the candidates of both ends of
+        every pair (a pair's occluders are among them)."""
+        P = rx.shape[0]
+        base = np.zeros(n_chunks + 1, dtype=np.int64)
+        for k in range(n_chunks):
+            acc = 0
+            for p in range((P * k) // n_chunks, (P * (k + 1)) // n_chunks):
+                acc += counts[rx[p]] + counts[tx[p]]
+            base[k + 1] = base[k] + acc
+        return base, np.zeros(P, dtype=np.int64), np.empty(max(1, base[n_chunks]), dtype=np.int64)
+
+    @njit(cache=True, error_model="numpy")
+    def _occluders_chunk(
+        p0: int, p1: int, K: int, positions: np.ndarray, width: float, rx: np.ndarray, tx: np.ndarray, starts: np.ndarray,
+        counts: np.ndarray, near: np.ndarray, dist2: np.ndarray, cnt: np.ndarray, idx: np.ndarray,
+    ) -> None:
+        """Occluders of pairs ``p0:p1`` (:func:`occluders_kernel`), each pair's sorted, one after the other into
+        ``idx`` from ``K`` on; their numbers into ``cnt``."""
         w2 = width * width
         w2_hi, w2_lo = w2 * (1.0 + _DISC_TOL), w2 * (1.0 - _DISC_TOL)
-        grey = np.empty(max(1, 2 * N), dtype=np.int64)  # one pair's candidates near the disc edge
-        for p in range(P):
+        grey = np.empty(max(1, 2 * positions.shape[0]), dtype=np.int64)  # one pair's candidates near the disc edge
+        for p in range(p0, p1):
+            K0 = K
             a, b = rx[p], tx[p]
             ax, ay = positions[a, 0], positions[a, 1]
             sx, sy = positions[b, 0] - ax, positions[b, 1] - ay
@@ -462,10 +513,6 @@ if HAVE_NUMBA:
             x1, y1 = ax + sx, ay + sy
             tx_, ty_ = x1 - ax, y1 - ay
             T2 = tx_ * tx_ + ty_ * ty_
-            if K + counts[a] + counts[b] > idx.shape[0]:
-                grown = np.empty(2 * (K + counts[a] + counts[b]), dtype=np.int64)
-                grown[:K] = idx[:K]
-                idx = grown
             n_grey = 0
             for e in range(2):
                 end = a if e == 0 else b
@@ -495,13 +542,26 @@ if HAVE_NUMBA:
                 if _segment_hits_disc(ax, ay, x1, y1, positions[k, 0], positions[k, 1], w2):
                     idx[K] = k
                     K += 1
-            for q in range(offsets[p] + 1, K):  # insertion sort: each pair's occluders in robot order
+            for q in range(K0 + 1, K):  # insertion sort: each pair's occluders in robot order
                 q2 = q
-                while q2 > offsets[p] and idx[q2 - 1] > idx[q2]:
+                while q2 > K0 and idx[q2 - 1] > idx[q2]:
                     idx[q2 - 1], idx[q2] = idx[q2], idx[q2 - 1]
                     q2 -= 1
-            offsets[p + 1] = K
-        return offsets, idx[:K].copy()
+            cnt[p] = K - K0
+
+    @njit(cache=True, error_model="numpy")
+    def _occluders_gather(base: np.ndarray, cnt: np.ndarray, idx: np.ndarray, n_chunks: int) -> tuple[np.ndarray, np.ndarray]:
+        """CSR (offsets (P + 1,), robots (K,)) from the chunks' parts of ``idx`` (:func:`_occluder_buffers`)."""
+        P = cnt.shape[0]
+        offsets = np.zeros(P + 1, dtype=np.int64)
+        for p in range(P):
+            offsets[p + 1] = offsets[p] + cnt[p]
+        out = np.empty(offsets[P], dtype=np.int64)
+        for k in range(n_chunks):
+            first = (P * k) // n_chunks
+            n = offsets[(P * (k + 1)) // n_chunks] - offsets[first]
+            out[offsets[first] : offsets[first] + n] = idx[base[k] : base[k] + n]
+        return offsets, out
 
     @njit(cache=True, error_model="numpy")
     def neighbour_csr_kernel(positions: np.ndarray, pairs: np.ndarray, reach2: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -345,12 +345,14 @@ def _occluder_lists(
     max_length: float | None = None,
     near_pairs: np.ndarray | None = None,
     near_range: float = 0.0,
+    threads: int = 1,
 ) -> tuple[np.ndarray, np.ndarray]:
     """CSR (offsets (P + 1,), robots (K,)) of the third robots closer than ``width`` to segment a[p]-b[p].
     ``max_length``: the longest segment (m) if known (to within 1e-12 m), else computed. ``near_pairs``
     (U, 2): unordered pairs known to include every pair of robots closer than ``near_range`` (m) (e.g.
     the KD-tree's candidate pairs): the neighbour lists are taken from them instead of a second KD-tree
-    query when the lists' reach is shorter (compiled path)."""
+    query when the lists' reach is shorter (compiled path). ``threads`` > 1: the compiled search runs on that
+    many of numba's threads (:func:`gain_threads`; same result bit for bit)."""
     P, N = a.shape[0], positions.shape[0]
     if P == 0 or N < 3:
         return np.zeros(P + 1, dtype=np.int64), np.zeros(0, dtype=np.int64)
@@ -370,6 +372,8 @@ def _occluder_lists(
             starts, counts, nbrs = kernels.neighbour_csr_kernel(positions, np.ascontiguousarray(near_pairs, dtype=np.int64), reach2)
         else:
             starts, counts, nbrs = _neighbour_csr(positions, reach, tree)
+        if threads > 1:
+            return kernels.occluders_kernel_threaded(positions, float(width), a, b, starts, counts, nbrs, int(threads))
         return kernels.occluders_kernel(positions, float(width), a, b, starts, counts, nbrs)
     starts, counts, nbrs = _neighbour_csr(positions, reach, tree)
     pairs, cands = [], []
@@ -481,17 +485,17 @@ def compute_links(
     if occlusion == "centre":
         pairs = pairs[line_of_sight(positions, platform.radius, pairs[:, 0], pairs[:, 1], tree)]
     rx, tx, pair_of, rel, rel_cs, rel_heading, distance = _directed_pairs(pairs, positions, headings)
+    threads = gain_threads(rx.shape[0]) if copy is None else 1
     occluders = None
     if occlusion == "ray":
         # occluders once per unordered pair, then in each receiver's frame
         a, b = (np.ascontiguousarray(pairs[:, k], dtype=np.int64) for k in (0, 1))
-        offsets, idx = _occluder_lists(positions, a, b, occluder_width(platform), tree, float(distance.max()), pairs, r)
+        offsets, idx = _occluder_lists(positions, a, b, occluder_width(platform), tree, float(distance.max()), pairs, r, threads)
         occluders = _occluder_frames(positions, headings, rx, pair_of, offsets, idx)
     if occluders is None:
         offsets, xy = np.zeros(rx.shape[0] + 1, dtype=np.int64), np.zeros((0, 2))
     else:
         offsets, xy = occluders
-    threads = gain_threads(rx.shape[0]) if copy is None else 1
     gains, lit, sums = _gains(rel, rel_heading, platform, platform.ir_model, offsets, xy, drop_zero, rel_cs, threads)
     rows = np.arange(rx.shape[0])
     if drop_zero and lit.shape[0] < rx.shape[0]:
@@ -500,7 +504,7 @@ def compute_links(
 
 
 def gain_threads(n_pairs: int) -> int:
-    """Threads for the gain kernel of one scene of ``n_pairs`` candidate directed pairs: numba's thread
+    """Threads for the gain kernel and occluder search of one scene of ``n_pairs`` candidate directed pairs: numba's thread
     count (``NUMBA_NUM_THREADS``, default all cores; ``numba.set_num_threads``) from
     :data:`THREADED_MIN_PAIRS` pairs on (about 370 e-puck robots at the flocking default density), else 1.
 
