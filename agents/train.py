@@ -55,7 +55,7 @@ from swarm_envs.agents.evaluation import (
     write_csv,
 )
 
-__all__ = ["main", "TrainError", "planned_timesteps", "load_checkpoint", "plot_learning_curve"]
+__all__ = ["main", "TrainError", "planned_timesteps", "load_checkpoint", "plot_learning_curve", "is_interrupt"]
 
 #: exit code after Ctrl-C (128 + SIGINT), as shells report it
 EXIT_INTERRUPTED = 130
@@ -66,6 +66,15 @@ RESULT_FILES = ("results.csv", "results.md", "per_seed.json")
 
 class TrainError(Exception):
     """Bad input found by train.py (output directory, checkpoint); reported as one line, exit code 2."""
+
+
+def is_interrupt(err: BaseException) -> bool:
+    """Whether ``err`` is Ctrl-C: a ``KeyboardInterrupt``, or the ``SystemError`` CPython raises in its place
+    when the signal arrives just as a compiled (numba) function returns ("... returned a result with an
+    exception set", caused by the ``KeyboardInterrupt``)."""
+    if isinstance(err, KeyboardInterrupt):
+        return True
+    return isinstance(err, SystemError) and isinstance(err.__cause__ or err.__context__, KeyboardInterrupt)
 
 
 def env_kwargs_of(cfg: dict[str, Any]) -> dict[str, Any]:
@@ -233,7 +242,9 @@ def train(cfg: dict[str, Any], out: Path) -> tuple[Any, float, bool]:
     t0 = time.perf_counter()
     try:
         model.learn(budget, callback=callbacks)  # SB3 dumps a row per iteration, before that iteration's update
-    except KeyboardInterrupt:
+    except (KeyboardInterrupt, SystemError) as err:
+        if not is_interrupt(err):
+            raise
         interrupted = True
         if threading.current_thread() is threading.main_thread():
             signal.signal(signal.SIGINT, signal.SIG_IGN)  # a second Ctrl-C must not cut the save short
@@ -423,7 +434,9 @@ def main(argv: list[str] | None = None) -> int:
     except TrainError as err:
         print(f"error: {err}", file=sys.stderr)
         return EXIT_BAD_INPUT
-    except KeyboardInterrupt:
+    except (KeyboardInterrupt, SystemError) as err:
+        if not is_interrupt(err):
+            raise
         where = {"setup": "before training started; nothing saved",
                  "train": "while setting up training; nothing saved",
                  "eval": f"during evaluation; the model is saved in {state.get('model', '?')}",

@@ -72,3 +72,30 @@ def test_ctrl_c_saves_model_and_config(tmp_path):
     assert cfg["train"]["total_timesteps"] == 10_000_000 and cfg["agent"]["scripted"] == "bearing_aggregation"
     assert json.loads((out / "timing.json").read_text())["interrupted"] is True
     assert not (out / "results.csv").exists()
+
+
+def _ctrl_c_in_compiled_code():
+    """The SystemError CPython raises when Ctrl-C arrives as a compiled function returns."""
+    try:
+        raise KeyboardInterrupt
+    except KeyboardInterrupt as interrupt:
+        raise SystemError("CPUDispatcher(<function kernel>) returned a result with an exception set") from interrupt
+
+
+def test_ctrl_c_surfacing_as_a_systemerror_is_an_interrupt(monkeypatch, capsys):
+    from swarm_envs.agents import train
+
+    with pytest.raises(SystemError) as caught:
+        _ctrl_c_in_compiled_code()
+    assert train.is_interrupt(caught.value) and train.is_interrupt(KeyboardInterrupt())
+    assert not train.is_interrupt(SystemError("something else")) and not train.is_interrupt(ValueError())
+    monkeypatch.setattr(train, "_run", lambda args, state: _ctrl_c_in_compiled_code())
+    assert train.main(["--config", str(ROOT / "configs" / "aggregation.yaml")]) == 130
+    assert capsys.readouterr().err.startswith("interrupted by Ctrl-C before training started")
+
+    def other_error(args, state):
+        raise SystemError("a real bug")
+
+    monkeypatch.setattr(train, "_run", other_error)
+    with pytest.raises(SystemError, match="a real bug"):
+        train.main(["--config", str(ROOT / "configs" / "aggregation.yaml")])
