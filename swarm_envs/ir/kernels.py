@@ -19,6 +19,7 @@ try:  # numba is optional: an accelerator, not a requirement
     from numba import prange
 
     from swarm_envs._numba import njit  # numba.njit whose cache recovers from corrupted files
+    from swarm_envs._vecmath import power_into
 
     HAVE_NUMBA = True
 except ImportError:  # pragma: no cover - exercised only without numba
@@ -129,22 +130,27 @@ if HAVE_NUMBA:
 
     @njit(cache=True, inline="always", error_model="numpy")
     def _epuck_rays(
-        out: np.ndarray, sums: np.ndarray, dets: np.ndarray, ems: np.ndarray, det_pos: np.ndarray, dcos: np.ndarray, dsin: np.ndarray,
+        out: np.ndarray, dets: np.ndarray, ems: np.ndarray, det_pos: np.ndarray, dcos: np.ndarray, dsin: np.ndarray,
         ex: np.ndarray, ey: np.ndarray, eax: np.ndarray, eay: np.ndarray, occ_xy: np.ndarray, q0: int, q1: int, r2: float,
-        k_m: float, o_m: float, d_sat_cm: float,
-    ) -> bool:
-        """e-puck gains of one pair's candidate rays into ``out`` (n_d, n_e) [T20 Eqs. (7),(24),(25),(27)] and
-        their sums over emitters into ``sums`` (n_d,) (rays in (detector, emitter) order, so each detector's
-        sum runs in emitter order); True if one is lit. Same values as :func:`_gain` without a square root or division per ray: with
+        k_m: float, o_m: float, d_sat_cm: float, far_at: np.ndarray, far_L2: np.ndarray, n_far: int,
+    ) -> tuple[bool, int]:
+        """e-puck gains of one pair's candidate rays into ``out`` (n_d, n_e) [T20 Eqs. (7),(24),(25),(27)];
+        returns (True if one is lit, ``n_far``). Same values as :func:`_gain` without a square root or division per ray: with
         ``dx`` the ray (detector -> emitter), ``nd = dx . u_i = |dx| cos(detector angle)`` and
         ``ne = -dx . a_j = |dx| cos(emitter angle)``, ``ce^7 cd^3 h_m = ne^7 nd^3 / L2^5 h_m`` and, beyond
         d_sat, ``h_m = o_m (100 |dx|)^k_m = o_m 100^k_m L2^(k_m / 2)``. A ray is dark when nd or ne <= 0;
         when one of them is within 1e-12 m of 0 (where rounding could flip the sign) the reference's
-        cosines decide and give the gain, so exactly the same rays are lit."""
+        cosines decide and give the gain, so exactly the same rays are lit.
+
+        A ray beyond d_sat gets only its factor ``ne^7 nd^3 o_m 100^k_m`` here; its position ``i * n_e + j``
+        and ``L2`` are appended to ``far_at``/``far_L2`` at ``n_far`` (returned advanced), and the caller
+        multiplies by ``L2^(k_m / 2 - 5)`` for many rays at once (:func:`_finish_far_rays`). That factor is
+        > 1e-124 (nd, ne >= 1e-12 m) and the power >= 0.4 (L2 < 1.2 m^2), so the ray is lit exactly when the
+        factor is > 0."""
         any_lit = False
         d_sat2 = (d_sat_cm / 100.0) ** 2
-        expo = 0.5 * k_m - 5.0
         scale = o_m * 100.0**k_m
+        ne_ = out.shape[1]
         for a in range(dets.shape[0]):
             i = dets[a]
             x0, y0, dc, ds = det_pos[i, 0], det_pos[i, 1], dcos[i], dsin[i]
@@ -174,7 +180,6 @@ if HAVE_NUMBA:
                     ce2 = ce * ce
                     g = ce2 * ce2 * ce2 * ce * cd * cd * cd * hm
                     out[i, j] = g
-                    sums[i] += g
                     any_lit = any_lit or g > 0.0
                     continue
                 ne2 = ne * ne
@@ -182,13 +187,36 @@ if HAVE_NUMBA:
                 if L2 <= d_sat2:  # h_m = 1
                     L4 = L2 * L2
                     g = num / (L4 * L4 * L2)
-                else:
-                    g = num * scale * math.exp(expo * math.log(L2))
+                else:  # the power later (docstring)
+                    g = num * scale
+                    far_at[n_far] = i * ne_ + j
+                    far_L2[n_far] = L2
+                    n_far += 1
                 out[i, j] = g
-                sums[i] += g
                 if g > 0.0:
                     any_lit = True
-        return any_lit
+        return any_lit, n_far
+
+    @njit(cache=True, error_model="numpy")
+    def _finish_far_rays(
+        out: np.ndarray, sums: np.ndarray, row0: int, row1: int, far_at: np.ndarray, far_L2: np.ndarray, n_far: int, expo: float, power: np.ndarray
+    ) -> None:
+        """The e-puck rows ``row0:row1`` of ``out`` (P, n_d, n_e), whose far rays (flat positions in ``out``
+        ``far_at[:n_far]``, squared lengths ``far_L2``) hold their factor only (:func:`_epuck_rays`): multiplied
+        by ``L2^expo`` (:func:`swarm_envs._vecmath.power_into`, one vectorised pass), then each detector's
+        sum over emitters into ``sums`` rows, sequentially in emitter order from 0.0 (dark rays add 0.0,
+        which changes no sum: the sums of the lit rays in that order, as documented)."""
+        power_into(far_L2[:n_far], expo, power[:n_far])
+        flat = out.reshape(-1)
+        for k in range(n_far):
+            flat[far_at[k]] = flat[far_at[k]] * power[k]
+        nd, ne = out.shape[1], out.shape[2]
+        for row in range(row0, row1):
+            for i in range(nd):
+                acc = 0.0
+                for j in range(ne):
+                    acc += out[row, i, j]
+                sums[row, i] = acc
 
     @njit(cache=True, inline="always", error_model="numpy")
     def _pair_row(
@@ -196,19 +224,22 @@ if HAVE_NUMBA:
         det_pos: np.ndarray, dcos: np.ndarray, dsin: np.ndarray, det_self: np.ndarray, rho_d: float,
         em_pos: np.ndarray, ecos: np.ndarray, esin: np.ndarray, em_self: np.ndarray, rho_e: float,
         kind: int, prm: np.ndarray, ir_range: float, occ_xy: np.ndarray, r2: float,
-        ex: np.ndarray, ey: np.ndarray, eax: np.ndarray, eay: np.ndarray, dets: np.ndarray, ems: np.ndarray,
-    ) -> bool:
+        scratch: np.ndarray, dets: np.ndarray, ems: np.ndarray, far_at: np.ndarray, far_L2: np.ndarray, n_far: int,
+    ) -> tuple[bool, int]:
         """One pair's gain row ``out_row`` (n_d, n_e) and its emitter sums ``sums_row`` (n_d,), zeroed then
         filled (:func:`gains_kernel`): transmitter centre (Rx, Ry) and heading (c, s) in the receiver frame,
-        candidate occluders ``occ_xy[q0:q1]``; ``ex`` .. ``ems`` are scratch arrays. True if a ray is lit."""
+        candidate occluders ``occ_xy[q0:q1]``; ``scratch`` (4, n_e), ``dets``, ``ems`` are scratch arrays.
+        Returns (True if a ray is lit, ``n_far``): e-puck rows are finished later (their far rays appended
+        to ``far_at``/``far_L2`` from ``n_far`` on, sums not filled; :func:`_epuck_rays`)."""
         nd, ne = dcos.shape[0], ecos.shape[0]
+        ex, ey, eax, eay = scratch[0], scratch[1], scratch[2], scratch[3]
         margin = 1e-9
         prune_det = kind == 1 or (kind == 2 and prm[3] > 0.0)
         prune_em = kind == 1 or (kind == 2 and prm[4] > 0.0)
         out_row[:] = 0.0
         sums_row[:] = 0.0
         if math.sqrt(Rx * Rx + Ry * Ry) > ir_range:
-            return False
+            return False, n_far
         n_em = 0
         for j in range(ne):  # TX emitters and their axes in the RX frame
             ex[j] = Rx + c * em_pos[j, 0] - s * em_pos[j, 1]
@@ -223,7 +254,8 @@ if HAVE_NUMBA:
             n_det += np.int64((not prune_det) | (Rx * dcos[i] + Ry * dsin[i] + rho_e - det_self[i] >= -margin))
         if kind == 1:
             return _epuck_rays(
-                out_row, sums_row, dets[:n_det], ems[:n_em], det_pos, dcos, dsin, ex, ey, eax, eay, occ_xy, q0, q1, r2, prm[0], prm[1], prm[2]
+                out_row, dets[:n_det], ems[:n_em], det_pos, dcos, dsin, ex, ey, eax, eay, occ_xy, q0, q1, r2, prm[0], prm[1], prm[2],
+                far_at, far_L2, n_far,
             )
         any_lit = False
         for a in range(n_det):
@@ -246,7 +278,7 @@ if HAVE_NUMBA:
                     sums_row[i] += g  # rays in (detector, emitter) order: emitter order per detector
                     if g > 0.0:
                         any_lit = True
-        return any_lit
+        return any_lit, n_far
 
     @njit(cache=True, error_model="numpy")
     def gains_kernel(
@@ -386,22 +418,38 @@ if HAVE_NUMBA:
         for j in range(ne):
             em_self[j] = em_pos[j, 0] * ecos[j] + em_pos[j, 1] * esin[j]
             rho_e = max(rho_e, math.sqrt(em_pos[j, 0] ** 2 + em_pos[j, 1] ** 2))
-        ex = np.empty(ne)
-        ey = np.empty(ne)
-        eax = np.empty(ne)
-        eay = np.empty(ne)
+        scratch = np.empty((4, ne))
         dets = np.empty(nd, dtype=np.int64)
         ems = np.empty(ne, dtype=np.int64)
+        # e-puck far rays waiting for their power (_epuck_rays), finished every ~64 pairs while the rows are
+        # still in cache
+        far_cap = 64 * nd * ne
+        far_at = np.empty(far_cap, dtype=np.int64)
+        far_L2 = np.empty(far_cap)
+        power = np.empty(far_cap)
+        expo = 0.5 * prm[0] - 5.0
+        n_far = 0
+        done = start  # rows before this one are finished
         n_lit = 0
         for p in range(start, stop):
             row = start + n_lit if compact else p
-            if _pair_row(
+            lit_p, n_new = _pair_row(
                 out[row], sums[row], rel_position[p, 0], rel_position[p, 1], rel_cos_sin[p, 0], rel_cos_sin[p, 1],
                 occ_offsets[p], occ_offsets[p + 1], det_pos, dcos, dsin, det_self, rho_d, em_pos, ecos, esin, em_self,
-                rho_e, kind, prm, ir_range, occ_xy, r2, ex, ey, eax, eay, dets, ems,
-            ):
+                rho_e, kind, prm, ir_range, occ_xy, r2, scratch, dets, ems, far_at, far_L2, n_far,
+            )
+            if lit_p:  # (a far ray makes its pair lit: an unlit pair appended none)
+                for k in range(n_far, n_new):
+                    far_at[k] += row * nd * ne
+                n_far = n_new
                 lit[start + n_lit] = p
                 n_lit += 1
+            if kind == 1 and n_far > far_cap - nd * ne:
+                end = start + n_lit if compact else p + 1
+                _finish_far_rays(out, sums, done, end, far_at, far_L2, n_far, expo, power)
+                done, n_far = end, 0
+        if kind == 1:
+            _finish_far_rays(out, sums, done, start + n_lit if compact else stop, far_at, far_L2, n_far, expo, power)
         return n_lit
 
     @njit(cache=True, error_model="numpy")
