@@ -23,6 +23,7 @@ from typing import Any
 
 import numpy as np
 
+from swarm_envs._worker import worker
 from swarm_envs.observation import ObservationLayout, nearest_slots, pack_nearest, range_bearing_rows
 from swarm_envs.sensing.base import SensorFrame
 from swarm_envs.task import BatchState, Task
@@ -123,10 +124,17 @@ class SwarmCore:
         payloads = None
         if self.layout.message_bits:
             payloads = (act[:, 2:] > 0) & ~self.static[:, None]  # static robots send no application messages
-        self.frame = self.sensing.step(self.positions, self.headings, payloads, row_moving if payloads is not None else None)
         self.num_cycles[moving] += 1
         state = self.state()
-        self.rewards, self.terms, self.metrics = self.task.rewards(state, starting)
+        # a large single scene (the sensing's last step said so): the rewards, from the ground truth only, on
+        # the worker thread while the sensing runs here (swarm_envs._worker; same result)
+        rewards = worker().submit(self.task.rewards, state, starting) if getattr(self.sensing, "large_scene", False) else None
+        try:
+            self.frame = self.sensing.step(self.positions, self.headings, payloads, row_moving if payloads is not None else None)
+        finally:  # never leave the worker running on the task's state
+            if rewards is not None:
+                rewards.exception()  # waits
+        self.rewards, self.terms, self.metrics = self.task.rewards(state, starting) if rewards is None else rewards.result()
         self._starting[:] = False
 
     def _gather(self) -> None:

@@ -64,7 +64,7 @@ except ImportError:  # pragma: no cover - exercised only without numba
 
 if _HAVE_NUMBA:
 
-    @njit(cache=True)
+    @njit(cache=True, nogil=True)
     def _neighbourhood_sums_kernel(values: np.ndarray, pairs: np.ndarray):  # pragma: no cover - compiled
         """:func:`neighbourhood_sums`: pairs in (i, j) order reach row r first from pairs (i, r), i < r
         increasing, then from pairs (r, j), j increasing."""
@@ -79,7 +79,7 @@ if _HAVE_NUMBA:
             counts[j] += 1
         return sums, counts
 
-    @njit(cache=True)
+    @njit(cache=True, nogil=True)
     def _component_stats_kernel(pairs: np.ndarray, B: int, N: int):  # pragma: no cover - compiled
         """(largest component size (B,) float, number of components (B,) int) of the graph of ``pairs``
         over B copies of N rows, by union-find (union by index, path halving)."""

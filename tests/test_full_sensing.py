@@ -123,8 +123,9 @@ def test_droplet_near_model_in_the_env():
 
 @pytest.mark.parametrize("platform", ["droplet", "epuck"])
 def test_range_bearing_on_the_worker_thread_gives_the_same_steps(platform, monkeypatch):
-    """Range & bearing on the worker thread, alongside SwarmCom (large single scenes), gives the same
-    observations, rewards and sensing statistics bit for bit as on the calling thread."""
+    """Range & bearing on the worker thread, alongside SwarmCom, and then the rewards alongside the sensing
+    (large single scenes) give the same observations, rewards and infos bit for bit as on the calling
+    thread."""
     import swarm_envs.sensing.full as full
 
     def run(on_worker):

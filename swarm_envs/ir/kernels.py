@@ -197,7 +197,7 @@ if HAVE_NUMBA:
                     any_lit = True
         return any_lit, n_far
 
-    @njit(cache=True, error_model="numpy")
+    @njit(cache=True, error_model="numpy", nogil=True)
     def _finish_far_rays(
         out: np.ndarray, sums: np.ndarray, row0: int, row1: int, far_at: np.ndarray, far_L2: np.ndarray, n_far: int, expo: float, power: np.ndarray
     ) -> None:
@@ -280,7 +280,7 @@ if HAVE_NUMBA:
                         any_lit = True
         return any_lit, n_far
 
-    @njit(cache=True, error_model="numpy")
+    @njit(cache=True, error_model="numpy", nogil=True)
     def gains_kernel(
         rel_position: np.ndarray,
         rel_cos_sin: np.ndarray,
@@ -332,7 +332,7 @@ if HAVE_NUMBA:
             return out[:n_lit], lit[:n_lit].copy(), sums[:n_lit]
         return out, lit[:n_lit].copy(), sums
 
-    @njit(cache=True, error_model="numpy", parallel=True)
+    @njit(cache=True, error_model="numpy", parallel=True, nogil=True)
     def gains_kernel_threaded(
         rel_position: np.ndarray,
         rel_cos_sin: np.ndarray,
@@ -377,7 +377,7 @@ if HAVE_NUMBA:
             n_lit += counts[k]
         return out[:n_lit], lit[:n_lit].copy(), sums[:n_lit]
 
-    @njit(cache=True, error_model="numpy")
+    @njit(cache=True, error_model="numpy", nogil=True)
     def _gains_chunk(
         start: int,
         stop: int,
@@ -452,7 +452,7 @@ if HAVE_NUMBA:
             _finish_far_rays(out, sums, done, start + n_lit if compact else stop, far_at, far_L2, n_far, expo, power)
         return n_lit
 
-    @njit(cache=True, error_model="numpy")
+    @njit(cache=True, error_model="numpy", nogil=True)
     def occluders_kernel(
         positions: np.ndarray,
         width: float,
@@ -482,7 +482,7 @@ if HAVE_NUMBA:
         _occluders_chunk(0, rx.shape[0], base[0], positions, width, rx, tx, starts, counts, near, dist2, cnt, idx)
         return _occluders_gather(base, cnt, idx, 1)
 
-    @njit(cache=True, error_model="numpy", parallel=True)
+    @njit(cache=True, error_model="numpy", parallel=True, nogil=True)
     def occluders_kernel_threaded(
         positions: np.ndarray,
         width: float,
@@ -506,7 +506,7 @@ if HAVE_NUMBA:
             _occluders_chunk((P * k) // n_chunks, (P * (k + 1)) // n_chunks, base[k], positions, width, rx, tx, starts, counts, near, dist2, cnt, idx)
         return _occluders_gather(base, cnt, idx, n_chunks)
 
-    @njit(cache=True, error_model="numpy")
+    @njit(cache=True, error_model="numpy", nogil=True)
     def _sort_neighbours(r0: int, r1: int, positions: np.ndarray, starts: np.ndarray, counts: np.ndarray, near: np.ndarray, dist2: np.ndarray) -> None:
         """Neighbour lists of robots ``r0:r1`` (``near``, in place) by increasing distance, squared distances
         into ``dist2`` (insertion sort: the lists are short)."""
@@ -523,7 +523,7 @@ if HAVE_NUMBA:
                 dist2[q2] = d2
                 near[q2] = k
 
-    @njit(cache=True, error_model="numpy")
+    @njit(cache=True, error_model="numpy", nogil=True)
     def _occluder_buffers(rx: np.ndarray, tx: np.ndarray, counts: np.ndarray, n_chunks: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Buffers of an occluder search in ``n_chunks`` chunks of pairs: the start of each chunk's part of
         ``idx`` (n_chunks + 1,), per-pair counts (P,) and ``idx``, sized by the candidates of both ends of
@@ -537,7 +537,7 @@ if HAVE_NUMBA:
             base[k + 1] = base[k] + acc
         return base, np.zeros(P, dtype=np.int64), np.empty(max(1, base[n_chunks]), dtype=np.int64)
 
-    @njit(cache=True, error_model="numpy")
+    @njit(cache=True, error_model="numpy", nogil=True)
     def _occluders_chunk(
         p0: int, p1: int, K: int, positions: np.ndarray, width: float, rx: np.ndarray, tx: np.ndarray, starts: np.ndarray,
         counts: np.ndarray, near: np.ndarray, dist2: np.ndarray, cnt: np.ndarray, idx: np.ndarray,
@@ -597,7 +597,7 @@ if HAVE_NUMBA:
                     q2 -= 1
             cnt[p] = K - K0
 
-    @njit(cache=True, error_model="numpy")
+    @njit(cache=True, error_model="numpy", nogil=True)
     def _occluders_gather(base: np.ndarray, cnt: np.ndarray, idx: np.ndarray, n_chunks: int) -> tuple[np.ndarray, np.ndarray]:
         """CSR (offsets (P + 1,), robots (K,)) from the chunks' parts of ``idx`` (:func:`_occluder_buffers`)."""
         P = cnt.shape[0]
@@ -611,7 +611,7 @@ if HAVE_NUMBA:
             out[offsets[first] : offsets[first] + n] = idx[base[k] : base[k] + n]
         return offsets, out
 
-    @njit(cache=True, error_model="numpy")
+    @njit(cache=True, error_model="numpy", nogil=True)
     def neighbour_csr_kernel(positions: np.ndarray, pairs: np.ndarray, reach2: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Neighbour lists as CSR (starts (N,), counts (N,), neighbours) from the unordered ``pairs`` (U, 2):
         both ends of every pair whose squared centre distance (computed as :func:`occluders_kernel` does)
@@ -645,7 +645,7 @@ if HAVE_NUMBA:
             fill[b] += 1
         return starts, counts, nbrs
 
-    @njit(cache=True, error_model="numpy")
+    @njit(cache=True, error_model="numpy", nogil=True)
     def occluder_frames_kernel(
         positions: np.ndarray, cos_h: np.ndarray, sin_h: np.ndarray, rx: np.ndarray, pair_of: np.ndarray, offsets: np.ndarray, idx: np.ndarray
     ) -> tuple[np.ndarray, np.ndarray]:
@@ -668,7 +668,7 @@ if HAVE_NUMBA:
                 q2 += 1
         return out_off, xy
 
-    @njit(cache=True, error_model="numpy")
+    @njit(cache=True, error_model="numpy", nogil=True)
     def directed_pairs_kernel(
         pairs: np.ndarray, positions: np.ndarray, headings: np.ndarray, cos_h: np.ndarray, sin_h: np.ndarray
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:

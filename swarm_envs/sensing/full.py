@@ -36,11 +36,11 @@ Channel and sensor statistics go to ``infos[agent]["sensing", name]``.
 
 from __future__ import annotations
 
-from concurrent.futures import ThreadPoolExecutor
 from typing import Any
 
 import numpy as np
 
+from swarm_envs._worker import worker
 from swarm_envs.comm.channel import recommended_relative_threshold
 from swarm_envs.comm.network import Network
 from swarm_envs.copies import CopyRandom
@@ -65,23 +65,13 @@ BEACON_KIND = "bearing_beacon"  # SwarmCom system kind of the header-only beacon
 _STAT_NAMES = ("tx_started", "deferrals", "rx_delivered", "rx_lost", "collisions", "bits_checked", "bit_errors")
 
 
-_WORKER: ThreadPoolExecutor | None = None
-
-
-def _worker() -> ThreadPoolExecutor:
-    """The process's one worker thread of :func:`rb_on_worker_thread` (created on first use)."""
-    global _WORKER
-    if _WORKER is None:
-        _WORKER = ThreadPoolExecutor(max_workers=1, thread_name_prefix="swarm_envs-sensing")
-    return _WORKER
-
-
 def rb_on_worker_thread(n_links: int, n_copies: int) -> bool:
-    """Whether range & bearing runs on a worker thread while SwarmCom runs on the calling thread: for a
-    single scene (``n_copies == 1``) large enough for the gain kernel's threads (:func:`gain_threads` of its
-    ``n_links`` links: numba on more than one thread, called from the main thread). The two read the same
-    links, draw from their own streams and touch disjoint state, and their compiled kernels release the
-    GIL (``nogil``), so the result is the same bit for bit either way; batches of copies stay on one thread."""
+    """Whether range & bearing runs on the worker thread (:mod:`swarm_envs._worker`) while SwarmCom runs on
+    the calling thread: for a single scene (``n_copies == 1``) large enough for the gain kernel's threads
+    (:func:`gain_threads` of its ``n_links`` links: numba on more than one thread, called from the main
+    thread). The two read the same links, draw from their own streams and touch disjoint state, and their
+    compiled kernels release the GIL (``nogil``), so the result is the same bit for bit either way; batches
+    of copies stay on one thread."""
     return n_copies == 1 and gain_threads(n_links) > 1
 
 
@@ -104,6 +94,8 @@ class FullSensing:
         self.method = config["scale_free_method"]
         self.hops = int(config["scale_free_k"])
         self.copy_of = np.repeat(np.arange(self.n_copies), self.copy_size)
+        #: whether the last step's scene was large enough for the worker thread (:func:`rb_on_worker_thread`)
+        self.large_scene = False
         # one stack for all copies; each module keeps one generator per copy (placeholders until reset)
         streams = [CopyRandom([np.random.default_rng(0) for _ in range(self.n_copies)]) for _ in range(4)]
         self.rb: RangeBearingSensor | None = None
@@ -175,10 +167,11 @@ class FullSensing:
         links = compute_links(positions, headings, self.platform, copy=self.copy_of if self.n_copies > 1 else None)
 
         # range & bearing (large single scenes: on the worker thread, while SwarmCom runs here)
+        self.large_scene = rb_on_worker_thread(len(links), self.n_copies)
         rb_future = None
         if self.has_range:
-            if rb_on_worker_thread(len(links), self.n_copies):
-                rb_future = _worker().submit(self.rb.step, links)
+            if self.large_scene:
+                rb_future = worker().submit(self.rb.step, links)
             else:
                 rb = self.rb.step(links)
                 neighbours = NeighbourReadings(rb.rx, rb.tx, rb.range, rb.bearing, rb.heading, rb.age.astype(float))

@@ -98,7 +98,7 @@ def _link_geometry(positions: np.ndarray, headings: np.ndarray, rx: np.ndarray, 
 if _HAVE_NUMBA:
     from swarm_envs.observation import wrap_difference_scalar
 
-    @njit(cache=True)
+    @njit(cache=True, nogil=True)
     def _link_geometry_kernel(positions: np.ndarray, headings: np.ndarray, rx: np.ndarray, tx: np.ndarray):  # pragma: no cover - compiled
         """:func:`_link_geometry` in one pass (the same IEEE operations as the numpy path)."""
         P = len(rx)
@@ -114,7 +114,7 @@ if _HAVE_NUMBA:
             heading[q] = wrap_difference_scalar(headings[t], headings[r])
         return dx, dy, heading_rx, heading
 
-    @njit(cache=True)
+    @njit(cache=True, nogil=True)
     def _scale_free_kernel(order: np.ndarray, distance: np.ndarray, cos_sin: np.ndarray, mean_distance: np.ndarray):  # pragma: no cover - compiled
         """Slot (r, c): ``distance * (cos, sin) / scale`` of its link, scale = robot r's mean neighbour
         distance (1 if not positive); zero for empty slots (the numpy path's operations, in its order)."""
@@ -129,7 +129,7 @@ if _HAVE_NUMBA:
                     out[r, c, 1] = distance[o] * cos_sin[r, c, 1] / scale
         return out
 
-    @njit(cache=True)
+    @njit(cache=True, nogil=True)
     def _copy_pairs_kernel(positions: np.ndarray, m: int, r2: float) -> np.ndarray:  # pragma: no cover - compiled
         """Pairs i < j of each copy of ``m`` rows with dx^2 + dy^2 <= r2, in (i, j) order (one pass into a
         buffer of the n (m - 1) / 2 pairs the copies have at most)."""
@@ -148,7 +148,7 @@ if _HAVE_NUMBA:
                         p += 1
         return out[:p]
 
-    @njit(cache=True)
+    @njit(cache=True, nogil=True)
     def _grid_pairs_kernel(positions: np.ndarray, m: int, r2: float, cell: float) -> np.ndarray:  # pragma: no cover - compiled
         """Pairs i < j of each copy of ``m`` rows with dx^2 + dy^2 <= r2, in (i, j) order: robots binned in
         square cells of side ``cell`` (>= the range; doubled until there are at most ~4 m cells), each
@@ -224,7 +224,7 @@ if _HAVE_NUMBA:
                     p += 1
         return out[:p].copy()
 
-    @njit(cache=True)
+    @njit(cache=True, nogil=True)
     def _directed_links_kernel(pairs: np.ndarray, n_rows: int):  # pragma: no cover - compiled
         """Row r's links in (rx, tx) order: first tx < r (pairs (tx, r), met in increasing tx), then tx > r
         (pairs (r, tx), also increasing) -- a counting sort, no comparison sort."""
