@@ -506,7 +506,7 @@ if HAVE_NUMBA:
             _occluders_chunk((P * k) // n_chunks, (P * (k + 1)) // n_chunks, base[k], positions, width, rx, tx, starts, counts, near, dist2, cnt, idx)
         return _occluders_gather(base, cnt, idx, n_chunks)
 
-    @njit(cache=True, error_model="numpy", nogil=True)
+    @njit(cache=True, inline="always", error_model="numpy", nogil=True)
     def _sort_neighbours(r0: int, r1: int, positions: np.ndarray, starts: np.ndarray, counts: np.ndarray, near: np.ndarray, dist2: np.ndarray) -> None:
         """Neighbour lists of robots ``r0:r1`` (``near``, in place) by increasing distance, squared distances
         into ``dist2`` (insertion sort: the lists are short)."""
@@ -523,7 +523,7 @@ if HAVE_NUMBA:
                 dist2[q2] = d2
                 near[q2] = k
 
-    @njit(cache=True, error_model="numpy", nogil=True)
+    @njit(cache=True, inline="always", error_model="numpy", nogil=True)
     def _occluder_buffers(rx: np.ndarray, tx: np.ndarray, counts: np.ndarray, n_chunks: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Buffers of an occluder search in ``n_chunks`` chunks of pairs: the start of each chunk's part of
         ``idx`` (n_chunks + 1,), per-pair counts (P,) and ``idx``, sized by the candidates of both ends of
@@ -537,7 +537,7 @@ if HAVE_NUMBA:
             base[k + 1] = base[k] + acc
         return base, np.zeros(P, dtype=np.int64), np.empty(max(1, base[n_chunks]), dtype=np.int64)
 
-    @njit(cache=True, error_model="numpy", nogil=True)
+    @njit(cache=True, inline="always", error_model="numpy", nogil=True)
     def _occluders_chunk(
         p0: int, p1: int, K: int, positions: np.ndarray, width: float, rx: np.ndarray, tx: np.ndarray, starts: np.ndarray,
         counts: np.ndarray, near: np.ndarray, dist2: np.ndarray, cnt: np.ndarray, idx: np.ndarray,
@@ -597,7 +597,7 @@ if HAVE_NUMBA:
                     q2 -= 1
             cnt[p] = K - K0
 
-    @njit(cache=True, error_model="numpy", nogil=True)
+    @njit(cache=True, inline="always", error_model="numpy", nogil=True)
     def _occluders_gather(base: np.ndarray, cnt: np.ndarray, idx: np.ndarray, n_chunks: int) -> tuple[np.ndarray, np.ndarray]:
         """CSR (offsets (P + 1,), robots (K,)) from the chunks' parts of ``idx`` (:func:`_occluder_buffers`)."""
         P = cnt.shape[0]
