@@ -168,13 +168,12 @@ class FullSensing:
 
         # range & bearing (large single scenes: on the worker thread, while SwarmCom runs here)
         self.large_scene = rb_on_worker_thread(len(links), self.n_copies)
-        rb_future = None
+        rb_future = rb = None
         if self.has_range:
             if self.large_scene:
                 rb_future = worker().submit(self.rb.step, links)
             else:
                 rb = self.rb.step(links)
-                neighbours = NeighbourReadings(rb.rx, rb.tx, rb.range, rb.bearing, rb.heading, rb.age.astype(float))
 
         # SwarmCom: application payloads and the bearing exchange share the channel
         net = self.network
@@ -196,6 +195,7 @@ class FullSensing:
                 rb_future.exception()  # waits
         if rb_future is not None:
             rb = rb_future.result()
+        if rb is not None:
             neighbours = NeighbourReadings(rb.rx, rb.tx, rb.range, rb.bearing, rb.heading, rb.age.astype(float))
         # sector bearings measured on the decoded frames (any kind)
         sectors = self.bearings.step(deliveries, links) if self.bearings is not None else None
