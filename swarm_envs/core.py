@@ -118,19 +118,31 @@ class SwarmCore:
         act = np.where(self.static[:, None], 0.0, act)
         p = self.platform
         row_moving = moving[self.copy_of_robot]
-        step_worlds([self.worlds[b] for b in np.flatnonzero(moving)], act[row_moving, 0] * p.max_speed, act[row_moving, 1] * p.max_angular_speed, DT)
-        self.last_actions[row_moving] = act[row_moving]
-        self._gather()
         payloads = None
         if self.layout.message_bits:
             payloads = (act[:, 2:] > 0) & ~self.static[:, None]  # static robots send no application messages
+        sending = row_moving if payloads is not None else None
+        # a large single scene (the sensing's last step said so): the part of the sensing step that reads
+        # nothing the physics changes (queueing the messages, drawing the channel's random numbers) on the
+        # worker thread while the physics runs here (chipmunk and the kernels release the GIL; same result)
+        large = getattr(self.sensing, "large_scene", False)
+        prepared = worker().submit(self.sensing.prepare_step, payloads, sending) if large else None
+        try:
+            step_worlds([self.worlds[b] for b in np.flatnonzero(moving)], act[row_moving, 0] * p.max_speed, act[row_moving, 1] * p.max_angular_speed, DT)
+        finally:  # never leave the worker running on the sensing's state
+            if prepared is not None:
+                prepared.exception()  # waits
+        self.last_actions[row_moving] = act[row_moving]
+        self._gather()
         self.num_cycles[moving] += 1
         state = self.state()
-        # a large single scene (the sensing's last step said so): the rewards, from the ground truth only, on
-        # the worker thread while the sensing runs here (swarm_envs._worker; same result)
-        rewards = worker().submit(self.task.rewards, state, starting) if getattr(self.sensing, "large_scene", False) else None
+        # and the rewards, from the ground truth only, on the worker thread while the sensing runs here
+        rewards = worker().submit(self.task.rewards, state, starting) if large else None
         try:
-            self.frame = self.sensing.step(self.positions, self.headings, payloads, row_moving if payloads is not None else None)
+            if prepared is None:
+                self.frame = self.sensing.step(self.positions, self.headings, payloads, sending)
+            else:
+                self.frame = self.sensing.step(self.positions, self.headings, prepared=prepared.result())
         finally:  # never leave the worker running on the task's state
             if rewards is not None:
                 rewards.exception()  # waits

@@ -123,9 +123,9 @@ def test_droplet_near_model_in_the_env():
 
 @pytest.mark.parametrize("platform", ["droplet", "epuck"])
 def test_range_bearing_on_the_worker_thread_gives_the_same_steps(platform, monkeypatch):
-    """Range & bearing on the worker thread, alongside SwarmCom, and then the rewards alongside the sensing
-    (large single scenes) give the same observations, rewards and infos bit for bit as on the calling
-    thread."""
+    """Range & bearing on the worker thread, alongside SwarmCom, the channel's random numbers drawn there
+    while the physics runs, and the rewards alongside the sensing (large single scenes) give the same
+    observations, rewards and infos bit for bit as on the calling thread."""
     import swarm_envs.sensing.full as full
 
     def run(on_worker):
@@ -163,3 +163,20 @@ def test_an_error_on_the_worker_thread_reaches_the_caller(monkeypatch):
     monkeypatch.setattr(env.unwrapped.core.sensing.rb, "step", broken)
     with pytest.raises(RuntimeError, match="range & bearing failed"):
         env.step({a: np.zeros(env.action_space(a).shape, np.float32) for a in env.agents})
+
+
+def test_an_error_drawing_ahead_on_the_worker_reaches_the_caller(monkeypatch):
+    import swarm_envs.sensing.full as full
+
+    monkeypatch.setattr(full, "rb_on_worker_thread", lambda n_links, n_copies: True)
+    env = swarm_envs.make("swarm_envs/Aggregation-v0", n_robots=10, sensing="full", platform="epuck")
+    env.reset(seed=0)
+    zeros = {a: np.zeros(env.action_space(a).shape, np.float32) for a in env.agents}
+    env.step(zeros)  # the sensing now calls the scene large: the next step draws ahead on the worker
+
+    def broken(payloads, sending):
+        raise RuntimeError("drawing ahead failed")
+
+    monkeypatch.setattr(env.unwrapped.core.sensing, "prepare_step", broken)
+    with pytest.raises(RuntimeError, match="drawing ahead failed"):
+        env.step(zeros)

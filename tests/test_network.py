@@ -283,3 +283,40 @@ def test_other_platforms_run_the_same_protocol(platform, d):
         got += [d_.payload[i, :8] for i in range(len(d_))]
     assert len(got) == len(sent) and all(np.array_equal(a, b) for a, b in zip(got, sent))
     assert net.stats["bit_errors"] == 0
+
+
+@pytest.mark.parametrize("bitrate", [310, 315])
+def test_prepared_steps_deliver_the_same_frames(bitrate):
+    """Drawing a step's random numbers ahead (prepare_step, before the payloads are queued, as the core does
+    while the physics runs) gives the same deliveries, statistics and generator state as drawing them in
+    step; 315 bps (31.5 slots per step) exercises the slot-clock remainder."""
+    rng0 = np.random.default_rng(4)
+    pos = np.stack([np.arange(10) * 0.07, np.zeros(10)], -1)
+    links = compute_links(pos, rng0.uniform(-np.pi, np.pi, 10), "epuck")
+
+    def run(ahead):
+        net = Network("epuck", 10, np.random.default_rng(8), bitrate=bitrate, comm_mode="flooding")
+        out, slots = [], []
+        for k in range(12):
+            prepared = net.prepare_step() if ahead else None
+            if k % 2 == 0:
+                net.send_many(np.arange(k % 3, 10, 3), np.ones((len(range(k % 3, 10, 3)), 8), bool))
+            d = net.step(links, prepared)
+            out.append((d.receiver.tolist(), d.origin.tolist(), d.seq.tolist(), d.payload.tolist()))
+            slots.append(net.stats["slots"])
+        return out, slots, net.rng.generators[0].bit_generator.state
+
+    ahead, inline = run(True), run(False)
+    assert ahead == inline
+    assert sum(len(step[0]) for step in ahead[0]) > 0
+    if bitrate == 315:
+        assert sorted(set(np.diff(ahead[1]))) == [31, 32]
+
+
+def test_a_prepared_step_is_for_one_step_only():
+    links, net = _pair(0.05, np.random.default_rng(0))
+    prepared = net.prepare_step()
+    net.step(links, prepared)
+    net.step(links)
+    with pytest.raises(ValueError, match="another step"):
+        net.step(links, prepared)

@@ -70,7 +70,7 @@ from swarm_envs.comm.protocol import (
 )
 from swarm_envs.platforms import Platform, get_platform
 
-__all__ = ["Network", "Deliveries", "BITRATES", "COMM_MODES", "BACKENDS"]
+__all__ = ["Network", "Deliveries", "PreparedStep", "BITRATES", "COMM_MODES", "BACKENDS"]
 
 BITRATES = (310, 650, 1080, 1160, 1670, 1800)  # bps offered by the e-puck hardware [T20 Sec. 5]
 COMM_MODES = ("broadcast", "flooding")
@@ -131,6 +131,19 @@ class Deliveries:
             transmitter=None if self.transmitter is None else self.transmitter[m],
             stats=self.stats,
         )
+
+
+@dataclass(frozen=True)
+class PreparedStep:
+    """A step's slot count and random numbers drawn ahead (:meth:`Network.prepare_step`): ``slots`` bit
+    slots, the network's slot clock ``first_slot`` and remainder ``carry_before`` it was drawn at, the
+    remainder ``carry_after`` the step leaves, and ``draws``."""
+
+    slots: int
+    first_slot: int
+    carry_before: float
+    carry_after: float
+    draws: StepDraws
 
 
 def _ranges(start: np.ndarray, stop: np.ndarray) -> np.ndarray:
@@ -451,9 +464,19 @@ class Network:
             self.csma.request(newly)  # access delay before the first carrier sense, drawn next step
 
     # ------------------------------------------------------------------ the step
-    def step(self, links: Any) -> Deliveries:
+    def prepare_step(self) -> PreparedStep:
+        """This step's slot count and every random number of it (:meth:`draw_step`), drawn ahead: they depend
+        on neither the links nor the queues, so they can be drawn while the physics runs (another thread;
+        :class:`swarm_envs.core.BatchCore`). Pass the result to the next :meth:`step`; a prepared step that
+        is never used leaves the streams advanced by one step's draws."""
+        total = self.carry + self.bitrate * self.dt
+        S = int(np.floor(total + 1e-9))
+        return PreparedStep(S, self.slot, self.carry, total - S, self.draw_step(S))
+
+    def step(self, links: Any, prepared: PreparedStep | None = None) -> Deliveries:
         """Simulate one control step of ``bitrate * dt`` bit slots over the given IR links
-        (:class:`swarm_envs.ir.layer.IRLinks` of the current poses) and return what was delivered."""
+        (:class:`swarm_envs.ir.layer.IRLinks` of the current poses) and return what was delivered.
+        ``prepared``: this step's draws from :meth:`prepare_step` (default: drawn now; same numbers)."""
         self._step_stats = self._new_step_stats()
         n, nd = self.n, self.n_det
         a = self.adc_model
@@ -492,10 +515,12 @@ class Network:
             sig_rx = rx[significant]
             sig_ptr = np.searchsorted(tx[significant], np.arange(n + 1))
 
-        total = self.carry + self.bitrate * self.dt
-        S = int(np.floor(total + 1e-9))
-        self.carry = total - S
-        draws = self.draw_step(S)
+        if prepared is None:
+            prepared = self.prepare_step()
+        elif prepared.first_slot != self.slot or prepared.carry_before != self.carry:
+            raise ValueError("prepared was made for another step of this network (prepare_step, then step, once each)")
+        S, draws = prepared.slots, prepared.draws
+        self.carry = prepared.carry_after
         self.csma.draw_requested(draws.access)
         if self.backend == "numba":
             deliveries = self._slots_kernel(S, draws, tx_ptr, rx, G, sig_ptr, sig_rx)

@@ -42,7 +42,7 @@ import numpy as np
 
 from swarm_envs._worker import worker
 from swarm_envs.comm.channel import recommended_relative_threshold
-from swarm_envs.comm.network import Network
+from swarm_envs.comm.network import Network, PreparedStep
 from swarm_envs.copies import CopyRandom
 from swarm_envs.ir.layer import compute_links, gain_threads
 from swarm_envs.ir.models import RoneIR
@@ -159,23 +159,12 @@ class FullSensing:
             self.bearings.reset(copies, [c[3] for c in children])
 
     # ------------------------------------------------------------------------------------------------
-    def step(
-        self, positions: np.ndarray, headings: np.ndarray, payloads: np.ndarray | None, sending: np.ndarray | None = None
-    ) -> SensorFrame:
-        """One control step of sensing (module docstring); ``payloads`` (N, b) bool or None; ``sending``
-        (N,) bool: robots whose payload may be queued this step (default all)."""
-        links = compute_links(positions, headings, self.platform, copy=self.copy_of if self.n_copies > 1 else None)
-
-        # range & bearing (large single scenes: on the worker thread, while SwarmCom runs here)
-        self.large_scene = rb_on_worker_thread(len(links), self.n_copies)
-        rb_future = rb = None
-        if self.has_range:
-            if self.large_scene:
-                rb_future = worker().submit(self.rb.step, links)
-            else:
-                rb = self.rb.step(links)
-
-        # SwarmCom: application payloads and the bearing exchange share the channel
+    def prepare_step(self, payloads: np.ndarray | None, sending: np.ndarray | None = None) -> PreparedStep:
+        """The part of a step that reads nothing the physics changes: the application ``payloads`` (N, b)
+        bool or None are queued (robots with an empty transmit queue, among ``sending`` (N,) bool, default
+        all), then the bearing exchange's messages or the beacons, and the channel's random numbers of the
+        step are drawn (:meth:`Network.prepare_step`). :class:`swarm_envs.core.BatchCore` runs it on the
+        worker thread while the physics of a large scene runs; pass the result to :meth:`step`."""
         net = self.network
         if payloads is not None and self.message_bits > 0:
             free = net.q_count == 0
@@ -188,8 +177,37 @@ class FullSensing:
             self.exchange.send(net)
         elif self.bearings is not None:
             self.bearings.send_beacons(net, BEACON_KIND)
+        return net.prepare_step()
+
+    def step(
+        self,
+        positions: np.ndarray,
+        headings: np.ndarray,
+        payloads: np.ndarray | None = None,
+        sending: np.ndarray | None = None,
+        prepared: PreparedStep | None = None,
+    ) -> SensorFrame:
+        """One control step of sensing (module docstring) at the robots' ``positions`` (N, 2) m and
+        ``headings`` (N,) rad: :meth:`prepare_step` with ``payloads`` and ``sending``, or its result
+        ``prepared`` when it has run already (then ``payloads`` must be None), then the links and sensors."""
+        if prepared is None:
+            prepared = self.prepare_step(payloads, sending)
+        elif payloads is not None:
+            raise ValueError("payloads were queued by prepare_step; pass either payloads or prepared")
+        links = compute_links(positions, headings, self.platform, copy=self.copy_of if self.n_copies > 1 else None)
+
+        # range & bearing (large single scenes: on the worker thread, while SwarmCom runs here)
+        self.large_scene = rb_on_worker_thread(len(links), self.n_copies)
+        rb_future = rb = None
+        if self.has_range:
+            if self.large_scene:
+                rb_future = worker().submit(self.rb.step, links)
+            else:
+                rb = self.rb.step(links)
+
+        # SwarmCom: application payloads and the bearing exchange share the channel (queued by prepare_step)
         try:
-            deliveries = net.step(links)
+            deliveries = self.network.step(links, prepared)
         finally:  # never leave the worker running on this sensor's state
             if rb_future is not None:
                 rb_future.exception()  # waits
