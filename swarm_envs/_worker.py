@@ -11,11 +11,17 @@ bit for bit either way. One thread, in submission order.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
+from typing import TypeVar
 
-__all__ = ["worker"]
+__all__ = ["worker", "run_chunks"]
+
+T = TypeVar("T")
 
 _WORKER: ThreadPoolExecutor | None = None
+_HELPERS: ThreadPoolExecutor | None = None
+_HELPER_COUNT = 0
 
 
 def worker() -> ThreadPoolExecutor:
@@ -24,3 +30,27 @@ def worker() -> ThreadPoolExecutor:
     if _WORKER is None:
         _WORKER = ThreadPoolExecutor(max_workers=1, thread_name_prefix="swarm_envs-worker")
     return _WORKER
+
+
+def run_chunks(chunk: Callable[[int], T], n_chunks: int) -> list[T]:
+    """``[chunk(0), ..., chunk(n_chunks - 1)]``, chunk 0 on the calling thread and the others on helper
+    threads (a pool of its own, not the worker, grown to ``n_chunks - 1`` threads on demand): for compiled
+    kernels that release the GIL and write disjoint parts of shared arrays (the IR layer's gain kernel and
+    occluder search on a large scene). The helpers wait on a lock between calls, so an idle helper takes no
+    core from the worker thread or the physics. Waits for every chunk; the first chunk's error (in
+    chunk order) is raised."""
+    global _HELPERS, _HELPER_COUNT
+    if n_chunks <= 1:
+        return [chunk(0)] if n_chunks == 1 else []
+    if _HELPERS is None or _HELPER_COUNT < n_chunks - 1:
+        old, _HELPERS = _HELPERS, ThreadPoolExecutor(max_workers=n_chunks - 1, thread_name_prefix="swarm_envs-helper")
+        _HELPER_COUNT = n_chunks - 1
+        if old is not None:
+            old.shutdown(wait=False)
+    futures = [_HELPERS.submit(chunk, k) for k in range(1, n_chunks)]
+    try:
+        first = chunk(0)
+    finally:  # never return while a helper still writes into the caller's arrays
+        for f in futures:
+            f.exception()  # waits
+    return [first, *(f.result() for f in futures)]

@@ -16,10 +16,9 @@ import math
 import numpy as np
 
 try:  # numba is optional: an accelerator, not a requirement
-    from numba import prange
-
     from swarm_envs._numba import njit  # numba.njit whose cache recovers from corrupted files
     from swarm_envs._vecmath import power_into
+    from swarm_envs._worker import run_chunks
 
     HAVE_NUMBA = True
 except ImportError:  # pragma: no cover - exercised only without numba
@@ -332,7 +331,6 @@ if HAVE_NUMBA:
             return out[:n_lit], lit[:n_lit].copy(), sums[:n_lit]
         return out, lit[:n_lit].copy(), sums
 
-    @njit(cache=True, error_model="numpy", parallel=True, nogil=True)
     def gains_kernel_threaded(
         rel_position: np.ndarray,
         rel_cos_sin: np.ndarray,
@@ -348,26 +346,35 @@ if HAVE_NUMBA:
         occ_radius: float,
         n_chunks: int,
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """:func:`gains_kernel` with ``compact=True`` on numba's threads: the pairs are cut into ``n_chunks``
-        contiguous chunks, each filled (and compacted within its own rows) by one thread, then the chunks'
-        lit rows are moved together in order. Every row is computed by the same code as the serial kernel,
-        so the result is the same bit for bit, whatever the number of chunks or threads."""
+        """:func:`gains_kernel` with ``compact=True`` on ``n_chunks`` threads (this one and the helper threads
+        of :func:`swarm_envs._worker.run_chunks`): the pairs are cut into contiguous chunks, each filled (and
+        compacted within its own rows) by one thread, then the chunks' lit rows are moved together in order
+        (:func:`_gather_gain_chunks`). Every row is computed by the same code as the serial kernel, so the
+        result is the same bit for bit, whatever the number of chunks or threads."""
         P, nd, ne = rel_position.shape[0], det_pos.shape[0], em_pos.shape[0]
         out = np.empty((P, nd, ne))
         sums = np.empty((P, nd))
         lit = np.empty(P, dtype=np.int64)
-        n_chunks = max(1, min(n_chunks, P))
-        bounds = np.empty(n_chunks + 1, dtype=np.int64)
-        for k in range(n_chunks + 1):
-            bounds[k] = (P * k) // n_chunks
-        counts = np.zeros(n_chunks, dtype=np.int64)
-        for k in prange(n_chunks):
-            counts[k] = _gains_chunk(
+        n_chunks = max(1, min(int(n_chunks), P))
+        bounds = [(P * k) // n_chunks for k in range(n_chunks + 1)]
+
+        def chunk(k: int) -> int:
+            return _gains_chunk(
                 bounds[k], bounds[k + 1], out, sums, lit, rel_position, rel_cos_sin, det_pos, det_dir, em_pos,
                 em_dir, kind, params, ir_range, occ_offsets, occ_xy, occ_radius, True,
             )
+
+        counts = np.asarray(run_chunks(chunk, n_chunks), dtype=np.int64)
+        return _gather_gain_chunks(out, sums, lit, np.asarray(bounds, dtype=np.int64), counts)
+
+    @njit(cache=True, error_model="numpy", nogil=True)
+    def _gather_gain_chunks(
+        out: np.ndarray, sums: np.ndarray, lit: np.ndarray, bounds: np.ndarray, counts: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The lit rows of chunks ``bounds[k]:bounds[k + 1]`` (``counts[k]`` rows each, at the chunk's start)
+        moved together in chunk order: (gains, lit, sums) of :func:`gains_kernel_threaded`."""
         n_lit = counts[0]
-        for k in range(1, n_chunks):  # rows only move towards the front: a forward copy is safe
+        for k in range(1, counts.shape[0]):  # rows only move towards the front: a forward copy is safe
             for q in range(counts[k]):
                 src, dst = bounds[k] + q, n_lit + q
                 if src != dst:
@@ -482,7 +489,6 @@ if HAVE_NUMBA:
         _occluders_chunk(0, rx.shape[0], base[0], positions, width, rx, tx, starts, counts, near, dist2, cnt, idx)
         return _occluders_gather(base, cnt, idx, 1)
 
-    @njit(cache=True, error_model="numpy", parallel=True, nogil=True)
     def occluders_kernel_threaded(
         positions: np.ndarray,
         width: float,
@@ -493,17 +499,41 @@ if HAVE_NUMBA:
         nbrs: np.ndarray,
         n_chunks: int,
     ) -> tuple[np.ndarray, np.ndarray]:
-        """:func:`occluders_kernel` on numba's threads: robots' lists sorted and pairs searched in ``n_chunks``
-        contiguous chunks, one thread each, every pair by the same code into its own part of the buffer,
-        then gathered in order; the same result bit for bit, whatever the number of chunks or threads."""
+        """:func:`occluders_kernel` on ``n_chunks`` threads (this one and the helper threads of
+        :func:`swarm_envs._worker.run_chunks`): robots' lists sorted and pairs searched in contiguous chunks,
+        one thread each, every pair by the same code into its own part of the buffer, then gathered in
+        order; the same result bit for bit, whatever the number of chunks or threads."""
         N, P = positions.shape[0], rx.shape[0]
-        n_chunks = max(1, n_chunks)
+        n_chunks = max(1, int(n_chunks))
         near, dist2 = nbrs.copy(), np.empty(nbrs.shape[0])
-        for k in prange(n_chunks):
-            _sort_neighbours((N * k) // n_chunks, (N * (k + 1)) // n_chunks, positions, starts, counts, near, dist2)
-        base, cnt, idx = _occluder_buffers(rx, tx, counts, n_chunks)
-        for k in prange(n_chunks):
-            _occluders_chunk((P * k) // n_chunks, (P * (k + 1)) // n_chunks, base[k], positions, width, rx, tx, starts, counts, near, dist2, cnt, idx)
+        run_chunks(lambda k: _sort_neighbours_kernel((N * k) // n_chunks, (N * (k + 1)) // n_chunks, positions, starts, counts, near, dist2), n_chunks)
+        base, cnt, idx = _occluder_buffers_kernel(rx, tx, counts, n_chunks)
+        run_chunks(
+            lambda k: _occluders_chunk_kernel(
+                (P * k) // n_chunks, (P * (k + 1)) // n_chunks, base[k], positions, float(width), rx, tx, starts, counts, near, dist2, cnt, idx
+            ),
+            n_chunks,
+        )
+        return _occluders_gather_kernel(base, cnt, idx, n_chunks)
+
+    # entry points of the threaded search: the inlined helpers below, each compiled on its own
+    @njit(cache=True, error_model="numpy", nogil=True)
+    def _sort_neighbours_kernel(r0: int, r1: int, positions: np.ndarray, starts: np.ndarray, counts: np.ndarray, near: np.ndarray, dist2: np.ndarray) -> None:
+        _sort_neighbours(r0, r1, positions, starts, counts, near, dist2)
+
+    @njit(cache=True, error_model="numpy", nogil=True)
+    def _occluder_buffers_kernel(rx: np.ndarray, tx: np.ndarray, counts: np.ndarray, n_chunks: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        return _occluder_buffers(rx, tx, counts, n_chunks)
+
+    @njit(cache=True, error_model="numpy", nogil=True)
+    def _occluders_chunk_kernel(
+        p0: int, p1: int, K: int, positions: np.ndarray, width: float, rx: np.ndarray, tx: np.ndarray, starts: np.ndarray,
+        counts: np.ndarray, near: np.ndarray, dist2: np.ndarray, cnt: np.ndarray, idx: np.ndarray,
+    ) -> None:
+        _occluders_chunk(p0, p1, K, positions, width, rx, tx, starts, counts, near, dist2, cnt, idx)
+
+    @njit(cache=True, error_model="numpy", nogil=True)
+    def _occluders_gather_kernel(base: np.ndarray, cnt: np.ndarray, idx: np.ndarray, n_chunks: int) -> tuple[np.ndarray, np.ndarray]:
         return _occluders_gather(base, cnt, idx, n_chunks)
 
     @njit(cache=True, inline="always", error_model="numpy", nogil=True)

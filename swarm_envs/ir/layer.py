@@ -43,7 +43,7 @@ __all__ = [
 
 OCCLUSION_RULES = ("ray", "centre", "none")
 
-#: candidate directed pairs of one scene from which its gain kernel uses numba's threads (:func:`gain_threads`)
+#: candidate directed pairs of one scene from which its gain kernel uses threads (:func:`gain_threads`)
 THREADED_MIN_PAIRS = 16384
 
 
@@ -224,7 +224,7 @@ def _gains(
     ``sums`` (rows, n_d) the gains summed over emitters sequentially in emitter order (:class:`IRLinks`
     ``emitter_sums``). ``cos_sin`` (P, 2): cos and sin of ``psi`` if known (the kernel uses them; default
     from ``psi``). ``threads`` > 1 (with ``compact``): the compiled kernel splits the pairs over that many
-    of numba's threads (same result bit for bit)."""
+    threads (:func:`gain_threads`; same result bit for bit)."""
     if kernels.HAVE_NUMBA and type(model).__name__ in kernels.MODEL_IDS:
         kind, params = kernels.model_params(model)
         if cos_sin is None:
@@ -352,7 +352,7 @@ def _occluder_lists(
     (U, 2): unordered pairs known to include every pair of robots closer than ``near_range`` (m) (e.g.
     the KD-tree's candidate pairs): the neighbour lists are taken from them instead of a second KD-tree
     query when the lists' reach is shorter (compiled path). ``threads`` > 1: the compiled search runs on that
-    many of numba's threads (:func:`gain_threads`; same result bit for bit)."""
+    many threads (:func:`gain_threads`; same result bit for bit)."""
     P, N = a.shape[0], positions.shape[0]
     if P == 0 or N < 3:
         return np.zeros(P + 1, dtype=np.int64), np.zeros(0, dtype=np.int64)
@@ -507,11 +507,14 @@ def gain_threads(n_pairs: int) -> int:
     """Threads for the gain kernel and occluder search of one scene of ``n_pairs`` candidate directed pairs: numba's thread
     count (``NUMBA_NUM_THREADS``, default all cores; ``numba.set_num_threads``) from
     :data:`THREADED_MIN_PAIRS` pairs on (about 370 e-puck robots at the flocking default density), else 1.
+    The chunks run on the calling thread and the helper threads of :func:`swarm_envs._worker.run_chunks`
+    (the library's own, which wait on a lock when idle, so they take no core from the physics or the
+    worker thread; numba's own parallel threads spin for milliseconds after each parallel region).
 
     Only :func:`compute_links` of a single scene (``copy=None``: one env, as a large swarm is stepped)
     uses threads; a batch of copies stays on one thread (batched training scales with copies and worker
-    processes instead), and only from the main Python thread: numba's default threading layer
-    (workqueue) must not be entered from two Python threads at once. The result is the same bit for bit
+    processes instead), and only from the main Python thread (one large scene per process uses the
+    helpers; envs stepped from other threads stay on their thread). The result is the same bit for bit
     either way."""
     if n_pairs < THREADED_MIN_PAIRS or not kernels.HAVE_NUMBA or threading.current_thread() is not threading.main_thread():
         return 1
