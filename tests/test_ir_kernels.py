@@ -277,8 +277,8 @@ def test_neighbour_lists_from_the_candidate_pairs_give_the_same_occluders(name):
         assert sorted(nbrs[starts[r] : starts[r] + counts[r]]) == sorted(ref[2][ref[0][r] : ref[0][r] + ref[1][r]])
 
 
-def test_ray_blocked_verdicts_equal_the_exact_segment_test_near_the_disc_edge():
-    """_ray_blocked skips the division except near the radius: its verdicts equal _segment_hits_disc's,
+def test_disc_test_verdicts_equal_the_exact_segment_test_near_the_disc_edge():
+    """_hits_disc (the gain kernel's occlusion test) skips the division except near the radius: its verdicts equal _segment_hits_disc's,
     including rays that graze the disc within rounding and discs near either end."""
     rng = np.random.default_rng(31)
     r = 0.035
@@ -293,10 +293,10 @@ def test_ray_blocked_verdicts_equal_the_exact_segment_test_near_the_disc_edge():
         side = rng.choice([-1.0, 1.0])
         cx = x0 + t * dx - side * h * np.sin(phi)
         cy = y0 + t * dy + side * h * np.cos(phi)
-        xy = np.array([[cx, cy]])
         x1, y1 = x0 + dx, y0 + dy
         dx, dy = x1 - x0, y1 - y0  # as the kernel computes the ray
-        fast = kernels._ray_blocked(x0, y0, x1, y1, dx, dy, dx * dx + dy * dy, xy, 0, 1, r * r)
+        r2 = r * r
+        fast = kernels._hits_disc(x0, y0, x1, y1, dx, dy, dx * dx + dy * dy, cx, cy, r2, r2 * (1 + kernels._DISC_TOL), r2 * (1 - kernels._DISC_TOL))
         exact = kernels._segment_hits_disc(x0, y0, x1, y1, cx, cy, r * r)
         assert fast == exact
         n += exact

@@ -59,7 +59,7 @@ if HAVE_NUMBA:
 
     @njit(cache=True, inline="always", error_model="numpy")
     def _gain(kind: int, p0: float, p1: float, p2: float, p3: float, p4: float, p5: float, p6: float, p7: float, d_m: float, cd: float, ce: float) -> float:
-        # the e-puck (kind 1) has its own ray loop, _epuck_rays
+        # the e-puck (kind 1) has its own ray arithmetic, in _gains_chunk
         if kind == 2:  # r-one binary arcs [L Sec. 3.2]; p3, p4 = cos of the half arcs
             if d_m <= p2 and cd >= p3 and ce >= p4:
                 return 1.0
@@ -114,94 +114,12 @@ if HAVE_NUMBA:
             return False
         return cr2 <= r2_lo * L2 or _segment_hits_disc(x0, y0, x1, y1, cx, cy, r2)
 
-    @njit(cache=True, inline="always", error_model="numpy")
-    def _ray_blocked(
-        x0: float, y0: float, x1: float, y1: float, dx: float, dy: float, L2: float, occ_xy: np.ndarray, q0: int, q1: int, r2: float
-    ) -> bool:
-        """Whether the ray (x0, y0) -> (x1, y1), ``dx = x1 - x0``, ``dy = y1 - y0``, ``L2 = dx * dx + dy * dy``
-        (computed so by the caller), crosses one of the discs ``occ_xy[q0:q1]`` (radius^2 ``r2``): the
-        verdicts of :func:`_segment_hits_disc` (:func:`_hits_disc`)."""
-        r2_hi, r2_lo = r2 * (1.0 + _DISC_TOL), r2 * (1.0 - _DISC_TOL)
-        for q in range(q0, q1):
-            if _hits_disc(x0, y0, x1, y1, dx, dy, L2, occ_xy[q, 0], occ_xy[q, 1], r2, r2_hi, r2_lo):
-                return True
-        return False
-
-    @njit(cache=True, inline="always", error_model="numpy")
-    def _epuck_rays(
-        out: np.ndarray, dets: np.ndarray, ems: np.ndarray, det_pos: np.ndarray, dcos: np.ndarray, dsin: np.ndarray,
-        ex: np.ndarray, ey: np.ndarray, eax: np.ndarray, eay: np.ndarray, occ_xy: np.ndarray, q0: int, q1: int, r2: float,
-        k_m: float, o_m: float, d_sat_cm: float, far_at: np.ndarray, far_L2: np.ndarray, n_far: int,
-    ) -> tuple[bool, int]:
-        """e-puck gains of one pair's candidate rays into ``out`` (n_d, n_e) [T20 Eqs. (7),(24),(25),(27)];
-        returns (True if one is lit, ``n_far``). Same values as :func:`_gain` without a square root or division per ray: with
-        ``dx`` the ray (detector -> emitter), ``nd = dx . u_i = |dx| cos(detector angle)`` and
-        ``ne = -dx . a_j = |dx| cos(emitter angle)``, ``ce^7 cd^3 h_m = ne^7 nd^3 / L2^5 h_m`` and, beyond
-        d_sat, ``h_m = o_m (100 |dx|)^k_m = o_m 100^k_m L2^(k_m / 2)``. A ray is dark when nd or ne <= 0;
-        when one of them is within 1e-12 m of 0 (where rounding could flip the sign) the reference's
-        cosines decide and give the gain, so exactly the same rays are lit.
-
-        A ray beyond d_sat gets only its factor ``ne^7 nd^3 o_m 100^k_m`` here; its position ``i * n_e + j``
-        and ``L2`` are appended to ``far_at``/``far_L2`` at ``n_far`` (returned advanced), and the caller
-        multiplies by ``L2^(k_m / 2 - 5)`` for many rays at once (:func:`_finish_far_rays`). That factor is
-        > 1e-124 (nd, ne >= 1e-12 m) and the power >= 0.4 (L2 < 1.2 m^2), so the ray is lit exactly when the
-        factor is > 0."""
-        any_lit = False
-        d_sat2 = (d_sat_cm / 100.0) ** 2
-        scale = o_m * 100.0**k_m
-        ne_ = out.shape[1]
-        for a in range(dets.shape[0]):
-            i = dets[a]
-            x0, y0, dc, ds = det_pos[i, 0], det_pos[i, 1], dcos[i], dsin[i]
-            for b in range(ems.shape[0]):
-                j = ems[b]
-                dx, dy = ex[j] - x0, ey[j] - y0
-                nd = dx * dc + dy * ds
-                if nd <= -_SIGN_TOL:
-                    continue
-                ne = -(dx * eax[j] + dy * eay[j])
-                if ne <= -_SIGN_TOL:
-                    continue
-                L2 = dx * dx + dy * dy
-                near_zero = nd < _SIGN_TOL or ne < _SIGN_TOL or L2 < 1e-12
-                if near_zero:  # the reference's cosines decide, and give the gain
-                    d = math.sqrt(L2)
-                    inv = 1.0 / max(d, 1e-12)
-                    ux, uy = dx * inv, dy * inv
-                    cd, ce = ux * dc + uy * ds, -(ux * eax[j] + uy * eay[j])
-                    if cd <= 0.0 or ce <= 0.0:
-                        continue
-                if _ray_blocked(x0, y0, ex[j], ey[j], dx, dy, L2, occ_xy, q0, q1, r2):
-                    continue
-                if near_zero:
-                    d_cm = 100.0 * d
-                    hm = 1.0 if d_cm <= d_sat_cm else o_m * math.exp(k_m * math.log(max(d_cm, 1e-12)))
-                    ce2 = ce * ce
-                    g = ce2 * ce2 * ce2 * ce * cd * cd * cd * hm
-                    out[i, j] = g
-                    any_lit = any_lit or g > 0.0
-                    continue
-                ne2 = ne * ne
-                num = ne2 * ne2 * ne2 * ne * nd * nd * nd
-                if L2 <= d_sat2:  # h_m = 1
-                    L4 = L2 * L2
-                    g = num / (L4 * L4 * L2)
-                else:  # the power later (docstring)
-                    g = num * scale
-                    far_at[n_far] = i * ne_ + j
-                    far_L2[n_far] = L2
-                    n_far += 1
-                out[i, j] = g
-                if g > 0.0:
-                    any_lit = True
-        return any_lit, n_far
-
     @njit(cache=True, error_model="numpy", nogil=True)
     def _finish_far_rays(
         out: np.ndarray, sums: np.ndarray, row0: int, row1: int, far_at: np.ndarray, far_L2: np.ndarray, n_far: int, expo: float, power: np.ndarray
     ) -> None:
         """The e-puck rows ``row0:row1`` of ``out`` (P, n_d, n_e), whose far rays (flat positions in ``out``
-        ``far_at[:n_far]``, squared lengths ``far_L2``) hold their factor only (:func:`_epuck_rays`): multiplied
+        ``far_at[:n_far]``, squared lengths ``far_L2``) hold their factor only (:func:`_gains_chunk`): multiplied
         by ``L2^expo`` (:func:`swarm_envs._vecmath.power_into`, one vectorised pass), then each detector's
         sum over emitters into ``sums`` rows, sequentially in emitter order from 0.0 (dark rays add 0.0,
         which changes no sum: the sums of the lit rays in that order, as documented)."""
@@ -216,68 +134,6 @@ if HAVE_NUMBA:
                 for j in range(ne):
                     acc += out[row, i, j]
                 sums[row, i] = acc
-
-    @njit(cache=True, inline="always", error_model="numpy")
-    def _pair_row(
-        out_row: np.ndarray, sums_row: np.ndarray, Rx: float, Ry: float, c: float, s: float, q0: int, q1: int,
-        det_pos: np.ndarray, dcos: np.ndarray, dsin: np.ndarray, det_self: np.ndarray, rho_d: float,
-        em_pos: np.ndarray, ecos: np.ndarray, esin: np.ndarray, em_self: np.ndarray, rho_e: float,
-        kind: int, prm: np.ndarray, ir_range: float, occ_xy: np.ndarray, r2: float,
-        scratch: np.ndarray, dets: np.ndarray, ems: np.ndarray, far_at: np.ndarray, far_L2: np.ndarray, n_far: int,
-    ) -> tuple[bool, int]:
-        """One pair's gain row ``out_row`` (n_d, n_e) and its emitter sums ``sums_row`` (n_d,), zeroed then
-        filled (:func:`gains_kernel`): transmitter centre (Rx, Ry) and heading (c, s) in the receiver frame,
-        candidate occluders ``occ_xy[q0:q1]``; ``scratch`` (4, n_e), ``dets``, ``ems`` are scratch arrays.
-        Returns (True if a ray is lit, ``n_far``): e-puck rows are finished later (their far rays appended
-        to ``far_at``/``far_L2`` from ``n_far`` on, sums not filled; :func:`_epuck_rays`)."""
-        nd, ne = dcos.shape[0], ecos.shape[0]
-        ex, ey, eax, eay = scratch[0], scratch[1], scratch[2], scratch[3]
-        margin = 1e-9
-        prune_det = kind == 1 or (kind == 2 and prm[3] > 0.0)
-        prune_em = kind == 1 or (kind == 2 and prm[4] > 0.0)
-        out_row[:] = 0.0
-        sums_row[:] = 0.0
-        if math.sqrt(Rx * Rx + Ry * Ry) > ir_range:
-            return False, n_far
-        n_em = 0
-        for j in range(ne):  # TX emitters and their axes in the RX frame
-            ex[j] = Rx + c * em_pos[j, 0] - s * em_pos[j, 1]
-            ey[j] = Ry + s * em_pos[j, 0] + c * em_pos[j, 1]
-            eax[j] = c * ecos[j] - s * esin[j]
-            eay[j] = s * ecos[j] + c * esin[j]
-            ems[n_em] = j  # branch-free compaction (the bound's outcome is unpredictable): kept if it may light
-            n_em += np.int64((not prune_em) | (Rx * eax[j] + Ry * eay[j] + em_self[j] - rho_d <= margin))
-        n_det = 0
-        for i in range(nd):
-            dets[n_det] = i
-            n_det += np.int64((not prune_det) | (Rx * dcos[i] + Ry * dsin[i] + rho_e - det_self[i] >= -margin))
-        if kind == 1:
-            return _epuck_rays(
-                out_row, dets[:n_det], ems[:n_em], det_pos, dcos, dsin, ex, ey, eax, eay, occ_xy, q0, q1, r2, prm[0], prm[1], prm[2],
-                far_at, far_L2, n_far,
-            )
-        any_lit = False
-        for a in range(n_det):
-            i = dets[a]
-            for b in range(n_em):
-                j = ems[b]
-                dx, dy = ex[j] - det_pos[i, 0], ey[j] - det_pos[i, 1]
-                d = math.sqrt(dx * dx + dy * dy)
-                inv = 1.0 / max(d, 1e-12)
-                ux, uy = dx * inv, dy * inv
-                cd = ux * dcos[i] + uy * dsin[i]
-                ce = -(ux * eax[j] + uy * eay[j])
-                # rays the model leaves dark (r-one: outside the arcs or range; the same zero branch as
-                # _gain) need no occlusion test
-                if kind == 2 and not (d <= prm[2] and cd >= prm[3] and ce >= prm[4]):
-                    continue
-                if not _ray_blocked(det_pos[i, 0], det_pos[i, 1], ex[j], ey[j], dx, dy, dx * dx + dy * dy, occ_xy, q0, q1, r2):
-                    g = _gain(kind, prm[0], prm[1], prm[2], prm[3], prm[4], prm[5], prm[6], prm[7], d, cd, ce)
-                    out_row[i, j] = g
-                    sums_row[i] += g  # rays in (detector, emitter) order: emitter order per detector
-                    if g > 0.0:
-                        any_lit = True
-        return any_lit, n_far
 
     @njit(cache=True, error_model="numpy", nogil=True)
     def gains_kernel(
@@ -407,14 +263,37 @@ if HAVE_NUMBA:
     ) -> int:
         """Gain rows of pairs ``start:stop`` (:func:`gains_kernel`) into ``out``/``sums`` rows from ``start``
         on: row ``p`` each, or with ``compact`` the lit pairs' rows one after the other, their pair indices
-        into ``lit`` from ``start`` on. Returns the number of lit pairs."""
+        into ``lit`` from ``start`` on. Returns the number of lit pairs.
+
+        The per-pair and per-ray work is written out in this one loop, arrays indexed and never sliced or
+        passed to a helper inside it: in numba each array view or array argument costs an atomic reference
+        count, and the threads of :func:`gains_kernel_threaded` share ``out`` and the inputs (measured: ~40
+        reference counts per pair took a tenth of the kernel's time). Helpers inside take scalars only.
+
+        **e-puck rays** [T20 Eqs. (7),(24),(25),(27)]: the same values as :func:`_gain` without a square
+        root or division per ray. With ``dx`` the ray (detector -> emitter), ``nd = dx . u_i = |dx|
+        cos(detector angle)`` and ``ne = -dx . a_j = |dx| cos(emitter angle)``, ``ce^7 cd^3 h_m = ne^7 nd^3 /
+        L2^5 h_m`` and, beyond d_sat, ``h_m = o_m (100 |dx|)^k_m = o_m 100^k_m L2^(k_m / 2)``. A ray is dark
+        when nd or ne <= 0; when one of them is within 1e-12 m of 0 (where rounding could flip the sign)
+        the reference's cosines decide and give the gain, so exactly the same rays are lit. A ray beyond
+        d_sat gets only its factor ``ne^7 nd^3 o_m 100^k_m`` in the loop; its flat position in ``out`` and
+        ``L2`` are queued in ``far_at``/``far_L2``, and :func:`_finish_far_rays` multiplies by
+        ``L2^(k_m / 2 - 5)`` for many rays at once, every ~64 pairs while the rows are still in cache. That
+        factor is > 1e-124 (nd, ne >= 1e-12 m) and the power >= 0.4 (L2 < 1.2 m^2), so the ray is lit
+        exactly when the factor is > 0. Droplet and r-one rays: :func:`_gain`, summed as they come.
+
+        **Occlusion** (SPEC 2): a ray is blocked when :func:`_hits_disc` finds an occluder's disc on it."""
         nd, ne = det_pos.shape[0], em_pos.shape[0]
         r2 = occ_radius * occ_radius
-        dcos, dsin = np.cos(det_dir), np.sin(det_dir)
-        ecos, esin = np.cos(em_dir), np.sin(em_dir)
+        r2_hi, r2_lo = r2 * (1.0 + _DISC_TOL), r2 * (1.0 - _DISC_TOL)
         prm = np.zeros(8)
         prm[: params.shape[0]] = params
-        # per-element constants of the front-only bounds (gains_kernel docstring)
+        k_m, o_m, d_sat_cm = prm[0], prm[1], prm[2]  # e-puck
+        d_sat2 = (d_sat_cm / 100.0) ** 2
+        scale = o_m * 100.0**k_m
+        # axes and the per-element constants of the front-only bounds (gains_kernel docstring)
+        dcos, dsin = np.cos(det_dir), np.sin(det_dir)
+        ecos, esin = np.cos(em_dir), np.sin(em_dir)
         det_self = np.empty(nd)  # d_i . u_i
         rho_d = 0.0
         for i in range(nd):
@@ -425,29 +304,109 @@ if HAVE_NUMBA:
         for j in range(ne):
             em_self[j] = em_pos[j, 0] * ecos[j] + em_pos[j, 1] * esin[j]
             rho_e = max(rho_e, math.sqrt(em_pos[j, 0] ** 2 + em_pos[j, 1] ** 2))
-        scratch = np.empty((4, ne))
+        margin = 1e-9
+        prune_det = kind == 1 or (kind == 2 and prm[3] > 0.0)
+        prune_em = kind == 1 or (kind == 2 and prm[4] > 0.0)
+        ex, ey, eax, eay = np.empty(ne), np.empty(ne), np.empty(ne), np.empty(ne)  # a pair's emitters, RX frame
         dets = np.empty(nd, dtype=np.int64)
         ems = np.empty(ne, dtype=np.int64)
-        # e-puck far rays waiting for their power (_epuck_rays), finished every ~64 pairs while the rows are
-        # still in cache
-        far_cap = 64 * nd * ne
+        far_cap = 64 * nd * ne  # e-puck far rays waiting for their power
         far_at = np.empty(far_cap, dtype=np.int64)
         far_L2 = np.empty(far_cap)
         power = np.empty(far_cap)
-        expo = 0.5 * prm[0] - 5.0
+        expo = 0.5 * k_m - 5.0
         n_far = 0
         done = start  # rows before this one are finished
         n_lit = 0
         for p in range(start, stop):
             row = start + n_lit if compact else p
-            lit_p, n_new = _pair_row(
-                out[row], sums[row], rel_position[p, 0], rel_position[p, 1], rel_cos_sin[p, 0], rel_cos_sin[p, 1],
-                occ_offsets[p], occ_offsets[p + 1], det_pos, dcos, dsin, det_self, rho_d, em_pos, ecos, esin, em_self,
-                rho_e, kind, prm, ir_range, occ_xy, r2, scratch, dets, ems, far_at, far_L2, n_far,
-            )
-            if lit_p:  # (a far ray makes its pair lit: an unlit pair appended none)
-                for k in range(n_far, n_new):
-                    far_at[k] += row * nd * ne
+            for i in range(nd):
+                for j in range(ne):
+                    out[row, i, j] = 0.0
+                sums[row, i] = 0.0
+            Rx, Ry = rel_position[p, 0], rel_position[p, 1]  # transmitter centre and heading, RX frame
+            c, s = rel_cos_sin[p, 0], rel_cos_sin[p, 1]
+            q0, q1 = occ_offsets[p], occ_offsets[p + 1]  # candidate occluders occ_xy[q0:q1]
+            any_lit = False
+            n_new = n_far  # far rays queued by this pair start here (dropped if it stays dark)
+            if math.sqrt(Rx * Rx + Ry * Ry) <= ir_range:
+                n_em = 0
+                for j in range(ne):  # TX emitters and their axes in the RX frame
+                    ex[j] = Rx + c * em_pos[j, 0] - s * em_pos[j, 1]
+                    ey[j] = Ry + s * em_pos[j, 0] + c * em_pos[j, 1]
+                    eax[j] = c * ecos[j] - s * esin[j]
+                    eay[j] = s * ecos[j] + c * esin[j]
+                    ems[n_em] = j  # branch-free compaction (the bound's outcome is unpredictable): kept if it may light
+                    n_em += np.int64((not prune_em) | (Rx * eax[j] + Ry * eay[j] + em_self[j] - rho_d <= margin))
+                n_det = 0
+                for i in range(nd):
+                    dets[n_det] = i
+                    n_det += np.int64((not prune_det) | (Rx * dcos[i] + Ry * dsin[i] + rho_e - det_self[i] >= -margin))
+                for a in range(n_det):
+                    i = dets[a]
+                    x0, y0, dc, ds = det_pos[i, 0], det_pos[i, 1], dcos[i], dsin[i]
+                    for b in range(n_em):
+                        j = ems[b]
+                        dx, dy = ex[j] - x0, ey[j] - y0
+                        proj_d = proj_e = d = cd = ce = 0.0
+                        near_zero = False
+                        if kind == 1:  # e-puck (docstring)
+                            proj_d = dx * dc + dy * ds
+                            if proj_d <= -_SIGN_TOL:
+                                continue
+                            proj_e = -(dx * eax[j] + dy * eay[j])
+                            if proj_e <= -_SIGN_TOL:
+                                continue
+                            L2 = dx * dx + dy * dy
+                            near_zero = proj_d < _SIGN_TOL or proj_e < _SIGN_TOL or L2 < 1e-12
+                            if near_zero:  # the reference's cosines decide, and give the gain
+                                d = math.sqrt(L2)
+                                inv = 1.0 / max(d, 1e-12)
+                                ux, uy = dx * inv, dy * inv
+                                cd, ce = ux * dc + uy * ds, -(ux * eax[j] + uy * eay[j])
+                                if cd <= 0.0 or ce <= 0.0:
+                                    continue
+                        else:
+                            L2 = dx * dx + dy * dy
+                            d = math.sqrt(L2)
+                            inv = 1.0 / max(d, 1e-12)
+                            ux, uy = dx * inv, dy * inv
+                            cd = ux * dc + uy * ds
+                            ce = -(ux * eax[j] + uy * eay[j])
+                            # rays the model leaves dark (r-one: outside the arcs or range; the same zero branch
+                            # as _gain) need no occlusion test
+                            if kind == 2 and not (d <= prm[2] and cd >= prm[3] and ce >= prm[4]):
+                                continue
+                        blocked = False
+                        for q in range(q0, q1):
+                            if _hits_disc(x0, y0, ex[j], ey[j], dx, dy, L2, occ_xy[q, 0], occ_xy[q, 1], r2, r2_hi, r2_lo):
+                                blocked = True
+                                break
+                        if blocked:
+                            continue
+                        if kind != 1:
+                            g = _gain(kind, prm[0], prm[1], prm[2], prm[3], prm[4], prm[5], prm[6], prm[7], d, cd, ce)
+                            sums[row, i] += g  # rays in (detector, emitter) order: emitter order per detector
+                        elif near_zero:
+                            d_cm = 100.0 * d
+                            hm = 1.0 if d_cm <= d_sat_cm else o_m * math.exp(k_m * math.log(max(d_cm, 1e-12)))
+                            ce2 = ce * ce
+                            g = ce2 * ce2 * ce2 * ce * cd * cd * cd * hm
+                        else:
+                            ne2 = proj_e * proj_e
+                            num = ne2 * ne2 * ne2 * proj_e * proj_d * proj_d * proj_d
+                            if L2 <= d_sat2:  # h_m = 1
+                                L4 = L2 * L2
+                                g = num / (L4 * L4 * L2)
+                            else:  # the power later (docstring)
+                                g = num * scale
+                                far_at[n_new] = (row * nd + i) * ne + j
+                                far_L2[n_new] = L2
+                                n_new += 1
+                        out[row, i, j] = g
+                        if g > 0.0:
+                            any_lit = True
+            if any_lit:  # (a far ray makes its pair lit: an unlit pair queued none)
                 n_far = n_new
                 lit[start + n_lit] = p
                 n_lit += 1
