@@ -1,4 +1,4 @@
-"""The process's one worker thread, for work that runs alongside the main thread's step.
+"""The process's worker thread and helper threads, for work that runs alongside the main thread's step.
 
 A large single scene (one env copy of hundreds of robots, numba on more than one thread) has stages that
 do not depend on each other: range & bearing and SwarmCom read the same IR links; the task's rewards
@@ -6,16 +6,21 @@ read only the ground truth. :class:`swarm_envs.sensing.full.FullSensing` runs ra
 the channel is simulated on the calling thread, and :class:`swarm_envs.core.BatchCore` the rewards while
 the sensing runs. Work submitted here draws from its own random streams and touches state nothing else
 touches in the meantime, and the compiled kernels release the GIL (``nogil``), so results are the same
-bit for bit either way. One thread, in submission order.
+bit for bit either way. One thread, in submission order; it also draws SwarmCom's random numbers and
+queues the step's messages while the physics runs (:meth:`FullSensing.prepare_step`).
+
+The helper threads (:func:`run_chunks`, :func:`on_helper`) are a separate pool for pieces of one compiled
+computation: the chunks of the IR layer's gain kernel and occluder search, and the gathering of the gain
+rows while SwarmCom starts. Idle threads of both pools wait on a lock, so they take no core from the rest.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
-from concurrent.futures import ThreadPoolExecutor
+from concurrent.futures import Future, ThreadPoolExecutor
 from typing import TypeVar
 
-__all__ = ["worker", "run_chunks"]
+__all__ = ["worker", "run_chunks", "on_helper"]
 
 T = TypeVar("T")
 
@@ -32,6 +37,23 @@ def worker() -> ThreadPoolExecutor:
     return _WORKER
 
 
+def _helpers(n: int) -> ThreadPoolExecutor:
+    """The helper pool, grown to at least ``n`` threads."""
+    global _HELPERS, _HELPER_COUNT
+    if _HELPERS is None or _HELPER_COUNT < n:
+        old, _HELPERS = _HELPERS, ThreadPoolExecutor(max_workers=n, thread_name_prefix="swarm_envs-helper")
+        _HELPER_COUNT = n
+        if old is not None:
+            old.shutdown(wait=False)
+    return _HELPERS
+
+
+def on_helper(fn: Callable[..., T], *args: object) -> Future:
+    """``fn(*args)`` on a helper thread (:func:`run_chunks`' pool), for compiled work that releases the GIL
+    and that the caller waits for (``Future.result()``) before anything reads what it writes."""
+    return _helpers(1).submit(fn, *args)
+
+
 def run_chunks(chunk: Callable[[int], T], n_chunks: int) -> list[T]:
     """``[chunk(0), ..., chunk(n_chunks - 1)]``, chunk 0 on the calling thread and the others on helper
     threads (a pool of its own, not the worker, grown to ``n_chunks - 1`` threads on demand): for compiled
@@ -39,15 +61,10 @@ def run_chunks(chunk: Callable[[int], T], n_chunks: int) -> list[T]:
     occluder search on a large scene). The helpers wait on a lock between calls, so an idle helper takes no
     core from the worker thread or the physics. Waits for every chunk; the first chunk's error (in
     chunk order) is raised."""
-    global _HELPERS, _HELPER_COUNT
     if n_chunks <= 1:
         return [chunk(0)] if n_chunks == 1 else []
-    if _HELPERS is None or _HELPER_COUNT < n_chunks - 1:
-        old, _HELPERS = _HELPERS, ThreadPoolExecutor(max_workers=n_chunks - 1, thread_name_prefix="swarm_envs-helper")
-        _HELPER_COUNT = n_chunks - 1
-        if old is not None:
-            old.shutdown(wait=False)
-    futures = [_HELPERS.submit(chunk, k) for k in range(1, n_chunks)]
+    pool = _helpers(n_chunks - 1)
+    futures = [pool.submit(chunk, k) for k in range(1, n_chunks)]
     try:
         first = chunk(0)
     finally:  # never return while a helper still writes into the caller's arrays

@@ -180,3 +180,23 @@ def test_an_error_drawing_ahead_on_the_worker_reaches_the_caller(monkeypatch):
     monkeypatch.setattr(env.unwrapped.core.sensing, "prepare_step", broken)
     with pytest.raises(RuntimeError, match="drawing ahead failed"):
         env.step(zeros)
+
+
+def test_an_error_gathering_the_gains_on_a_helper_reaches_the_caller(monkeypatch):
+    import swarm_envs.ir.kernels as kernels
+    import swarm_envs.ir.layer as layer
+    import swarm_envs.sensing.full as full
+
+    monkeypatch.setattr(full, "rb_on_worker_thread", lambda n_links, n_copies: True)
+    monkeypatch.setattr(layer, "gain_threads", lambda n_pairs: 2)  # threaded gains for a small scene
+    env = swarm_envs.make("swarm_envs/Aggregation-v0", n_robots=12, sensing="full", platform="epuck")
+    env.reset(seed=0)
+    zeros = {a: np.zeros(env.action_space(a).shape, np.float32) for a in env.agents}
+    env.step(zeros)
+
+    def broken(out, starts, counts):
+        raise RuntimeError("gathering the gains failed")
+
+    monkeypatch.setattr(kernels, "_gather_gain_rows", broken)
+    with pytest.raises(RuntimeError, match="gathering the gains failed"):
+        env.step(zeros)

@@ -85,11 +85,17 @@ def test_threaded_gain_kernel_equals_the_serial_kernel_bit_for_bit(name):
         np.testing.assert_array_equal(lit_t, lit)
         np.testing.assert_array_equal(threaded, serial)
         np.testing.assert_array_equal(sums_t, sums)
+        # the gain rows gathered on a helper thread: lit and sums final on return, the rows once it is done
+        later, lit_b, sums_b, pending = kernels.gains_kernel_threaded(*args, chunks, True)
+        np.testing.assert_array_equal(lit_b, lit)
+        np.testing.assert_array_equal(sums_b, sums)
+        assert pending.result() is None
+        np.testing.assert_array_equal(later, serial)
 
 
 def test_compute_links_on_threads_equals_one_thread(monkeypatch):
     """A scene large enough for the threaded gain kernel and occluder search gives the same links as with
-    one thread."""
+    one thread, also when the gain rows are gathered on a helper thread (FullSensing's path)."""
     platform = get_platform("epuck")
     rng = np.random.default_rng(5)
     positions, headings = _dense_scene(platform, 500, 5.0, rng)
@@ -98,9 +104,13 @@ def test_compute_links_on_threads_equals_one_thread(monkeypatch):
     monkeypatch.setattr(layer, "THREADED_MIN_PAIRS", 1)
     monkeypatch.setattr(layer, "gain_threads", lambda n_pairs: 3)
     on_three = layer.compute_links(positions, headings, platform)
+    background, pending = layer._compute_links(positions, headings, platform, background=True)
+    assert pending is not None
+    pending.result()  # the sensing's path: gains gathered on a helper thread, waited for before use
     monkeypatch.setattr(layer, "gain_threads", lambda n_pairs: 1)
     serial = layer.compute_links(positions, headings, platform)
-    for links in (threaded, on_three):
+    assert layer._compute_links(positions, headings, platform, background=True)[1] is None  # one thread: nothing pending
+    for links in (threaded, on_three, background):
         for name in ("rx", "tx", "distance", "rel_position", "rel_heading", "gains", "emitter_sums"):
             np.testing.assert_array_equal(getattr(links, name), getattr(serial, name))
         for got, expected in zip(links.occluders, serial.occluders):  # the threaded occluder search too

@@ -12,19 +12,20 @@ of the ``fast`` extra); otherwise the layer uses the numpy path.
 from __future__ import annotations
 
 import math
+from concurrent.futures import Future
 
 import numpy as np
 
 try:  # numba is optional: an accelerator, not a requirement
     from swarm_envs._numba import njit  # numba.njit whose cache recovers from corrupted files
     from swarm_envs._vecmath import power_into
-    from swarm_envs._worker import run_chunks
+    from swarm_envs._worker import on_helper, run_chunks
 
     HAVE_NUMBA = True
 except ImportError:  # pragma: no cover - exercised only without numba
     HAVE_NUMBA = False
 
-__all__ = ["HAVE_NUMBA", "MODEL_IDS", "model_params", "gains_kernel", "gains_kernel_threaded", "occluders_kernel", "occluders_kernel_threaded", "neighbour_csr_kernel", "occluder_frames_kernel", "directed_pairs_kernel"]
+__all__ = ["HAVE_NUMBA", "MODEL_IDS", "model_params", "gains_kernel", "gains_kernel_threaded", "occluders_kernel", "occluders_kernel_threaded", "neighbour_csr_kernel", "occluder_frames_kernel", "directed_pairs_kernel", "select_links_kernel"]
 
 #: model class name -> kernel model id
 MODEL_IDS = {"DropletIR": 0, "EpuckIR": 1, "RoneIR": 2, "DropletLowPowerIR": 3}
@@ -201,12 +202,18 @@ if HAVE_NUMBA:
         occ_xy: np.ndarray,
         occ_radius: float,
         n_chunks: int,
-    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        background: bool = False,
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray] | tuple[np.ndarray, np.ndarray, np.ndarray, Future]:
         """:func:`gains_kernel` with ``compact=True`` on ``n_chunks`` threads (this one and the helper threads
         of :func:`swarm_envs._worker.run_chunks`): the pairs are cut into contiguous chunks, each filled (and
         compacted within its own rows) by one thread, then the chunks' lit rows are moved together in order
-        (:func:`_gather_gain_chunks`). Every row is computed by the same code as the serial kernel, so the
-        result is the same bit for bit, whatever the number of chunks or threads."""
+        (:func:`_gather_chunk_rows`, :func:`_gather_gain_rows`). Every row is computed by the same code as
+        the serial kernel, so the result is the same bit for bit, whatever the number of chunks or threads.
+
+        ``background=True``: ``lit`` and ``sums`` are gathered before returning, the gain rows by a helper
+        thread (:func:`swarm_envs._worker.on_helper`); returns ``(gains, lit, sums, pending)``, and ``gains``
+        holds its values once ``pending.result()`` has returned (for a caller with work that needs only
+        ``lit`` and ``sums``)."""
         P, nd, ne = rel_position.shape[0], det_pos.shape[0], em_pos.shape[0]
         out = np.empty((P, nd, ne))
         sums = np.empty((P, nd))
@@ -221,24 +228,39 @@ if HAVE_NUMBA:
             )
 
         counts = np.asarray(run_chunks(chunk, n_chunks), dtype=np.int64)
-        return _gather_gain_chunks(out, sums, lit, np.asarray(bounds, dtype=np.int64), counts)
+        starts = np.asarray(bounds[:-1], dtype=np.int64)
+        n_lit = _gather_chunk_rows(sums, lit, starts, counts)
+        if background:
+            return out[:n_lit], lit[:n_lit].copy(), sums[:n_lit], on_helper(_gather_gain_rows, out, starts, counts)
+        _gather_gain_rows(out, starts, counts)
+        return out[:n_lit], lit[:n_lit].copy(), sums[:n_lit]
 
     @njit(cache=True, error_model="numpy", nogil=True)
-    def _gather_gain_chunks(
-        out: np.ndarray, sums: np.ndarray, lit: np.ndarray, bounds: np.ndarray, counts: np.ndarray
-    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """The lit rows of chunks ``bounds[k]:bounds[k + 1]`` (``counts[k]`` rows each, at the chunk's start)
-        moved together in chunk order: (gains, lit, sums) of :func:`gains_kernel_threaded`."""
-        n_lit = counts[0]
+    def _gather_chunk_rows(sums: np.ndarray, lit: np.ndarray, starts: np.ndarray, counts: np.ndarray) -> int:
+        """The ``counts[k]`` rows of ``sums`` and ``lit`` at each chunk's start ``starts[k]`` moved together to
+        the front, in chunk order; returns their number."""
+        n = counts[0]
         for k in range(1, counts.shape[0]):  # rows only move towards the front: a forward copy is safe
             for q in range(counts[k]):
-                src, dst = bounds[k] + q, n_lit + q
-                if src != dst:
-                    out[dst] = out[src]
-                    sums[dst] = sums[src]
-                    lit[dst] = lit[src]
-            n_lit += counts[k]
-        return out[:n_lit], lit[:n_lit].copy(), sums[:n_lit]
+                src = starts[k] + q
+                for i in range(sums.shape[1]):
+                    sums[n, i] = sums[src, i]
+                lit[n] = lit[src]
+                n += 1
+        return n
+
+    @njit(cache=True, error_model="numpy", nogil=True)
+    def _gather_gain_rows(out: np.ndarray, starts: np.ndarray, counts: np.ndarray) -> None:
+        """:func:`_gather_chunk_rows` for the gain rows ``out`` (P, n_d, n_e), element by element (no row views:
+        numba counts a reference per view)."""
+        n = counts[0]
+        for k in range(1, counts.shape[0]):
+            for q in range(counts[k]):
+                src = starts[k] + q
+                for i in range(out.shape[1]):
+                    for j in range(out.shape[2]):
+                        out[n, i, j] = out[src, i, j]
+                n += 1
 
     @njit(cache=True, error_model="numpy", nogil=True)
     def _gains_chunk(
@@ -656,6 +678,22 @@ if HAVE_NUMBA:
                 xy[q2, 1] = -s * dx + c * dy
                 q2 += 1
         return out_off, xy
+
+    @njit(cache=True, error_model="numpy", nogil=True)
+    def select_links_kernel(
+        lit: np.ndarray, rx: np.ndarray, tx: np.ndarray, rel: np.ndarray, rel_heading: np.ndarray, distance: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """Rows ``lit`` of the links' arrays in one pass: ``(rx[lit], tx[lit], rel[lit], rel_heading[lit],
+        distance[lit])`` (numpy's fancy indexing, one array at a time, was ~5x slower at 36k links)."""
+        n = lit.shape[0]
+        rx_, tx_ = np.empty(n, dtype=rx.dtype), np.empty(n, dtype=tx.dtype)
+        rel_, rh_, d_ = np.empty((n, 2)), np.empty(n), np.empty(n)
+        for k in range(n):
+            p = lit[k]
+            rx_[k], tx_[k] = rx[p], tx[p]
+            rel_[k, 0], rel_[k, 1] = rel[p, 0], rel[p, 1]
+            rh_[k], d_[k] = rel_heading[p], distance[p]
+        return rx_, tx_, rel_, rh_, d_
 
     @njit(cache=True, error_model="numpy", nogil=True)
     def directed_pairs_kernel(

@@ -28,6 +28,7 @@ All public inputs/outputs are SI (metres, radians, angles wrapped to (-pi, pi]).
 from __future__ import annotations
 
 import threading
+from concurrent.futures import Future
 from dataclasses import dataclass, field
 import numpy as np
 from scipy.spatial import cKDTree
@@ -218,13 +219,16 @@ def _gains(
     compact: bool,
     cos_sin: np.ndarray | None = None,
     threads: int = 1,
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    background: bool = False,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, Future | None]:
     """(gains, lit, sums) of :func:`pair_gains` with checked inputs: ``lit`` the pairs with a nonzero gain,
     ``gains`` every pair's rows, or with ``compact`` only the ``lit`` rows (compiled kernel, or numpy), and
     ``sums`` (rows, n_d) the gains summed over emitters sequentially in emitter order (:class:`IRLinks`
     ``emitter_sums``). ``cos_sin`` (P, 2): cos and sin of ``psi`` if known (the kernel uses them; default
     from ``psi``). ``threads`` > 1 (with ``compact``): the compiled kernel splits the pairs over that many
-    threads (:func:`gain_threads`; same result bit for bit)."""
+    threads (:func:`gain_threads`; same result bit for bit). ``background`` (with threads): the gain rows
+    are gathered on a helper thread; the fourth result is then that thread's future (else None), and
+    ``gains`` holds its values once it is done (:func:`kernels.gains_kernel_threaded`)."""
     if kernels.HAVE_NUMBA and type(model).__name__ in kernels.MODEL_IDS:
         kind, params = kernels.model_params(model)
         if cos_sin is None:
@@ -235,14 +239,16 @@ def _gains(
             offsets, xy, float(platform.radius),
         )
         if compact and threads > 1:
-            return kernels.gains_kernel_threaded(*args, int(threads))
-        return kernels.gains_kernel(*args, compact)
+            if background:
+                return kernels.gains_kernel_threaded(*args, int(threads), True)
+            return (*kernels.gains_kernel_threaded(*args, int(threads)), None)
+        return (*kernels.gains_kernel(*args, compact), None)
     g = _pair_gains_numpy(R, psi, platform, model)
     if xy.shape[0]:
         g = g * _clear_rays_numpy(R, psi, platform, offsets, xy)
     lit = np.flatnonzero(g.reshape(g.shape[0], -1).max(axis=1, initial=0.0) > 0)
     g = g[lit] if compact else g
-    return g, lit, _emitter_sums(g)
+    return g, lit, _emitter_sums(g), None
 
 
 def _emitter_sums(gains: np.ndarray) -> np.ndarray:
@@ -464,6 +470,23 @@ def compute_links(
     Returns:
         :class:`IRLinks` with both directions (u, w) and (w, u) of every candidate pair, sorted by (rx, tx).
     """
+    return _compute_links(positions, headings, platform, max_range, drop_zero, occlusion, copy)[0]
+
+
+def _compute_links(
+    positions: np.ndarray,
+    headings: np.ndarray,
+    platform: Platform | str,
+    max_range: float | None = None,
+    drop_zero: bool = True,
+    occlusion: str = "ray",
+    copy: np.ndarray | None = None,
+    background: bool = False,
+) -> tuple[IRLinks, Future | None]:
+    """:func:`compute_links`, and with ``background`` (for :class:`swarm_envs.sensing.full.FullSensing`) the
+    future of a helper thread still gathering ``gains`` when the scene uses threads (:func:`gain_threads`;
+    else None): everything else in the links is final, and ``gains`` is once the future is done, which the
+    caller must wait for before anything reads ``gains`` and before it returns."""
     if occlusion not in OCCLUSION_RULES:
         raise ValueError(f"occlusion must be one of {OCCLUSION_RULES}, got {occlusion!r}")
     platform = get_platform(platform)
@@ -473,7 +496,7 @@ def compute_links(
     r = platform.ir_range if max_range is None else float(max_range)
     n_d, n_e = platform.n_detectors, platform.n_emitters
     if N < 2:
-        return _empty_links(n_d, n_e, N)
+        return _empty_links(n_d, n_e, N), None
     points = positions
     if copy is not None:
         lift = np.asarray(copy, dtype=float).reshape(-1, 1) * (4.0 * r + 4.0 * platform.radius + 1.0)
@@ -481,7 +504,7 @@ def compute_links(
     tree = cKDTree(points)
     pairs = tree.query_pairs(r, output_type="ndarray")
     if pairs.shape[0] == 0:
-        return _empty_links(n_d, n_e, N)
+        return _empty_links(n_d, n_e, N), None
     if occlusion == "centre":
         pairs = pairs[line_of_sight(positions, platform.radius, pairs[:, 0], pairs[:, 1], tree)]
     rx, tx, pair_of, rel, rel_cs, rel_heading, distance = _directed_pairs(pairs, positions, headings)
@@ -496,11 +519,15 @@ def compute_links(
         offsets, xy = np.zeros(rx.shape[0] + 1, dtype=np.int64), np.zeros((0, 2))
     else:
         offsets, xy = occluders
-    gains, lit, sums = _gains(rel, rel_heading, platform, platform.ir_model, offsets, xy, drop_zero, rel_cs, threads)
+    gains, lit, sums, pending = _gains(rel, rel_heading, platform, platform.ir_model, offsets, xy, drop_zero, rel_cs, threads, background)
     rows = np.arange(rx.shape[0])
     if drop_zero and lit.shape[0] < rx.shape[0]:
-        rx, tx, rel, rel_heading, distance, rows = rx[lit], tx[lit], rel[lit], rel_heading[lit], distance[lit], rows[lit]
-    return IRLinks(rx, tx, distance, rel, rel_heading, gains, N, None if occluders is None else (*occluders, rows), sums)
+        rows = lit
+        if kernels.HAVE_NUMBA:
+            rx, tx, rel, rel_heading, distance = kernels.select_links_kernel(lit, rx, tx, rel, rel_heading, distance)
+        else:
+            rx, tx, rel, rel_heading, distance = rx[lit], tx[lit], rel[lit], rel_heading[lit], distance[lit]
+    return IRLinks(rx, tx, distance, rel, rel_heading, gains, N, None if occluders is None else (*occluders, rows), sums), pending
 
 
 def gain_threads(n_pairs: int) -> int:

@@ -36,7 +36,9 @@ Channel and sensor statistics go to ``infos[agent]["sensing", name]``.
 
 from __future__ import annotations
 
-from typing import Any
+from collections.abc import Callable
+from concurrent.futures import Future
+from typing import Any, TypeVar
 
 import numpy as np
 
@@ -44,7 +46,7 @@ from swarm_envs._worker import worker
 from swarm_envs.comm.channel import recommended_relative_threshold
 from swarm_envs.comm.network import Network, PreparedStep
 from swarm_envs.copies import CopyRandom
-from swarm_envs.ir.layer import compute_links, gain_threads
+from swarm_envs.ir.layer import _compute_links, gain_threads
 from swarm_envs.ir.models import RoneIR
 from swarm_envs.observation import pack_nearest
 from swarm_envs.platforms import Platform
@@ -60,6 +62,8 @@ __all__ = ["FullSensing", "BEACON_PERIOD", "rb_on_worker_thread"]
 #: thesis round 2 (1 + 5)^2 x 32.8 ms = 2.36 s [L Sec. 3.2.1] in 0.1 s control steps, rounded up
 BEACON_PERIOD = int(np.ceil(round(thesis_round_time(5) / 0.1, 9)))
 
+T = TypeVar("T")
+
 BEACON_KIND = "bearing_beacon"  # SwarmCom system kind of the header-only beacons
 
 _STAT_NAMES = ("tx_started", "deferrals", "rx_delivered", "rx_lost", "collisions", "bits_checked", "bit_errors")
@@ -73,6 +77,13 @@ def rb_on_worker_thread(n_links: int, n_copies: int) -> bool:
     compiled kernels release the GIL (``nogil``), so the result is the same bit for bit either way; batches
     of copies stay on one thread."""
     return n_copies == 1 and gain_threads(n_links) > 1
+
+
+def _when_done(pending: Future | None, fn: Callable[..., T], *args: Any) -> T:
+    """``fn(*args)`` once ``pending`` (a helper's job, or None) is done."""
+    if pending is not None:
+        pending.result()
+    return fn(*args)
 
 
 class FullSensing:
@@ -194,23 +205,27 @@ class FullSensing:
             prepared = self.prepare_step(payloads, sending)
         elif payloads is not None:
             raise ValueError("payloads were queued by prepare_step; pass either payloads or prepared")
-        links = compute_links(positions, headings, self.platform, copy=self.copy_of if self.n_copies > 1 else None)
+        # the IR links; in a large scene a helper thread still gathers their gain matrices while SwarmCom,
+        # which reads only the emitter sums, starts (swarm_envs.ir.layer._compute_links)
+        links, gains_pending = _compute_links(positions, headings, self.platform, copy=self.copy_of if self.n_copies > 1 else None, background=True)
 
         # range & bearing (large single scenes: on the worker thread, while SwarmCom runs here)
         self.large_scene = rb_on_worker_thread(len(links), self.n_copies)
         rb_future = rb = None
-        if self.has_range:
-            if self.large_scene:
-                rb_future = worker().submit(self.rb.step, links)
-            else:
-                rb = self.rb.step(links)
-
-        # SwarmCom: application payloads and the bearing exchange share the channel (queued by prepare_step)
         try:
+            if self.has_range:
+                if self.large_scene:
+                    rb_future = worker().submit(_when_done, gains_pending, self.rb.step, links)
+                else:
+                    rb = _when_done(gains_pending, self.rb.step, links)
+            # SwarmCom: application payloads and the bearing exchange share the channel (queued by prepare_step)
             deliveries = self.network.step(links, prepared)
-        finally:  # never leave the worker running on this sensor's state
-            if rb_future is not None:
-                rb_future.exception()  # waits
+        finally:  # never leave the worker or a helper running on this step's state
+            for job in (rb_future, gains_pending):
+                if job is not None:
+                    job.exception()  # waits
+        if gains_pending is not None:
+            gains_pending.result()  # links.gains complete from here on (or the gather's error)
         if rb_future is not None:
             rb = rb_future.result()
         if rb is not None:
