@@ -177,9 +177,12 @@ class SwarmCore:
         # in float32 (values cast from float64 as build would), then clipped by build. A stack that already
         # selected the k nearest (the ideal one) hands them over in NeighbourReadings.slots / slot_cos_sin
         slots, cos_sin = nb.slots, nb.slot_cos_sin
-        if slots is None or slots.shape != (n, k):
-            slots, cos_sin = nearest_slots(n, nb.rx, nb.range, k), None
-        range_bearing = range_bearing_rows(slots, nb.range, nb.bearing, nb.heading, nb.age, cos_sin)
+        if slots is not None and slots.shape == (n, k) and nb.rows is not None and nb.rows.shape[:2] == (n, k):
+            range_bearing = nb.rows  # built by the stack (FullSensing, on its worker thread)
+        else:
+            if slots is None or slots.shape != (n, k):
+                slots, cos_sin = nearest_slots(n, nb.rx, nb.range, k), None
+            range_bearing = range_bearing_rows(slots, nb.range, nb.bearing, nb.heading, nb.age, cos_sin)
         msg = frame.messages
         if len(msg.receiver):
             key = msg.distance_hint if msg.distance_hint is not None else np.arange(len(msg.receiver), dtype=float)

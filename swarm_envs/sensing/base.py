@@ -34,6 +34,9 @@ class NeighbourReadings:
     #: empty slots); the observation builder then reuses them instead of selecting again
     slots: np.ndarray | None = None
     slot_cos_sin: np.ndarray | None = None
+    #: optional, from a stack that also built them (the full one, on its worker thread): ``rows`` (N, k, 7)
+    #: float32, the observation rows of ``slots`` (:func:`swarm_envs.observation.range_bearing_rows`)
+    rows: np.ndarray | None = None
 
     @property
     def valid(self) -> np.ndarray:

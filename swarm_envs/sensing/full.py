@@ -48,7 +48,7 @@ from swarm_envs.comm.network import Network, PreparedStep
 from swarm_envs.copies import CopyRandom
 from swarm_envs.ir.layer import _compute_links, gain_threads
 from swarm_envs.ir.models import RoneIR
-from swarm_envs.observation import pack_nearest
+from swarm_envs.observation import nearest_slots, pack_nearest, range_bearing_rows
 from swarm_envs.platforms import Platform
 from swarm_envs.sensing.base import MessageReadings, NeighbourReadings, ScaleFreeReadings, SensorFrame
 from swarm_envs.sensing.bearing_sensor import RONE_ARC_RANGE_DEG, MessageBearings
@@ -211,13 +211,13 @@ class FullSensing:
 
         # range & bearing (large single scenes: on the worker thread, while SwarmCom runs here)
         self.large_scene = rb_on_worker_thread(len(links), self.n_copies)
-        rb_future = rb = None
+        rb_future = rb = neighbours = None
         try:
             if self.has_range:
                 if self.large_scene:
-                    rb_future = worker().submit(_when_done, gains_pending, self.rb.step, links)
+                    rb_future = worker().submit(_when_done, gains_pending, self._range_bearing, links, True)
                 else:
-                    rb = _when_done(gains_pending, self.rb.step, links)
+                    rb, neighbours = _when_done(gains_pending, self._range_bearing, links, False)
             # SwarmCom: application payloads and the bearing exchange share the channel (queued by prepare_step)
             deliveries = self.network.step(links, prepared)
         finally:  # never leave the worker or a helper running on this step's state
@@ -227,9 +227,7 @@ class FullSensing:
         if gains_pending is not None:
             gains_pending.result()  # links.gains complete from here on (or the gather's error)
         if rb_future is not None:
-            rb = rb_future.result()
-        if rb is not None:
-            neighbours = NeighbourReadings(rb.rx, rb.tx, rb.range, rb.bearing, rb.heading, rb.age.astype(float))
+            rb, neighbours = rb_future.result()
         # sector bearings measured on the decoded frames (any kind)
         sectors = self.bearings.step(deliveries, links) if self.bearings is not None else None
         if not self.has_range:
@@ -267,6 +265,17 @@ class FullSensing:
             stats["rb_overlapped"] = np.bincount(rb.rx[(rb.age == 0) & (rb.n_overlap > 1)], minlength=self.n)
         stats["rigid"] = scale_free.rigid.astype(np.int64)
         return SensorFrame(neighbours, messages, scale_free, stats)
+
+    def _range_bearing(self, links: Any, with_rows: bool) -> tuple[Any, NeighbourReadings]:
+        """Range & bearing's step on ``links`` and its readings; ``with_rows`` (on the worker thread, while
+        SwarmCom runs): the readings also carry each robot's k nearest (``slots``) and their observation
+        rows (``rows``), which the observation builder would otherwise compute after the sensing."""
+        rb = self.rb.step(links)
+        neighbours = NeighbourReadings(rb.rx, rb.tx, rb.range, rb.bearing, rb.heading, rb.age.astype(float))
+        if with_rows:
+            neighbours.slots = nearest_slots(self.n, neighbours.rx, neighbours.range, self.k)
+            neighbours.rows = range_bearing_rows(neighbours.slots, neighbours.range, neighbours.bearing, neighbours.heading, neighbours.age)
+        return rb, neighbours
 
     def _scale_free(self, knowledge) -> ScaleFreeReadings:
         if self.method == "two_hop":
