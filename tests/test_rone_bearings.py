@@ -161,8 +161,8 @@ def test_env_readings_refresh_no_faster_than_decoded_frames():
     seen = []
     step = fs.network.step
 
-    def record(links):
-        d = step(links)
+    def record(links, prepared=None):
+        d = step(links, prepared)
         seen.append(set(zip(d.receiver.tolist(), d.origin.tolist())))
         return d
 
@@ -211,8 +211,8 @@ def test_env_every_frame_colliding_leaves_no_reading():
     pos, hd, _ = triangle()
     step = fs.network.step
 
-    def lose_robot_2(links):  # the channel loses every frame from robot 2 (e.g. all collide)
-        d = step(links)
+    def lose_robot_2(links, prepared=None):  # the channel loses every frame from robot 2 (e.g. all collide)
+        d = step(links, prepared)
         keep = d.transmitter != 2
         for f in ("receiver", "origin", "sender", "seq", "detector", "kind", "length", "payload", "slot", "corrupt", "transmitter"):
             setattr(d, f, getattr(d, f)[keep])
