@@ -200,3 +200,31 @@ def test_an_error_gathering_the_gains_on_a_helper_reaches_the_caller(monkeypatch
     monkeypatch.setattr(kernels, "_gather_gain_rows", broken)
     with pytest.raises(RuntimeError, match="gathering the gains failed"):
         env.step(zeros)
+
+
+def test_a_prepared_step_takes_no_payloads_and_equals_the_inline_step():
+    """FullSensing.prepare_step (queue and draw ahead) then step(prepared=...) gives the frame step(payloads)
+    gives; payloads given twice are refused before anything is sensed."""
+    import swarm_envs.sensing.full as full
+
+    def stack():
+        env = swarm_envs.make("swarm_envs/Flocking-v0", n_robots=12, sensing="full", platform="epuck", message_bits=4)
+        env.reset(seed=5)
+        return env.unwrapped.core
+
+    a, b = stack(), stack()
+    rng = np.random.default_rng(1)
+    delivered = 0
+    for _ in range(6):
+        payloads = rng.random((12, 4)) > 0.5
+        ahead = b.sensing.prepare_step(payloads)
+        fa = a.sensing.step(a.positions, a.headings, payloads)
+        fb = b.sensing.step(b.positions, b.headings, prepared=ahead)
+        np.testing.assert_array_equal(fa.messages.receiver, fb.messages.receiver)
+        np.testing.assert_array_equal(fa.messages.payload, fb.messages.payload)
+        np.testing.assert_array_equal(fa.neighbours.range, fb.neighbours.range)
+        delivered += len(fa.messages.receiver)
+    assert delivered > 0  # application messages did go through the queues
+    assert isinstance(b.sensing, full.FullSensing)
+    with pytest.raises(ValueError, match="either payloads or prepared"):
+        b.sensing.step(b.positions, b.headings, payloads, prepared=b.sensing.prepare_step(None))
