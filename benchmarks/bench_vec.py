@@ -135,9 +135,9 @@ def main() -> None:
         grid = [(n, b) for n, b in grid if b == args.copies] or [(args.n or 10, args.copies)]
     modes = [args.sensing] if args.sensing else ["full", "ideal"]
     print(f"load average at start: {os.getloadavg()[0]:.2f} on {os.cpu_count()} cores")
-    print(f"numba threads: {_numba_threads()} (a single copy with >= 16384 candidate IR pairs, i.e. the N = 1000 full row, runs its occluder "
-          "search and gain kernel on them and range & bearing and rewards on a worker thread; everything else on one thread; "
-          "NUMBA_NUM_THREADS=1 for one core)")
+    print(f"threads: {_numba_threads()} (numba's thread count; a single copy with >= 16384 candidate IR pairs, i.e. the N = 1000 full row, "
+          "runs its occluder search and gain kernel in that many chunks on helper threads, and SwarmCom's draws, the rewards and "
+          "range & bearing on a worker thread; everything else on one thread; NUMBA_NUM_THREADS=1 for one core)")
     vmas_rate = None
     if not args.no_vmas:
         t = time_vmas(10, 1024, args.vmas_steps)
