@@ -283,3 +283,27 @@ def test_send_rejects_bad_payload_lengths():
         for lengths in ([3, -1], [3, 9]):
             with pytest.raises(ValueError, match="payload length"):
                 net.send_many(np.array([0, 1]), np.zeros((2, 8), bool), lengths=np.array(lengths))
+
+
+@pytest.mark.skipif(not HAVE_NUMBA, reason="needs numba")
+@pytest.mark.parametrize("noisy", [False, True])
+def test_compiled_detector_response_equals_the_reference(noisy):
+    """The slot loop's branch-free detector response (kernels._respond) equals channel.detector_response bit
+    for bit: lit and dark detectors, levels decaying to the dark cut-off, light above 1 and below 0 clipped."""
+    from swarm_envs.comm.channel import adc_model_for, detector_response
+    from swarm_envs.comm.kernels import _respond
+
+    a = adc_model_for("epuck")
+    slot_s, rng = 1.0 / 310, np.random.default_rng(8)
+    n = 4000
+    y = np.where(rng.random(n) < 0.4, 0.0, rng.uniform(0.0, 1.3, n))
+    level = np.where(rng.random(n) < 0.3, 0.0, 10.0 ** rng.uniform(-8, 0, n))
+    inoise = rng.normal(0.0, 0.05, n) if noisy else np.zeros(0)
+    ref = level.copy()
+    for _ in range(6):  # a few slots: levels decay, some below the dark cut-off
+        expect = detector_response(ref, y + inoise if noisy else y, slot_s, a.response_c, a.response_bias)
+        _respond(y.copy(), inoise, level, float(a.response_bias), slot_s / a.response_c)
+        np.testing.assert_array_equal(level, expect)
+        ref = expect
+        y = np.where(rng.random(n) < 0.5, 0.0, y)
+    assert (level == 0.0).any() and (level > 0.0).any()

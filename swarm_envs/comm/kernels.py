@@ -39,9 +39,16 @@ import numpy as np
 try:  # numba is optional: an accelerator, not a requirement
     from numba import njit
 
+    from swarm_envs._vecmath import exp_moderate
+
     HAVE_NUMBA = True
 except ImportError:  # pragma: no cover - exercised only without numba
     HAVE_NUMBA = False
+
+    from swarm_envs._vecmath import exp_array
+
+    def exp_moderate(x: float) -> float:
+        return float(exp_array(np.array([x]))[0])
 
 __all__ = ["HAVE_NUMBA", "COUNTERS", "PER_ROBOT", "DELIVERY_FIELDS", "StepDraws", "GeneratorList", "draw_step", "draw_copies", "link_tables", "build_frames", "slot_loop", "decode_words"]
 
@@ -144,6 +151,8 @@ def _identity(f):  # pragma: no cover - used only without numba
 
 
 _jit = njit(cache=True, nogil=True) if HAVE_NUMBA else _identity
+#: for loops the compiler should vectorise: numpy's error model (no ZeroDivisionError branch in the loop)
+_jit_vector = njit(cache=True, nogil=True, error_model="numpy") if HAVE_NUMBA else _identity
 
 
 @_jit
@@ -448,6 +457,24 @@ def _abort(r, state, nbits, buf, gt_buf, gt_id, collided, n, k, table_msg, table
     nbits[r] = 0
 
 
+@_jit_vector
+def _respond(ysum: np.ndarray, inoise: np.ndarray, level: np.ndarray, b: float, kt: float) -> None:
+    """One bit slot of the detector response (:func:`swarm_envs.comm.channel.detector_response`, the same
+    arithmetic) for every detector, flat over (robot, detector): the light ``ysum`` plus the intensity
+    noise ``inoise`` (same shape, or empty for none) clipped to [0, 1], the levels ``level`` updated in place;
+    ``b`` the response bias, ``kt`` = slot duration / c > 0. Branch-free, with the library's own ``exp``
+    (:func:`swarm_envs._vecmath.exp_moderate`), so the compiler vectorises the loop. A dark detector at
+    level 0 stays at 0 (its update, ``b b / b - b``, is within rounding of 0 and below DARK_LEVEL)."""
+    noisy = inoise.shape[0] > 0
+    for k in range(ysum.shape[0]):
+        y = ysum[k] + inoise[k] if noisy else ysum[k]
+        y = min(max(y, 0.0), 1.0)
+        Y = y + b
+        u0 = level[k] + b
+        v = Y * u0 / (u0 + (Y - u0) * exp_moderate(-Y * kt)) - b
+        level[k] = 0.0 if (y == 0.0 and v < _DARK_LEVEL) else v
+
+
 @_jit
 def slot_loop(
     S, slot0, n_det, m_min, m_sup, m_tr, alpha, first_check,
@@ -474,8 +501,8 @@ def slot_loop(
     W = buf.shape[1]
     has_inoise = inoise.shape[0] > 0
     filt = resp_kt > 0.0
-    e_dark = np.exp(-resp_b * resp_kt)  # decay factor of a dark detector (y = 0) over one slot
     ysum = np.zeros((n, n_det))
+    ysum_flat, level_flat = ysum.reshape(-1), rx_v.reshape(-1)  # (robot, detector) rows, for _respond
     best_str = np.full(n, -np.inf)
     best_tx = np.full(n, -1, dtype=np.int64)
     sigcnt = np.zeros(n, dtype=np.int64)
@@ -539,25 +566,7 @@ def slot_loop(
                         best_tx[r] = t
         # detector response across slots (channel.detector_response), every robot
         if filt:
-            for r in range(n):
-                for d in range(n_det):
-                    y = ysum[r, d]
-                    if has_inoise:
-                        y = y + inoise[s, r, d]
-                    if y > 1.0:
-                        y = 1.0
-                    elif y < 0.0:
-                        y = 0.0
-                    v0 = rx_v[r, d]
-                    if y == 0.0 and v0 == 0.0:
-                        continue
-                    Y = y + resp_b
-                    u0 = v0 + resp_b
-                    E = e_dark if y == 0.0 else np.exp(-Y * resp_kt)
-                    v = Y * u0 / (u0 + (Y - u0) * E) - resp_b
-                    if y == 0.0 and v < _DARK_LEVEL:
-                        v = 0.0
-                    rx_v[r, d] = v
+            _respond(ysum_flat, inoise[s].reshape(-1) if has_inoise else inoise.reshape(-1), level_flat, resp_b, resp_kt)
         # 4./5. ADC [Eqs. (20)-(22)] and detectors [Sec. 4.2, Eq. (36), Sec. 4.5]
         for r in range(n):
             listen = not sending[r]
