@@ -165,6 +165,23 @@ def test_an_error_on_the_worker_thread_reaches_the_caller(monkeypatch):
         env.step({a: np.zeros(env.action_space(a).shape, np.float32) for a in env.agents})
 
 
+def test_an_error_building_the_observation_rows_on_the_worker_reaches_the_caller(monkeypatch):
+    """The readings' observation rows are built on the worker while the exchange runs here; their error is
+    raised by the step (after the step's own work, which it does not mask)."""
+    import swarm_envs.sensing.full as full
+
+    monkeypatch.setattr(full, "rb_on_worker_thread", lambda n_links, n_copies: True)
+    env = swarm_envs.make("swarm_envs/Aggregation-v0", n_robots=10, sensing="full", platform="epuck")
+    env.reset(seed=0)
+
+    def broken(neighbours, n, k):
+        raise RuntimeError("observation rows failed")
+
+    monkeypatch.setattr(full, "_observation_rows", broken)
+    with pytest.raises(RuntimeError, match="observation rows failed"):
+        env.step({a: np.zeros(env.action_space(a).shape, np.float32) for a in env.agents})
+
+
 def test_an_error_drawing_ahead_on_the_worker_reaches_the_caller(monkeypatch):
     import swarm_envs.sensing.full as full
 

@@ -79,6 +79,15 @@ def rb_on_worker_thread(n_links: int, n_copies: int) -> bool:
     return n_copies == 1 and gain_threads(n_links) > 1
 
 
+def _observation_rows(neighbours: NeighbourReadings, n: int, k: int) -> None:
+    """Each robot's k nearest readings (``neighbours.slots``) and their observation rows (``neighbours.rows``),
+    which the observation builder would otherwise compute after the sensing (on the worker thread, while
+    the exchange and scale-free coordinates run on the calling thread)."""
+    slots = nearest_slots(n, neighbours.rx, neighbours.range, k)
+    neighbours.rows = range_bearing_rows(slots, neighbours.range, neighbours.bearing, neighbours.heading, neighbours.age)
+    neighbours.slots = slots
+
+
 def _when_done(pending: Future | None, fn: Callable[..., T], *args: Any) -> T:
     """``fn(*args)`` once ``pending`` (a helper's job, or None) is done."""
     if pending is not None:
@@ -215,9 +224,9 @@ class FullSensing:
         try:
             if self.has_range:
                 if self.large_scene:
-                    rb_future = worker().submit(_when_done, gains_pending, self._range_bearing, links, True)
+                    rb_future = worker().submit(_when_done, gains_pending, self._range_bearing, links)
                 else:
-                    rb, neighbours = _when_done(gains_pending, self._range_bearing, links, False)
+                    rb, neighbours = _when_done(gains_pending, self._range_bearing, links)
             # SwarmCom: application payloads and the bearing exchange share the channel (queued by prepare_step)
             deliveries = self.network.step(links, prepared)
         finally:  # never leave the worker or a helper running on this step's state
@@ -228,6 +237,20 @@ class FullSensing:
             gains_pending.result()  # links.gains complete from here on (or the gather's error)
         if rb_future is not None:
             rb, neighbours = rb_future.result()
+        # the readings' observation rows on the worker thread, while the exchange and scale-free run here
+        rows_future = worker().submit(_observation_rows, neighbours, self.n, self.k) if rb_future is not None else None
+        try:
+            frame = self._finish_step(links, deliveries, rb, neighbours)
+        finally:  # never leave the worker running on this step's readings
+            if rows_future is not None:
+                rows_future.exception()  # waits
+        if rows_future is not None:
+            rows_future.result()  # (the rows' error, if any)
+        return frame
+
+    def _finish_step(self, links: Any, deliveries: Any, rb: Any, neighbours: NeighbourReadings | None) -> SensorFrame:
+        """The rest of :meth:`step` after range & bearing and SwarmCom: sector bearings, messages, the bearing
+        exchange and scale-free coordinates, statistics."""
         # sector bearings measured on the decoded frames (any kind)
         sectors = self.bearings.step(deliveries, links) if self.bearings is not None else None
         if not self.has_range:
@@ -266,16 +289,10 @@ class FullSensing:
         stats["rigid"] = scale_free.rigid.astype(np.int64)
         return SensorFrame(neighbours, messages, scale_free, stats)
 
-    def _range_bearing(self, links: Any, with_rows: bool) -> tuple[Any, NeighbourReadings]:
-        """Range & bearing's step on ``links`` and its readings; ``with_rows`` (on the worker thread, while
-        SwarmCom runs): the readings also carry each robot's k nearest (``slots``) and their observation
-        rows (``rows``), which the observation builder would otherwise compute after the sensing."""
+    def _range_bearing(self, links: Any) -> tuple[Any, NeighbourReadings]:
+        """Range & bearing's step on ``links`` and its readings."""
         rb = self.rb.step(links)
-        neighbours = NeighbourReadings(rb.rx, rb.tx, rb.range, rb.bearing, rb.heading, rb.age.astype(float))
-        if with_rows:
-            neighbours.slots = nearest_slots(self.n, neighbours.rx, neighbours.range, self.k)
-            neighbours.rows = range_bearing_rows(neighbours.slots, neighbours.range, neighbours.bearing, neighbours.heading, neighbours.age)
-        return rb, neighbours
+        return rb, NeighbourReadings(rb.rx, rb.tx, rb.range, rb.bearing, rb.heading, rb.age.astype(float))
 
     def _scale_free(self, knowledge) -> ScaleFreeReadings:
         if self.method == "two_hop":
