@@ -9,18 +9,18 @@ touches in the meantime, and the compiled kernels release the GIL (``nogil``), s
 bit for bit either way. One thread, in submission order; it also draws SwarmCom's random numbers and
 queues the step's messages while the physics runs (:meth:`FullSensing.prepare_step`).
 
-The helper threads (:func:`run_chunks`, :func:`on_helper`) are a separate pool for pieces of one compiled
-computation: the chunks of the IR layer's gain kernel and occluder search, and the gathering of the gain
-rows while SwarmCom starts. Idle threads of both pools wait on a lock, so they take no core from the rest.
+The helper threads (:func:`run_chunks`) are a separate pool for pieces of one compiled computation: the
+chunks of the IR layer's gain kernel and occluder search. Idle threads of both pools wait on a lock, so
+they take no core from the rest.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
-from concurrent.futures import Future, ThreadPoolExecutor
+from concurrent.futures import ThreadPoolExecutor
 from typing import TypeVar
 
-__all__ = ["worker", "run_chunks", "on_helper"]
+__all__ = ["worker", "run_chunks"]
 
 T = TypeVar("T")
 
@@ -46,12 +46,6 @@ def _helpers(n: int) -> ThreadPoolExecutor:
         if old is not None:
             old.shutdown(wait=False)
     return _HELPERS
-
-
-def on_helper(fn: Callable[..., T], *args: object) -> Future:
-    """``fn(*args)`` on a helper thread (:func:`run_chunks`' pool), for compiled work that releases the GIL
-    and that the caller waits for (``Future.result()``) before anything reads what it writes."""
-    return _helpers(1).submit(fn, *args)
 
 
 def run_chunks(chunk: Callable[[int], T], n_chunks: int) -> list[T]:

@@ -85,17 +85,24 @@ def test_threaded_gain_kernel_equals_the_serial_kernel_bit_for_bit(name):
         np.testing.assert_array_equal(lit_t, lit)
         np.testing.assert_array_equal(threaded, serial)
         np.testing.assert_array_equal(sums_t, sums)
-        # the gain rows gathered on a helper thread: lit and sums final on return, the rows once it is done
-        later, lit_b, sums_b, pending = kernels.gains_kernel_threaded(*args, chunks, True)
+        # the gain rows left where the chunks put them: lit and sums final on return, any rows readable by
+        # lit index before the gather (in any order, repeated, none), all of them after it
+        later, lit_b, sums_b, rows = kernels.gains_kernel_threaded(*args, chunks, True)
         np.testing.assert_array_equal(lit_b, lit)
         np.testing.assert_array_equal(sums_b, sums)
-        assert pending.result() is None
+        assert rows.n_rows == len(lit)
+        pick = np.random.default_rng(chunks).integers(0, len(lit), 300)
+        for idx in (pick, np.arange(len(lit)), np.zeros(0, dtype=np.int64)):
+            np.testing.assert_array_equal(rows.take(idx), serial[idx])
+        np.testing.assert_array_equal(rows.gather(), serial)
         np.testing.assert_array_equal(later, serial)
+        np.testing.assert_array_equal(rows.take(pick), serial[pick])  # reads the gathered rows now
+        np.testing.assert_array_equal(rows.gather(), serial)  # gathers once
 
 
 def test_compute_links_on_threads_equals_one_thread(monkeypatch):
     """A scene large enough for the threaded gain kernel and occluder search gives the same links as with
-    one thread, also when the gain rows are gathered on a helper thread (FullSensing's path)."""
+    one thread, also when the gain rows are left in the chunks and gathered later (FullSensing's path)."""
     platform = get_platform("epuck")
     rng = np.random.default_rng(5)
     positions, headings = _dense_scene(platform, 500, 5.0, rng)
@@ -104,12 +111,14 @@ def test_compute_links_on_threads_equals_one_thread(monkeypatch):
     monkeypatch.setattr(layer, "THREADED_MIN_PAIRS", 1)
     monkeypatch.setattr(layer, "gain_threads", lambda n_pairs: 3)
     on_three = layer.compute_links(positions, headings, platform)
-    background, pending = layer._compute_links(positions, headings, platform, background=True)
-    assert pending is not None
-    pending.result()  # the sensing's path: gains gathered on a helper thread, waited for before use
+    background, rows = layer._compute_links(positions, headings, platform, deferred=True)
+    assert rows is not None
     monkeypatch.setattr(layer, "gain_threads", lambda n_pairs: 1)
     serial = layer.compute_links(positions, headings, platform)
-    assert layer._compute_links(positions, headings, platform, background=True)[1] is None  # one thread: nothing pending
+    some = np.arange(0, len(serial), 7)
+    np.testing.assert_array_equal(rows.take(some), serial.gains[some])  # the sensing's path: rows before the gather
+    rows.gather()
+    assert layer._compute_links(positions, headings, platform, deferred=True)[1] is None  # one thread: nothing deferred
     for links in (threaded, on_three, background):
         for name in ("rx", "tx", "distance", "rel_position", "rel_heading", "gains", "emitter_sums"):
             np.testing.assert_array_equal(getattr(links, name), getattr(serial, name))

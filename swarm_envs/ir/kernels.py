@@ -12,20 +12,19 @@ of the ``fast`` extra); otherwise the layer uses the numpy path.
 from __future__ import annotations
 
 import math
-from concurrent.futures import Future
 
 import numpy as np
 
 try:  # numba is optional: an accelerator, not a requirement
     from swarm_envs._numba import njit  # numba.njit whose cache recovers from corrupted files
     from swarm_envs._vecmath import power_into
-    from swarm_envs._worker import on_helper, run_chunks
+    from swarm_envs._worker import run_chunks
 
     HAVE_NUMBA = True
 except ImportError:  # pragma: no cover - exercised only without numba
     HAVE_NUMBA = False
 
-__all__ = ["HAVE_NUMBA", "MODEL_IDS", "model_params", "gains_kernel", "gains_kernel_threaded", "occluders_kernel", "occluders_kernel_threaded", "neighbour_csr_kernel", "occluder_frames_kernel", "directed_pairs_kernel", "select_links_kernel"]
+__all__ = ["HAVE_NUMBA", "MODEL_IDS", "model_params", "gains_kernel", "gains_kernel_threaded", "ChunkRows", "occluders_kernel", "occluders_kernel_threaded", "neighbour_csr_kernel", "occluder_frames_kernel", "directed_pairs_kernel", "select_links_kernel"]
 
 #: model class name -> kernel model id
 MODEL_IDS = {"DropletIR": 0, "EpuckIR": 1, "RoneIR": 2, "DropletLowPowerIR": 3}
@@ -202,18 +201,17 @@ if HAVE_NUMBA:
         occ_xy: np.ndarray,
         occ_radius: float,
         n_chunks: int,
-        background: bool = False,
-    ) -> tuple[np.ndarray, np.ndarray, np.ndarray] | tuple[np.ndarray, np.ndarray, np.ndarray, Future]:
+        deferred: bool = False,
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray] | tuple[np.ndarray, np.ndarray, np.ndarray, ChunkRows]:
         """:func:`gains_kernel` with ``compact=True`` on ``n_chunks`` threads (this one and the helper threads
         of :func:`swarm_envs._worker.run_chunks`): the pairs are cut into contiguous chunks, each filled (and
         compacted within its own rows) by one thread, then the chunks' lit rows are moved together in order
         (:func:`_gather_chunk_rows`, :func:`_gather_gain_rows`). Every row is computed by the same code as
         the serial kernel, so the result is the same bit for bit, whatever the number of chunks or threads.
 
-        ``background=True``: ``lit`` and ``sums`` are gathered before returning, the gain rows by a helper
-        thread (:func:`swarm_envs._worker.on_helper`); returns ``(gains, lit, sums, pending)``, and ``gains``
-        holds its values once ``pending.result()`` has returned (for a caller with work that needs only
-        ``lit`` and ``sums``)."""
+        ``deferred=True``: ``lit`` and ``sums`` are gathered before returning, the gain rows are not; returns
+        ``(gains, lit, sums, rows)`` with ``rows`` a :class:`ChunkRows`, and ``gains`` holds its values once
+        ``rows.gather()`` has run (for a caller whose work reads only ``lit``, ``sums`` and some rows)."""
         P, nd, ne = rel_position.shape[0], det_pos.shape[0], em_pos.shape[0]
         out = np.empty((P, nd, ne))
         sums = np.empty((P, nd))
@@ -230,10 +228,37 @@ if HAVE_NUMBA:
         counts = np.asarray(run_chunks(chunk, n_chunks), dtype=np.int64)
         starts = np.asarray(bounds[:-1], dtype=np.int64)
         n_lit = _gather_chunk_rows(sums, lit, starts, counts)
-        if background:
-            return out[:n_lit], lit[:n_lit].copy(), sums[:n_lit], on_helper(_gather_gain_rows, out, starts, counts)
+        if deferred:
+            return out[:n_lit], lit[:n_lit].copy(), sums[:n_lit], ChunkRows(out, starts, counts)
         _gather_gain_rows(out, starts, counts)
         return out[:n_lit], lit[:n_lit].copy(), sums[:n_lit]
+
+    class ChunkRows:
+        """The lit gain rows of :func:`gains_kernel_threaded` as its chunks left them: chunk k's rows are
+        ``out[starts[k]:starts[k] + counts[k]]``, lit rows ``sum(counts[:k])`` on. :meth:`take` reads rows by
+        lit index without moving any; :meth:`gather` moves them together in place, once (after it, ``take``
+        reads the gathered rows). Not thread-safe: no ``take`` may run while ``gather`` does."""
+
+        def __init__(self, out: np.ndarray, starts: np.ndarray, counts: np.ndarray) -> None:
+            self._out, self._starts, self._counts = out, starts, counts
+            self._first = np.cumsum(counts) - counts  # lit index of each chunk's first row
+            self.n_rows = int(counts.sum())
+            self._gathered = False
+
+        def take(self, idx: np.ndarray) -> np.ndarray:
+            """Copies of the rows of lit indices ``idx`` (S,): (S, n_d, n_e), as ``gathered[idx]``."""
+            idx = np.asarray(idx, dtype=np.int64)
+            if self._gathered:
+                return self._out[idx]
+            chunk = np.searchsorted(self._first, idx, side="right") - 1
+            return self._out[idx - self._first[chunk] + self._starts[chunk]]
+
+        def gather(self) -> np.ndarray:
+            """The rows moved together (``out[:n_rows]``, the kernel's ``gains``), moving them on the first call."""
+            if not self._gathered:
+                _gather_gain_rows(self._out, self._starts, self._counts)
+                self._gathered = True
+            return self._out[: self.n_rows]
 
     @njit(cache=True, error_model="numpy", nogil=True)
     def _gather_chunk_rows(sums: np.ndarray, lit: np.ndarray, starts: np.ndarray, counts: np.ndarray) -> int:

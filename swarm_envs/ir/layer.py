@@ -28,7 +28,6 @@ All public inputs/outputs are SI (metres, radians, angles wrapped to (-pi, pi]).
 from __future__ import annotations
 
 import threading
-from concurrent.futures import Future
 from dataclasses import dataclass, field
 import numpy as np
 from scipy.spatial import cKDTree
@@ -219,16 +218,16 @@ def _gains(
     compact: bool,
     cos_sin: np.ndarray | None = None,
     threads: int = 1,
-    background: bool = False,
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, Future | None]:
+    deferred: bool = False,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, kernels.ChunkRows | None]:
     """(gains, lit, sums) of :func:`pair_gains` with checked inputs: ``lit`` the pairs with a nonzero gain,
     ``gains`` every pair's rows, or with ``compact`` only the ``lit`` rows (compiled kernel, or numpy), and
     ``sums`` (rows, n_d) the gains summed over emitters sequentially in emitter order (:class:`IRLinks`
     ``emitter_sums``). ``cos_sin`` (P, 2): cos and sin of ``psi`` if known (the kernel uses them; default
     from ``psi``). ``threads`` > 1 (with ``compact``): the compiled kernel splits the pairs over that many
-    threads (:func:`gain_threads`; same result bit for bit). ``background`` (with threads): the gain rows
-    are gathered on a helper thread; the fourth result is then that thread's future (else None), and
-    ``gains`` holds its values once it is done (:func:`kernels.gains_kernel_threaded`)."""
+    threads (:func:`gain_threads`; same result bit for bit). ``deferred`` (with threads): the gain rows are
+    not gathered; the fourth result is then their :class:`kernels.ChunkRows` (else None), and ``gains``
+    holds its values once its ``gather()`` has run (:func:`kernels.gains_kernel_threaded`)."""
     if kernels.HAVE_NUMBA and type(model).__name__ in kernels.MODEL_IDS:
         kind, params = kernels.model_params(model)
         if cos_sin is None:
@@ -239,7 +238,7 @@ def _gains(
             offsets, xy, float(platform.radius),
         )
         if compact and threads > 1:
-            if background:
+            if deferred:
                 return kernels.gains_kernel_threaded(*args, int(threads), True)
             return (*kernels.gains_kernel_threaded(*args, int(threads)), None)
         return (*kernels.gains_kernel(*args, compact), None)
@@ -481,12 +480,12 @@ def _compute_links(
     drop_zero: bool = True,
     occlusion: str = "ray",
     copy: np.ndarray | None = None,
-    background: bool = False,
-) -> tuple[IRLinks, Future | None]:
-    """:func:`compute_links`, and with ``background`` (for :class:`swarm_envs.sensing.full.FullSensing`) the
-    future of a helper thread still gathering ``gains`` when the scene uses threads (:func:`gain_threads`;
-    else None): everything else in the links is final, and ``gains`` is once the future is done, which the
-    caller must wait for before anything reads ``gains`` and before it returns."""
+    deferred: bool = False,
+) -> tuple[IRLinks, kernels.ChunkRows | None]:
+    """:func:`compute_links`, and with ``deferred`` (for :class:`swarm_envs.sensing.full.FullSensing`), when
+    the scene uses threads (:func:`gain_threads`; else None), the gain rows as the kernel's chunks left them
+    (:class:`kernels.ChunkRows`): everything else in the links is final, and ``links.gains`` holds its
+    values only after ``rows.gather()``; until then read rows with ``rows.take(link indices)``."""
     if occlusion not in OCCLUSION_RULES:
         raise ValueError(f"occlusion must be one of {OCCLUSION_RULES}, got {occlusion!r}")
     platform = get_platform(platform)
@@ -519,7 +518,7 @@ def _compute_links(
         offsets, xy = np.zeros(rx.shape[0] + 1, dtype=np.int64), np.zeros((0, 2))
     else:
         offsets, xy = occluders
-    gains, lit, sums, pending = _gains(rel, rel_heading, platform, platform.ir_model, offsets, xy, drop_zero, rel_cs, threads, background)
+    gains, lit, sums, rows_pending = _gains(rel, rel_heading, platform, platform.ir_model, offsets, xy, drop_zero, rel_cs, threads, deferred)
     rows = np.arange(rx.shape[0])
     if drop_zero and lit.shape[0] < rx.shape[0]:
         rows = lit
@@ -527,7 +526,7 @@ def _compute_links(
             rx, tx, rel, rel_heading, distance = kernels.select_links_kernel(lit, rx, tx, rel, rel_heading, distance)
         else:
             rx, tx, rel, rel_heading, distance = rx[lit], tx[lit], rel[lit], rel_heading[lit], distance[lit]
-    return IRLinks(rx, tx, distance, rel, rel_heading, gains, N, None if occluders is None else (*occluders, rows), sums), pending
+    return IRLinks(rx, tx, distance, rel, rel_heading, gains, N, None if occluders is None else (*occluders, rows), sums), rows_pending
 
 
 def gain_threads(n_pairs: int) -> int:

@@ -37,8 +37,7 @@ Channel and sensor statistics go to ``infos[agent]["sensing", name]``.
 from __future__ import annotations
 
 from collections.abc import Callable
-from concurrent.futures import Future
-from typing import Any, TypeVar
+from typing import Any
 
 import numpy as np
 
@@ -62,8 +61,6 @@ __all__ = ["FullSensing", "BEACON_PERIOD", "rb_on_worker_thread"]
 #: thesis round 2 (1 + 5)^2 x 32.8 ms = 2.36 s [L Sec. 3.2.1] in 0.1 s control steps, rounded up
 BEACON_PERIOD = int(np.ceil(round(thesis_round_time(5) / 0.1, 9)))
 
-T = TypeVar("T")
-
 BEACON_KIND = "bearing_beacon"  # SwarmCom system kind of the header-only beacons
 
 _STAT_NAMES = ("tx_started", "deferrals", "rx_delivered", "rx_lost", "collisions", "bits_checked", "bit_errors")
@@ -86,13 +83,6 @@ def _observation_rows(neighbours: NeighbourReadings, n: int, k: int) -> None:
     slots = nearest_slots(n, neighbours.rx, neighbours.range, k)
     neighbours.rows = range_bearing_rows(slots, neighbours.range, neighbours.bearing, neighbours.heading, neighbours.age)
     neighbours.slots = slots
-
-
-def _when_done(pending: Future | None, fn: Callable[..., T], *args: Any) -> T:
-    """``fn(*args)`` once ``pending`` (a helper's job, or None) is done."""
-    if pending is not None:
-        pending.result()
-    return fn(*args)
 
 
 class FullSensing:
@@ -214,9 +204,11 @@ class FullSensing:
             prepared = self.prepare_step(payloads, sending)
         elif payloads is not None:
             raise ValueError("payloads were queued by prepare_step; pass either payloads or prepared")
-        # the IR links; in a large scene a helper thread still gathers their gain matrices while SwarmCom,
-        # which reads only the emitter sums, starts (swarm_envs.ir.layer._compute_links)
-        links, gains_pending = _compute_links(positions, headings, self.platform, copy=self.copy_of if self.n_copies > 1 else None, background=True)
+        # the IR links; in a large scene the gain matrices stay where the gain kernel's chunks left them
+        # (swarm_envs.ir.kernels.ChunkRows): range & bearing reads the rows it needs from there, SwarmCom
+        # reads only the emitter sums, and nothing here reads links.gains before gain_rows.gather()
+        links, gain_rows = _compute_links(positions, headings, self.platform, copy=self.copy_of if self.n_copies > 1 else None, deferred=True)
+        take = None if gain_rows is None else gain_rows.take
 
         # range & bearing (large single scenes: on the worker thread, while SwarmCom runs here)
         self.large_scene = rb_on_worker_thread(len(links), self.n_copies)
@@ -224,19 +216,18 @@ class FullSensing:
         try:
             if self.has_range:
                 if self.large_scene:
-                    rb_future = worker().submit(_when_done, gains_pending, self._range_bearing, links)
+                    rb_future = worker().submit(self._range_bearing, links, take)
                 else:
-                    rb, neighbours = _when_done(gains_pending, self._range_bearing, links)
+                    rb, neighbours = self._range_bearing(links, take)
             # SwarmCom: application payloads and the bearing exchange share the channel (queued by prepare_step)
             deliveries = self.network.step(links, prepared)
-        finally:  # never leave the worker or a helper running on this step's state
-            for job in (rb_future, gains_pending):
-                if job is not None:
-                    job.exception()  # waits
-        if gains_pending is not None:
-            gains_pending.result()  # links.gains complete from here on (or the gather's error)
+        finally:  # never leave the worker running on this step's state
+            if rb_future is not None:
+                rb_future.exception()  # waits
         if rb_future is not None:
             rb, neighbours = rb_future.result()
+        if gain_rows is not None and self.bearings is not None:
+            gain_rows.gather()  # the sector bearings read links.gains (range & bearing's reads are done)
         # the readings' observation rows on the worker thread, while the exchange and scale-free run here
         rows_future = worker().submit(_observation_rows, neighbours, self.n, self.k) if rb_future is not None else None
         try:
@@ -289,9 +280,10 @@ class FullSensing:
         stats["rigid"] = scale_free.rigid.astype(np.int64)
         return SensorFrame(neighbours, messages, scale_free, stats)
 
-    def _range_bearing(self, links: Any) -> tuple[Any, NeighbourReadings]:
-        """Range & bearing's step on ``links`` and its readings."""
-        rb = self.rb.step(links)
+    def _range_bearing(self, links: Any, gain_rows: Callable[[np.ndarray], np.ndarray] | None = None) -> tuple[Any, NeighbourReadings]:
+        """Range & bearing's step on ``links`` (their gain rows read with ``gain_rows``, default
+        ``links.gains``) and its readings."""
+        rb = self.rb.step(links, gain_rows=gain_rows)
         return rb, NeighbourReadings(rb.rx, rb.tx, rb.range, rb.bearing, rb.heading, rb.age.astype(float))
 
     def _scale_free(self, knowledge) -> ScaleFreeReadings:

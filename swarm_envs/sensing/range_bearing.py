@@ -69,6 +69,7 @@ are kept as ground truth (``RangeBearingReadings.true_tx``, ``.n_overlap``) for 
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -671,11 +672,15 @@ class RangeBearingSensor:
         return independent_set_numpy(prio, links.rx, links.tx)
 
     # -- one control step ------------------------------------------------------------------------------
-    def step(self, links: IRLinks, fired: np.ndarray | None = None) -> RangeBearingReadings:
+    def step(
+        self, links: IRLinks, fired: np.ndarray | None = None, gain_rows: Callable[[np.ndarray], np.ndarray] | None = None
+    ) -> RangeBearingReadings:
         """Advance one control step with this step's links; return all current readings.
 
         ``fired``: optional (N,) bool robots that fire this step instead of the schedule's choice (for
-        validation and tests; no priorities are drawn then)."""
+        validation and tests; no priorities are drawn then). ``gain_rows``: optional reader of the links'
+        gain matrices, ``gain_rows(link indices) -> (S, n_d, n_e)`` equal to ``links.gains[indices]``
+        (default; e.g. :meth:`swarm_envs.ir.kernels.ChunkRows.take` before the rows are gathered)."""
         N = self.n_robots
         if fired is None:
             fired = self.fire_mask(links)
@@ -694,15 +699,14 @@ class RangeBearingSensor:
         grx = rx_sel[starts]
         n_over = np.diff(np.r_[starts, sel.size]).astype(np.int64)
         tx_sel = links.tx[sel]
-        n_d = links.gains.shape[1]
-        fused = HAVE_NUMBA and sel.size > 0 and links.gains.dtype == np.float64 and int(n_over.max()) <= FRAME_WORDS_MAX_GROUP
+        gains = links.gains[sel] if gain_rows is None else gain_rows(sel)  # the firing links' matrices
+        n_d = gains.shape[1]
+        fused = HAVE_NUMBA and sel.size > 0 and gains.dtype == np.float64 and int(n_over.max()) <= FRAME_WORDS_MAX_GROUP
         if fused:  # the sums and the brightest link of every group in one pass (kernels.firing_sums)
-            gains = links.gains[sel]
             lam, light, group_light, best = firing_sums(gains.reshape(sel.size, -1), starts.astype(np.int64), n_d, _PAIRWISE_INIT)
-            lam = lam.reshape(starts.size, *links.gains.shape[1:])
+            lam = lam.reshape(starts.size, *gains.shape[1:])
             true = tx_sel[best]  # ground truth: the firing TX with the brightest entry of each group
         else:
-            gains = links.gains[sel]
             lam = segment_sum(gains, starts) if starts.size < sel.size else gains
             light, group_light = (sum_last(gains) if self.collisions and sel.size else None), None
             # ground truth: the firing TX with the brightest entry of each group
