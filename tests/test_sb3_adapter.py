@@ -144,7 +144,11 @@ def test_short_ppo_run_save_reload_same_actions(tmp_path):
     np.testing.assert_array_equal(a1, a2)
     # and through the Policy wrapper on named observations
     parts = vec.layout.unflatten(obs[vec.rows(0)])
-    np.testing.assert_allclose(SB3Policy(loaded, vec.platform, vec.layout).act_batch(parts), np.clip(a2[vec.rows(0)], -1, 1))
+    # a batch of one copy's rows against the whole batch: float32 matrix products may round differently
+    # with the batch size (blocking), so equal up to float32 rounding, not bit for bit
+    np.testing.assert_allclose(
+        SB3Policy(loaded, vec.platform, vec.layout).act_batch(parts), np.clip(a2[vec.rows(0)], -1, 1), rtol=1e-5, atol=1e-6
+    )
 
 
 def test_adapter_with_full_sensing():
