@@ -24,6 +24,7 @@ arithmetic runs as one numpy program over all their robots, and each space is wr
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass
 
 from collections.abc import Sequence
@@ -38,6 +39,9 @@ from swarm_envs.platforms import Platform
 
 __all__ = ["Arena", "World", "step_worlds", "spawn_positions", "check_capacity", "lattice_lower_bound", "as_real_array", "wrap_angle", "N_BUMP_SECTORS"]
 
+#: bytes of commands a world keeps per episode for exact copies (16 per robot and step; 64 MB = 400,000
+#: steps of 10 robots); a longer episode's copy falls back to pymunk's copy of the space
+COPY_LOG_BYTES = 64 << 20
 N_BUMP_SECTORS = 8  # bump sensor: one flag per 45-degree sector of the body (sector 0 centred ahead)
 _ROBOT, _WALL = 1, 2
 MOTOR_ACCELERATION = 50.0  # m/s^2: bounded motor force / mass; full speed within one physics sub-step
@@ -268,6 +272,9 @@ class World:
         self.angular_velocities = np.zeros(self.n)
         self.bumps = np.zeros((self.n, N_BUMP_SECTORS), dtype=bool)
         self._body_motion = np.zeros((self.n, 3))  # pymunk body (vx, vy, omega) after the last step
+        self._episode_start: tuple[np.ndarray, np.ndarray] | None = None  # set by place()
+        self._commands: list[tuple[np.ndarray, np.ndarray, float]] | None = []
+        self._command_bytes = 0
 
     def _build_space(self) -> None:
         """A new pymunk space with every robot at the origin and the walls: no contact, arbiter or
@@ -302,6 +309,10 @@ class World:
             wall.elasticity = 0.0
             wall.collision_type = _WALL
             self.space.add(wall)
+        self._make_buffers()
+
+    def _make_buffers(self) -> None:
+        """The pymunk.batch buffers over the space's bodies (C memory: rebuilt, never copied)."""
         # contacts of the sub-steps of a control step, appended by _substeps (see there)
         self._robot_ids = np.array([body.id for body in self.bodies], dtype=np.uintp)
         self._contacts = pymunk.batch.Buffer()
@@ -324,6 +335,47 @@ class World:
                 _batched_data(buffer, fields) for buffer, fields in ((self._write_buffer, _WRITE), (self._read_buffer, _READ), (self._contacts, _CONTACT_FIELDS))
             )
         self._read_ptr = None  # the read buffer's C array when _read_rows was made
+
+    # -- copies (copy.deepcopy, pickle) ----------------------------------------------------------------
+    # pymunk can pickle a space, but a restored space does not step on bit for bit: chipmunk's joint
+    # impulses and its collision index are not part of pymunk's state. A copy therefore rebuilds the space
+    # and replays the episode's physics from its placement with the logged commands (physics only: the
+    # sensing and task state are copied as they are), which is exact because the physics is deterministic.
+    _NOT_COPIED = ("space", "bodies", "controls", "_robot_ids", "_contacts", "_read_buffer", "_write_values",
+                   "_write_rows", "_write_buffer", "_batched", "_read_ptr", "_read_rows")
+
+    def __getstate__(self) -> dict:
+        state = {k: v for k, v in self.__dict__.items() if k not in self._NOT_COPIED}
+        if self._commands is None:  # the log outgrew its bound: pymunk's own copy of the space (not exact)
+            warnings.warn(
+                f"copying a world whose episode log exceeded {COPY_LOG_BYTES >> 20} MB: the copy's physics is "
+                "pymunk's copy of the space and may drift from the original by rounding",
+                RuntimeWarning,
+                stacklevel=2,
+            )
+            state["_space_copy"] = (self.space, self.bodies, self.controls)
+        return state
+
+    def __setstate__(self, state: dict) -> None:
+        space_copy = state.pop("_space_copy", None)
+        self.__dict__.update(state)
+        if space_copy is not None:
+            self.space, self.bodies, self.controls = space_copy
+            self._make_buffers()
+            return
+        self._build_space()
+        if self._episode_start is None:
+            return
+        final = {k: getattr(self, k) for k in ("positions", "headings", "velocities", "angular_velocities", "bumps", "_body_motion")}
+        commands, n_bytes = self._commands, self._command_bytes
+        self.place(*self._episode_start)
+        for linear, angular, dt in commands:
+            step_worlds([self], linear, angular, dt)
+        if not (np.array_equal(self.positions, final["positions"]) and np.array_equal(self._body_motion, final["_body_motion"])):
+            raise RuntimeError("replaying the episode's physics did not reproduce the copied world")  # pragma: no cover
+        self._commands, self._command_bytes = commands, n_bytes
+        for key, value in final.items():
+            setattr(self, key, value)
 
     # -- state -----------------------------------------------------------------------------------
     def check_placement(self, positions: np.ndarray, headings: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -367,6 +419,21 @@ class World:
         self.angular_velocities = np.zeros(self.n)
         self.bumps = np.zeros((self.n, N_BUMP_SECTORS), dtype=bool)
         self._body_motion = np.zeros((self.n, 3))
+        # the episode so far, for exact copies (see __getstate__): the placement and every step's commands
+        self._episode_start = (positions.copy(), headings.copy())
+        self._commands: list[tuple[np.ndarray, np.ndarray, float]] | None = []
+        self._command_bytes = 0
+
+    def _record(self, linear: np.ndarray, angular: np.ndarray, dt: float) -> None:
+        """Append one step's commands (m/s, rad/s, s) to the episode's log, while it stays under
+        :data:`COPY_LOG_BYTES`; past that the log is dropped and copies are no longer exact."""
+        if self._commands is None:
+            return
+        self._command_bytes += linear.nbytes + angular.nbytes
+        if self._command_bytes > COPY_LOG_BYTES:
+            self._commands = None
+            return
+        self._commands.append((linear.copy(), angular.copy(), dt))
 
     def _advance(self, control: np.ndarray, h: float) -> np.ndarray:
         """Set the control bodies' (vx, vy, omega) rows ``control`` (n, 3), run the sub-steps of ``h``
@@ -424,9 +491,12 @@ def step_worlds(worlds: Sequence[World], linear: np.ndarray, angular: np.ndarray
     platform, substeps = first.platform, first.substeps
     if any(w.platform is not platform or w.substeps != substeps for w in worlds):
         raise ValueError("step_worlds needs worlds of one platform and one sub-step count")
-    linear, angular = first.wheel_limited(np.asarray(linear, float).reshape(-1), np.asarray(angular, float).reshape(-1))
+    linear, angular = np.asarray(linear, float).reshape(-1), np.asarray(angular, float).reshape(-1)
     sizes = [w.n for w in worlds]
     bounds = np.concatenate([[0], np.cumsum(sizes)])
+    for w, a, b in zip(worlds, bounds[:-1], bounds[1:]):
+        w._record(linear[a:b], angular[a:b], dt)
+    linear, angular = first.wheel_limited(linear, angular)
     if linear.shape[0] != bounds[-1]:
         raise ValueError(f"expected {bounds[-1]} commands (the worlds' robots), got {linear.shape[0]}")
     single = len(worlds) == 1
