@@ -1,10 +1,14 @@
 """swarm_envs: PettingZoo swarm-robotics environments with a physically modelled infrared sensing stack.
 
-Importing the package registers the tasks in PettingZoo's registry::
+Importing the package registers the suite's tasks (in its registry and in PettingZoo's)::
 
     import pettingzoo, swarm_envs
     env = pettingzoo.make("parallel", "swarm_envs/Aggregation-v0", n_robots=10)
-    env = swarm_envs.make("swarm_envs/Flocking-v0", platform="rone")   # same, parallel API
+    env = swarm_envs.make("swarm_envs/Flocking-v0", platform="rone")        # same, parallel API
+    vec = swarm_envs.make_vec("swarm_envs/Flocking-v0", 64)                 # 64 copies, one batched core
+
+Your own task: subclass :class:`swarm_envs.task.Task` and ``swarm_envs.register("my_lab/MyTask-v0",
+MyTask)`` (or ``"my_module:MyTask"``, imported when first made); every function here then accepts the id.
 
 ``swarm_envs.make`` passes every keyword to the env unchanged (``max_cycles=-1`` raises), whereas
 ``pettingzoo.make`` drops ``max_cycles=-1`` and uses the env's default.
@@ -14,44 +18,34 @@ from __future__ import annotations
 
 from typing import Any
 
-from pettingzoo import ParallelEnv, register
-
-from swarm_envs import aggregation_v0, centroid_seeking_v0, flocking_v0
+from swarm_envs import env, task  # noqa: F401  (swarm_envs.env.info_group, swarm_envs.task.Task)
 from swarm_envs.platforms import PLATFORMS, Platform, get_platform
-from swarm_envs.registry import ENV_IDS, list_envs
+from swarm_envs.registry import ENV_IDS, EnvSpec, list_envs, make, make_vec, register, spec
 
 __version__ = "0.1.0"
 __all__ = [
-    "aggregation_v0",
-    "flocking_v0",
-    "centroid_seeking_v0",
     "make",
     "make_vec",
+    "register",
+    "spec",
     "list_envs",
+    "EnvSpec",
     "ENV_IDS",
     "PLATFORMS",
     "Platform",
     "get_platform",
 ]
 
-for _id, _module in ENV_IDS.items():
-    register("parallel", _id, entry_point=f"{_module}:parallel_env")
-    register("aec", _id, entry_point=f"{_module}:env")
+register("swarm_envs/Aggregation-v0", "swarm_envs.aggregation_v0:AggregationEnv")
+register("swarm_envs/Flocking-v0", "swarm_envs.flocking_v0:FlockingEnv")
+register("swarm_envs/CentroidSeeking-v0", "swarm_envs.centroid_seeking_v0:CentroidSeekingEnv")
 
 
-def make(env_id: str, **kwargs: Any) -> ParallelEnv:
-    """Create a parallel environment by registered id, e.g. ``make("swarm_envs/Aggregation-v0", n_robots=20)``."""
-    if env_id not in ENV_IDS:
-        raise ValueError(f"unknown environment id {env_id!r}; registered: {list_envs()}")
+def __getattr__(name: str) -> Any:
+    # submodules on first use (``swarm_envs.flocking_v0``, ``swarm_envs.vector``)
     import importlib
+    import importlib.util
 
-    # the registry's own entry point, called directly: pettingzoo.make treats max_cycles=-1 as "not
-    # given" (its spec default), which would silently turn an invalid -1 into 500-step episodes
-    return importlib.import_module(ENV_IDS[env_id]).parallel_env(**kwargs)
-
-
-def make_vec(env_id: str, num_envs: int, **kwargs: Any):
-    """``num_envs`` copies of a registered task stepped by one batched core (:mod:`swarm_envs.vector`)."""
-    from swarm_envs.vector import make_vec as _make_vec
-
-    return _make_vec(env_id, num_envs, **kwargs)
+    if not name.startswith("__") and importlib.util.find_spec(f"swarm_envs.{name}") is not None:
+        return importlib.import_module(f"swarm_envs.{name}")
+    raise AttributeError(f"module 'swarm_envs' has no attribute {name!r}")

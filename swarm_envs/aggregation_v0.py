@@ -16,9 +16,8 @@ from pettingzoo.utils.conversions import parallel_to_aec
 
 from swarm_envs.env import SwarmEnv
 from swarm_envs.factories import reports_unknown_kwargs
-from swarm_envs.metrics import largest_component_fraction
 from swarm_envs.platforms import Platform
-from swarm_envs.task import BatchState, Task
+from swarm_envs.task import BatchState, Task, largest_component_fraction
 
 __all__ = ["AggregationTask", "AggregationEnv", "raw_env", "parallel_env", "env"]
 
@@ -27,6 +26,10 @@ CLUSTER_LINK_DIAMETERS = 1.5
 
 class AggregationTask(Task):
     """Aggregation rewards and metrics over all env copies (module docstring)."""
+
+    METRICS = {"largest_cluster_fraction": "final", "n_clusters": "final", "mean_distance_to_centroid": "final"}
+    HEADLINE = ("largest_cluster_fraction", +1)
+    SCRIPTED_POLICY = "swarm_envs.agents.scripted:BearingAggregation"
 
     def __init__(self, config: dict[str, Any], platform, n_copies: int = 1) -> None:
         super().__init__(config, platform, n_copies)

@@ -21,9 +21,7 @@ from scipy.spatial import cKDTree
 from swarm_envs.env import SwarmEnv
 from swarm_envs.factories import reports_unknown_kwargs
 from swarm_envs.platforms import Platform
-from swarm_envs.task import BatchState, Task
-from swarm_envs.world import spawn_positions
-from swarm_envs.settings import SettingsError
+from swarm_envs.task import BatchState, Int, SettingsError, Task, spawn_positions
 
 __all__ = ["CentroidSeekingTask", "CentroidSeekingEnv", "raw_env", "parallel_env", "env"]
 
@@ -31,18 +29,19 @@ __all__ = ["CentroidSeekingTask", "CentroidSeekingEnv", "raw_env", "parallel_env
 class CentroidSeekingTask(Task):
     """Centroid-seeking rewards and metrics over all env copies; extra kwarg ``n_anchors`` (default 4, >= 3)."""
 
-    TASK_DEFAULTS = {"n_anchors": 4, "n_robots": 1}
+    SETTINGS = {"n_robots": 1, "n_anchors": Int(4, "static robots on a convex polygon", low=3, high=1000)}
+    METRICS = {"mean_distance_second_half": "final", "mean_distance_to_centroid": "final"}
+    HEADLINE = ("mean_distance_second_half", -1)
+    SCRIPTED_POLICY = "swarm_envs.agents.scripted:CentroidSeeker"
 
     def __init__(self, config: dict[str, Any], platform, n_copies: int = 1) -> None:
         super().__init__(config, platform, n_copies)
-        # per copy, the cumulative sum of the mean seeker distance over steps 0 .. t (index t + 1)
-        self._distance_cumsum = np.zeros((self.n_copies, self.max_cycles + 2))
+        # per copy, the cumulative sum of the mean seeker distance over steps 0 .. t (index t + 1); grown
+        # as episodes run (memory follows the steps taken, not max_cycles)
+        self._distance_cumsum = np.zeros((self.n_copies, 64))
 
-    def _n_static(self) -> int:
-        n = self.config["n_anchors"]
-        if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 3:
-            raise ValueError(f"n_anchors must be an integer >= 3 (a polygon), got {n!r}")
-        return int(n)
+    def n_static_robots(self) -> int:
+        return self.config["n_anchors"]
 
     def default_arena_size(self) -> float:
         # room for an anchor polygon of radius ~0.3 IR ranges plus seekers around it
@@ -53,7 +52,7 @@ class CentroidSeekingTask(Task):
         ratio = 1.05 * self.platform.radius / self.polygon_radius
         return 2 * float(np.arcsin(ratio)) if ratio < 1 else np.inf
 
-    def _check_layout(self) -> None:
+    def check_layout(self) -> None:
         n_a, angle = self.n_static, self._anchor_min_angle()
         if n_a * angle >= 2 * np.pi:
             fit = int(np.ceil(2 * np.pi / angle)) - 1 if np.isfinite(angle) else 0
@@ -111,6 +110,10 @@ class CentroidSeekingTask(Task):
         mean_dist = dist.mean(axis=1)
         copies = np.arange(self.n_copies)
         t = np.minimum(state.num_cycles, self.max_cycles)
+        if t.max() + 2 > self._distance_cumsum.shape[1]:
+            grown = np.zeros((self.n_copies, max(2 * self._distance_cumsum.shape[1], int(t.max()) + 2)))
+            grown[:, : self._distance_cumsum.shape[1]] = self._distance_cumsum
+            self._distance_cumsum = grown
         self._distance_cumsum[first, 0] = 0.0
         self._distance_cumsum[copies, t + 1] = self._distance_cumsum[copies, t] + mean_dist
         # steps ceil(t/2) .. t: at the end of an episode, its second half (never NaN)

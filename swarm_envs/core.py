@@ -7,7 +7,7 @@ bearing exchange, scale-free coordinates; no link, message or random draw crosse
 arrays -> rewards (the task, on ``(B, ...)`` views).
 
 Thin views sit on top: :class:`swarm_envs.env.SwarmEnv` (a PettingZoo ``ParallelEnv``) is the core with
-``B = 1``; :func:`swarm_envs.vector.make_vec` exposes ``B`` copies as arrays. Because each copy draws from
+``B = 1``; :func:`swarm_envs.make_vec` (:mod:`swarm_envs.vector`) exposes ``B`` copies as arrays. Because each copy draws from
 its own generators in the order a single env would, copy ``b`` seeded with ``s`` reproduces a single env
 seeded with ``s`` bit for bit.
 

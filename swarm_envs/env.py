@@ -40,10 +40,11 @@ INFO_GROUPS = ("ground_truth", "reward_terms", "metrics", "sensing")
 STATE_ROBOT_FIELDS = ("x", "y", "cos_heading", "sin_heading", "vx", "vy", "angular_velocity")
 
 
-def resolve_config(env_cls: type, kwargs: dict[str, Any]) -> dict[str, Any]:
-    """Every setting of ``env_cls``'s task filled in and checked (:func:`swarm_envs.settings.validate_settings`):
-    unknown names raise ``TypeError``, bad values ``SettingsError`` (a ``ValueError``) naming the key."""
-    return validate_settings(env_cls, kwargs)
+def resolve_config(task: Any, kwargs: dict[str, Any]) -> dict[str, Any]:
+    """Every setting of ``task`` (a ``Task`` subclass, env class or registered id) filled in and checked
+    (:func:`swarm_envs.settings.validate_settings`): unknown names raise ``TypeError``, bad values
+    ``SettingsError`` (a ``ValueError``) naming the key."""
+    return validate_settings(task, kwargs)
 
 
 def make_layout(cfg: dict[str, Any], platform: Platform) -> ObservationLayout:
@@ -105,30 +106,34 @@ def check_reset_options(options: Any, world: World) -> tuple[np.ndarray | None, 
 class SwarmEnv(ParallelEnv):
     """A swarm of disc robots whose observations come from a modelled infrared sensing stack.
 
-    A thin PettingZoo view of the batched core (:class:`swarm_envs.core.SwarmCore`) with one copy.
-    Subclasses set ``TASK`` (a :class:`swarm_envs.task.Task` subclass: extra kwargs, spawn, rewards).
-    See :data:`COMMON_DEFAULTS` for the shared keyword arguments.
+    A thin PettingZoo view of the batched core (:class:`swarm_envs.core.SwarmCore`) with one copy, for
+    any task: ``SwarmEnv(TaskClass, **settings)``, or a subclass that sets ``TASK`` (the suite's task
+    modules do: ``AggregationEnv(**settings)``). See :data:`swarm_envs.settings.COMMON_SETTINGS` for the
+    keyword arguments every task takes, and the task's ``SETTINGS`` for its own.
 
     Actions are ``Box(-1, 1, (2 + message_bits,))``: (linear, angular) velocity as fractions of the
     platform maxima, then the message bits (entries > 0 are 1-bits). Finite values outside [-1, 1] are
     clipped; NaN/inf, wrong shapes and unknown agents raise. Zero actions keep a robot still.
+
+    Envs can be copied (``copy.deepcopy``) and pickled, before a reset or mid-episode: the copy continues
+    bit for bit like the original under the same actions.
     """
 
     metadata = {"name": "swarm_v0", "render_modes": ["human", "rgb_array"], "render_fps": int(1 / DT), "is_parallelizable": True}
     TASK: type[Task] = Task
-    TASK_DEFAULTS: dict[str, Any] = {}
 
-    def __init_subclass__(cls, **kwargs: Any) -> None:
-        super().__init_subclass__(**kwargs)
-        cls.TASK_DEFAULTS = dict(cls.TASK.TASK_DEFAULTS)
-
-    def __init__(self, **kwargs: Any) -> None:
+    def __init__(self, task: type[Task] | None = None, /, **kwargs: Any) -> None:
+        task_cls = self.TASK if task is None else task
+        if not (isinstance(task_cls, type) and issubclass(task_cls, Task)) or task_cls is Task:
+            raise TypeError(f"{type(self).__name__} needs a swarm_envs.task.Task subclass (SwarmEnv(TaskClass, ...)), got {task_cls!r:.80}")
+        if task is not None and task is not self.TASK:
+            self.metadata = {**self.metadata, "name": _snake_case(task_cls.__name__)}
         # every setting is checked here, whatever the sensing mode (swarm_envs.settings)
-        cfg = resolve_config(type(self), kwargs)
+        cfg = resolve_config(task_cls, kwargs)
         self.config = cfg
         self.platform: Platform = get_platform(cfg["platform"])
         self.render_mode = cfg["render_mode"]
-        self.task = self.TASK(cfg, self.platform, n_copies=1)
+        self.task = task_cls(cfg, self.platform, n_copies=1)
         self.max_cycles = self.task.max_cycles
         self.reward_mode = self.task.reward_mode
         self.n_static = self.task.n_static
@@ -145,6 +150,12 @@ class SwarmEnv(ParallelEnv):
         self.core = SwarmCore(self.task, self.layout)
         self._renderer = None
         self.num_cycles = 0
+
+    # -- copies ----------------------------------------------------------------------------------------
+    def __getstate__(self) -> dict[str, Any]:
+        state = dict(self.__dict__)
+        state["_renderer"] = None  # a pygame surface or window is not copied; the copy draws anew
+        return state
 
     # -- the core's single copy ----------------------------------------------------------------------
     @property
@@ -356,6 +367,11 @@ class SwarmEnv(ParallelEnv):
     def __repr__(self) -> str:
         return f"{type(self).__name__}(n_robots={self.n_agents}, platform={self.platform.name!r}, sensing={self.config['sensing']!r})"
 
+
+
+def _snake_case(name: str) -> str:
+    """``"MyTask"`` -> ``"my_task"`` (the PettingZoo ``metadata["name"]`` of a task's env)."""
+    return "".join(f"_{c.lower()}" if c.isupper() and i else c.lower() for i, c in enumerate(name))
 
 
 def info_group(info: dict, group: str) -> dict[str, Any]:

@@ -17,10 +17,8 @@ from pettingzoo.utils.conversions import parallel_to_aec
 
 from swarm_envs.env import SwarmEnv
 from swarm_envs.factories import reports_unknown_kwargs
-from swarm_envs.metrics import largest_component_fraction, neighbourhood_sums
 from swarm_envs.platforms import Platform
-from swarm_envs.task import BatchState, Task, bump_any
-from swarm_envs.sensing.ideal import copy_pairs
+from swarm_envs.task import BatchState, Real, Task, bump_any, largest_component_fraction, neighbourhood_sums, pairs_within
 
 __all__ = ["FlockingTask", "FlockingEnv", "raw_env", "parallel_env", "env"]
 
@@ -28,14 +26,14 @@ __all__ = ["FlockingTask", "FlockingEnv", "raw_env", "parallel_env", "env"]
 class FlockingTask(Task):
     """Flocking rewards and metrics over all env copies; extra kwarg ``collision_penalty`` (default 0.1)."""
 
-    TASK_DEFAULTS = {"collision_penalty": 0.1}
+    SETTINGS = {"collision_penalty": Real(0.1, "weight of the fraction of robots bumping", low=0.0, high=1000.0)}
+    METRICS = {"polarisation": "mean", "cohesion": "mean", "collision_fraction": "mean"}
+    HEADLINE = ("polarisation", +1)
+    SCRIPTED_POLICY = "swarm_envs.agents.scripted:OrientationFlocking"
 
     def __init__(self, config: dict[str, Any], platform, n_copies: int = 1) -> None:
         super().__init__(config, platform, n_copies)
-        penalty = config["collision_penalty"]
-        if isinstance(penalty, bool) or not isinstance(penalty, (int, float)) or not np.isfinite(penalty) or penalty < 0:
-            raise ValueError(f"collision_penalty must be a non-negative number, got {penalty!r}")
-        self.penalty = float(penalty)
+        self.penalty = config["collision_penalty"]
 
     def rewards(self, state: BatchState, first: np.ndarray):
         B, A = self.n_copies, self.n_agents
@@ -44,7 +42,7 @@ class FlockingTask(Task):
         vmax = self.platform.max_speed
         ir_range = self.platform.ir_range
         # IR-range links of every copy, once, for cohesion and local polarisation (never across copies)
-        pairs = copy_pairs(pos.reshape(B * A, 2), ir_range, A)
+        pairs = pairs_within(pos, ir_range)
         cohesion, _ = largest_component_fraction(pos, ir_range, pairs)
         weight = np.clip(speed / vmax, 0.0, 1.0)
         vec = np.stack([np.cos(head), np.sin(head)], -1) * weight[..., None]  # (B, A, 2)

@@ -1,11 +1,15 @@
-"""Settings of the swarm envs: the defaults and the one validator every entry point uses.
+"""Settings of the swarm envs: one rule per setting, in one place, used by every entry point.
 
-:func:`validate_settings` checks a task's keyword arguments up front (types, finiteness, allowed values,
-and combinations such as BCH codes and message sizes the SwarmCom frame can carry [T20]), whatever the
-``sensing`` mode, so a bad value fails when the env is built, never at ``reset`` or mid-training. The env
-constructor (:class:`swarm_envs.env.SwarmEnv`) and the training config check (:mod:`agents.config`)
-both call it. Geometry that needs the built arena (do the robots fit?) is checked by the constructor
-right after (:func:`swarm_envs.world.check_capacity` and the task's own layout check).
+Every keyword argument of an env is a :class:`Setting`: a default and a rule (type, finiteness, range, and
+an upper bound where a larger value would exhaust memory or time). :data:`COMMON_SETTINGS` holds the
+settings every task takes; a task declares its own in ``Task.SETTINGS`` with the same classes
+(:class:`Int`, :class:`Real`, :class:`Choice`, :class:`Flag`), or gives a common setting another default.
+:func:`validate_settings` checks a task's keyword arguments up front -- whatever the ``sensing`` mode --
+and returns them resolved: defaults filled in and every value in its canonical Python type (``int``,
+``float``, ``bool``, a tuple for ``code``), so numpy scalars are accepted where a number is meant and
+bools are refused. The envs, ``make_vec``, ``train.py``'s config check and the command-line tools all call
+it, so a bad value fails when the env is built, never at ``reset`` or mid-training. Geometry that needs
+the built arena (do the robots fit?) is checked by the task right after (:class:`swarm_envs.task.Task`).
 
 Errors: unknown keys raise ``TypeError`` (like any unknown keyword argument); bad values raise
 :class:`SettingsError` (a ``ValueError``) whose ``key`` attribute names the setting.
@@ -15,82 +19,31 @@ from __future__ import annotations
 
 import math
 import numbers
+from collections.abc import Mapping
+from dataclasses import dataclass, replace
 from typing import Any
 
 from swarm_envs.comm.bch import SUPPORTED as BCH_CODES
 from swarm_envs.comm.protocol import MAX_PAYLOAD
 from swarm_envs.platforms import PLATFORMS, Platform, get_platform
-from swarm_envs.registry import env_class
 
-__all__ = ["COMMON_DEFAULTS", "SettingsError", "validate_settings", "task_class"]
+__all__ = [
+    "Setting",
+    "Int",
+    "Real",
+    "Choice",
+    "Flag",
+    "COMMON_SETTINGS",
+    "COMMON_DEFAULTS",
+    "MAX_ROBOTS",
+    "SettingsError",
+    "validate_settings",
+    "task_settings",
+]
 
-#: Keyword arguments every task accepts, with their defaults (see README "Environments").
-COMMON_DEFAULTS: dict[str, Any] = {
-    "n_robots": 10,
-    "platform": "epuck",
-    "sensing": "full",
-    "max_cycles": 500,
-    "render_mode": None,
-    "arena": "square",
-    "arena_size": None,  # m; None = platform spacing * sqrt(number of robots)
-    "reward_mode": "global",
-    "flatten": False,
-    "n_neighbours": 8,
-    "n_messages": 8,
-    "message_bits": 0,
-    # SwarmCom messaging [T20]
-    "bitrate": 310,
-    "relative_threshold": None,  # m_tr (ADC counts); None = the platform's: 5 e-puck/r-one [T20], 8 droplet
-    "code": (15, 15),
-    "comm_mode": "broadcast",
-    # range & bearing [F14]
-    "rb_schedule": "contention",
-    "rb_max_age": 10,
-    "rb_noise": None,  # ADC counts; None = the platform model's documented default
-    "rb_near_model": False,  # Droplet: firmware low-power fit instead of the power ladder when saturated
-    # bearing-only sensing and scale-free coordinates [L]
-    "bearing_source": None,  # None = "sectors" on rone, "range_bearing" elsewhere
-    "bearing_noise": True,  # r-one sector readings with the measured receiver-arc spread [L Sec. 3.2.1]
-    "exchange": "network",
-    "scale_free_method": "two_hop",
-    "scale_free_k": 1,
-    "physics_substeps": 8,
-}
-
-_SHAPES = ("square", "circle")  # swarm_envs.world.Arena.SHAPES (not imported: world needs pymunk)
-
-_CHOICES: dict[str, tuple] = {
-    "sensing": ("full", "ideal"),
-    "render_mode": (None, "rgb_array", "human"),
-    "arena": _SHAPES,
-    "reward_mode": ("global", "local"),
-    "comm_mode": ("broadcast", "flooding"),
-    "rb_schedule": ("contention", "every_step"),
-    "bearing_source": (None, "sectors", "range_bearing"),
-    "exchange": ("network", "ideal"),
-    "scale_free_method": ("two_hop", "null_space"),
-    "bitrate": (310, 650, 1080, 1160, 1670, 1800),
-}
-#: key -> (lowest allowed integer, highest or None)
-_INTS: dict[str, tuple[int, int | None]] = {
-    "n_robots": (1, None),
-    "max_cycles": (1, None),
-    "n_neighbours": (1, None),
-    "n_messages": (1, None),
-    "rb_max_age": (1, None),
-    "scale_free_k": (1, None),
-    "physics_substeps": (1, None),
-    "message_bits": (0, MAX_PAYLOAD),  # the frame's length field [T20]
-    "n_anchors": (3, None),  # CentroidSeeking: a polygon
-}
-#: key -> (description with unit, allow None, allow zero); every value must be a finite real, not a bool
-_REALS: dict[str, tuple[str, bool, bool]] = {
-    "arena_size": ("a positive number of metres", True, False),
-    "relative_threshold": ("a positive number of ADC counts (m_tr)", True, False),
-    "rb_noise": ("a non-negative number of ADC counts", True, True),
-    "collision_penalty": ("a non-negative number", False, True),  # Flocking
-}
-_BOOLS = ("flatten", "rb_near_model", "bearing_noise")
+#: Robots (agents and static robots) of one env copy at most: the IR layer's work and memory grow with
+#: robots x neighbours, and 10,000 robots already take minutes per episode.
+MAX_ROBOTS = 10_000
 
 
 class SettingsError(ValueError):
@@ -101,80 +54,236 @@ class SettingsError(ValueError):
         self.key = key
 
 
-def task_class(task: type | str) -> type:
-    """The env class of ``task``: a class (returned as is) or a registered id such as
-    ``"swarm_envs/Flocking-v0"``."""
-    if isinstance(task, type):
-        return task
-    return env_class(task)
+def _is_int(value: Any) -> bool:
+    return isinstance(value, numbers.Integral) and not isinstance(value, bool)
 
 
 def _is_real(value: Any) -> bool:
     return isinstance(value, numbers.Real) and not isinstance(value, bool)
 
 
-def _is_int(value: Any) -> bool:
-    return isinstance(value, numbers.Integral) and not isinstance(value, bool)
+@dataclass(frozen=True)
+class Setting:
+    """A keyword argument: its default and its rule. Subclasses implement :meth:`check`."""
+
+    default: Any
+    doc: str = ""
+
+    def check(self, key: str, value: Any) -> Any:
+        """``value`` in its canonical type, or :class:`SettingsError` naming ``key``."""
+        return value
+
+    def rule(self) -> str:
+        """The rule in words (for error messages and docs)."""
+        return "any value"
 
 
-def validate_settings(task: type | str, settings: dict[str, Any]) -> dict[str, Any]:
-    """Check ``settings`` (keyword arguments) for ``task`` (env class or registered id) and return the
-    resolved settings: every default filled in, ``code`` as a tuple. Raises ``TypeError`` for unknown keys
-    and :class:`SettingsError` (``ValueError``) naming the key for a bad value."""
-    cls = task_class(task)
-    defaults = {**COMMON_DEFAULTS, **getattr(cls, "TASK_DEFAULTS", {})}
-    if not isinstance(settings, dict):
-        raise TypeError(f"settings must be a dict of keyword arguments, got {type(settings).__name__}")
-    unknown = sorted(set(settings) - set(defaults), key=str)
-    if unknown:
-        raise TypeError(f"{cls.__name__} got unknown keyword argument(s) {unknown}; allowed: {sorted(defaults)}")
-    cfg = {**defaults, **settings}
+@dataclass(frozen=True)
+class Int(Setting):
+    """An integer in ``[low, high]`` (numpy integers accepted; bools and floats refused)."""
 
-    for key, allowed in _CHOICES.items():
-        value = cfg[key]
+    low: int = 0
+    high: int | None = None
+
+    def rule(self) -> str:
+        return f"an integer >= {self.low}" if self.high is None else f"an integer in [{self.low}, {self.high}]"
+
+    def check(self, key: str, value: Any) -> int:
+        if not _is_int(value) or value < self.low or (self.high is not None and value > self.high):
+            raise SettingsError(key, f"{key} must be {self.rule()}{self.doc and ' (' + self.doc + ')'}, got {value!r}")
+        return int(value)
+
+
+@dataclass(frozen=True)
+class Real(Setting):
+    """A finite real number in ``[low, high]`` (``(low, high]`` when ``low_open``), or None when allowed.
+
+    Integers, numpy scalars and fractions are accepted and returned as ``float``; bools, NaN and inf are
+    refused."""
+
+    low: float = 0.0
+    high: float = math.inf
+    low_open: bool = False
+    allow_none: bool = False
+    unit: str = ""
+
+    def rule(self) -> str:
+        low = f"> {self.low:g}" if self.low_open else f">= {self.low:g}"
+        span = low if math.isinf(self.high) else f"{low} and <= {self.high:g}"
+        unit = f" {self.unit}" if self.unit else ""
+        return f"a finite number{unit} {span}" + (" or None" if self.allow_none else "")
+
+    def check(self, key: str, value: Any) -> float | None:
+        if value is None and self.allow_none:
+            return None
+        ok = _is_real(value)
+        if ok:
+            try:
+                number = float(value)
+            except (OverflowError, ValueError):  # e.g. a Fraction or int too large for a float
+                ok = False
+        if ok:
+            above = number > self.low if self.low_open else number >= self.low
+            ok = math.isfinite(number) and above and number <= self.high
+        if not ok:
+            raise SettingsError(key, f"{key} must be {self.rule()}{self.doc and ' (' + self.doc + ')'}, got {value!r}")
+        return number
+
+
+@dataclass(frozen=True)
+class Choice(Setting):
+    """One of ``choices`` (compared by value; a bool never matches a number)."""
+
+    choices: tuple = ()
+
+    def rule(self) -> str:
+        return f"one of {list(self.choices)}"
+
+    def check(self, key: str, value: Any) -> Any:
+        for allowed in self.choices:
+            if allowed is None:
+                if value is None:
+                    return None
+                continue
+            if isinstance(value, bool) != isinstance(allowed, bool) or not isinstance(value, (str, numbers.Number)):
+                continue
+            try:
+                if type(allowed)(value) == allowed and value == allowed:
+                    return allowed
+            except (TypeError, ValueError, OverflowError):  # e.g. an array or a string for a number
+                continue
+        raise SettingsError(key, f"{key}={value!r:.80} is not allowed; allowed values: {list(self.choices)}")
+
+
+@dataclass(frozen=True)
+class Flag(Setting):
+    """True or False (numpy bools accepted; numbers refused)."""
+
+    def rule(self) -> str:
+        return "True or False"
+
+    def check(self, key: str, value: Any) -> bool:
+        if isinstance(value, bool) or type(value).__name__ == "bool_":
+            return bool(value)
+        raise SettingsError(key, f"{key} must be True or False, got {value!r:.80}")
+
+
+@dataclass(frozen=True)
+class _PlatformSetting(Setting):
+    def rule(self) -> str:
+        return f"one of {sorted(PLATFORMS)} or a swarm_envs.Platform"
+
+    def check(self, key: str, value: Any) -> str | Platform:
+        if isinstance(value, Platform):
+            return value
+        if isinstance(value, str) and value in PLATFORMS:
+            return value
+        raise SettingsError(key, f"unknown platform {value!r:.80}; allowed values: {sorted(PLATFORMS)} or a swarm_envs.Platform")
+
+
+@dataclass(frozen=True)
+class _CodeSetting(Setting):
+    def rule(self) -> str:
+        return f"a BCH (n, k) pair, one of {sorted(BCH_CODES)}"
+
+    def check(self, key: str, value: Any) -> tuple[int, int]:
+        if not (isinstance(value, (tuple, list)) and len(value) == 2 and all(_is_int(c) for c in value)):
+            raise SettingsError(key, f"code must be a BCH (n, k) pair of integers, one of {sorted(BCH_CODES)}; got {value!r:.80}")
+        code = (int(value[0]), int(value[1]))
+        if code not in BCH_CODES:
+            raise SettingsError(key, f"code={code!r} is not a supported BCH code; allowed values: {sorted(BCH_CODES)}")
+        return code
+
+
+#: The settings every task takes (defaults and rules). The bounds are hard limits, not advice.
+COMMON_SETTINGS: dict[str, Setting] = {
+    "n_robots": Int(10, "agents per env copy", low=1, high=MAX_ROBOTS),
+    "platform": _PlatformSetting("epuck"),
+    "sensing": Choice("full", choices=("full", "ideal")),
+    "max_cycles": Int(500, "control steps of 0.1 s per episode", low=1, high=10**9),
+    "render_mode": Choice(None, choices=(None, "rgb_array", "human")),
+    "arena": Choice("square", choices=("square", "circle")),
+    # m; None = platform spacing * sqrt(number of robots). Above 10 km float64 positions lose the
+    # sub-millimetre resolution the physics needs.
+    "arena_size": Real(None, low=0.0, low_open=True, high=10_000.0, allow_none=True, unit="of metres"),
+    "reward_mode": Choice("global", choices=("global", "local")),
+    "flatten": Flag(False),
+    "n_neighbours": Int(8, "observation rows", low=1, high=256),
+    "n_messages": Int(8, "observation rows", low=1, high=256),
+    "message_bits": Int(0, "the SwarmCom frame's length field", low=0, high=MAX_PAYLOAD),
+    # SwarmCom messaging [T20]
+    "bitrate": Choice(310, choices=(310, 650, 1080, 1160, 1670, 1800)),
+    # m_tr (ADC counts); None = the platform's: 5 e-puck/r-one [T20], 8 droplet. At most the detector's
+    # full swing m_max - m_min = 4080 - 150 counts [T20 Eqs. (15)-(22)].
+    "relative_threshold": Real(None, low=0.0, low_open=True, high=3930.0, allow_none=True, unit="of ADC counts (m_tr)"),
+    "code": _CodeSetting((15, 15)),
+    "comm_mode": Choice("broadcast", choices=("broadcast", "flooding")),
+    # range & bearing [F14]
+    "rb_schedule": Choice("contention", choices=("contention", "every_step")),
+    "rb_max_age": Int(10, "steps a reading persists", low=1, high=100_000),
+    "rb_noise": Real(None, low=0.0, high=1000.0, allow_none=True, unit="of ADC counts"),
+    "rb_near_model": Flag(False),
+    # bearing-only sensing and scale-free coordinates [L]
+    "bearing_source": Choice(None, choices=(None, "sectors", "range_bearing")),
+    "bearing_noise": Flag(True),
+    "exchange": Choice("network", choices=("network", "ideal")),
+    "scale_free_method": Choice("two_hop", choices=("two_hop", "null_space")),
+    "scale_free_k": Int(1, "hops of the null-space method", low=1, high=4),
+    "physics_substeps": Int(8, "pymunk sub-steps per control step", low=1, high=1000),
+}
+
+#: The default of every common setting.
+COMMON_DEFAULTS: dict[str, Any] = {key: s.default for key, s in COMMON_SETTINGS.items()}
+
+
+def task_settings(own: Mapping[str, Any], owner: str = "task") -> dict[str, Setting]:
+    """The settings a task declares in ``own`` (``Task.SETTINGS``), resolved against the common ones:
+    a :class:`Setting` declares a setting (or replaces a common rule); a plain value gives a common
+    setting another default (checked against its rule). ``TypeError`` for a plain value of a new name."""
+    out: dict[str, Setting] = {}
+    for key, value in own.items():
+        if not isinstance(key, str) or not key.isidentifier():
+            raise TypeError(f"{owner}: setting names must be identifiers, got {key!r}")
+        if isinstance(value, Setting):
+            setting = value
+        elif key in COMMON_SETTINGS:
+            setting = replace(COMMON_SETTINGS[key], default=value)
+        else:
+            raise TypeError(
+                f"{owner}: the new setting {key!r} needs a rule: declare it as Int(...), Real(...), Choice(...) "
+                "or Flag(...) from swarm_envs.task"
+            )
         try:
-            ok = not isinstance(value, bool) and any(value is a if a is None else value == a for a in allowed)
-        except (TypeError, ValueError):  # e.g. an array, whose comparison is not a bool
-            ok = False
-        if not ok:
-            raise SettingsError(key, f"{key}={value!r} is not allowed; allowed values: {list(allowed)}")
-    for key, (low, high) in _INTS.items():
-        if key not in cfg:
-            continue
-        value = cfg[key]
-        if not _is_int(value) or value < low or (high is not None and value > high):
-            span = f">= {low}" if high is None else f"in [{low}, {high}]"
-            why = " (the SwarmCom frame's length field)" if key == "message_bits" else ""
-            raise SettingsError(key, f"{key} must be an integer {span}{why}, got {value!r}")
-    for key, (what, allow_none, allow_zero) in _REALS.items():
-        if key not in cfg:
-            continue
-        value = cfg[key]
-        if value is None and allow_none:
-            continue
-        ok = _is_real(value) and math.isfinite(value) and (value >= 0 if allow_zero else value > 0)
-        if not ok:
-            raise SettingsError(key, f"{key} must be {what}{' or None' if allow_none else ''} (finite), got {value!r}")
-    for key in _BOOLS:
-        if not isinstance(cfg[key], bool):
-            raise SettingsError(key, f"{key} must be True or False, got {cfg[key]!r}")
+            setting.check(key, setting.default)
+        except SettingsError as err:
+            raise TypeError(f"{owner}: the default of {key!r} breaks its own rule: {err}") from None
+        out[key] = setting
+    return out
 
-    platform = cfg["platform"]
-    if not isinstance(platform, Platform) and (not isinstance(platform, str) or platform not in PLATFORMS):
-        raise SettingsError("platform", f"unknown platform {platform!r}; allowed values: {sorted(PLATFORMS)}")
-    platform = get_platform(platform)
+
+def validate_settings(task: Any, settings: Mapping[str, Any]) -> dict[str, Any]:
+    """Check ``settings`` (keyword arguments) for ``task`` (a ``Task`` subclass, or an env class whose
+    ``TASK`` it is; for a registered id use ``swarm_envs.registry.task_class(id)``) and return the resolved
+    settings: every default filled in, every value in its canonical type.
+
+    Raises ``TypeError`` for unknown keys and :class:`SettingsError` (``ValueError``) naming the key for a
+    bad value."""
+    cls = getattr(task, "TASK", task)
+    if not callable(getattr(cls, "settings", None)):
+        raise TypeError(f"validate_settings needs a swarm_envs.task.Task subclass or an env class, got {task!r:.80}")
+    rules = {**COMMON_SETTINGS, **cls.settings()}
+    if not isinstance(settings, Mapping):
+        raise TypeError(f"settings must be a dict of keyword arguments, got {type(settings).__name__}")
+    unknown = sorted((k for k in settings if k not in rules), key=str)
+    if unknown:
+        raise TypeError(f"{cls.__name__} got unknown keyword argument(s) {unknown}; allowed: {sorted(rules)}")
+    cfg = {key: rule.check(key, settings[key]) if key in settings else rule.default for key, rule in rules.items()}
+
+    platform = get_platform(cfg["platform"])
     if cfg["rb_near_model"] and platform.name != "droplet":
         raise SettingsError("rb_near_model", "rb_near_model=True is the Droplet firmware's low-power fit; use platform='droplet'")
     if cfg["bearing_source"] == "range_bearing" and not hasattr(platform.ir_model, "amplitude_inverse"):
         raise SettingsError(
             "bearing_source", f"bearing_source='range_bearing' needs a range & bearing platform; {platform.name!r} has none (use 'sectors')"
         )
-
-    code = cfg["code"]
-    if not (isinstance(code, (tuple, list)) and len(code) == 2 and all(_is_int(c) for c in code)):
-        raise SettingsError("code", f"code must be a BCH (n, k) pair of integers, one of {sorted(BCH_CODES)}; got {code!r}")
-    code = (int(code[0]), int(code[1]))
-    if code not in BCH_CODES:
-        raise SettingsError("code", f"code={code!r} is not a supported BCH code; allowed values: {sorted(BCH_CODES)}")
-    cfg["code"] = code
     return cfg

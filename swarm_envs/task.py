@@ -1,25 +1,77 @@
-"""What a task adds to the simulation core: its robots, spawn, rewards and metrics, over all env copies.
+"""The public task API: what a task adds to the simulation core -- its settings, robots, spawn, rewards
+and metrics -- over all env copies at once.
 
-A :class:`Task` sees the ground-truth state of ``B`` env copies as ``(B, n_world, ...)`` arrays
-(:class:`BatchState`) and returns rewards and reward terms per agent ``(B, n_agents)`` and metrics per
-copy ``(B,)``. Rewards and metrics are computed from ground truth; they reach the agents only as
-rewards and ``infos``, never as observations.
+A task is one :class:`Task` subclass. The simulator owns physics and sensing, so a task never writes an
+observation (observations come only from the sensing stack). It sees the ground truth of ``B`` env
+copies as ``(B, n_world, ...)`` arrays (:class:`BatchState`) and returns rewards and reward terms per
+agent ``(B, n_agents)`` and metrics per copy ``(B,)``; rewards and metrics reach the agents only as
+rewards and ``infos``, never as observations. The suite's own tasks are written with exactly this API
+(they import only this module)::
+
+    import numpy as np
+    import swarm_envs
+    from swarm_envs.task import Real, Task, nearest_distances
+
+    class Spread(Task):
+        SETTINGS = {"target": Real(0.3, low=0.0, unit="m")}
+        METRICS = {"mean_spacing": "mean"}
+        HEADLINE = ("mean_spacing", +1)
+
+        def rewards(self, state, first):
+            pos = self.agents_of(state.positions)                       # (B, N, 2) m
+            spacing = nearest_distances(pos).mean(axis=1)              # (B,)
+            reward = -np.abs(spacing - self.config["target"])
+            return np.repeat(reward[:, None], self.n_agents, 1), {}, {"mean_spacing": spacing}
+
+    swarm_envs.register("my_lab/Spread-v0", Spread)     # then make / make_vec / pettingzoo.make / train.py
+
+Everything a task needs is exported here: the base class, the state, the setting rules
+(:class:`Int`, :class:`Real`, :class:`Choice`, :class:`Flag`, :class:`SettingsError`), spawn and fit
+helpers (:func:`spawn_positions`, :func:`check_capacity`, :class:`Arena`) and metric helpers over copies
+(:func:`pairs_within`, :func:`largest_component_fraction`, :func:`neighbourhood_sums`,
+:func:`nearest_distances`, :func:`bump_any`).
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
+from scipy.spatial import cKDTree
 
+from swarm_envs.metrics import largest_component_fraction, neighbourhood_sums
 from swarm_envs.platforms import Platform
+from swarm_envs.settings import MAX_ROBOTS, Choice, Flag, Int, Real, Setting, SettingsError, task_settings
 from swarm_envs.world import N_BUMP_SECTORS, Arena, check_capacity, spawn_positions
 
-__all__ = ["BatchState", "Task", "SPACING"]
+__all__ = [
+    "Task",
+    "BatchState",
+    "SPACING",
+    "Setting",
+    "Int",
+    "Real",
+    "Choice",
+    "Flag",
+    "SettingsError",
+    "Arena",
+    "N_BUMP_SECTORS",
+    "spawn_positions",
+    "check_capacity",
+    "pairs_within",
+    "largest_component_fraction",
+    "neighbourhood_sums",
+    "nearest_distances",
+    "bump_any",
+]
 
 #: default centre spacing (m) used to size the arena when ``arena_size`` is None
 SPACING = {"droplet": 0.15, "epuck": 0.25, "rone": 0.45}
+
+#: how a metric is reduced over an episode for evaluation: its value after the last step, or its mean
+#: over the steps after the reset
+REDUCTIONS = ("final", "mean")
 
 
 @dataclass
@@ -42,24 +94,65 @@ class BatchState:
 
 
 class Task:
-    """Base class of the swarm tasks (subclasses: aggregation, flocking, centroid seeking).
+    """Base class of every swarm task (the suite's and a user's).
+
+    Declare on the subclass:
+
+    - ``SETTINGS``: the task's own keyword arguments as rules with defaults (``Int``, ``Real``,
+      ``Choice``, ``Flag``), or another default for a common setting (``{"n_robots": 1}``);
+    - ``METRICS``: ``{name: "final" | "mean"}``, how each metric of :meth:`rewards` is reduced over an
+      episode by the evaluators (``train.py``, ``swarm-benchmark``);
+    - ``HEADLINE``: ``(metric, +1)`` if higher is better, ``(metric, -1)`` if lower is better;
+    - ``SCRIPTED_POLICY``: ``"module:Class"`` of a scripted baseline (a ``swarm_envs.agents.base.Policy``),
+      or None.
+
+    Override :meth:`rewards` (required) and, if needed, :meth:`n_static_robots`, :meth:`check_layout`,
+    :meth:`default_arena_size`, :meth:`spawn` and :meth:`markers`. The constructor gets the resolved
+    settings (``self.config``: every common setting, see :data:`swarm_envs.settings.COMMON_SETTINGS`,
+    plus the task's own), the platform and the number of copies.
 
     Args:
-        config: resolved env settings (``swarm_envs.env.COMMON_DEFAULTS`` plus ``TASK_DEFAULTS``).
+        config: resolved env settings.
         platform: the robots' platform.
         n_copies: number of env copies stepped together.
     """
 
-    #: extra keyword arguments of the task, with defaults
-    TASK_DEFAULTS: dict[str, Any] = {}
+    SETTINGS: ClassVar[dict[str, Any]] = {}
+    METRICS: ClassVar[dict[str, str]] = {}
+    HEADLINE: ClassVar[tuple[str, int] | None] = None
+    SCRIPTED_POLICY: ClassVar[str | None] = None
+    #: the task's own settings' defaults (derived from ``SETTINGS``; read-only)
+    TASK_DEFAULTS: ClassVar[dict[str, Any]] = {}
+    _settings: ClassVar[dict[str, Setting]] = {}
+
+    def __init_subclass__(cls, **kwargs: Any) -> None:
+        super().__init_subclass__(**kwargs)
+        owner = f"{cls.__module__}.{cls.__qualname__}"
+        declared = {**getattr(super(cls, cls), "_settings", {}), **task_settings(cls.__dict__.get("SETTINGS", {}), owner)}
+        cls._settings = declared
+        cls.TASK_DEFAULTS = {key: s.default for key, s in declared.items()}
+        bad = {k: v for k, v in cls.METRICS.items() if v not in REDUCTIONS}
+        if bad:
+            raise TypeError(f"{owner}.METRICS: reductions must be one of {REDUCTIONS}, got {bad}")
+        if cls.HEADLINE is not None:
+            name, sign = cls.HEADLINE
+            if name not in cls.METRICS or sign not in (1, -1):
+                raise TypeError(f"{owner}.HEADLINE must be (a metric of METRICS, +1 or -1), got {cls.HEADLINE!r}")
+
+    @classmethod
+    def settings(cls) -> dict[str, Setting]:
+        """The task's own settings (its ``SETTINGS`` and its bases'), resolved as rules."""
+        return dict(cls._settings)
 
     def __init__(self, config: dict[str, Any], platform: Platform, n_copies: int = 1) -> None:
         self.config = config
         self.platform = platform
         self.n_copies = int(n_copies)
-        self.n_static = self._n_static()
+        self.n_static = int(self.n_static_robots())
         self.n_agents = int(config["n_robots"])
         self.n_world = self.n_static + self.n_agents
+        if self.n_world > MAX_ROBOTS:
+            raise SettingsError("n_robots", f"{self.n_world} robots per copy (agents and static robots) is above the limit of {MAX_ROBOTS}")
         self.max_cycles = int(config["max_cycles"])
         self.reward_mode = config["reward_mode"]
         size = config["arena_size"] if config["arena_size"] is not None else self.default_arena_size()
@@ -67,39 +160,45 @@ class Task:
         self.agent_robots = np.arange(self.n_static, self.n_world)
         # robots that cannot fit even touching fail here; the random spawner also keeps a gap of 0.1
         # radius, so an arena within ~10 % of a full packing can still fail at reset (without positions)
-        check_capacity(self.n_world, platform.radius, self.arena, gap=0.0)
-        self._check_layout()
+        try:
+            check_capacity(self.n_world, platform.radius, self.arena, gap=0.0)
+        except ValueError as err:
+            raise SettingsError("arena_size" if config["arena_size"] is not None else "n_robots", str(err)) from None
+        self.check_layout()
 
-    # -- hooks -----------------------------------------------------------------------------------
-    def _n_static(self) -> int:
-        """Number of non-agent (static) robots; they sense and emit but are never commanded."""
+    # -- what a task may override --------------------------------------------------------------------
+    def n_static_robots(self) -> int:
+        """Number of static robots (world rows ``0 .. n_static - 1``): they sense, emit and talk like the
+        agents but are never commanded (e.g. anchors). Read ``self.config`` for the task's settings."""
         return 0
 
-    def _check_layout(self) -> None:
-        """Raise ``ValueError`` when the task's initial layout cannot fit (e.g. too many anchors)."""
+    def check_layout(self) -> None:
+        """Raise :class:`SettingsError` naming the setting when the task's initial layout cannot fit."""
 
     def default_arena_size(self) -> float:
         """Arena size (m) when ``arena_size=None``: the platform's spacing times sqrt(robots)."""
-        n_world = self.n_static + int(self.config["n_robots"])
-        return SPACING.get(self.platform.name, 4 * self.platform.diameter) * float(np.sqrt(n_world))
+        return SPACING.get(self.platform.name, 4 * self.platform.diameter) * float(np.sqrt(self.n_world))
 
     def spawn(self, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
-        """One copy's initial (positions (n_world, 2) m, headings (n_world,) rad)."""
+        """One copy's initial (positions (n_world, 2) m, headings (n_world,) rad), drawn from ``rng``."""
         positions = spawn_positions(rng, self.n_world, self.platform.radius, self.arena)
         return positions, rng.uniform(-np.pi, np.pi, self.n_world)
 
     def rewards(self, state: BatchState, first: np.ndarray) -> tuple[np.ndarray, dict[str, np.ndarray], dict[str, np.ndarray]]:
         """(rewards (B, n_agents), reward terms {name: (B, n_agents)}, metrics {name: (B,)}).
 
-        ``first`` (B,) marks copies whose episode starts with this state (their reset).
+        Called after every control step and after every reset; ``first`` (B,) bool marks the copies whose
+        episode starts with this state (their reset step), so per-copy memory (e.g. the previous spread)
+        can be restarted there. Return the same term and metric names every step.
         """
-        raise NotImplementedError
+        raise NotImplementedError(f"{type(self).__name__} must implement rewards(state, first)")
 
     def markers(self, positions: np.ndarray) -> dict[str, np.ndarray]:
-        """Task markers of one copy (name -> world point (2,) m) from its positions (n_world, 2)."""
+        """Task markers of one copy (name -> world point (2,) m) from its positions (n_world, 2): drawn by
+        the renderer and part of ``env.state()``. Return the same names every step."""
         return {}
 
-    # -- helpers ---------------------------------------------------------------------------------
+    # -- helpers ---------------------------------------------------------------------------------------
     def agents_of(self, array: np.ndarray) -> np.ndarray:
         """The agent rows of a (B, n_world, ...) array."""
         return array[:, self.n_static :]
@@ -108,3 +207,23 @@ class Task:
 def bump_any(bumps: np.ndarray) -> np.ndarray:
     """True per robot in contact with anything this step; ``bumps`` (..., N_BUMP_SECTORS)."""
     return bumps.reshape(*bumps.shape[:-1], N_BUMP_SECTORS).any(axis=-1)
+
+
+def pairs_within(positions: np.ndarray, distance: float) -> np.ndarray:
+    """Unordered robot pairs (P, 2) of rows of ``positions`` (B, N, 2) whose centres are closer than
+    ``distance`` (m), never across copies; row ``b * N + i`` is robot i of copy b."""
+    from swarm_envs.sensing.ideal import copy_pairs
+
+    B, N = positions.shape[:2]
+    return copy_pairs(np.ascontiguousarray(positions, dtype=float).reshape(B * N, 2), float(distance), N)
+
+
+def nearest_distances(positions: np.ndarray) -> np.ndarray:
+    """(B, N) centre distance (m) of every robot to its nearest other robot of the same copy (inf alone)."""
+    B, N = positions.shape[:2]
+    out = np.full((B, N), np.inf)
+    if N < 2:
+        return out
+    for b in range(B):  # one KD-tree query per copy
+        out[b] = cKDTree(positions[b]).query(positions[b], k=2)[0][:, 1]
+    return out

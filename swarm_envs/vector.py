@@ -31,9 +31,13 @@ from gymnasium.vector import AutoresetMode, VectorEnv
 from swarm_envs.core import SwarmCore
 from swarm_envs.env import check_reset_options, check_seed, make_layout, resolve_config
 from swarm_envs.platforms import get_platform
-from swarm_envs.registry import env_class
+from swarm_envs.settings import SettingsError
 
-__all__ = ["SwarmVectorEnv", "make_vec"]
+#: copies of one batched core at most, and robots over all its copies at most (memory grows with both)
+MAX_COPIES = 100_000
+MAX_TOTAL_ROBOTS = 200_000
+
+__all__ = ["SwarmVectorEnv", "MAX_COPIES", "MAX_TOTAL_ROBOTS"]
 
 
 def _batch_space(space: spaces.Box, lead: tuple[int, ...]) -> spaces.Box:
@@ -43,25 +47,30 @@ def _batch_space(space: spaces.Box, lead: tuple[int, ...]) -> spaces.Box:
 
 
 class SwarmVectorEnv(VectorEnv):
-    """``num_envs`` copies of the task of ``env_cls`` (a :class:`swarm_envs.env.SwarmEnv` subclass).
+    """``num_envs`` copies of ``task`` (a :class:`swarm_envs.task.Task` subclass, its env class or a registered id).
 
     Args:
-        env_cls: the task's env class (e.g. :class:`swarm_envs.aggregation_v0.AggregationEnv`).
+        task: the task (e.g. :class:`swarm_envs.aggregation_v0.AggregationTask`).
         num_envs: number of copies B.
         **kwargs: env settings, as for the single env.
     """
 
     metadata = {"autoreset_mode": AutoresetMode.NEXT_STEP, "render_modes": []}
 
-    def __init__(self, env_cls: type, num_envs: int, **kwargs: Any) -> None:
-        if isinstance(num_envs, bool) or not isinstance(num_envs, (int, np.integer)) or num_envs < 1:
-            raise ValueError(f"num_envs must be an integer >= 1, got {num_envs!r}")
+    def __init__(self, task: type, num_envs: int, **kwargs: Any) -> None:
+        if isinstance(num_envs, bool) or not isinstance(num_envs, (int, np.integer)) or not 1 <= num_envs <= MAX_COPIES:
+            raise SettingsError("num_envs", f"num_envs must be an integer in [1, {MAX_COPIES}], got {num_envs!r:.80}")
         if kwargs.get("render_mode") is not None:
-            raise ValueError("make_vec does not render; use the single env (swarm_envs.make) with render_mode")
-        cfg = resolve_config(env_cls, kwargs)
+            raise SettingsError("render_mode", "make_vec does not render; use the single env (swarm_envs.make) with render_mode")
+        task_cls = getattr(task, "TASK", task)  # an env class's task
+        cfg = resolve_config(task_cls, kwargs)
         self.config = cfg
         self.platform = get_platform(cfg["platform"])
-        self.task = env_cls.TASK(cfg, self.platform, n_copies=int(num_envs))
+        self.task = task_cls(cfg, self.platform, n_copies=int(num_envs))
+        if self.task.n_world * int(num_envs) > MAX_TOTAL_ROBOTS:
+            raise SettingsError(
+                "num_envs", f"{num_envs} copies of {self.task.n_world} robots exceed {MAX_TOTAL_ROBOTS} robots in one batched core; use fewer copies"
+            )
         self.layout = make_layout(cfg, self.platform)
         self.core = SwarmCore(self.task, self.layout)
         self.num_envs = int(num_envs)
@@ -173,15 +182,3 @@ class SwarmVectorEnv(VectorEnv):
             "sensing": {k: np.asarray(v)[rows] for k, v in stats.items()},
             "episode_step": core.num_cycles.copy(),
         }
-
-
-def make_vec(env_id: str, num_envs: int, **kwargs: Any) -> SwarmVectorEnv:
-    """``num_envs`` copies of the registered task ``env_id`` stepped by one batched core.
-
-    Example::
-
-        vec = swarm_envs.make_vec("swarm_envs/Flocking-v0", 64, n_robots=10, sensing="ideal")
-        obs, infos = vec.reset(seed=0)                 # copy b seeded with 0 + b
-        obs, rew, term, trunc, infos = vec.step(np.zeros((64, 10, 2)))
-    """
-    return SwarmVectorEnv(env_class(env_id), num_envs, **kwargs)

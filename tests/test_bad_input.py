@@ -71,7 +71,7 @@ def test_unknown_kwargs_and_names():
         flocking_v0.parallel_env(platform="kilobot")
     with pytest.raises(ValueError, match="sensing='perfect' is not allowed"):
         flocking_v0.parallel_env(sensing="perfect")
-    with pytest.raises(ValueError, match="n_robots must be an integer >= 1"):
+    with pytest.raises(ValueError, match=r"n_robots must be an integer in \[1, 10000\]"):
         flocking_v0.parallel_env(n_robots=0)
     with pytest.raises(ValueError, match="arena_size"):
         flocking_v0.parallel_env(arena_size=-1.0)

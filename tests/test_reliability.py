@@ -131,11 +131,11 @@ def test_spawner_does_not_enumerate_a_roomy_arena(monkeypatch):
         raise AssertionError("the spawner enumerated the whole arena")
 
     monkeypatch.setattr(world, "_best_lattice", enumerate_lattice)
-    for size in (100.0, 1e6):
+    for size in (100.0, 1e4):
         for shape in Arena.SHAPES:
             pos = spawn_positions(np.random.default_rng(0), 10, 0.035, Arena(shape, size))
             assert pos.shape == (10, 2) and np.all(Arena(shape, size).contains(pos, 0.035))
-    env = aggregation_v0.parallel_env(n_robots=10, arena_size=1e6, sensing="ideal")
+    env = aggregation_v0.parallel_env(n_robots=10, arena_size=1e4, sensing="ideal")
     env.reset(seed=0)
     env.step({a: np.ones(2) for a in env.agents})
 
@@ -183,12 +183,13 @@ def test_too_many_anchors_is_a_capacity_error(sensing):
 
 
 def test_good_settings_still_pass_and_resolve():
+    from swarm_envs.registry import task_class
     from swarm_envs.settings import validate_settings
 
-    cfg = validate_settings("swarm_envs/Flocking-v0", {"code": [15, 7], "message_bits": 255, "rb_noise": 0})
+    cfg = validate_settings(task_class("swarm_envs/Flocking-v0"), {"code": [15, 7], "message_bits": 255, "rb_noise": 0})
     assert cfg["code"] == (15, 7) and cfg["collision_penalty"] == 0.1 and cfg["n_robots"] == 10
     with pytest.raises(TypeError, match="unknown keyword"):
-        validate_settings("swarm_envs/Flocking-v0", {"n_anchors": 4})
+        validate_settings(task_class("swarm_envs/Flocking-v0"), {"n_anchors": 4})
 
 
 @pytest.mark.parametrize(

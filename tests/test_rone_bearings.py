@@ -12,6 +12,7 @@ from swarm_envs.platforms import get_platform
 from swarm_envs.sensing.bearing_sensor import RONE_ARC_RANGE_DEG, MessageBearings, link_masks, sector_lut, sense_bearings
 from swarm_envs.sensing.exchange import BearingExchange, encode_rows
 from swarm_envs.sensing.full import BEACON_PERIOD, FullSensing
+from swarm_envs.registry import task_class
 from swarm_envs.settings import validate_settings
 
 RONE = get_platform("rone")
@@ -44,7 +45,7 @@ def triangle():
 
 
 def full_stack(n: int, seed: int = 0, **settings) -> FullSensing:
-    cfg = validate_settings("swarm_envs/Aggregation-v0", {"platform": "rone", "n_robots": n, **settings})
+    cfg = validate_settings(task_class("swarm_envs/Aggregation-v0"), {"platform": "rone", "n_robots": n, **settings})
     fs = FullSensing(RONE, n, cfg)
     fs.reset(np.array([0]), [np.random.default_rng(seed)])
     return fs

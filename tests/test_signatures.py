@@ -9,15 +9,16 @@ import typing
 import pytest
 
 from swarm_envs import aggregation_v0, centroid_seeking_v0, flocking_v0
-from swarm_envs.settings import _CHOICES, COMMON_DEFAULTS
+from swarm_envs.settings import COMMON_DEFAULTS, COMMON_SETTINGS, Choice
 from swarm_envs.platforms import PLATFORMS
 
 TASK_MODULES = [aggregation_v0, flocking_v0, centroid_seeking_v0]
+_CHOICES = {key: rule.choices for key, rule in COMMON_SETTINGS.items() if isinstance(rule, Choice)}
 SECTIONS = ["Description", "Action Space", "Observation Space", "Rewards", "Starting State", "Episode End", "Arguments", "Version History"]
 
 
 def _defaults(module) -> dict:
-    return {**COMMON_DEFAULTS, **module.raw_env.TASK_DEFAULTS}
+    return {**COMMON_DEFAULTS, **module.raw_env.TASK.TASK_DEFAULTS}
 
 
 @pytest.mark.parametrize("module", TASK_MODULES, ids=lambda m: m.__name__)
