@@ -1,9 +1,11 @@
 """Scripted baselines vs random on the swarm tasks, with bootstrap 95 % confidence intervals.
 
-    python -m swarm_envs.agents.benchmark [--task aggregation|flocking|centroid_seeking ...] [--episodes N]
+    python -m swarm_envs.agents.benchmark [--task TASK ...] [--import MODULE ...] [--episodes N]
                                [--sensing full|ideal] [--max-cycles T] [--n-robots N] [--json]
 
-``--task`` is repeatable or a comma list (default: every task). For each task the task's scripted controller (:data:`agents.scripted.TASK_SCRIPTED`), the [T20] Alg. 1
+``--task`` (an env id or a short name such as ``flocking``) is repeatable or a comma list (default: every
+registered task with a scripted baseline); ``--import`` imports the modules (or ``.py`` files) that
+register tasks of your own first. For each task the task's scripted controller (``Task.SCRIPTED_POLICY``), the [T20] Alg. 1
 random walk and uniform random actions run on the same seeds ``0 .. N-1``; on flocking also the sorted
 following controller ([L] Alg. 6, with 4 message bits for the ids). Prints one table per task:
 ``mean [95 % bootstrap percentile interval]`` per metric (see :mod:`swarm_envs.agents.evaluation` for the reductions) and the wall time.
@@ -21,31 +23,40 @@ from typing import Any
 
 import numpy as np
 
-from swarm_envs.agents.evaluation import PRIMARY_METRIC, TASK_METRICS, evaluate, markdown_table, random_factory, summarise
-from swarm_envs.agents.scripted import TASK_SCRIPTED, make_scripted
+from swarm_envs.agents.evaluation import evaluate, markdown_table, random_factory, summarise
+from swarm_envs.agents.scripted import make_scripted, scripted_class
+from swarm_envs.agents.tasks import SHORT_NAMES, env_id, headline, import_modules, metric_reductions, scripted_policy
+from swarm_envs.registry import list_envs
 
 __all__ = ["run_benchmark", "main"]
+
+
+def default_tasks() -> list[str]:
+    """The suite's short names, then every other registered id whose task has a scripted baseline."""
+    ids = set(SHORT_NAMES.values())
+    return list(SHORT_NAMES) + [i for i in list_envs() if i not in ids and scripted_policy(i) is not None]
 
 
 def run_benchmark(
     episodes: int, sensing: str, max_cycles: int | None, n_robots: int | None, tasks: list[str] | None = None
 ) -> dict[str, Any]:
-    """``{task: {"rows": summary rows, "seconds": {policy: s}, "env": kwargs}}`` for ``tasks`` (default: all)."""
+    """``{task: {"rows": summary rows, "seconds": {policy: s}, "env": kwargs}}`` for ``tasks`` (default:
+    :func:`default_tasks`)."""
     out: dict[str, Any] = {}
     seeds = list(range(episodes))
-    for task in tasks or list(TASK_SCRIPTED):
-        scripted = TASK_SCRIPTED[task]
+    for task in tasks or default_tasks():
+        scripted = scripted_policy(task)
         kwargs: dict[str, Any] = {"sensing": sensing}
         if max_cycles is not None:
             kwargs["max_cycles"] = max_cycles
         if n_robots is not None:
             kwargs["n_robots"] = n_robots
-        candidates: dict[str, tuple[dict, Any]] = {
-            scripted: (kwargs, lambda env, name=scripted: make_scripted(name, env)),
-            "random_walk": (kwargs, lambda env: make_scripted("random_walk", env)),
-            "random": (kwargs, random_factory),
-        }
-        if task == "flocking":
+        candidates: dict[str, tuple[dict, Any]] = {}
+        if scripted is not None:
+            candidates[scripted_class(scripted).name] = (kwargs, lambda env, name=scripted: make_scripted(name, env))
+        candidates["random_walk"] = (kwargs, lambda env: make_scripted("random_walk", env))
+        candidates["random"] = (kwargs, random_factory)
+        if env_id(task) == SHORT_NAMES["flocking"]:
             candidates["sorted_following"] = ({**kwargs, "message_bits": 4}, lambda env: make_scripted("sorted_following", env))
         results, seconds = {}, {}
         for name, (kw, factory) in candidates.items():
@@ -69,11 +80,11 @@ def _json_safe(obj: Any) -> Any:
 
 
 def parse_tasks(values: list[str]) -> list[str]:
-    """Task names from repeated and/or comma-separated ``--task`` values (order kept, duplicates dropped)."""
+    """Task names from repeated and/or comma-separated ``--task`` values (order kept, duplicates dropped);
+    ``ValueError`` for an unknown one."""
     names = [t.strip() for v in values for t in v.split(",") if t.strip()]
-    unknown = [t for t in names if t not in TASK_SCRIPTED]
-    if unknown:
-        raise ValueError(f"unknown task(s) {unknown}; available: {list(TASK_SCRIPTED)}")
+    for name in names:
+        env_id(name)
     return list(dict.fromkeys(names))
 
 
@@ -81,7 +92,10 @@ def main(argv: list[str] | None = None) -> int:
     """Command line of ``python -m swarm_envs.agents.benchmark``; returns the exit code."""
     parser = argparse.ArgumentParser(description="Scripted swarm baselines vs random, with bootstrap 95% CIs")
     parser.add_argument("--task", action="append", default=[], metavar="TASK",
-                        help=f"task to run, repeatable or a comma list; one of {', '.join(TASK_SCRIPTED)} (default: all)")
+                        help=f"task to run (env id or one of {', '.join(SHORT_NAMES)}), repeatable or a comma list "
+                             "(default: every task with a scripted baseline)")
+    parser.add_argument("--import", dest="imports", action="append", default=[], metavar="MODULE",
+                        help="module or .py file to import first (one that registers tasks of your own); repeatable")
     parser.add_argument("--episodes", type=int, default=30, help="seeds per policy and task (default 30)")
     parser.add_argument("--sensing", choices=("full", "ideal"), default="full")
     parser.add_argument("--max-cycles", type=int, default=None, help="episode length (default: the env's 500)")
@@ -93,17 +107,18 @@ def main(argv: list[str] | None = None) -> int:
     if args.max_cycles is not None and args.max_cycles < 1:
         parser.error("--max-cycles must be >= 1")
     try:
+        import_modules(args.imports)
         tasks = parse_tasks(args.task)
-    except ValueError as err:
+    except (ImportError, ValueError) as err:
         parser.error(str(err))
     results = run_benchmark(args.episodes, args.sensing, args.max_cycles, args.n_robots, tasks=tasks or None)
     if args.json:
         print(json.dumps(_json_safe(results)))
         return 0
     for task, res in results.items():
-        primary, sign = PRIMARY_METRIC[task]
-        print(f"\n## {task}  (env {res['env']}; headline `{primary}`, {'higher' if sign > 0 else 'lower'} is better; "
-              f"reductions {TASK_METRICS[task]})\n")
+        best = headline(task)
+        about = f"headline `{best[0]}`, {'higher' if best[1] > 0 else 'lower'} is better; " if best else ""
+        print(f"\n## {task}  (env {res['env']}; {about}reductions {metric_reductions(task)})\n")
         print(markdown_table(res["rows"], n_seeds=args.episodes), end="")
         print("wall time: " + ", ".join(f"{p} {s:.1f} s" for p, s in res["seconds"].items()))
     return 0

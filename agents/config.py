@@ -1,10 +1,16 @@
 """Training configuration: YAML files validated against a schema of defaults, with dotted overrides.
 
-A config has five sections besides ``task``, ``seed`` and ``output_dir`` (see ``configs/*.yaml``):
+A config names its ``task`` by a registered env id (``swarm_envs/Flocking-v0``, or a task of your own,
+``my_lab/Spread-v0``, whose registering module is listed in ``imports``) or by a short name of the suite's
+tasks (``flocking``), and has five sections besides ``task``, ``imports``, ``seed`` and ``output_dir`` (see
+``configs/*.yaml``):
 
-- ``env``: keyword arguments of the task's env (any key of ``swarm_envs.env.COMMON_DEFAULTS`` or the task's
-  ``TASK_DEFAULTS``; values are checked by the env's own validator, ``swarm_envs.settings.validate_settings``,
-  for the env train.py would build, whatever its ``sensing``);
+- ``imports``: modules (``my_lab.tasks``) or Python files (``path/to/tasks.py``) imported before the task
+  is looked up, e.g. the module that calls ``swarm_envs.register``;
+- ``env``: keyword arguments of the task's env (any common setting, see
+  ``swarm_envs.settings.COMMON_SETTINGS``, or the task's own ``SETTINGS``; values are checked by the env's
+  own validator, ``swarm_envs.settings.validate_settings``, for the env train.py would build, whatever its
+  ``sensing``);
 - ``agent``: PPO hyper-parameters (stable-baselines3 names) and the scripted baseline;
 - ``train``: budget (``total_timesteps`` counts robot-steps: one per robot per env step), env copies,
   torch threads, checkpoints;
@@ -32,11 +38,12 @@ class ConfigError(ValueError):
 #: schema and defaults; ``None`` under ``env`` means "free-form, validated by the env"
 DEFAULTS: dict[str, Any] = {
     "task": "aggregation",
+    "imports": [],
     "seed": 0,
     "output_dir": "runs/default",
     "env": {},
     "agent": {
-        "scripted": None,  # None = the task's scripted baseline (agents.scripted.TASK_SCRIPTED)
+        "scripted": None,  # None = the task's scripted baseline (its Task.SCRIPTED_POLICY; none if it has none)
         "scripted_kwargs": {},
         "learning_rate": 3.0e-4,
         "n_steps": 128,  # rollout length per row (robot); rollout size = n_steps * n_envs * n_robots
@@ -111,22 +118,31 @@ def _merge(base: dict, update: dict, path: str = "") -> dict:
 
 
 def _env_allowed(task: str) -> dict[str, Any]:
-    from swarm_envs.agents.evaluation import TASKS
-    import importlib
+    """Every env setting of ``task`` with its default (the id's registered settings included)."""
+    from swarm_envs.agents.tasks import env_id
+    from swarm_envs.registry import spec, task_class
+    from swarm_envs.settings import COMMON_DEFAULTS
 
-    from swarm_envs.env import COMMON_DEFAULTS
-
-    module = importlib.import_module(TASKS[task])
-    return {**COMMON_DEFAULTS, **module.raw_env.TASK_DEFAULTS}
+    name = env_id(task)
+    return {**COMMON_DEFAULTS, **task_class(name).TASK_DEFAULTS, **spec(name).kwargs}
 
 
 def validate(cfg: dict[str, Any]) -> dict[str, Any]:
     """Check every key and value; returns ``cfg`` (raises :class:`ConfigError`)."""
-    from swarm_envs.agents.evaluation import TASKS
-    from swarm_envs.agents.scripted import SCRIPTED
+    from swarm_envs.agents.scripted import check_scripted_kwargs
+    from swarm_envs.agents.tasks import env_id, import_modules
 
-    if cfg["task"] not in TASKS:
-        raise ConfigError(f"task={cfg['task']!r} is not a task; allowed values: {sorted(TASKS)}")
+    imports = cfg["imports"]
+    if not isinstance(imports, list) or not all(isinstance(m, str) and m for m in imports):
+        raise ConfigError(f"config key 'imports' must be a list of module names or .py paths, got {imports!r:.80}")
+    try:
+        import_modules(imports)
+    except ImportError as err:
+        raise ConfigError(f"config key 'imports': {err}") from None
+    try:
+        env_id(cfg["task"])
+    except ValueError as err:
+        raise ConfigError(f"config key 'task': {err}") from None
 
     def walk(node: dict, schema: dict, path: str) -> None:
         for key, value in node.items():
@@ -161,8 +177,17 @@ def validate(cfg: dict[str, Any]) -> dict[str, Any]:
     if not net or not all(isinstance(h, int) and not isinstance(h, bool) and h > 0 for h in net):
         raise ConfigError(f"config key 'agent.net_arch' must be a non-empty list of positive layer sizes, got {net!r}")
     scripted = cfg["agent"]["scripted"]
-    if scripted is not None and scripted not in SCRIPTED:
-        raise ConfigError(f"config key 'agent.scripted'={scripted!r} is not a scripted policy; allowed values: {sorted(SCRIPTED)}")
+    if scripted is None:
+        from swarm_envs.agents.tasks import scripted_policy
+
+        scripted = scripted_policy(cfg["task"])
+    if scripted is not None:
+        try:
+            check_scripted_kwargs(scripted, cfg["agent"]["scripted_kwargs"])
+        except ValueError as err:
+            raise ConfigError(f"config key 'agent.scripted' / 'agent.scripted_kwargs': {err}") from None
+    elif cfg["agent"]["scripted_kwargs"]:
+        raise ConfigError(f"config key 'agent.scripted_kwargs' is set but task {cfg['task']!r} has no scripted baseline")
     mc = cfg["eval"]["max_cycles"]
     if mc is not None and (isinstance(mc, bool) or not isinstance(mc, int) or mc < 1):
         raise ConfigError(f"config key 'eval.max_cycles' must be null or an integer >= 1, got {mc!r}")
@@ -187,18 +212,15 @@ def _check_env_settings(task: str, env: dict[str, Any]) -> None:
     """Run the env's own validator (:func:`swarm_envs.settings.validate_settings`) on the settings train.py
     would build the env with (YAML lists as tuples, ``flatten=True``), then build that env once (cheap: no
     reset) for the checks that need its arena (robots and anchors fit). Raises :class:`ConfigError`."""
-    import importlib
-
-    from swarm_envs.agents.evaluation import TASKS
-    from swarm_envs.settings import SettingsError, validate_settings
+    import swarm_envs
+    from swarm_envs.agents.tasks import env_id
+    from swarm_envs.settings import SettingsError
 
     kwargs = {**env, "flatten": True}
     if isinstance(kwargs.get("code"), list):
         kwargs["code"] = tuple(kwargs["code"])
-    env_cls = importlib.import_module(TASKS[task]).raw_env
     try:
-        validate_settings(env_cls, kwargs)
-        env_cls(**kwargs).close()
+        swarm_envs.make(env_id(task), **kwargs).close()
     except SettingsError as err:
         raise ConfigError(f"bad env settings: {err} (config key 'env.{err.key}')") from None
     except (ValueError, TypeError) as err:
@@ -259,9 +281,9 @@ def load_config(path: str | Path | None, overrides: list[str] | None = None) -> 
 
 def resolve(cfg: dict[str, Any]) -> dict[str, Any]:
     """The config with task defaults filled in (scripted baseline name), for saving beside results."""
-    from swarm_envs.agents.scripted import TASK_SCRIPTED
+    from swarm_envs.agents.tasks import scripted_policy
 
     out = copy.deepcopy(cfg)
     if out["agent"]["scripted"] is None:
-        out["agent"]["scripted"] = TASK_SCRIPTED[out["task"]]
+        out["agent"]["scripted"] = scripted_policy(out["task"])
     return out

@@ -3,7 +3,7 @@
 An episode is run with :func:`run_episode`: the policy sees the named batched observations of the agents
 (:meth:`swarm_envs.env.SwarmEnv.batched_observations`, rows = agents in ``possible_agents`` order); the task
 metrics are read from ``infos[agent]["metrics", name]`` by the *evaluator* only. Each task metric is reduced
-over the episode as listed in :data:`TASK_METRICS` ("final" = value after the last step, "mean" = mean
+over the episode as the task declares in ``Task.METRICS`` ("final" = value after the last step, "mean" = mean
 over all steps after reset). ``episode_return`` is the mean over robots of the summed per-robot reward.
 Confidence intervals: bootstrap percentile 95 % interval of the mean over seeds (:func:`confidence_interval`),
 which lies inside the range of the per-seed values and so inside the metric's range (a fraction stays in
@@ -22,12 +22,10 @@ import numpy as np
 from scipy import stats
 
 from swarm_envs.agents.base import Policy, RandomPolicy
+from swarm_envs.agents.tasks import env_id, metric_reductions
 from swarm_envs.env import info_group
 
 __all__ = [
-    "TASKS",
-    "TASK_METRICS",
-    "PRIMARY_METRIC",
     "make_env",
     "run_episode",
     "evaluate",
@@ -40,39 +38,21 @@ __all__ = [
     "random_factory",
 ]
 
-#: task name -> module path of its parallel env
-TASKS = {
-    "aggregation": "swarm_envs.aggregation_v0",
-    "flocking": "swarm_envs.flocking_v0",
-    "centroid_seeking": "swarm_envs.centroid_seeking_v0",
-}
-
-#: task -> {metric: reduction over the episode}
-TASK_METRICS: dict[str, dict[str, str]] = {
-    "aggregation": {"largest_cluster_fraction": "final", "n_clusters": "final", "mean_distance_to_centroid": "final"},
-    "flocking": {"polarisation": "mean", "cohesion": "mean", "collision_fraction": "mean"},
-    "centroid_seeking": {"mean_distance_second_half": "final", "mean_distance_to_centroid": "final"},
-}
-
-#: task -> (headline metric, +1 if higher is better else -1)
-PRIMARY_METRIC: dict[str, tuple[str, int]] = {
-    "aggregation": ("largest_cluster_fraction", +1),
-    "flocking": ("polarisation", +1),
-    "centroid_seeking": ("mean_distance_second_half", -1),
-}
-
 RESULT_COLUMNS = ("policy", "metric", "mean", "ci_low", "ci_high", "n")
 #: below this many seeds the tables warn that bootstrap intervals under-cover (tests/test_confidence_intervals.py)
 FEW_SEEDS = 10
 
 
 def make_env(task: str, **env_kwargs: Any):
-    """The native parallel env of ``task`` (``aggregation``, ``flocking``, ``centroid_seeking``)."""
-    if task not in TASKS:
-        raise ValueError(f"unknown task {task!r}; available: {sorted(TASKS)}")
-    import importlib
+    """The parallel env of ``task`` (an env id or a short name such as ``"aggregation"``)."""
+    import swarm_envs
 
-    return importlib.import_module(TASKS[task]).parallel_env(**env_kwargs)
+    return swarm_envs.make(env_id(task), **env_kwargs)
+
+
+def _reductions(task: str, metric_names: Any) -> dict[str, str]:
+    """The task's ``METRICS`` reductions, or every metric it reports as a mean when it declares none."""
+    return metric_reductions(task) or dict.fromkeys(metric_names, "mean")
 
 
 def run_episode(
@@ -87,9 +67,9 @@ def run_episode(
     The policy is reset with its own generator derived from ``seed``. If ``frames`` is a list, rendered
     RGB frames are appended (the env needs ``render_mode="rgb_array"``).
     """
-    reductions = TASK_METRICS[task]
     policy.reset(env.n_agents, rng=np.random.default_rng([seed, 7919]))
     _, infos = env.reset(seed=seed)
+    reductions = _reductions(task, info_group(infos[env.possible_agents[0]], "metrics"))
     if frames is not None:
         frames.append(env.render())
     sums = dict.fromkeys(reductions, 0.0)
@@ -154,16 +134,14 @@ def evaluate(
 def run_batch(task: str, env_kwargs: dict[str, Any], policy_factory: Callable[[Any], Policy], seeds: Sequence[int]) -> list[dict[str, float]]:
     """One episode per seed, all seeds as copies of one vector env; returns reduced metrics per seed
     (as :func:`run_episode`). Episodes end at ``max_cycles`` (the tasks never terminate early)."""
-    from swarm_envs.registry import ENV_IDS
-    from swarm_envs.vector import make_vec
+    import swarm_envs
 
-    reductions = TASK_METRICS[task]
-    env_id = {module: env_id for env_id, module in ENV_IDS.items()}[TASKS[task]]
-    vec = make_vec(env_id, len(seeds), **env_kwargs)
+    vec = swarm_envs.make_vec(env_id(task), len(seeds), **env_kwargs)
     policies = [policy_factory(vec) for _ in seeds]
     for policy, seed in zip(policies, seeds):
         policy.reset(vec.n_agents, rng=np.random.default_rng([seed, 7919]))
-    obs, _ = vec.reset(seed=list(seeds))
+    obs, infos = vec.reset(seed=list(seeds))
+    reductions = _reductions(task, infos["metrics"])
     B = len(seeds)
     sums = {name: np.zeros(B) for name in reductions}
     returns = np.zeros((B, vec.n_agents))

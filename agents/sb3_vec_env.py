@@ -33,21 +33,19 @@ import numpy as np
 from stable_baselines3.common.vec_env import VecEnv
 
 from swarm_envs.agents.base import Policy, flatten_batch
-from swarm_envs.registry import env_class
+from swarm_envs.registry import resolve
 
 __all__ = ["SwarmVecEnv", "SB3Policy"]
 
 
-def _env_class(env: str | type | Callable[..., Any]) -> type:
-    """The task's env class from an env id, the class itself, or a task module's ``parallel_env``."""
-    if isinstance(env, str):
-        return env_class(env)
-    if isinstance(env, type):
-        return env
+def _env_entry(env: str | type | Callable[..., Any]) -> tuple[type, dict[str, Any]]:
+    """(entry class, default settings) of an env id, a Task or env class, or a task module's ``parallel_env``."""
+    if isinstance(env, (str, type)):
+        return resolve(env)
     module = sys.modules.get(getattr(env, "__module__", ""), None)
     if module is None or not hasattr(module, "raw_env"):
-        raise TypeError(f"expected an env id, a swarm env class or a task's parallel_env function, got {env!r}")
-    return module.raw_env
+        raise TypeError(f"expected an env id, a swarm task or env class, or a task's parallel_env function, got {env!r}")
+    return module.raw_env, {}
 
 
 class SwarmVecEnv(VecEnv):
@@ -68,9 +66,8 @@ class SwarmVecEnv(VecEnv):
             raise ValueError(f"n_copies must be an integer >= 1, got {n_copies!r}")
         if isinstance(n_workers, bool) or not isinstance(n_workers, (int, np.integer)) or not 1 <= n_workers <= n_copies:
             raise ValueError(f"n_workers must be an integer in [1, n_copies={n_copies}], got {n_workers!r}")
-        kwargs = dict(env_kwargs or {})
-        kwargs["flatten"] = True
-        env_cls = _env_class(env)
+        env_cls, defaults = _env_entry(env)
+        kwargs = {**defaults, **(env_kwargs or {}), "flatten": True}
         self.vec = SwarmVectorEnv(env_cls, int(n_copies), **kwargs) if n_workers == 1 else _WorkerVec(env_cls, int(n_copies), kwargs, int(n_workers))
         self.agents = list(self.vec.possible_agents)
         self.n_agents = len(self.agents)

@@ -24,6 +24,9 @@ the thesis leaves open (the r-one "keeps its last pose").
 
 from __future__ import annotations
 
+import importlib
+import inspect
+
 import numpy as np
 
 from swarm_envs.agents.base import Policy, wrap_angle
@@ -39,7 +42,8 @@ __all__ = [
     "CentroidSeeker",
     "SortedFollowing",
     "SCRIPTED",
-    "TASK_SCRIPTED",
+    "scripted_class",
+    "check_scripted_kwargs",
     "make_scripted",
     "circular_mean",
     "bump_direction",
@@ -358,16 +362,40 @@ SCRIPTED: dict[str, type[Policy]] = {
     cls.name: cls for cls in (RandomWalk, OrientationFlocking, BearingAggregation, CentroidSeeker, SortedFollowing)
 }
 
-#: the scripted baseline of each task
-TASK_SCRIPTED: dict[str, str] = {
-    "aggregation": "bearing_aggregation",
-    "flocking": "orientation_flocking",
-    "centroid_seeking": "centroid_seeker",
-}
+def scripted_class(name: str) -> type[Policy]:
+    """The controller class of ``name``: a name of :data:`SCRIPTED` or ``"module:Class"`` of any
+    :class:`~swarm_envs.agents.base.Policy` subclass (e.g. a task's ``SCRIPTED_POLICY``)."""
+    if isinstance(name, str) and ":" in name:
+        module_name, _, attr = name.partition(":")
+        try:
+            cls = getattr(importlib.import_module(module_name), attr)
+        except (ImportError, AttributeError) as err:
+            raise ValueError(f"cannot load scripted policy {name!r}: {err}") from None
+        if not (isinstance(cls, type) and issubclass(cls, Policy)):
+            raise ValueError(f"scripted policy {name!r} is not a swarm_envs.agents.base.Policy subclass")
+        return cls
+    if name not in SCRIPTED:
+        raise ValueError(f"unknown scripted policy {name!r}; available: {sorted(SCRIPTED)} or 'module:Class'")
+    return SCRIPTED[name]
 
 
 def make_scripted(name: str, env, rng: np.random.Generator | None = None, **kwargs) -> Policy:
-    """Build scripted controller ``name`` for ``env`` (reads only its platform spec and observation layout)."""
-    if name not in SCRIPTED:
-        raise ValueError(f"unknown scripted policy {name!r}; available: {sorted(SCRIPTED)}")
-    return SCRIPTED[name](env.platform, env.layout, rng, **kwargs)
+    """Build scripted controller ``name`` (see :func:`scripted_class`) for ``env`` (reads only its platform
+    spec and observation layout); ``kwargs`` go to the controller. ``ValueError`` for an unknown name or
+    keyword."""
+    cls = check_scripted_kwargs(name, kwargs)
+    return cls(env.platform, env.layout, rng, **kwargs)
+
+
+def check_scripted_kwargs(name: str, kwargs: dict) -> type[Policy]:
+    """The controller class of ``name``, after checking that it takes ``kwargs``: ``ValueError`` naming an
+    unknown keyword and listing the allowed ones (before any env is built)."""
+    cls = scripted_class(name)
+    params = inspect.signature(cls.__init__).parameters
+    kinds = (inspect.Parameter.POSITIONAL_OR_KEYWORD, inspect.Parameter.KEYWORD_ONLY)
+    allowed = [key for key, p in params.items() if key not in ("self", "platform", "layout", "rng") and p.kind in kinds]
+    takes_any = any(p.kind is inspect.Parameter.VAR_KEYWORD for p in params.values())
+    unknown = sorted(k for k in kwargs if k not in allowed)
+    if unknown and not takes_any:
+        raise ValueError(f"scripted policy {name!r} takes no keyword argument(s) {unknown}; allowed: {allowed}")
+    return cls

@@ -43,9 +43,8 @@ import numpy as np
 import yaml
 
 from swarm_envs.agents.config import ConfigError, load_config, resolve
+from swarm_envs.agents.tasks import env_id, headline, metric_reductions
 from swarm_envs.agents.evaluation import (
-    PRIMARY_METRIC,
-    TASKS,
     evaluate,
     make_env,
     markdown_table,
@@ -225,8 +224,7 @@ def train(cfg: dict[str, Any], out: Path) -> tuple[Any, float, bool]:
     """Train PPO and save ``out/model.zip``; returns (model, seconds, interrupted by Ctrl-C)."""
     from swarm_envs.agents.sb3_vec_env import SwarmVecEnv
 
-    module = __import__(TASKS[cfg["task"]], fromlist=["parallel_env"])
-    venv = SwarmVecEnv(module.parallel_env, cfg["train"]["n_envs"], env_kwargs_of(cfg), n_workers=cfg["train"]["n_workers"])
+    venv = SwarmVecEnv(env_id(cfg["task"]), cfg["train"]["n_envs"], env_kwargs_of(cfg), n_workers=cfg["train"]["n_workers"])
     venv.seed(cfg["seed"])
     wrapped = venv if cfg["agent"]["reward_scale"] == 1.0 else _ScaledRewards(venv, cfg["agent"]["reward_scale"])
     model = build_model(cfg, wrapped)
@@ -498,26 +496,27 @@ def _run(args: argparse.Namespace, state: dict[str, Any]) -> int:
         print(f"trained {model.num_timesteps} robot-steps in {timing['train_s']:.1f} s -> {out / 'model.zip'}")
 
     seeds = list(range(cfg["eval"]["seed_start"], cfg["eval"]["seed_start"] + cfg["eval"]["n_seeds"]))
-    factories = {
-        "ppo": lambda env: SB3Policy(model, env.platform, env.layout, deterministic=cfg["eval"]["deterministic"]),
-        "scripted": lambda env: make_scripted(cfg["agent"]["scripted"], env, **cfg["agent"]["scripted_kwargs"]),
-        "random": random_factory,
-    }
+    factories = {"ppo": lambda env: SB3Policy(model, env.platform, env.layout, deterministic=cfg["eval"]["deterministic"])}
+    if cfg["agent"]["scripted"] is not None:  # a task without a scripted baseline is compared with random only
+        factories["scripted"] = lambda env: make_scripted(cfg["agent"]["scripted"], env, **cfg["agent"]["scripted_kwargs"])
+    factories["random"] = random_factory
     t0 = time.perf_counter()
     results = {name: evaluate(task, eval_kwargs, f, seeds, progress=cfg["train"]["progress_bar"], desc=f"eval {name}")
                for name, f in factories.items()}
     timing["eval_s"] = time.perf_counter() - t0
     rows = summarise(results, seed=cfg["seed"])
     write_csv(rows, out / "results.csv")
-    primary, sign = PRIMARY_METRIC[task]
+    best = headline(task)
+    reductions = ", ".join(f"{m} {how}" for m, how in metric_reductions(task).items())
     header = (
-        f"# {task}: PPO vs scripted ({cfg['agent']['scripted']}) vs random, {len(seeds)} evaluation seeds\n\n"
+        f"# {task}: PPO vs " + (f"scripted ({cfg['agent']['scripted']}) vs " if "scripted" in factories else "") +
+        f"random, {len(seeds)} evaluation seeds\n\n"
         f"env: {json.dumps(eval_kwargs)}; "
         + (f"PPO checkpoint {checkpoint} (eval-only)" if checkpoint else
            f"PPO budget {cfg['train']['total_timesteps']} robot-steps ({model.num_timesteps} run)")
-        + f"; headline metric `{primary}` "
-        f"({'higher' if sign > 0 else 'lower'} is better). Final-step values except flocking metrics "
-        "(mean over the episode); episode_return = mean per-robot return.\n\n"
+        + (f"; headline metric `{best[0]}` ({'higher' if best[1] > 0 else 'lower'} is better)" if best else "")
+        + (f". Metrics over an episode: {reductions} (final = after the last step, mean = over the episode)" if reductions else "")
+        + "; episode_return = mean per-robot return.\n\n"
     )
     table = markdown_table(rows, n_seeds=len(seeds))
     (out / "results.md").write_text(header + table)

@@ -32,7 +32,7 @@ def test_tasks_repeated_and_comma_list(capsys):
 def test_unknown_task_is_a_usage_error(capsys):
     with pytest.raises(SystemExit) as exc:
         benchmark.main(["--task", "herding", *TINY])
-    assert exc.value.code == 2 and "unknown task(s) ['herding']" in capsys.readouterr().err
+    assert exc.value.code == 2 and "unknown task 'herding'" in capsys.readouterr().err
 
 
 def test_module_runs_with_one_episode():

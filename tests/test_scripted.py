@@ -8,7 +8,8 @@ from scipy import stats
 
 from swarm_envs.agents.base import RandomPolicy
 from swarm_envs.agents.evaluation import confidence_interval, evaluate, make_env, random_factory, run_episode
-from swarm_envs.agents.scripted import SCRIPTED, TASK_SCRIPTED, bump_direction, circular_mean, make_scripted
+from swarm_envs.agents.scripted import SCRIPTED, bump_direction, circular_mean, make_scripted, scripted_class
+from swarm_envs.agents.tasks import SHORT_NAMES, headline, scripted_policy
 from swarm_envs.env import DT
 
 SEEDS = list(range(5))
@@ -23,11 +24,9 @@ SEEDS = list(range(5))
     ],
 )
 def test_scripted_beats_random_on_task_metric(task, kwargs):
-    from swarm_envs.agents.evaluation import PRIMARY_METRIC
-
     kw = {"sensing": "ideal", **kwargs}
-    metric, sign = PRIMARY_METRIC[task]
-    scripted = evaluate(task, kw, lambda env: make_scripted(TASK_SCRIPTED[task], env), SEEDS)[metric]
+    metric, sign = headline(task)
+    scripted = evaluate(task, kw, lambda env: make_scripted(scripted_policy(task), env), SEEDS)[metric]
     random = evaluate(task, kw, random_factory, SEEDS)[metric]
     diff = sign * (scripted - random)  # > 0 = scripted better, paired by seed
     assert np.all(diff > 0), (scripted, random)
@@ -162,7 +161,7 @@ def test_sorted_following_keeps_robots_behind_their_predecessor():
 
 @pytest.mark.parametrize(
     "name, task, kwargs",
-    [(v, k, {}) for k, v in TASK_SCRIPTED.items()]
+    [(scripted_policy(k), k, {}) for k in SHORT_NAMES]
     + [("random_walk", "aggregation", {}), ("sorted_following", "flocking", {"n_robots": 5, "message_bits": 3})],
 )
 def test_scripted_runs_with_full_sensing(name, task, kwargs):
@@ -172,20 +171,19 @@ def test_scripted_runs_with_full_sensing(name, task, kwargs):
 
 
 def test_registry_complete():
-    assert set(TASK_SCRIPTED.values()) <= set(SCRIPTED)
+    for task in SHORT_NAMES:  # every task's declared baseline loads as a scripted controller
+        assert scripted_class(scripted_policy(task)).name in SCRIPTED
     assert {"random_walk", "sorted_following"} <= set(SCRIPTED)
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("task", list(TASK_SCRIPTED))
+@pytest.mark.parametrize("task", list(SHORT_NAMES))
 def test_scripted_beats_random_with_full_sensing(task):
     """~40 s: runs only when selected with ``-m slow`` (see tests/conftest.py)."""
-    from swarm_envs.agents.evaluation import PRIMARY_METRIC
-
     kw = {"sensing": "full", "max_cycles": 200}
-    metric, sign = PRIMARY_METRIC[task]
+    metric, sign = headline(task)
     seeds = list(range(10))
-    scripted = evaluate(task, kw, lambda env: make_scripted(TASK_SCRIPTED[task], env), seeds)[metric]
+    scripted = evaluate(task, kw, lambda env: make_scripted(scripted_policy(task), env), seeds)[metric]
     random = evaluate(task, kw, random_factory, seeds)[metric]
     diff = sign * (scripted - random)
     assert diff.mean() > 0 and stats.ttest_1samp(diff, 0.0, alternative="greater").pvalue < 0.01, (scripted, random)
@@ -202,7 +200,7 @@ def test_scripted_beats_random_with_full_sensing(task):
 def test_batched_evaluation_equals_sequential(task, kwargs, factory):
     """Evaluating seeds as copies of one vector env gives exactly the per-seed numbers of run_episode
     (copies are bit-identical to single envs; each copy has its own policy instance and generator)."""
-    make = (lambda env: make_scripted(TASK_SCRIPTED[task], env)) if factory == "scripted" else random_factory
+    make = (lambda env: make_scripted(scripted_policy(task), env)) if factory == "scripted" else random_factory
     seeds = [3, 11, 4]
     batched = evaluate(task, kwargs, make, seeds, max_copies=2)  # two chunks: 2 + 1 copies
     env = make_env(task, **kwargs)

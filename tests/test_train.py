@@ -56,8 +56,8 @@ def test_default_configs_exist():
         ("task: aggregation\nagent:\n  activation: sigmoid\n", "'agent.activation'='sigmoid' not allowed"),
         ("task: aggregation\nenv:\n  n_robot: 5\n", "unknown env key(s) ['env.n_robot']"),
         ("task: aggregation\nenv:\n  platform: roomba\n", "bad env settings: unknown platform 'roomba'"),
-        ("task: herding\n", "task='herding' is not a task"),
-        ("task: aggregation\nagent:\n  scripted: dance\n", "'agent.scripted'='dance' is not a scripted policy"),
+        ("task: herding\n", "config key 'task': unknown task 'herding'"),
+        ("task: aggregation\nagent:\n  scripted: dance\n", "unknown scripted policy 'dance'"),
         ("- a\n- b\n", "must hold a mapping"),
     ],
 )
@@ -131,7 +131,7 @@ def test_train_end_to_end(trained):
         assert (out / name).exists(), name
     assert list((out / "checkpoints").glob("ppo_*_steps.zip"))
     saved = yaml.safe_load((out / "config.yaml").read_text())
-    assert saved["train"]["total_timesteps"] == 1000 and saved["agent"]["scripted"] == "bearing_aggregation"
+    assert saved["train"]["total_timesteps"] == 1000 and saved["agent"]["scripted"] == "swarm_envs.agents.scripted:BearingAggregation"
     md = (out / "results.md").read_text()
     assert "| largest_cluster_fraction |" in md and "n=3 seeds" in md and "bootstrap" in md
     assert len(json.loads((out / "per_seed.json").read_text())["ppo"]["n_clusters"]) == 3

@@ -69,7 +69,7 @@ def test_ctrl_c_saves_model_and_config(tmp_path):
     model = PPO.load(out / "model.zip", device="cpu")
     assert 512 <= model.num_timesteps < 10_000_000
     cfg = load_config(out / "config.yaml")  # the resolved config is a valid config again
-    assert cfg["train"]["total_timesteps"] == 10_000_000 and cfg["agent"]["scripted"] == "bearing_aggregation"
+    assert cfg["train"]["total_timesteps"] == 10_000_000 and cfg["agent"]["scripted"] == "swarm_envs.agents.scripted:BearingAggregation"
     assert json.loads((out / "timing.json").read_text())["interrupted"] is True
     assert not (out / "results.csv").exists()
 
