@@ -13,6 +13,7 @@ e.g. ``infos["robot_0"]["metrics", "polarisation"]``: the same key paths TensorD
 from __future__ import annotations
 
 import functools
+import itertools
 import numbers
 from collections.abc import Mapping
 from typing import Any
@@ -244,36 +245,50 @@ class SwarmEnv(ParallelEnv):
         return obs, infos
 
     def _action_array(self, actions: dict[str, Any]) -> np.ndarray:
+        """(n_world, action_size) float64 actions of the live agents, checked and clipped to [-1, 1]."""
         if not isinstance(actions, dict):
             raise TypeError(f"actions must be a dict mapping agent names to arrays, got {type(actions).__name__}")
-        unknown = [a for a in actions if a not in self._agent_index or a not in self.agents]
-        if unknown:
-            raise KeyError(f"actions given for unknown or finished agent(s) {unknown[:5]}; live agents: {len(self.agents)} named robot_0..")
-        missing = [a for a in self.agents if a not in actions]
-        if missing:
+        live = set(self.agents)
+        if len(actions) != len(live) or not live.issuperset(actions):
+            unknown = [a for a in actions if a not in live]
+            if unknown:
+                raise KeyError(f"actions given for unknown or finished agent(s) {unknown[:5]}; live agents: {len(self.agents)} named robot_0..")
+            missing = [a for a in self.agents if a not in actions]
             raise KeyError(f"missing actions for agent(s) {missing[:5]}; every live agent needs an action")
         size = self.layout.action_size
+        # numeric arrays of the right shape are stacked at once; anything else is checked agent by agent,
+        # which also names the agent in an error
+        values = [actions[a] for a in self.agents]
+        if all(type(v) is np.ndarray and v.dtype.kind in "iuf" and v.shape == (size,) for v in values) and values:
+            arr = np.stack(values)
+        else:
+            arr = np.stack([self._one_action(a, v, size) for a, v in zip(self.agents, values)]) if values else np.zeros((0, size))
+        arr = arr.astype(np.float64)
+        finite = np.isfinite(arr).all(axis=1)
+        if not finite.all():
+            first = int(np.argmin(finite))
+            raise ValueError(f"action for {self.agents[first]} contains NaN or inf: {arr[first]}")
         out = np.zeros((self.n_world, size))
-        for agent, action in actions.items():
-            try:
-                arr = np.asarray(action)
-            except (TypeError, ValueError):
-                arr = np.asarray(None)
-            if arr.dtype.kind not in "iuf":  # not bool, complex, strings (even of digits) or objects
-                raise TypeError(
-                    f"action for {agent} must be a real-valued numeric array of shape ({size},) "
-                    f"(int or float dtype), got {action!r:.80} of dtype {arr.dtype}"
-                )
-            arr = arr.astype(np.float64)
-            if arr.shape != (size,):
-                raise ValueError(
-                    f"action for {agent} has shape {arr.shape}; expected ({size},) = (linear, angular"
-                    + (f", {self.layout.message_bits} message bits)" if self.layout.message_bits else ")")
-                )
-            if not np.all(np.isfinite(arr)):
-                raise ValueError(f"action for {agent} contains NaN or inf: {arr}")
-            out[self.agent_robots[self._agent_index[agent]]] = arr
+        out[self.agent_robots[[self._agent_index[a] for a in self.agents]]] = arr
         return np.clip(out, -1.0, 1.0)
+
+    def _one_action(self, agent: str, action: Any, size: int) -> np.ndarray:
+        """One agent's action as a float array of shape (size,); ``TypeError``/``ValueError`` naming the agent."""
+        try:
+            arr = np.asarray(action)
+        except (TypeError, ValueError):
+            arr = np.asarray(None)
+        if arr.dtype.kind not in "iuf":  # not bool, complex, strings (even of digits) or objects
+            raise TypeError(
+                f"action for {agent} must be a real-valued numeric array of shape ({size},) "
+                f"(int or float dtype), got {action!r:.80} of dtype {arr.dtype}"
+            )
+        if arr.shape != (size,):
+            raise ValueError(
+                f"action for {agent} has shape {arr.shape}; expected ({size},) = (linear, angular"
+                + (f", {self.layout.message_bits} message bits)" if self.layout.message_bits else ")")
+            )
+        return arr.astype(np.float64)
 
     def step(self, actions: dict[str, Any]):
         if not self.agents:
@@ -284,7 +299,7 @@ class SwarmEnv(ParallelEnv):
         rewards_arr = self.core.rewards[0]
         obs = self._observations()
         infos = self._infos()
-        rewards = {a: float(rewards_arr[i]) for i, a in enumerate(self.agents)}
+        rewards = dict(zip(self.agents, np.asarray(rewards_arr, dtype=float)[[self._agent_index[a] for a in self.agents]].tolist()))
         truncated = self.num_cycles >= self.max_cycles
         terminations = {a: False for a in self.agents}
         truncations = {a: truncated for a in self.agents}
@@ -300,8 +315,15 @@ class SwarmEnv(ParallelEnv):
         return self.core.observations()
 
     def _observations(self) -> dict[str, Any]:
+        """Per live agent its observation: rows of this step's batched arrays (one array operation per part)."""
         batched = self.batched_observations()
-        return {a: self.layout.per_robot(batched, self.agent_robots[i]) for i, a in enumerate(self.agents)}
+        rows = self.agent_robots[[self._agent_index[a] for a in self.agents]]
+        if self.layout.flatten:  # as gymnasium.spaces.flatten per agent: the parts' rows concatenated, float32
+            parts = [np.asarray(batched[name])[rows].reshape(len(rows), -1) for name in self.layout.dict_space().spaces]
+            return dict(zip(self.agents, np.concatenate(parts, axis=1).astype(np.float32, copy=False)))
+        names = list(batched)
+        parts = [np.asarray(batched[name])[rows] for name in names]
+        return {agent: dict(zip(names, values)) for agent, values in zip(self.agents, zip(*parts))}
 
     def state(self) -> np.ndarray:
         """Global ground-truth state for centralised critics (never part of any observation).
@@ -324,24 +346,28 @@ class SwarmEnv(ParallelEnv):
         return np.concatenate([robots, points, [progress]]).astype(np.float32)
 
     def _infos(self) -> dict[str, dict]:
-        """Per agent, a flat dict keyed by ``(group, name)``; values are numbers or fixed-shape arrays."""
-        core = self.core
-        world = self.world
+        """Per agent, a flat dict keyed by ``(group, name)``; values are numbers or fixed-shape arrays.
+
+        Built column by column over all agents (one array operation per key), then one small dict per agent:
+        arrays are rows of this step's own copies, numbers are Python scalars."""
+        core, world = self.core, self.world
+        agents = self.agents
+        rows = self.agent_robots[[self._agent_index[a] for a in agents]]
+        index = [self._agent_index[a] for a in agents]
         stats = core.frame.stats if core.frame is not None else {}
-        metrics = {name: float(v[0]) for name, v in core.metrics.items()}
-        infos = {}
-        for i, agent in enumerate(self.agents):
-            r = self.agent_robots[i]
-            info: dict[tuple[str, str], Any] = {
-                ("ground_truth", "position"): world.positions[r].copy(),
-                ("ground_truth", "heading"): float(world.headings[r]),
-                ("ground_truth", "velocity"): world.velocities[r].copy(),
-            }
-            info.update({("reward_terms", name): float(v[0, i]) for name, v in core.terms.items()})
-            info.update({("metrics", name): float(v) for name, v in metrics.items()})
-            info.update({("sensing", name): (v[r].item() if np.ndim(v) == 1 else v[r].copy()) for name, v in stats.items()})
-            infos[agent] = info
-        return infos
+        keys: list[tuple[str, str]] = [("ground_truth", "position"), ("ground_truth", "heading"), ("ground_truth", "velocity")]
+        columns: list[Any] = [world.positions[rows], world.headings[rows].tolist(), world.velocities[rows]]
+        for name, v in core.terms.items():
+            keys.append(("reward_terms", name))
+            columns.append(np.asarray(v[0], dtype=float)[index].tolist())
+        for name, v in core.metrics.items():
+            keys.append(("metrics", name))
+            columns.append(itertools.repeat(float(v[0])))
+        for name, v in stats.items():
+            keys.append(("sensing", name))
+            v = np.asarray(v)
+            columns.append(v[rows].tolist() if v.ndim == 1 else v[rows])
+        return {agent: dict(zip(keys, values)) for agent, values in zip(agents, zip(*columns))}
 
     # -- rendering -----------------------------------------------------------------------------------
     def render(self):

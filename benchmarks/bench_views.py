@@ -1,0 +1,95 @@
+"""The PettingZoo view's cost: the ``ParallelEnv`` (dicts of actions, observations, rewards and infos per agent)
+against ``make_vec(..., 1)`` (arrays) over the same batched core, in the same run.
+
+    python benchmarks/bench_views.py                         # N = 1000, full sensing, 5 alternated rounds
+    python benchmarks/bench_views.py --n 100 --rounds 3 --env swarm_envs/Flocking-v0
+    python benchmarks/bench_views.py --import examples/custom_task.py --env swarm_examples/Dispersion-v0
+
+Each round times ``--steps`` env steps of each view (random actions; the ParallelEnv's actions are made as
+a dict of arrays before the timer starts), one after the other, so both sides of a round's ratio see the
+same machine load. Prints env steps/s per round, the ratio ParallelEnv / make_vec per round and the median
+ratio, and the load average before and after.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import statistics
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+os.environ.setdefault("OMP_NUM_THREADS", "1")
+
+import swarm_envs  # noqa: E402
+
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+from swarm_envs.agents.tasks import import_modules  # noqa: E402
+
+
+def time_parallel(env, actions: list[dict], steps: int) -> float:
+    """Env steps per second of the ParallelEnv over ``steps`` steps (after 2 warm-up steps)."""
+    for a in actions[:2]:
+        env.step(a)
+    t0 = time.perf_counter()
+    for a in actions[2 : 2 + steps]:
+        env.step(a)
+    return steps / (time.perf_counter() - t0)
+
+
+def time_vector(vec, actions: np.ndarray, steps: int) -> float:
+    """Env steps per second of the vector env (one copy) over ``steps`` steps (after 2 warm-up steps)."""
+    for a in actions[:2]:
+        vec.step(a)
+    t0 = time.perf_counter()
+    for a in actions[2 : 2 + steps]:
+        vec.step(a)
+    return steps / (time.perf_counter() - t0)
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--env", default="swarm_envs/Aggregation-v0", help="registered env id")
+    parser.add_argument("--import", dest="imports", action="append", default=[], metavar="MODULE",
+                        help="module or .py file that registers the env (repeatable)")
+    parser.add_argument("--n", type=int, default=1000, help="robots")
+    parser.add_argument("--sensing", choices=("full", "ideal"), default="full")
+    parser.add_argument("--steps", type=int, default=20, help="timed steps per view and round")
+    parser.add_argument("--rounds", type=int, default=5)
+    args = parser.parse_args(argv)
+    if args.n < 1 or args.steps < 1 or args.rounds < 1:
+        parser.error("--n, --steps and --rounds must be >= 1")
+    try:
+        import_modules(args.imports)
+    except ImportError as err:
+        parser.error(str(err))
+
+    kwargs = dict(n_robots=args.n, sensing=args.sensing, max_cycles=10**6)
+    env = swarm_envs.make(args.env, **kwargs)
+    vec = swarm_envs.make_vec(args.env, 1, **kwargs)
+    env.reset(seed=0)
+    vec.reset(seed=0)
+    rng = np.random.default_rng(0)
+    size = vec.layout.action_size
+    load0 = os.getloadavg()
+    print(f"{args.env}, N = {args.n}, {args.sensing} sensing, {args.steps} steps per view and round; load {load0[0]:.2f}")
+    print("| round | ParallelEnv (env steps/s) | make_vec(1) (env steps/s) | ratio |")
+    print("|---|---|---|---|")
+    ratios = []
+    for r in range(args.rounds):
+        arrays = rng.uniform(-1, 1, (args.steps + 2, 1, vec.n_agents, size))
+        dicts = [{a: arrays[t, 0, i] for i, a in enumerate(env.possible_agents)} for t in range(args.steps + 2)]
+        par = time_parallel(env, dicts, args.steps)
+        arr = time_vector(vec, arrays, args.steps)
+        ratios.append(par / arr)
+        print(f"| {r + 1} | {par:.2f} | {arr:.2f} | {par / arr:.3f} |", flush=True)
+    load1 = os.getloadavg()
+    print(f"\nmedian ratio ParallelEnv / make_vec(1): {statistics.median(ratios):.3f}; load {load0[0]:.2f} -> {load1[0]:.2f}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
