@@ -32,9 +32,9 @@ import swarm_envs  # noqa: E402
 GRID = [(10, 1), (10, 16), (10, 64), (10, 256), (100, 1), (100, 16), (100, 64), (100, 256), (1000, 1)]
 
 
-def time_swarm(n: int, copies: int, sensing: str, min_steps: int, min_seconds: float) -> tuple[float, float]:
-    """Median (wall-clock, process CPU) seconds per vector step (B copies of N robots)."""
-    vec = swarm_envs.make_vec("swarm_envs/Flocking-v0", copies, n_robots=n, sensing=sensing, max_cycles=10**6)
+def time_swarm(n: int, copies: int, sensing: str, min_steps: int, min_seconds: float, env_id: str = "swarm_envs/Flocking-v0") -> tuple[float, float]:
+    """Median (wall-clock, process CPU) seconds per vector step (B copies of N robots of ``env_id``)."""
+    vec = swarm_envs.make_vec(env_id, copies, n_robots=n, sensing=sensing, max_cycles=10**6)
     vec.reset(seed=0)
     rng = np.random.default_rng(0)
     shape = (copies, n, vec.layout.action_size)
@@ -89,7 +89,7 @@ def interleaved(rounds: int, copies: tuple[int, ...] = (64, 256), vmas_steps: in
     if env is None:
         print("VMAS: not installed (pip install vmas) - nothing to interleave")
         return
-    print(f"load average at start: {os.getloadavg()[0]:.2f} on {os.cpu_count()} cores")
+    print(f"{args.env}; load average at start: {os.getloadavg()[0]:.2f} on {os.cpu_count()} cores")
     print("| round | VMAS agent-steps/s | " + " | ".join(f"B={b} agent-steps/s | ratio" for b in copies) + " |")
     print("|---|---|" + "---|---|" * len(copies))
     ratios: dict[int, list[float]] = {b: [] for b in copies}
@@ -124,7 +124,17 @@ def main() -> None:
     parser.add_argument("--no-vmas", action="store_true")
     parser.add_argument("--vmas-steps", type=int, default=20, help="timed VMAS steps (median)")
     parser.add_argument("--interleave", type=int, metavar="R", help="alternate VMAS and N = 10 ideal R times (ratios only)")
+    parser.add_argument("--env", default="swarm_envs/Flocking-v0", help="registered env id (default: flocking, as VMAS's scenario)")
+    parser.add_argument("--import", dest="imports", action="append", default=[], metavar="MODULE",
+                        help="module or .py file that registers --env (repeatable), e.g. examples/custom_task.py")
     args = parser.parse_args()
+    from swarm_envs.agents.tasks import import_modules
+
+    try:
+        import_modules(args.imports)
+        swarm_envs.spec(args.env)
+    except (ImportError, ValueError) as err:
+        parser.error(str(err))
     if args.interleave:
         interleaved(args.interleave)
         return
@@ -134,7 +144,7 @@ def main() -> None:
     if args.copies:
         grid = [(n, b) for n, b in grid if b == args.copies] or [(args.n or 10, args.copies)]
     modes = [args.sensing] if args.sensing else ["full", "ideal"]
-    print(f"load average at start: {os.getloadavg()[0]:.2f} on {os.cpu_count()} cores")
+    print(f"{args.env}; load average at start: {os.getloadavg()[0]:.2f} on {os.cpu_count()} cores")
     print(f"threads: {_numba_threads()} (numba's thread count; a single copy with >= 16384 candidate IR pairs, i.e. the N = 1000 full row, "
           "runs its occluder search and gain kernel in that many chunks on helper threads, and SwarmCom's draws, the rewards and "
           "range & bearing on a worker thread; everything else on one thread; NUMBA_NUM_THREADS=1 for one core)")
@@ -151,7 +161,7 @@ def main() -> None:
     print("|---|---|---|---|---|---|---|---|")
     for sensing in modes:
         for n, b in grid:
-            t, cpu = time_swarm(n, b, sensing, args.min_steps, args.min_seconds)
+            t, cpu = time_swarm(n, b, sensing, args.min_steps, args.min_seconds, args.env)
             rate = n * b / t
             ratio = f"{rate / vmas_rate:.2f}x" if vmas_rate else "-"
             print(f"| {n} | {b} | {sensing} | {t * 1e3:.1f} | {cpu * 1e3:.1f} | {rate:,.0f} | {1 / t:,.1f} | {ratio} |", flush=True)

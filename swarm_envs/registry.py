@@ -23,7 +23,7 @@ from typing import Any
 
 from swarm_envs.env import SwarmEnv
 from swarm_envs.task import Task
-from swarm_envs.vector import SwarmVectorEnv
+from swarm_envs.vector import AgentsAsEnvs, SwarmVectorEnv
 
 __all__ = ["EnvSpec", "register", "spec", "list_envs", "task_class", "resolve", "make", "make_vec", "ENV_IDS", "ID_PATTERN"]
 
@@ -126,7 +126,7 @@ def spec(env_id: str) -> EnvSpec:
     try:
         return _REGISTRY[env_id]
     except (KeyError, TypeError):
-        close = difflib.get_close_matches(str(env_id), list(_REGISTRY), n=3)
+        close = difflib.get_close_matches(str(env_id), list(_REGISTRY), n=3, cutoff=0.8)
         hint = f"; did you mean {close}?" if close else ""
         raise ValueError(
             f"unknown environment id {env_id!r}{hint} Registered: {list_envs()}. "
@@ -171,8 +171,13 @@ def make(env: str | type, **kwargs: Any) -> SwarmEnv:
     return SwarmEnv(entry, **settings)
 
 
-def make_vec(env: str | type, num_envs: int, **kwargs: Any) -> SwarmVectorEnv:
+def make_vec(env: str | type, num_envs: int, *, agents_as_envs: bool = False, **kwargs: Any) -> SwarmVectorEnv | AgentsAsEnvs:
     """``num_envs`` copies of a registered id (or a ``Task`` / ``SwarmEnv`` subclass) stepped by one batched
-    core: a Gymnasium ``VectorEnv`` with ``(num_envs, n_agents, ...)`` arrays (:mod:`swarm_envs.vector`)."""
+    core: a Gymnasium ``VectorEnv`` with ``(num_envs, n_agents, ...)`` arrays (:mod:`swarm_envs.vector`).
+    ``agents_as_envs=True``: every robot of every copy as one sub-env (``num_envs x n_agents`` rows,
+    :class:`swarm_envs.vector.AgentsAsEnvs`), for Gymnasium's vector wrappers."""
+    if not isinstance(agents_as_envs, bool):
+        raise TypeError(f"agents_as_envs must be True or False, got {agents_as_envs!r:.80}")
     entry, defaults = resolve(env)
-    return SwarmVectorEnv(entry, num_envs, **{**defaults, **kwargs})
+    vec = SwarmVectorEnv(entry, num_envs, **{**defaults, **kwargs})
+    return AgentsAsEnvs(vec) if agents_as_envs else vec

@@ -220,10 +220,12 @@ def pairs_within(positions: np.ndarray, distance: float) -> np.ndarray:
 
 def nearest_distances(positions: np.ndarray) -> np.ndarray:
     """(B, N) centre distance (m) of every robot to its nearest other robot of the same copy (inf alone)."""
+    positions = np.asarray(positions, dtype=float)
     B, N = positions.shape[:2]
-    out = np.full((B, N), np.inf)
     if N < 2:
-        return out
-    for b in range(B):  # one KD-tree query per copy
-        out[b] = cKDTree(positions[b]).query(positions[b], k=2)[0][:, 1]
-    return out
+        return np.full((B, N), np.inf)
+    if N <= 64:  # all pairs of every copy at once
+        gaps = np.linalg.norm(positions[:, :, None, :] - positions[:, None, :, :], axis=-1)
+        gaps[:, np.arange(N), np.arange(N)] = np.inf
+        return gaps.min(axis=2)
+    return np.stack([cKDTree(p).query(p, k=2)[0][:, 1] for p in positions])  # one KD-tree per copy
