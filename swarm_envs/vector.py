@@ -37,7 +37,7 @@ from swarm_envs.settings import SettingsError
 MAX_COPIES = 100_000
 MAX_TOTAL_ROBOTS = 200_000
 
-__all__ = ["SwarmVectorEnv", "MAX_COPIES", "MAX_TOTAL_ROBOTS"]
+__all__ = ["SwarmVectorEnv", "AgentsAsEnvs", "MAX_COPIES", "MAX_TOTAL_ROBOTS"]
 
 
 def _batch_space(space: spaces.Box, lead: tuple[int, ...]) -> spaces.Box:
@@ -182,3 +182,61 @@ class SwarmVectorEnv(VectorEnv):
             "sensing": {k: np.asarray(v)[rows] for k, v in stats.items()},
             "episode_step": core.num_cycles.copy(),
         }
+
+
+class AgentsAsEnvs(VectorEnv):
+    """Every robot of every copy as one sub-env: ``num_envs = B x N`` rows (row ``b * N + i`` is agent i of
+    copy b), for Gymnasium's vector wrappers and single-agent libraries (parameter sharing, as SuperSuit's
+    ``pettingzoo_env_to_vec_env_v1`` does). A view of one :class:`SwarmVectorEnv`: observations ``(B N, ...)``,
+    actions ``(B N, A)``, rewards, terminations and truncations ``(B N,)``, infos with ``B N`` rows (per-copy
+    values repeated for each of its robots). Autoreset as :class:`SwarmVectorEnv` (``NEXT_STEP``): all robots
+    of a copy end and restart together.
+
+    Example::
+
+        vec = swarm_envs.make_vec("swarm_envs/Flocking-v0", 16, agents_as_envs=True, flatten=True)
+        vec = gymnasium.wrappers.vector.RecordEpisodeStatistics(vec)
+        vec = gymnasium.wrappers.vector.NormalizeObservation(vec)
+    """
+
+    metadata = {"autoreset_mode": AutoresetMode.NEXT_STEP, "render_modes": []}
+
+    def __init__(self, vec: SwarmVectorEnv) -> None:
+        from gymnasium.vector.utils import batch_space
+
+        self.vec = vec
+        self.copies, self.n_agents = vec.num_envs, vec.n_agents
+        self.num_envs = self.copies * self.n_agents
+        self.single_observation_space = vec.agent_observation_space
+        self.single_action_space = vec.agent_action_space
+        self.observation_space = batch_space(self.single_observation_space, self.num_envs)
+        self.action_space = batch_space(self.single_action_space, self.num_envs)
+        self.layout, self.platform, self.config = vec.layout, vec.platform, vec.config
+
+    def reset(self, *, seed: int | Sequence[int | None] | None = None, options: dict[str, Any] | None = None):
+        """Reset every copy (``seed``: an int, or one per *copy*, as :meth:`SwarmVectorEnv.reset`)."""
+        obs, infos = self.vec.reset(seed=seed, options=options)
+        return self._rows(obs), self._info_rows(infos)
+
+    def step(self, actions: np.ndarray):
+        """Step with ``(B N, A)`` actions."""
+        arr = np.asarray(actions)
+        if arr.ndim != 2 or arr.shape[0] != self.num_envs:
+            raise ValueError(f"actions must have shape (num_envs, action_size) = ({self.num_envs}, {self.vec.layout.action_size}), got {arr.shape}")
+        obs, rewards, terminations, truncations, infos = self.vec.step(arr.reshape(self.copies, self.n_agents, -1))
+        return self._rows(obs), rewards.reshape(-1), terminations.reshape(-1), truncations.reshape(-1), self._info_rows(infos)
+
+    def close_extras(self, **kwargs: Any) -> None:
+        self.vec.close()
+
+    def _rows(self, value: Any) -> Any:
+        """(B, N, ...) arrays (or a dict of them) as (B N, ...) rows; (B,) per-copy values repeated per robot."""
+        if isinstance(value, dict):
+            return {k: self._rows(v) for k, v in value.items()}
+        value = np.asarray(value)
+        if value.shape[:2] == (self.copies, self.n_agents):
+            return value.reshape(self.num_envs, *value.shape[2:])
+        return np.repeat(value, self.n_agents, axis=0)
+
+    def _info_rows(self, infos: dict[str, Any]) -> dict[str, Any]:
+        return {k: self._rows(v) for k, v in infos.items()}
