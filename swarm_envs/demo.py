@@ -1,70 +1,376 @@
-"""Run a short episode with a simple scripted behaviour and write a GIF.
+"""Watch a swarm task: run one episode of a policy and write it as a GIF.
 
-``python -m swarm_envs.demo --task flocking --out demo.gif [--platform epuck] [--sensing full] [--steps 150]``
+``swarm-demo`` (``python -m swarm_envs.demo``)::
 
-The behaviour is a minimal one that reads only the observation (steer towards the mean bearing of
-the neighbours, away when too close), so the GIF shows what the sensing stack lets a robot do.
+    swarm-demo --task flocking --out flocking.gif          # the task's scripted baseline (default policy)
+    swarm-demo --task aggregation --policy random --overlay
+    swarm-demo --task swarm_envs/Flocking-v0 --model runs/flocking/model.zip
+    swarm-demo --all --out-dir docs/img/envs               # one small GIF per task (the docs' pictures)
+
+The frames (:func:`swarm_envs.render.render_env`) show the robots with their headings, the IR links that
+delivered a decoded reading this step, decoded messages, the task's markers, a caption (task, platform,
+policy, step, the task's headline metric) and a legend; ``--overlay`` adds where one robot's range & bearing
+observation puts its neighbours next to where they are. At the end the headline metric of the episode is
+printed next to the random policy's on the same seed (reduced as :func:`swarm_envs.agents.evaluation.run_episode`
+reduces it). Settings not given on the command line come from each task's showcase preset
+(:data:`SHOWCASE`).
 """
 
 from __future__ import annotations
 
 import argparse
+import os
 import sys
+import zipfile
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
 
 import numpy as np
 
-from swarm_envs.env import info_group
+from swarm_envs.agents.evaluation import PRIMARY_METRIC, TASK_METRICS, make_env, run_episode
+from swarm_envs.agents.evaluation import TASKS as TASK_MODULES
+from swarm_envs.env import DT, info_group
+from swarm_envs.registry import ENV_IDS
 
-TASKS = {"aggregation": "swarm_envs/Aggregation-v0", "flocking": "swarm_envs/Flocking-v0", "centroid_seeking": "swarm_envs/CentroidSeeking-v0"}
+#: short task name -> registered env id
+TASKS = {task: env_id for task, module in TASK_MODULES.items() for env_id, env_module in ENV_IDS.items() if env_module == module}
+
+#: per task, the settings a demo uses unless the command line gives them: scenes in which the scripted
+#: baseline visibly does its task (docs/environments/<task>.md shows the GIFs they make)
+SHOWCASE: dict[str, dict[str, Any]] = {
+    "aggregation": {"platform": "epuck", "n_robots": 10, "steps": 300, "seed": 0, "overlay": 0},
+    "flocking": {"platform": "droplet", "n_robots": 16, "steps": 300, "seed": 0, "overlay": None},
+    "centroid_seeking": {"platform": "rone", "n_robots": 1, "steps": 300, "seed": 0, "overlay": 0},
+}
+
+#: image settings of ``--all`` unless given: small GIFs for the documentation
+DOCS_IMAGE = {"pixels": 320, "frame_skip": 4}
+#: image settings of a single demo unless given
+IMAGE = {"pixels": 480, "frame_skip": 1}
 
 
-def cohesive_walk(obs: dict[str, np.ndarray], diameter: float) -> np.ndarray:
-    """Turn towards the neighbours' mean bearing (away from any closer than 1.5 diameters)."""
-    rb = obs["range_bearing"]
-    valid = rb[:, 0] > 0
-    if not valid.any():
-        return np.array([0.6, 0.3], np.float32)
-    vec = (rb[valid, 2:4]).sum(axis=0)
-    if np.any(rb[valid, 1] < 1.5 * diameter):
-        vec = -(rb[valid & (rb[:, 1] < 1.5 * diameter), 2:4]).sum(axis=0)
-    turn = np.arctan2(vec[1], vec[0])
-    return np.array([0.8 * max(np.cos(turn), 0.0), np.clip(turn, -1, 1)], np.float32)
+class DemoError(Exception):
+    """A bad demo input, reported as one line (exit code 2)."""
+
+
+@dataclass
+class DemoResult:
+    """What one demo episode produced."""
+
+    task: str
+    policy: str
+    frames: list = field(repr=False)
+    steps: int = 0
+    metrics: dict[str, float] = field(default_factory=dict)  # reduced as run_episode reduces them
+
+
+def resolve_task(name: str) -> tuple[str, str]:
+    """(short task name, env id) of a short name or a registered env id; :class:`DemoError` otherwise."""
+    if name in TASKS:
+        return name, TASKS[name]
+    for task, env_id in TASKS.items():
+        if name == env_id:
+            return task, env_id
+    raise DemoError(f"unknown task {name!r}; use one of {sorted(TASKS)} or a registered env id {sorted(ENV_IDS)}")
+
+
+def _task_of(env: Any) -> str:
+    """The short task name of a swarm env (by its task module)."""
+    module = type(env).__module__
+    for task, task_module in TASK_MODULES.items():
+        if module == task_module:
+            return task
+    raise DemoError(f"no scripted baseline for {type(env).__name__} (module {module})")
+
+
+def _scripted_policy(env: Any):
+    """The scripted baseline of ``env``'s task (:data:`swarm_envs.agents.scripted.TASK_SCRIPTED`)."""
+    from swarm_envs.agents.scripted import TASK_SCRIPTED, make_scripted
+
+    return make_scripted(TASK_SCRIPTED[_task_of(env)], env)
+
+
+def load_model_policy(path: str | Path, env: Any):
+    """A trained SB3 PPO ``.zip`` (as ``train.py`` saves it) as a policy for ``env``.
+
+    :class:`DemoError` (one line) when the file is not a PPO model or does not fit the env's flat
+    observation or action size."""
+    path = Path(path)
+    if not path.is_file():
+        raise DemoError(f"--model '{path}' does not exist")
+    if not zipfile.is_zipfile(path):
+        raise DemoError(f"--model '{path}' is not a zip archive (truncated, or not a stable-baselines3 model)")
+    try:
+        from stable_baselines3 import PPO
+
+        from swarm_envs.agents.sb3_vec_env import SB3Policy
+    except ImportError as err:
+        raise DemoError(f"--model needs stable-baselines3 ({err}); pip install 'swarm_envs[rl]'") from None
+    from gymnasium.spaces import flatdim
+
+    try:
+        model = PPO.load(path, device="cpu")
+    except Exception as err:  # SB3 raises many kinds (KeyError, BadZipFile, ValueError, pickle errors)
+        detail = str(err).strip().splitlines()[0] if str(err).strip() else ""
+        raise DemoError(f"--model '{path}' cannot be loaded as a PPO model ({type(err).__name__}{': ' + detail if detail else ''})") from None
+    obs_size, act_size = flatdim(env.layout.dict_space()), env.layout.action_size
+    if model.observation_space.shape != (obs_size,):
+        raise DemoError(
+            f"--model '{path}' expects observations of size {_size(model.observation_space.shape)} but this env gives "
+            f"{obs_size}; pass the env settings it was trained with (--env n_neighbours=.. / n_messages=.. / message_bits=..)"
+        )
+    if model.action_space.shape != (act_size,):
+        raise DemoError(f"--model '{path}' gives actions of size {_size(model.action_space.shape)} but this env expects {act_size}")
+    return SB3Policy(model, env.platform, env.layout, deterministic=True)
+
+
+def _size(shape: tuple[int, ...] | None) -> str:
+    return "x".join(str(s) for s in shape) if shape else "?"
+
+
+def make_policy(kind: str, env: Any, model: str | None = None):
+    """The policy of a demo: ``"scripted"`` (the task's baseline), ``"random"`` or a PPO ``model`` path."""
+    if model is not None:
+        return load_model_policy(model, env)
+    if kind == "scripted":
+        return _scripted_policy(env)
+    if kind == "random":
+        from swarm_envs.agents.base import RandomPolicy
+
+        return RandomPolicy(env.platform, env.layout)
+    raise DemoError(f"unknown policy {kind!r}; use 'scripted' or 'random'")
+
+
+def run_demo(
+    task: str,
+    env_kwargs: dict[str, Any],
+    policy: Any,
+    seed: int,
+    frame_skip: int = 1,
+    pixels: int = 480,
+    overlay_agent: int | None = None,
+) -> DemoResult:
+    """One episode of ``policy`` on ``task`` from ``reset(seed=seed)``, drawn every ``frame_skip`` steps.
+
+    The episode is driven as :func:`swarm_envs.agents.evaluation.run_episode` drives it (the policy sees the
+    agents' named batched observations; its generator is derived from ``seed`` the same way), so the
+    reduced metrics are the same numbers. Frames: the reset, every ``frame_skip``-th step and the last step.
+    """
+    from swarm_envs.render import Renderer, render_env
+
+    env = make_env(task, **env_kwargs)
+    if overlay_agent is not None and not 0 <= overlay_agent < env.n_agents:
+        env.close()
+        raise ValueError(f"overlay_agent must be in [0, {env.n_agents}), got {overlay_agent}")
+    renderer = Renderer(env.arena, env.platform, pixels=pixels, fps=env.metadata["render_fps"])
+    headline, _ = PRIMARY_METRIC[task]
+    title = (
+        f"{TASKS[task].split('/')[-1]} | {env.platform.name} x {env.n_agents}, {env.config['sensing']} sensing"
+        f"\n{getattr(policy, 'name', 'policy')}"
+    )
+
+    def draw(metrics: dict[str, float]) -> np.ndarray:
+        caption = f"{title} | t {env.num_cycles * DT:.1f} / {env.max_cycles * DT:.0f} s | {headline} {metrics[headline]:.2f}"
+        return render_env(env, renderer, caption=caption, overlay_agent=overlay_agent)
+
+    reductions = TASK_METRICS[task]
+    policy.reset(env.n_agents, rng=np.random.default_rng([seed, 7919]))
+    _, infos = env.reset(seed=seed)
+    frames = [draw(info_group(infos[env.possible_agents[0]], "metrics"))]
+    sums = dict.fromkeys(reductions, 0.0)
+    last: dict[str, float] = {}
+    steps = 0
+    while env.agents:
+        parts = {k: v[env.agent_robots] for k, v in env.batched_observations().items()}
+        actions = np.asarray(policy.act_batch(parts), dtype=np.float64)
+        _, _, _, _, infos = env.step({a: actions[i] for i, a in enumerate(env.possible_agents)})
+        last = info_group(infos[env.possible_agents[0]], "metrics")
+        for name in reductions:
+            sums[name] += last[name]
+        steps += 1
+        if steps % frame_skip == 0 or not env.agents:
+            frames.append(draw(last))
+    renderer.close()
+    env.close()
+    metrics = {name: float(last[name] if how == "final" else sums[name] / max(steps, 1)) for name, how in reductions.items()}
+    return DemoResult(task, getattr(policy, "name", "policy"), frames, steps, metrics)
+
+
+def random_baseline(task: str, env_kwargs: dict[str, Any], seed: int) -> dict[str, float]:
+    """The random policy's reduced metrics on the same env and seed (no rendering)."""
+    from swarm_envs.agents.base import RandomPolicy
+
+    env = make_env(task, **env_kwargs)
+    try:
+        return run_episode(env, RandomPolicy(env.platform, env.layout), seed, task)
+    finally:
+        env.close()
+
+
+def write_gif(frames: list[np.ndarray], path: str | Path, frame_ms: float) -> int:
+    """Write RGB frames as a looping GIF with one palette (the renderer's colours), ``frame_ms`` per frame.
+
+    The renderer draws nothing antialiased, so the palette keeps every frame exact; Pillow (``optimize``)
+    stores only the changed pixels of each frame. Returns the file size in bytes."""
+    from PIL import Image
+
+    from swarm_envs.render import PALETTE
+
+    palette = Image.new("P", (1, 1))
+    palette.putpalette([c for colour in PALETTE for c in colour])
+    images = [Image.fromarray(np.asarray(f, np.uint8)).quantize(palette=palette, dither=Image.Dither.NONE) for f in frames]
+    images[0].save(path, format="GIF", save_all=True, append_images=images[1:], duration=frame_ms, loop=0, optimize=True)
+    return Path(path).stat().st_size
+
+
+# -- command line ---------------------------------------------------------------------------------------
+def _int_at_least(low: int):
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected an integer >= {low}, got {text!r}") from None
+        if value < low:
+            raise argparse.ArgumentTypeError(f"must be >= {low}, got {value}")
+        return value
+
+    return parse
+
+
+def _env_setting(text: str) -> tuple[str, Any]:
+    import yaml
+
+    key, sep, value = text.partition("=")
+    key = key.strip()
+    if not sep or not key:
+        raise argparse.ArgumentTypeError(f"expected KEY=VALUE, got {text!r}")
+    own = {"render_mode": "the demo", "platform": "--platform", "sensing": "--sensing", "n_robots": "--n-robots", "max_cycles": "--steps"}
+    if key in own:
+        raise argparse.ArgumentTypeError(f"{key} is set by {own[key]}")
+    return key, yaml.safe_load(value)
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse with one-line errors: ``swarm-demo: error: <message>`` and exit code 2."""
+
+    def error(self, message: str):
+        self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+
+
+def _parser() -> argparse.ArgumentParser:
+    parser = _Parser(prog="swarm-demo", description=__doc__.split("\n\n")[0])
+    parser.add_argument("--task", default=None, help=f"short name {sorted(TASKS)} or a registered env id (default flocking)")
+    parser.add_argument("--all", action="store_true", help="one GIF per task, <task>.gif in --out-dir (small documentation GIFs)")
+    parser.add_argument("--policy", choices=["scripted", "random"], default=None, help="default: the task's scripted baseline")
+    parser.add_argument("--model", default=None, metavar="PATH", help="a trained PPO .zip (train.py's model.zip) instead of --policy")
+    parser.add_argument("--out", default=None, help="GIF path (default demo.gif); its directory must exist")
+    parser.add_argument("--out-dir", default=None, help="with --all: folder for the GIFs (created; default .)")
+    parser.add_argument("--platform", default=None, help="droplet, epuck or rone (default: the task's showcase)")
+    parser.add_argument("--sensing", default="full", choices=["full", "ideal"])
+    parser.add_argument("--n-robots", type=_int_at_least(1), default=None)
+    parser.add_argument("--steps", type=_int_at_least(1), default=None, help="episode length in 0.1 s steps")
+    parser.add_argument("--seed", type=_int_at_least(0), default=None)
+    parser.add_argument("--env", type=_env_setting, action="append", default=[], metavar="KEY=VALUE",
+                        help="another env setting, e.g. message_bits=4 (repeatable)")
+    parser.add_argument("--overlay", type=_int_at_least(0), nargs="?", const=0, default=None, metavar="AGENT",
+                        help="show where agent AGENT's (default 0) range & bearing rows put its neighbours (default: the showcase's)")
+    parser.add_argument("--no-overlay", action="store_true", help="no overlay, whatever the showcase")
+    parser.add_argument("--frame-skip", type=_int_at_least(1), default=None,
+                        help="draw every k-th step; the GIF shows 10 frames/s, so k x real time (default 1; --all: 4)")
+    parser.add_argument("--pixels", type=_int_at_least(160), default=None, help="image size (default 480; --all: 320)")
+    return parser
+
+
+def _check_writable_dir(folder: Path, what: str) -> str | None:
+    if not folder.is_dir():
+        return f"{what} directory '{folder}' does not exist"
+    if not os.access(folder, os.W_OK):
+        return f"{what} directory '{folder}' is not writable"
+    return None
+
+
+def _jobs(args: argparse.Namespace, parser: argparse.ArgumentParser) -> list[tuple[str, Path]]:
+    """(task, output path) of every GIF the command asks for; argparse errors for bad combinations."""
+    if args.all:
+        if args.task is not None or args.out is not None:
+            parser.error("--all writes every task to --out-dir; leave out --task and --out")
+        if args.model is not None:
+            parser.error("--model fits one env; use --task with it, not --all")
+        out_dir = Path(args.out_dir or ".")
+        try:
+            out_dir.mkdir(parents=True, exist_ok=True)
+        except OSError as err:
+            parser.error(f"--out-dir '{out_dir}' cannot be created ({err.strerror or err})")
+        problem = _check_writable_dir(out_dir, "--out-dir")
+        if problem:
+            parser.error(problem)
+        return [(task, out_dir / f"{task}.gif") for task in TASKS]
+    if args.out_dir is not None:
+        parser.error("--out-dir goes with --all; give a single demo's path with --out")
+    if args.model is not None and args.policy is not None:
+        parser.error("give either --policy or --model, not both")
+    try:
+        task, _ = resolve_task(args.task or "flocking")
+    except DemoError as err:
+        parser.error(str(err))
+    out = Path(args.out or "demo.gif")
+    if out.is_dir():
+        parser.error(f"--out '{out}' is a directory; give a file path such as {out / 'demo.gif'}")
+    problem = _check_writable_dir(out.parent if str(out.parent) else Path("."), "--out")
+    if problem:
+        parser.error(problem)
+    return [(task, out)]
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m swarm_envs.demo", description=__doc__.split("\n\n")[0])
-    parser.add_argument("--task", choices=sorted(TASKS), default="flocking")
-    parser.add_argument("--out", default="demo.gif", help="GIF path")
-    parser.add_argument("--platform", default="epuck")
-    parser.add_argument("--sensing", default="full", choices=["full", "ideal"])
-    parser.add_argument("--n-robots", type=int, default=None)
-    parser.add_argument("--steps", type=int, default=150)
-    parser.add_argument("--seed", type=int, default=0)
+    """Command line of ``swarm-demo``; returns 0, or exits with code 2 and one error line for bad input."""
+    parser = _parser()
     args = parser.parse_args(argv)
-
-    import imageio.v3 as iio
-
-    import swarm_envs
-
-    kwargs = {"platform": args.platform, "sensing": args.sensing, "render_mode": "rgb_array", "max_cycles": args.steps}
-    if args.n_robots is not None:
-        kwargs["n_robots"] = args.n_robots
-    env = swarm_envs.make(TASKS[args.task], **kwargs)
-    obs, _ = env.reset(seed=args.seed)
-    frames = [env.render()]
-    infos = {}
-    while env.agents:
-        actions = {a: cohesive_walk(obs[a], env.platform.diameter) for a in env.agents}
-        obs, _, _, _, infos = env.step(actions)
-        frames.append(env.render())
-    env.close()
-    # Pillow's GIF writer takes the frame delay in milliseconds (a GIF stores centiseconds):
-    # one control step per frame, shown at the env's render_fps (10 fps = 100 ms per frame).
-    frame_ms = 1000.0 / env.metadata["render_fps"]
-    iio.imwrite(args.out, np.stack(frames), plugin="pillow", extension=".gif", duration=frame_ms, loop=0)
-    metrics = info_group(next(iter(infos.values())), "metrics") if infos else {}
-    print(f"wrote {args.out}: {len(frames)} frames; final metrics: " + ", ".join(f"{k}={v:.3f}" for k, v in metrics.items()))
+    jobs = _jobs(args, parser)
+    image = DOCS_IMAGE if args.all else IMAGE
+    pixels = args.pixels or image["pixels"]
+    frame_skip = args.frame_skip or image["frame_skip"]
+    for task, out in jobs:
+        preset = SHOWCASE[task]
+        seed = preset["seed"] if args.seed is None else args.seed
+        env_kwargs: dict[str, Any] = {
+            "platform": args.platform or preset["platform"],
+            "sensing": args.sensing,
+            "n_robots": args.n_robots or preset["n_robots"],
+            "max_cycles": args.steps or preset["steps"],
+            **dict(args.env),
+        }
+        overlay = None if args.no_overlay else preset["overlay"] if args.overlay is None else args.overlay
+        try:
+            probe = make_env(task, **env_kwargs)  # checks every setting before anything runs
+        except (TypeError, ValueError) as err:  # unknown keys, bad values (SettingsError is a ValueError)
+            parser.error(f"bad env setting: {str(err).splitlines()[0]}")
+        try:
+            if overlay is not None and overlay >= probe.n_agents:
+                raise DemoError(f"--overlay {overlay}: this env has agents 0 .. {probe.n_agents - 1}")
+            policy = make_policy(args.policy or "scripted", probe, args.model)
+        except DemoError as err:
+            parser.error(str(err))
+        finally:
+            probe.close()
+        result = run_demo(task, env_kwargs, policy, seed, frame_skip, pixels, overlay)
+        size = write_gif(result.frames, out, 1000.0 * DT)  # one frame per 0.1 s: frame_skip x real time
+        _report(result, out, size, frame_skip, env_kwargs, seed)
     return 0
+
+
+def _report(result: DemoResult, out: Path, size: int, frame_skip: int, env_kwargs: dict[str, Any], seed: int) -> None:
+    name, sign = PRIMARY_METRIC[result.task]
+    how = TASK_METRICS[result.task][name]
+    every = f", every {frame_skip} steps" if frame_skip > 1 else ""
+    print(f"wrote {out}: {len(result.frames)} frames ({result.steps} steps{every}), {size / 1000:.0f} kB")
+    text = f"{name} ({'mean over the episode' if how == 'mean' else 'at the end'}, {'higher' if sign > 0 else 'lower'} is better), seed {seed}: "
+    text += f"{result.policy} {result.metrics[name]:.3f}"
+    if result.policy != "random":
+        text += f", random {random_baseline(result.task, env_kwargs, seed)[name]:.3f}"
+    print(text)
+    print("  " + ", ".join(f"{k}={v:.3f}" for k, v in result.metrics.items()))
 
 
 if __name__ == "__main__":
