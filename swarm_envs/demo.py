@@ -28,13 +28,13 @@ from typing import Any
 
 import numpy as np
 
-from swarm_envs.agents.evaluation import PRIMARY_METRIC, TASK_METRICS, make_env, run_episode
-from swarm_envs.agents.evaluation import TASKS as TASK_MODULES
+from swarm_envs.agents.evaluation import make_env, run_episode
+from swarm_envs.agents.tasks import SHORT_NAMES, headline, metric_reductions
 from swarm_envs.env import DT, info_group
-from swarm_envs.registry import ENV_IDS
+from swarm_envs.registry import list_envs, task_class
 
 #: short task name -> registered env id
-TASKS = {task: env_id for task, module in TASK_MODULES.items() for env_id, env_module in ENV_IDS.items() if env_module == module}
+TASKS = dict(SHORT_NAMES)
 
 #: per task, the settings a demo uses unless the command line gives them: scenes in which the scripted
 #: baseline visibly does its task (docs/environments/<task>.md shows the GIFs they make)
@@ -43,6 +43,9 @@ SHOWCASE: dict[str, dict[str, Any]] = {
     "flocking": {"platform": "droplet", "n_robots": 16, "steps": 300, "seed": 0, "overlay": None},
     "centroid_seeking": {"platform": "rone", "n_robots": 1, "steps": 300, "seed": 0, "overlay": 0},
 }
+
+#: the settings of a task without a showcase (None: the task's own default)
+DEFAULT_SHOWCASE: dict[str, Any] = {"platform": None, "n_robots": None, "steps": 300, "seed": 0, "overlay": None}
 
 #: image settings of ``--all`` unless given: small GIFs for the documentation
 DOCS_IMAGE = {"pixels": 320, "frame_skip": 4}
@@ -66,29 +69,46 @@ class DemoResult:
 
 
 def resolve_task(name: str) -> tuple[str, str]:
-    """(short task name, env id) of a short name or a registered env id; :class:`DemoError` otherwise."""
+    """(task label, env id) of a short name or a registered env id (the label is the short name of the
+    suite's first tasks, else the id); :class:`DemoError` otherwise."""
     if name in TASKS:
         return name, TASKS[name]
-    for task, env_id in TASKS.items():
-        if name == env_id:
-            return task, env_id
-    raise DemoError(f"unknown task {name!r}; use one of {sorted(TASKS)} or a registered env id {sorted(ENV_IDS)}")
+    if name in list_envs():
+        return next((task for task, env_id in TASKS.items() if env_id == name), name), name
+    raise DemoError(f"unknown task {name!r}; use one of {sorted(TASKS)} or a registered env id {list_envs()}")
 
 
-def _task_of(env: Any) -> str:
-    """The short task name of a swarm env (by its task module)."""
-    module = type(env).__module__
-    for task, task_module in TASK_MODULES.items():
-        if module == task_module:
-            return task
-    raise DemoError(f"no scripted baseline for {type(env).__name__} (module {module})")
+def demo_tasks() -> list[str]:
+    """The tasks ``--all`` draws: the suite's own registered tasks that have a scripted baseline."""
+    labels = [resolve_task(env_id)[0] for env_id in list_envs() if env_id.startswith("swarm_envs/")]
+    return [label for label in labels if task_class(resolve_task(label)[1]).SCRIPTED_POLICY is not None]
+
+
+def gif_name(task: str) -> str:
+    """File name of a task's GIF: ``flocking.gif``, ``sorted_following.gif`` for ``swarm_envs/SortedFollowing-v0``."""
+    if task in TASKS:
+        return f"{task}.gif"
+    name = task.rsplit("/", 1)[-1].rsplit("-v", 1)[0]
+    return "".join(f"_{c.lower()}" if c.isupper() and i else c.lower() for i, c in enumerate(name)) + ".gif"
+
+
+def _headline(task: str, metrics: Any) -> tuple[str, int]:
+    """The task's headline metric and sign, or its first metric (higher better) when it declares none."""
+    return headline(task) or (next(iter(metrics)), +1)
+
+
+def _reductions(task: str, metrics: Any) -> dict[str, str]:
+    return metric_reductions(task) or dict.fromkeys(metrics, "mean")
 
 
 def _scripted_policy(env: Any):
-    """The scripted baseline of ``env``'s task (:data:`swarm_envs.agents.scripted.TASK_SCRIPTED`)."""
-    from swarm_envs.agents.scripted import TASK_SCRIPTED, make_scripted
+    """The scripted baseline of ``env``'s task (its ``Task.SCRIPTED_POLICY``)."""
+    from swarm_envs.agents.scripted import make_scripted
 
-    return make_scripted(TASK_SCRIPTED[_task_of(env)], env)
+    name = type(env.task).SCRIPTED_POLICY
+    if name is None:
+        raise DemoError(f"task {type(env.task).__name__} has no scripted baseline; use --policy random or --model")
+    return make_scripted(name, env)
 
 
 def load_model_policy(path: str | Path, env: Any):
@@ -164,20 +184,21 @@ def run_demo(
         env.close()
         raise ValueError(f"overlay_agent must be in [0, {env.n_agents}), got {overlay_agent}")
     renderer = Renderer(env.arena, env.platform, pixels=pixels, fps=env.metadata["render_fps"])
-    headline, _ = PRIMARY_METRIC[task]
     title = (
-        f"{TASKS[task].split('/')[-1]} | {env.platform.name} x {env.n_agents}, {env.config['sensing']} sensing"
+        f"{resolve_task(task)[1].split('/')[-1]} | {env.platform.name} x {env.n_agents}, {env.config['sensing']} sensing"
         f"\n{getattr(policy, 'name', 'policy')}"
     )
-
-    def draw(metrics: dict[str, float]) -> np.ndarray:
-        caption = f"{title} | t {env.num_cycles * DT:.1f} / {env.max_cycles * DT:.0f} s | {headline} {metrics[headline]:.2f}"
-        return render_env(env, renderer, caption=caption, overlay_agent=overlay_agent)
-
-    reductions = TASK_METRICS[task]
     policy.reset(env.n_agents, rng=np.random.default_rng([seed, 7919]))
     _, infos = env.reset(seed=seed)
-    frames = [draw(info_group(infos[env.possible_agents[0]], "metrics"))]
+    first = info_group(infos[env.possible_agents[0]], "metrics")
+    best, _ = _headline(task, first)
+    reductions = _reductions(task, first)
+
+    def draw(metrics: dict[str, float]) -> np.ndarray:
+        caption = f"{title} | t {env.num_cycles * DT:.1f} / {env.max_cycles * DT:.0f} s | {best} {metrics[best]:.2f}"
+        return render_env(env, renderer, caption=caption, overlay_agent=overlay_agent)
+
+    frames = [draw(first)]
     sums = dict.fromkeys(reductions, 0.0)
     last: dict[str, float] = {}
     steps = 0
@@ -305,7 +326,7 @@ def _jobs(args: argparse.Namespace, parser: argparse.ArgumentParser) -> list[tup
         problem = _check_writable_dir(out_dir, "--out-dir")
         if problem:
             parser.error(problem)
-        return [(task, out_dir / f"{task}.gif") for task in TASKS]
+        return [(task, out_dir / gif_name(task)) for task in demo_tasks()]
     if args.out_dir is not None:
         parser.error("--out-dir goes with --all; give a single demo's path with --out")
     if args.model is not None and args.policy is not None:
@@ -332,7 +353,7 @@ def main(argv: list[str] | None = None) -> int:
     pixels = args.pixels or image["pixels"]
     frame_skip = args.frame_skip or image["frame_skip"]
     for task, out in jobs:
-        preset = SHOWCASE[task]
+        preset = {**DEFAULT_SHOWCASE, **SHOWCASE.get(task, {})}
         seed = preset["seed"] if args.seed is None else args.seed
         env_kwargs: dict[str, Any] = {
             "platform": args.platform or preset["platform"],
@@ -341,6 +362,7 @@ def main(argv: list[str] | None = None) -> int:
             "max_cycles": args.steps or preset["steps"],
             **dict(args.env),
         }
+        env_kwargs = {k: v for k, v in env_kwargs.items() if v is not None}  # None: the task's own default
         overlay = None if args.no_overlay else preset["overlay"] if args.overlay is None else args.overlay
         try:
             probe = make_env(task, **env_kwargs)  # checks every setting before anything runs
@@ -361,8 +383,8 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def _report(result: DemoResult, out: Path, size: int, frame_skip: int, env_kwargs: dict[str, Any], seed: int) -> None:
-    name, sign = PRIMARY_METRIC[result.task]
-    how = TASK_METRICS[result.task][name]
+    name, sign = _headline(result.task, result.metrics)
+    how = _reductions(result.task, result.metrics)[name]
     every = f", every {frame_skip} steps" if frame_skip > 1 else ""
     print(f"wrote {out}: {len(result.frames)} frames ({result.steps} steps{every}), {size / 1000:.0f} kB")
     text = f"{name} ({'mean over the episode' if how == 'mean' else 'at the end'}, {'higher' if sign > 0 else 'lower'} is better), seed {seed}: "

@@ -376,14 +376,13 @@ class SwarmEnv(ParallelEnv):
 
             gymnasium.logger.warn("render() called without render_mode; pass render_mode='rgb_array' or 'human'")
             return None
-        from swarm_envs.render import Renderer
+        from swarm_envs.render import Renderer, render_env
 
         if self._renderer is None:
             self._renderer = Renderer(self.arena, self.platform, human=self.render_mode == "human", fps=self.metadata["render_fps"])
-        links = (self._frame.neighbours.rx, self._frame.neighbours.tx) if self._frame is not None else None
-        return self._renderer.draw(
-            self.world.positions, self.world.headings, links, self._markers(), static=np.arange(self.n_world) < self.n_static
-        )
+        if self._frame is None:  # before the first reset: the robots where they are, no links
+            return self._renderer.draw(self.world.positions, self.world.headings, None, self._markers(), static=np.arange(self.n_world) < self.n_static)
+        return render_env(self, self._renderer, legend=False)  # the IR links that carried a reading this step
 
     def close(self) -> None:
         if self._renderer is not None:

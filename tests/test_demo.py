@@ -8,8 +8,9 @@ from PIL import Image
 
 from swarm_envs import render
 from swarm_envs.agents.base import RandomPolicy
-from swarm_envs.agents.evaluation import PRIMARY_METRIC, make_env, run_episode
-from swarm_envs.agents.scripted import SCRIPTED, TASK_SCRIPTED, make_scripted
+from swarm_envs.agents.evaluation import make_env, run_episode
+from swarm_envs.agents.tasks import headline, scripted_policy
+from swarm_envs.agents.scripted import make_scripted, scripted_class
 from swarm_envs.demo import SHOWCASE, TASKS, _scripted_policy, main
 from swarm_envs.sensing.base import MessageReadings, NeighbourReadings, ScaleFreeReadings, SensorFrame
 
@@ -63,20 +64,21 @@ def test_frame_skip_gives_the_expected_frame_count(tmp_path, capsys):
 @pytest.mark.parametrize("task", sorted(TASKS))
 def test_default_policy_is_the_tasks_scripted_baseline(task, tmp_path, capsys):
     env = make_env(task, sensing="ideal", n_robots=3)
-    assert isinstance(_scripted_policy(env), SCRIPTED[TASK_SCRIPTED[task]])
+    assert isinstance(_scripted_policy(env), scripted_class(scripted_policy(task)))
+    name = scripted_class(scripted_policy(task)).name
     env.close()
     out = tmp_path / f"{task}.gif"
     assert main(["--task", task, *SMALL, "--steps", "6", "--seed", "3", "--out", str(out)]) == 0
     text = capsys.readouterr().out
-    assert TASK_SCRIPTED[task] in text and "random" in text
+    assert name in text and "random" in text
     # the printed numbers are run_episode's for the same seed (the evaluator's reduction of the metrics)
     kwargs = {"platform": SHOWCASE[task]["platform"], "sensing": "ideal", "n_robots": 3, "max_cycles": 6}
     env = make_env(task, **kwargs)
-    scripted = run_episode(env, make_scripted(TASK_SCRIPTED[task], env), 3, task)
+    scripted = run_episode(env, make_scripted(scripted_policy(task), env), 3, task)
     random = run_episode(env, RandomPolicy(env.platform, env.layout), 3, task)
     env.close()
-    name = PRIMARY_METRIC[task][0]
-    assert f"{TASK_SCRIPTED[task]} {scripted[name]:.3f}, random {random[name]:.3f}" in text
+    metric = headline(task)[0]
+    assert f"{name} {scripted[metric]:.3f}, random {random[metric]:.3f}" in text
 
 
 def test_random_policy_and_an_env_id(tmp_path, capsys):
