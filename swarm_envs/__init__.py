@@ -27,6 +27,7 @@ __all__ = [
     "centroid_seeking_v0",
     "make",
     "make_vec",
+    "make_torchrl",
     "list_envs",
     "ENV_IDS",
     "PLATFORMS",
@@ -55,3 +56,10 @@ def make_vec(env_id: str, num_envs: int, **kwargs: Any):
     from swarm_envs.vector import make_vec as _make_vec
 
     return _make_vec(env_id, num_envs, **kwargs)
+
+
+def make_torchrl(env_id: str, num_envs: int, **kwargs: Any):
+    """``num_envs`` copies of a registered task as one batched TorchRL env (:mod:`swarm_envs.torchrl_env`; needs torchrl)."""
+    from swarm_envs.torchrl_env import make_torchrl as _make_torchrl
+
+    return _make_torchrl(env_id, num_envs, **kwargs)
