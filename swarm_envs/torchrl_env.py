@@ -2,7 +2,8 @@
 
 :func:`make_torchrl` (also ``swarm_envs.make_torchrl``) returns a :class:`SwarmTorchRLEnv` with
 ``batch_size=[B]`` that steps one :class:`swarm_envs.vector.SwarmVectorEnv`: one array program for all
-copies, arrays in and out, no Python loop over copies or agents. The tensordict layout is the one of
+copies, arrays in and out, no Python loop over copies or agents here (the global state's task markers are
+computed copy by copy, :meth:`SwarmVectorEnv.states`). The tensordict layout is the one of
 TorchRL's own multi-agent envs (VMAS, PettingZoo): every robot is an agent of one group (``"agents"``
 by default, agents ``robot_0 .. robot_{N-1}``), per-agent entries have shape ``[B, N, ...]``:
 

@@ -122,7 +122,8 @@ class SwarmVectorEnv(VectorEnv):
         """Global ground-truth state of every copy, ``(B, state_dim)`` float32: row b is what
         :meth:`swarm_envs.env.SwarmEnv.state` returns for a single env in copy b's place (robots'
         ``STATE_ROBOT_FIELDS`` in world order, the task's markers (m) sorted by name, episode progress).
-        For centralised critics only: never part of an observation. Call after :meth:`reset`."""
+        For centralised critics only: never part of an observation. Call after :meth:`reset`. The markers
+        come from the task copy by copy (``Task.markers`` takes one copy's positions)."""
         if not self._started:
             raise RuntimeError("states() needs started episodes; call reset() first")
         core, B, n = self.core, self.num_envs, self.task.n_world
