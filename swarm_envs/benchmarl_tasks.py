@@ -122,7 +122,11 @@ class SwarmTaskClass(TaskClass):
         if not isinstance(spec, Composite):
             return []
         # a part of shape (N, a, b): its last two dimensions become one
-        return [FlattenObservation(first_dim=1 - len(part.shape), last_dim=-1, in_keys=[(GROUP, "observation", k)]) for k, part in spec.items() if len(part.shape) > 2]
+        return [
+            FlattenObservation(first_dim=1 - len(part.shape), last_dim=-1, in_keys=[(GROUP, "observation", key)])
+            for key, part in spec.items()
+            if len(part.shape) > 2
+        ]
 
     @staticmethod
     def env_name() -> str:
