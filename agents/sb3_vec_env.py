@@ -55,12 +55,21 @@ class SwarmVecEnv(VecEnv):
         env: an env id (``"swarm_envs/Aggregation-v0"``), a task's env class, or its ``parallel_env``.
         n_copies: env copies stepped together by the batched core.
         env_kwargs: env settings (``flatten`` is forced to True).
+        torch_threads: torch's intra-op thread count, set here for the policy that steps this env
+            (:func:`swarm_envs.torch_threads.set_torch_threads`: None = 1 on at most 2 cores, else
+            ``min(4, cores // 2)``, or ``OMP_NUM_THREADS`` if set; torch's default threads made PPO up
+            to 25x slower on a loaded 2-core machine); ``0`` leaves torch's setting alone.
     """
 
     def __init__(
-        self, env: str | type | Callable[..., Any], n_copies: int = 1, env_kwargs: dict[str, Any] | None = None, n_workers: int = 1
+        self, env: str | type | Callable[..., Any], n_copies: int = 1, env_kwargs: dict[str, Any] | None = None, n_workers: int = 1,
+        torch_threads: int | None = None,
     ) -> None:
+        from swarm_envs.torch_threads import set_torch_threads
         from swarm_envs.vector import SwarmVectorEnv
+
+        if torch_threads != 0:
+            set_torch_threads(torch_threads)
 
         if isinstance(n_copies, bool) or not isinstance(n_copies, (int, np.integer)) or n_copies < 1:
             raise ValueError(f"n_copies must be an integer >= 1, got {n_copies!r}")

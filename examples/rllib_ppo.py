@@ -32,6 +32,10 @@ Every node needs the same Python, ``swarm_envs[rllib]`` and Ray version installe
 ``runtime_env`` to ``ray.init``). Env runners are spread over the cluster's CPUs by Ray; the batch
 per iteration (``--batch``, env steps: RLlib counts env steps, each one steps every robot)
 should grow with K so that each runner samples at least one episode per iteration.
+
+**Threads.** The driver (which runs the learner) uses 1 torch intra-op thread on machines with at most
+2 cores and ``min(4, cores // 2)`` above (``--torch-threads`` or ``OMP_NUM_THREADS`` override it); Ray
+gives each env runner ``OMP_NUM_THREADS`` = its CPUs (1).
 """
 
 from __future__ import annotations
@@ -49,6 +53,7 @@ from ray.rllib.env.wrappers.pettingzoo_env import ParallelPettingZooEnv
 from ray.tune.registry import register_env
 
 import swarm_envs
+from swarm_envs.torch_threads import set_torch_threads
 
 ENV_NAME = "swarm_envs_parallel"
 POLICY = "shared"
@@ -112,7 +117,9 @@ def main(argv: list[str] | None = None) -> list[dict[str, float]]:
     parser.add_argument("--lr", type=float, default=3e-4)
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--env-flatten", action="store_true", help="use the env's flatten=True instead of the connector")
+    parser.add_argument("--torch-threads", type=int, default=None, help="the driver's (learner's) torch threads; default: 1 on <= 2 cores, else min(4, cores // 2)")
     args = parser.parse_args(argv)
+    set_torch_threads(args.torch_threads)  # Ray's env runners get OMP_NUM_THREADS = their CPUs (1) from Ray
 
     register_env(ENV_NAME, env_creator)
     started_here = not ray.is_initialized()

@@ -1,11 +1,14 @@
-"""MAPPO with TorchRL on a swarm task: shared decentralised policy, centralised critic on ``env.state()``.
+"""MAPPO with TorchRL on a swarm task: shared decentralised policy, centralised critic on the global state.
 
     pip install -e ".[torchrl]"
-    python examples/torchrl_mappo.py                     # aggregation, ~1-2 min on 2 CPU cores
-    python examples/torchrl_mappo.py --frames 200000 --n-robots 10
+    python examples/torchrl_mappo.py                     # aggregation, 10 copies, ~1-2 min on 2 CPU cores
+    python examples/torchrl_mappo.py --frames 200000 --n-robots 10 --num-envs 64
+    python examples/torchrl_mappo.py --wrapper pettingzoo   # TorchRL's stock PettingZooWrapper, one env
 
-The env is TorchRL's stock ``PettingZooWrapper`` around the native parallel env, with the default
-``Dict`` observation and ``return_state=True``; nothing swarm-specific is needed to wrap it:
+The env is ``swarm_envs.make_torchrl``: ``--num-envs`` copies of the task stepped by one batched core, as
+one TorchRL env with ``batch_size=[num_envs]`` (:mod:`swarm_envs.torchrl_env`), with the default ``Dict``
+observation and the global ``state``. ``--wrapper pettingzoo`` uses TorchRL's stock ``PettingZooWrapper``
+around the single parallel env (``return_state=True``) instead: the same model and loss work on both.
 
 - **Actor** (decentralised, parameters shared by all robots): each robot's Dict observation (range &
   bearing, messages, scale-free coordinates, rigidity, proprioception: sensing only) is flattened and
@@ -15,8 +18,10 @@ The env is TorchRL's stock ``PettingZooWrapper`` around the native parallel env,
   observation ("agent-specific global state"), so per-robot rewards (``reward_mode="local"``) work too.
   Ground truth reaches the critic only: it is used for training, never for acting.
 
-Each iteration prints the mean reward per step and the task metrics TorchRL collected from ``infos``
-(``("robot", "info", "metrics", name)``), e.g. aggregation's ``mean_distance_to_centroid`` (m).
+Each iteration prints the mean reward per step and the task metrics from the infos (batched env:
+``("info", name)`` per copy; stock wrapper: ``("robot", "info", "metrics", name)``), e.g. aggregation's
+``mean_distance_to_centroid`` (m). Torch uses 1 intra-op thread on machines with at most 2 cores and
+``min(4, cores // 2)`` above (``--torch-threads`` or ``OMP_NUM_THREADS`` override it).
 """
 
 from __future__ import annotations
@@ -33,13 +38,15 @@ from torchrl.collectors import Collector
 from torchrl.data.replay_buffers import ReplayBuffer
 from torchrl.data.replay_buffers.samplers import SamplerWithoutReplacement
 from torchrl.data.replay_buffers.storages import LazyTensorStorage
+from torchrl.envs import EnvBase
 from torchrl.envs.libs.pettingzoo import PettingZooWrapper
 from torchrl.modules import MLP, ProbabilisticActor, TanhNormal
 from torchrl.objectives import ClipPPOLoss, ValueEstimators
 
 import swarm_envs
+from swarm_envs.torch_threads import set_torch_threads
 
-GROUP = "robot"  # TorchRL groups agents by name prefix: robot_0, robot_1, ... -> "robot"
+GROUP = "robot"  # the stock wrapper groups agents by name prefix (robot_0, robot_1, ... -> "robot"); make_torchrl uses it too
 
 
 class DictEncoder(nn.Module):
@@ -60,15 +67,17 @@ class StateAndOwnObservation(nn.Module):
         return torch.cat([state.unsqueeze(-2).expand(*own.shape[:-1], state.shape[-1]), own], dim=-1)
 
 
-def make_env(task: str, n_robots: int, max_cycles: int, sensing: str, seed: int) -> PettingZooWrapper:
-    """The stock TorchRL wrapper around a registered swarm env, with the global state."""
-    env = swarm_envs.make(task, n_robots=n_robots, max_cycles=max_cycles, sensing=sensing)
-    return PettingZooWrapper(env, return_state=True, seed=seed)
+def make_env(task: str, n_robots: int, max_cycles: int, sensing: str, seed: int, num_envs: int = 10, wrapper: str = "batched") -> EnvBase:
+    """The batched TorchRL env (``wrapper="batched"``, ``num_envs`` copies) or the stock wrapper around one env."""
+    settings = dict(n_robots=n_robots, max_cycles=max_cycles, sensing=sensing)
+    if wrapper == "batched":
+        return swarm_envs.make_torchrl(task, num_envs, group=GROUP, seed=seed, torch_threads=0, **settings)
+    return PettingZooWrapper(swarm_envs.make(task, **settings), return_state=True, seed=seed)
 
 
-def build(env: PettingZooWrapper, hidden: int = 64) -> tuple[ProbabilisticActor, TensorDictSequential]:
+def build(env: EnvBase, hidden: int = 64) -> tuple[ProbabilisticActor, TensorDictSequential]:
     """(actor, critic) modules for the env's single agent group."""
-    obs_spec = env.observation_spec[GROUP, "observation"]
+    obs_spec = env.observation_spec_unbatched[GROUP, "observation"]
     part_keys = sorted(obs_spec.keys())
     event_dims = [len(obs_spec[k].shape) - 1 for k in part_keys]  # minus the agent dim
     obs_size = sum(int(obs_spec[k].shape[1:].numel()) for k in part_keys)
@@ -84,7 +93,7 @@ def build(env: PettingZooWrapper, hidden: int = 64) -> tuple[ProbabilisticActor,
         in_keys=[(GROUP, "features")],
         out_keys=[(GROUP, "loc"), (GROUP, "scale")],
     )
-    action_spec = env.full_action_spec[GROUP, "action"]
+    action_spec = env.full_action_spec_unbatched[GROUP, "action"]
     actor = ProbabilisticActor(
         module=TensorDictSequential(encoder(), actor_net),
         spec=action_spec,
@@ -113,20 +122,22 @@ def main(argv: list[str] | None = None) -> dict[str, float]:
     parser.add_argument("--n-robots", type=int, default=6)
     parser.add_argument("--max-cycles", type=int, default=100, help="episode length in control steps (0.1 s each)")
     parser.add_argument("--sensing", default="full", choices=["full", "ideal"])
-    parser.add_argument("--frames", type=int, default=3000, help="total env steps (each steps every robot)")
+    parser.add_argument("--wrapper", default="batched", choices=["batched", "pettingzoo"])
+    parser.add_argument("--num-envs", type=int, default=10, help="env copies of the batched env")
+    parser.add_argument("--frames", type=int, default=3000, help="total env steps (each steps every robot of one copy)")
     parser.add_argument("--frames-per-batch", type=int, default=500)
     parser.add_argument("--epochs", type=int, default=4)
     parser.add_argument("--minibatch", type=int, default=100)
     parser.add_argument("--lr", type=float, default=3e-4)
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--torch-threads", type=int, default=None, help="default: 1 on <= 2 cores, else min(4, cores // 2)")
     args = parser.parse_args(argv)
+    set_torch_threads(args.torch_threads)
     torch.manual_seed(args.seed)
 
-    env = make_env(args.task, args.n_robots, args.max_cycles, args.sensing, args.seed)
+    env = make_env(args.task, args.n_robots, args.max_cycles, args.sensing, args.seed, args.num_envs, args.wrapper)
     actor, critic = build(env)
-    collector = Collector(
-        env, actor, frames_per_batch=args.frames_per_batch, total_frames=args.frames, auto_register_policy_transforms=False
-    )
+    collector = Collector(env, actor, frames_per_batch=args.frames_per_batch, total_frames=args.frames)
     buffer = ReplayBuffer(
         storage=LazyTensorStorage(args.frames_per_batch), sampler=SamplerWithoutReplacement(), batch_size=args.minibatch
     )
@@ -160,7 +171,7 @@ def main(argv: list[str] | None = None) -> dict[str, float]:
                 optim.zero_grad()
         collector.update_policy_weights_()
         steps += batch.numel()
-        metrics = batch["next", GROUP, "info", "metrics"]
+        metrics = batch["next", GROUP, "info", "metrics"] if args.wrapper == "pettingzoo" else batch["next", "info"].exclude("episode_step")
         log = {"reward_per_step": batch["next", GROUP, "reward"].mean().item()}
         log.update({name: metrics[name].mean().item() for name in sorted(metrics.keys())})
         print(f"iter {i:3d}  env steps {steps:6d}  " + "  ".join(f"{k} {v:+.4g}" for k, v in log.items()), flush=True)

@@ -26,6 +26,7 @@ __version__ = "0.1.0"
 __all__ = [
     "make",
     "make_vec",
+    "make_torchrl",
     "register",
     "spec",
     "list_envs",
@@ -39,6 +40,14 @@ __all__ = [
 register("swarm_envs/Aggregation-v0", "swarm_envs.aggregation_v0:AggregationEnv")
 register("swarm_envs/Flocking-v0", "swarm_envs.flocking_v0:FlockingEnv")
 register("swarm_envs/CentroidSeeking-v0", "swarm_envs.centroid_seeking_v0:CentroidSeekingEnv")
+
+
+def make_torchrl(env: str | type, num_envs: int, **kwargs: Any):
+    """``num_envs`` copies of a registered id (or a ``Task`` class) as one batched TorchRL ``EnvBase``
+    (:mod:`swarm_envs.torchrl_env`; needs the ``torchrl`` extra)."""
+    from swarm_envs.torchrl_env import make_torchrl as _make_torchrl
+
+    return _make_torchrl(env, num_envs, **kwargs)
 
 
 def __getattr__(name: str) -> Any:

@@ -127,6 +127,25 @@ class SwarmVectorEnv(VectorEnv):
         terminations = np.zeros((self.num_envs, self.n_agents), dtype=bool)
         return self._observations(), rewards, terminations, truncations, self._infos()
 
+    def states(self) -> np.ndarray:
+        """Global ground-truth state of every copy, ``(B, state_dim)`` float32: row b is what
+        :meth:`swarm_envs.env.SwarmEnv.state` returns for a single env in copy b's place (robots'
+        ``STATE_ROBOT_FIELDS`` in world order, the task's markers (m) sorted by name, episode progress).
+        For centralised critics only: never part of an observation. Call after :meth:`reset`. The markers
+        come from the task copy by copy (``Task.markers`` takes one copy's positions)."""
+        if not self._started:
+            raise RuntimeError("states() needs started episodes; call reset() first")
+        core, B, n = self.core, self.num_envs, self.task.n_world
+        positions = core.positions.reshape(B, n, 2)
+        headings = core.headings.reshape(B, n)
+        spin = np.stack([w.angular_velocities for w in core.worlds])
+        fields = [positions, np.cos(headings)[..., None], np.sin(headings)[..., None], core.velocities.reshape(B, n, 2), spin[..., None]]
+        robots = np.concatenate(fields, axis=2).reshape(B, -1)
+        markers = [self.task.markers(positions[b]) for b in range(B)]
+        points = np.array([[v for name in sorted(m) for v in np.asarray(m[name], float).reshape(2)] for m in markers]).reshape(B, -1)
+        progress = np.minimum(core.num_cycles / self.max_cycles, 1.0)
+        return np.concatenate([robots, points, progress[:, None]], axis=1).astype(np.float32)
+
     def close_extras(self, **kwargs: Any) -> None:
         pass
 

@@ -54,12 +54,14 @@ def test_return_state_gives_the_global_state(env_id):
     assert not torch.equal(td["state"][0], td["next", "state"][-1]), "random actions must move the robots"
 
 
-def test_mappo_example_trains_a_few_iterations():
+@pytest.mark.parametrize("wrapper", ["batched", "pettingzoo"])
+def test_mappo_example_trains_a_few_iterations(wrapper):
     spec = importlib.util.spec_from_file_location("torchrl_mappo", EXAMPLE)
     example = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(example)
     log = example.main(
         ["--frames", "80", "--frames-per-batch", "40", "--minibatch", "20", "--epochs", "1", "--n-robots", "3", "--max-cycles", "20", "--sensing", "ideal"]
+        + ["--wrapper", wrapper, "--num-envs", "4", "--torch-threads", "1"]
     )
     assert {"reward_per_step", "mean_distance_to_centroid", "largest_cluster_fraction"} <= set(log)
     assert all(math.isfinite(v) for v in log.values())

@@ -1,0 +1,88 @@
+"""BenchMARL: the swarm task family builds the batched env, its specs fit BenchMARL, MAPPO and IPPO train and log."""
+
+import importlib.util
+import math
+from pathlib import Path
+
+import pytest
+
+pytest.importorskip("benchmarl", reason="benchmarl is not installed: pip install -e '.[benchmarl]'")
+import torch  # noqa: E402
+from torchrl.envs import Compose, TransformedEnv  # noqa: E402
+from torchrl.envs.utils import check_env_specs  # noqa: E402
+
+from swarm_envs.benchmarl_tasks import GROUP, TASK_DEFAULTS, SwarmTask  # noqa: E402
+from swarm_envs.torchrl_env import SwarmTorchRLEnv  # noqa: E402
+
+pytestmark = pytest.mark.filterwarnings("ignore::DeprecationWarning")
+EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "benchmarl_mappo.py"
+
+
+def load_example():
+    spec = importlib.util.spec_from_file_location("benchmarl_mappo", EXAMPLE)
+    example = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(example)
+    return example
+
+
+@pytest.mark.parametrize("task", list(SwarmTask))
+@pytest.mark.parametrize("flatten", [False, True])
+def test_task_family_specs(task, flatten):
+    swarm_task = task.get_task(config={"max_steps": 7, "n_robots": 3, "sensing": "ideal", "flatten": flatten})
+    base = swarm_task.get_env_fun(num_envs=2, continuous_actions=True, seed=0, device="cpu")()
+    assert isinstance(base, SwarmTorchRLEnv) and base.batch_size == (2,) and base.max_cycles == 7
+    env = TransformedEnv(base, Compose(*swarm_task.get_env_transforms(base)))
+    check_env_specs(env)
+    assert swarm_task.max_steps(env) == 7
+    assert swarm_task.group_map(env) == {GROUP: ["robot_0", "robot_1", "robot_2"]}
+    obs = swarm_task.observation_spec(env)
+    assert set(obs.keys()) == {GROUP} and set(obs[GROUP].keys()) == {"observation"}
+    # BenchMARL's MLP takes every observation leaf with one feature dimension after the agent dimension
+    leaves = list(obs.values(True, True))
+    assert leaves and all(len(leaf.shape) == 2 and leaf.shape[0] == 3 for leaf in leaves)
+    size = sum(leaf.shape[-1] for leaf in leaves)
+    assert size == base.vec.agent_observation_space.shape[0] if flatten else size == sum(
+        int(torch.tensor(s.shape).prod()) for s in base.vec.agent_observation_space.spaces.values()
+    )
+    assert list(swarm_task.state_spec(env).keys()) == ["state"]
+    info = swarm_task.info_spec(env)
+    assert "ground_truth_position" in info[GROUP, "info"].keys() and "episode_step" in info["info"].keys()
+    assert swarm_task.action_spec(env)[GROUP, "action"].shape == (3, 2)
+    assert swarm_task.supports_continuous_actions() and not swarm_task.supports_discrete_actions()
+    with pytest.raises(ValueError, match="continuous"):
+        swarm_task.get_env_fun(2, False, 0, "cpu")
+
+
+def test_defaults_and_yaml(tmp_path):
+    task = SwarmTask.AGGREGATION.get_task()
+    assert task.config == TASK_DEFAULTS["AGGREGATION"]
+    path = tmp_path / "aggregation.yaml"
+    path.write_text("max_steps: 20\nn_robots: 4\n")
+    task = SwarmTask.AGGREGATION.get_from_yaml(str(path))
+    assert task.config["max_steps"] == 20 and task.config["n_robots"] == 4 and task.config["sensing"] == "full"
+    with pytest.raises(ValueError, match="max_steps"):
+        SwarmTask.FLOCKING.get_task(config={"max_cycles": 5}).get_env_fun(1, True, 0, "cpu")
+
+
+@pytest.mark.parametrize("algorithm", ["mappo", "ippo"])
+def test_example_trains_and_logs(algorithm, tmp_path):
+    example = load_example()
+    result = example.run(
+        algorithm, "aggregation", frames=120, frames_per_batch=60, num_envs=3, n_robots=3, max_steps=10,
+        sensing="ideal", torch_threads=1, log_dir=str(tmp_path),
+    )
+    assert {"episode_reward", "mean_reward_per_step", "mean_distance_to_centroid", "largest_cluster_fraction"} <= set(result)
+    assert all(math.isfinite(v) for v in result.values())
+    # BenchMARL's csv logger wrote the task's infos (flat keys under the group and the root)
+    logged = {p.stem for p in tmp_path.rglob("*.csv")}
+    expected = {"collection_agents_info_ground_truth_position", "collection_info_mean_distance_to_centroid", "eval_reward_episode_reward_mean"}
+    assert expected <= logged, sorted(logged)
+
+
+def test_example_main_with_the_flat_observation():
+    example = load_example()
+    results = example.main(
+        ["--task", "flocking", "--algorithms", "mappo", "--frames", "60", "--frames-per-batch", "60", "--num-envs", "2",
+         "--n-robots", "3", "--max-steps", "10", "--sensing", "full", "--flatten", "--torch-threads", "1"]
+    )
+    assert set(results) == {"mappo"} and math.isfinite(results["mappo"]["episode_reward"])
