@@ -158,3 +158,53 @@ def test_version_history_entries_name_changelog_releases():
         for release in re.findall(r"swarm_envs (\d+\.\d+\.\d+)", history):
             assert release in released, f"{env_id}: Version History names {release}, which CHANGELOG.md lacks"
         assert env_id in changelog, f"CHANGELOG.md does not mention {env_id}"
+
+
+# -- links into docs/design.md and the generated performance page ------------------------------------------
+def _slug(heading: str) -> str:
+    """Python-Markdown's toc slug (the anchors MkDocs gives headings)."""
+    return re.sub(r"[\s-]+", "-", re.sub(r"[^\w\s-]", "", heading).strip().lower())
+
+
+def test_design_anchors_cited_in_the_product_exist():
+    design = (ROOT / "docs" / "design.md").read_text(encoding="utf-8")
+    anchors = {_slug(h) for h in re.findall(r"^#{2,4} (.+?)\s*$", design, re.M)}
+    assert {"physics", "infrared-physical-layer", "range-and-bearing", "deviations-and-assumptions"} <= anchors
+    cited = []
+    for path in _files():
+        for number, line in enumerate(path.read_text(encoding="utf-8").splitlines(), 1):
+            cited += [(path, number, a) for a in re.findall(r"design\.md#([\w-]+)", line)]
+    assert cited, "code and docs cite docs/design.md sections"
+    missing = [f"{p.relative_to(ROOT)}:{n}: #{a}" for p, n, a in cited if a not in anchors]
+    assert not missing, "no such section in docs/design.md:\n" + "\n".join(missing)
+
+
+def _run_all():
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("run_all", ROOT / "benchmarks" / "run_all.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_performance_page_is_rendered_from_the_measurements():
+    import datetime
+
+    run_all = _run_all()
+    rows = [{"n": 10, "copies": 256, "sensing": s, "s_per_step": t, "cpu_s_per_step": t, "agent_steps_per_s": 2560 / t,
+             "env_steps_per_s": 1 / t} for s, t in (("full", 0.08), ("ideal", 0.04))]
+    runs = [{"numba_threads": 2, "vmas": {"version": "1.5.2", "n_agents": 10, "num_envs": 1024, "s_per_step": 0.2,
+                                          "agent_steps_per_s": 51200.0}, "rows": rows}]
+    info = {"cpu": "Test CPU", "cores": "2", "os": "Linux", "Python": "3.11", "numpy": "2"}
+    train = {"robot_steps": 202240, "train_s": 30.0, "total_s": 40.0, "robot_steps_per_s": 6741.3}
+    when = datetime.datetime(2030, 1, 2, 3, 4, tzinfo=datetime.timezone.utc)
+    page = run_all.render(info, runs, train, [10], when, 5.0, (0.5, 0.4, 0.3), (0.6, 0.5, 0.4))
+    assert "| 10 | 256 | full | 80.0 | 80.0 | 12.5 | 32,000 | 0.62x |" in page
+    assert "| 10 | 256 | ideal | 40.0 | 40.0 | 25.0 | 64,000 | 1.25x |" in page
+    assert "51,200 agent-steps/s" in page and "6,741 robot-steps/s" in page and "Test CPU, 2 cores" in page
+    assert "Reduced run: only N = 10" in page
+    without = run_all.render(info, [dict(runs[0], vmas=None)], "not measured (`--no-training`)", list(run_all.SIZES),
+                             when, 5.0, (0.5, 0.4, 0.3), (0.6, 0.5, 0.4))
+    assert "VMAS was not installed" in without and "| - |" in without and "Reduced run" not in without
+    assert not any(re.search(p, without, re.IGNORECASE) for p in HISTORY_PATTERNS)
