@@ -4,7 +4,7 @@
 
 Issue target (measured, not asserted): R&B adds less than physics + ideal observation at n = 1000.
 Density: the env's default for the platform (arena side = spacing x sqrt(N)). ``--occlusion``: the IR layer's
-line-of-sight rule(s) to time (``ray``: per-ray, SPEC 2, the default; ``centre``: the first version's rule).
+line-of-sight rule(s) to time (``ray``: per-ray, docs/design.md#infrared-physical-layer, the default; ``centre``: one centre-to-centre segment per pair).
 """
 
 from __future__ import annotations

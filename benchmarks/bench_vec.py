@@ -10,6 +10,7 @@ ratios; the process CPU time per step is printed too, as it depends less on othe
     python benchmarks/bench_vec.py --quick             # N = 10 only
     python benchmarks/bench_vec.py --n 10 --copies 64 --sensing full
     python benchmarks/bench_vec.py --interleave 5        # VMAS vs N = 10 ideal, alternated, 5 rounds
+    python benchmarks/bench_vec.py --n 1000 --json     # one JSON object instead of the table (run_all.py --markdown)
 
 On a shared machine the load drifts between the VMAS row and ours; ``--interleave R`` alternates the two
 measurements (VMAS, then N = 10 ideal flocking at B = 64 and 256) R times and prints each round's ratio
@@ -19,6 +20,7 @@ and the median ratio, so both sides of every ratio see the same load.
 from __future__ import annotations
 
 import argparse
+import json
 import os
 import statistics
 import time
@@ -127,6 +129,7 @@ def main() -> None:
     parser.add_argument("--env", default="swarm_envs/Flocking-v0", help="registered env id (default: flocking, as VMAS's scenario)")
     parser.add_argument("--import", dest="imports", action="append", default=[], metavar="MODULE",
                         help="module or .py file that registers --env (repeatable), e.g. examples/custom_task.py")
+    parser.add_argument("--json", action="store_true", help="print one JSON object (rows, VMAS, load, threads) instead of the table")
     args = parser.parse_args()
     from swarm_envs.agents.tasks import import_modules
 
@@ -144,6 +147,9 @@ def main() -> None:
     if args.copies:
         grid = [(n, b) for n, b in grid if b == args.copies] or [(args.n or 10, args.copies)]
     modes = [args.sensing] if args.sensing else ["full", "ideal"]
+    if args.json:
+        print(json.dumps(_measure_json(grid, modes, args)))
+        return
     print(f"{args.env}; load average at start: {os.getloadavg()[0]:.2f} on {os.cpu_count()} cores")
     print(f"threads: {_numba_threads()} (numba's thread count; a single copy with >= 16384 candidate IR pairs, i.e. the N = 1000 full row, "
           "runs its occluder search and gain kernel in that many chunks on helper threads, and SwarmCom's draws, the rewards and "
@@ -166,6 +172,25 @@ def main() -> None:
             ratio = f"{rate / vmas_rate:.2f}x" if vmas_rate else "-"
             print(f"| {n} | {b} | {sensing} | {t * 1e3:.1f} | {cpu * 1e3:.1f} | {rate:,.0f} | {1 / t:,.1f} | {ratio} |", flush=True)
     print(f"\nload average at end: {os.getloadavg()[0]:.2f}")
+
+
+def _measure_json(grid: list[tuple[int, int]], modes: list[str], args: argparse.Namespace) -> dict:
+    """The table's measurements as one JSON-serialisable dict (times in seconds per vector step)."""
+    result: dict = {"load_start": os.getloadavg()[0], "numba_threads": _numba_threads(), "vmas": None, "rows": []}
+    if not args.no_vmas:
+        t = time_vmas(10, 1024, args.vmas_steps)
+        if t is not None:
+            import vmas
+
+            result["vmas"] = {"version": vmas.__version__, "n_agents": 10, "num_envs": 1024, "s_per_step": t,
+                              "agent_steps_per_s": 10 * 1024 / t}
+    for sensing in modes:
+        for n, b in grid:
+            t, cpu = time_swarm(n, b, sensing, args.min_steps, args.min_seconds, args.env)
+            result["rows"].append({"n": n, "copies": b, "sensing": sensing, "s_per_step": t, "cpu_s_per_step": cpu,
+                                   "agent_steps_per_s": n * b / t, "env_steps_per_s": 1 / t})
+    result["load_end"] = os.getloadavg()[0]
+    return result
 
 
 if __name__ == "__main__":

@@ -22,7 +22,25 @@ from swarm_envs import env, task  # noqa: F401  (swarm_envs.env.info_group, swar
 from swarm_envs.platforms import PLATFORMS, Platform, get_platform
 from swarm_envs.registry import ENV_IDS, EnvSpec, list_envs, make, make_vec, register, spec
 
-__version__ = "0.1.0"
+
+def _read_version() -> str:
+    """The version in pyproject.toml: from the installed package's metadata, else (a source tree on the
+    path without an install) from the pyproject.toml beside the package, else ``"0+unknown"``."""
+    import re
+    from importlib import metadata
+
+    try:
+        return metadata.version("swarm_envs")
+    except metadata.PackageNotFoundError:
+        from pathlib import Path
+
+        pyproject = Path(__file__).resolve().parent.parent / "pyproject.toml"
+        text = pyproject.read_text(encoding="utf-8") if pyproject.is_file() else ""
+        found = re.search(r'^version\s*=\s*"([^"]+)"', text, re.M)
+        return found.group(1) if found else "0+unknown"
+
+
+__version__ = _read_version()
 __all__ = [
     "make",
     "make_vec",

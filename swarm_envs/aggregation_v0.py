@@ -1,4 +1,4 @@
-"""Aggregation: robots start spread out and should gather into one cluster (SPEC 6).
+"""Aggregation: robots start spread out and should gather into one cluster (docs/design.md#tasks).
 
 Reward (global, default) = decrease of the swarm's spread (mean distance to the centroid) this step,
 normalised by the arena size; ``reward_mode="local"`` rewards each robot for the decrease of its own
@@ -104,7 +104,7 @@ def parallel_env(
 
     ## Description
 
-    Aggregation (SPEC 6): ``n_robots`` robots start spread over the arena and should gather into one
+    Aggregation (docs/design.md#tasks): ``n_robots`` robots start spread over the arena and should gather into one
     cluster, sensing each other only through infrared. Two robots are in one cluster when their centres
     are within 1.5 diameters (chained). Agents are named ``robot_0`` .. ``robot_{N-1}``.
 

@@ -1,4 +1,4 @@
-"""Flocking: move together in one direction without collisions (SPEC 6).
+"""Flocking: move together in one direction without collisions (docs/design.md#tasks).
 
 Reward (global, default) = polarisation x cohesion - collision_penalty x (fraction of robots bumping),
 with polarisation = norm of the mean unit heading weighted by speed / max speed, cohesion = size of the
@@ -112,7 +112,7 @@ def parallel_env(
 
     ## Description
 
-    Flocking (SPEC 6): ``n_robots`` robots should move together in one direction without collisions,
+    Flocking (docs/design.md#tasks): ``n_robots`` robots should move together in one direction without collisions,
     sensing each other only through infrared. Agents are named ``robot_0`` .. ``robot_{N-1}``.
 
     ## Action Space

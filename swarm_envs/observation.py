@@ -1,4 +1,4 @@
-"""Observation layout (SPEC 7) and the vectorised packing of per-link readings into fixed slots.
+"""Observation layout (docs/design.md#observations-and-actions) and the vectorised packing of per-link readings into fixed slots.
 
 Every robot observes a ``Dict``:
 

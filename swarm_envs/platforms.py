@@ -4,12 +4,12 @@ All quantities are SI (metres, seconds, radians) in the robot's body frame: orig
 x-axis forward, angles counter-clockwise. The infrared *hardware model* (gain functions) of each
 platform lives in :mod:`swarm_envs.ir.models`; :attr:`Platform.ir_model` (or :func:`model_for`) returns it.
 
-Sources (SPEC section 1):
+Sources (docs/design.md#platforms):
 - ``droplet``: Farrow et al., ICRA 2014 [F14 Sec. III]: 4.4 cm diameter, 6 emitters and 6 sensors
   co-located at radius 2.0 cm, channel k at 30 + 60 k degrees. Max speed 2 cm/s is assumed.
 - ``epuck``: Trenkwalder et al. 2020 [T20 Sec. 2, Eqs. (1),(2)]: 7.0 cm diameter, 8 proximity
   sensors; each has an emitter and a detector 0.127 cm either side of the sensor point, both facing
-  the sensor's direction. Layout from the public Webots e-puck model (SPEC 4.1).
+  the sensor's direction. Layout from the public Webots e-puck model (docs/design.md#platforms).
 - ``rone``: Lynch thesis [L Sec. 3.2]: 11 cm diameter, 8 IR receivers at 22.5 + 45 k degrees with
   68-degree arcs, 8 transmitters at 45 k degrees.
 """

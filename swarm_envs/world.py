@@ -5,7 +5,7 @@ Each control step (``dt`` = 0.1 s) is split into physics sub-steps. Every robot 
 kinematic *control body* (pymunk's top-down "tank" pattern): a pivot joint and a gear joint with zero
 bias and bounded force make the body's velocity track the control body's as motors would, while
 contacts, which have unbounded force, win over the motors: robots push each other but never overlap
-and walls hold; bump sensing reads the contacts pymunk's solver processed in each sub-step (SPEC 1; the
+and walls hold; bump sensing reads the contacts pymunk's solver processed in each sub-step (docs/design.md#physics; the
 contacts its post-solve collision callbacks would report, see :func:`_substeps`).
 
 The control bodies are set once per control step (no Python work per sub-step): translation along the

@@ -1,4 +1,4 @@
-"""Bit-rate-dependent detector response (comm/channel.py ``detector_response``, SPEC 4.2, [T20 Secs. 5.3, 7])."""
+"""Bit-rate-dependent detector response (comm/channel.py ``detector_response``, docs/design.md#swarmcom-messaging, [T20 Secs. 5.3, 7])."""
 
 import numpy as np
 import pytest
@@ -59,7 +59,7 @@ def test_messages_stop_arriving_closer_as_the_bit_rate_grows():
 
 def test_without_the_response_nothing_depends_on_bit_rate():
     """The instantaneous detector (response_c = 0) reaches the same reliable range at 310 and 1800 bps
-    (the behaviour before the response model): the bit-rate dependence comes from the response only."""
+    (no response model): the bit-rate dependence comes from the response only."""
     dist = np.arange(7.0, 70.0, 3.0) / 100
     r = {br: reliable_range_cm(run_pairs(dist, np.random.default_rng(1), 40, bitrate=br, adc_model=ADCModel(response_c=0.0))) for br in (310, 1800)}
     assert abs(r[310] - r[1800]) <= 6 and r[1800] > 40, r

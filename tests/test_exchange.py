@@ -59,8 +59,8 @@ def scene(seed, n=20, side=1.6):
         if len(pos) == 0 or np.min(np.hypot(*(pos - p).T)) > 0.12:
             pos = np.vstack([pos, p])
     hd = rng.uniform(-np.pi, np.pi, n)
-    # symmetric links (the first version's centre-line occlusion): these tests check the exchange; per-ray
-    # occlusion (SPEC 2, the simulator's default) also makes one-way links, which cost rigidity
+    # symmetric links (the centre-line occlusion rule): these tests check the exchange; per-ray
+    # occlusion (docs/design.md#infrared-physical-layer, the simulator's default) also makes one-way links, which cost rigidity
     links = compute_links(pos, hd, "rone", occlusion="centre")
     return pos, hd, links, sense_bearings(links, "rone")
 

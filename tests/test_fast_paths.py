@@ -1,6 +1,6 @@
-"""The fast per-step paths (ideal sensing, observations, task rewards and metrics) equal the formulas they
-replaced, bit for bit. The ``_old_*`` functions below are the previous implementations, kept verbatim as
-references (KD-tree pairs + argsort, ``np.add.at``, ``np.mod`` wrapping, packing of every link, ``np.clip``).
+"""The fast per-step paths (ideal sensing, observations, task rewards and metrics) equal straightforward
+numpy formulas, bit for bit. The ``_old_*`` functions below are those plain reference implementations
+(KD-tree pairs + argsort, ``np.add.at``, ``np.mod`` wrapping, packing of every link, ``np.clip``).
 """
 
 from __future__ import annotations
@@ -26,7 +26,7 @@ def _equal(a, b, what=""):
     np.testing.assert_array_equal(a, b, err_msg=what)
 
 
-# -- the previous implementations (references) ---------------------------------------------------------
+# -- the plain reference implementations -----------------------------------------------------------------
 def _old_relative_pose(positions, headings, rx, tx):
     delta = positions[tx] - positions[rx]
     distance = np.hypot(delta[:, 0], delta[:, 1])
@@ -36,7 +36,7 @@ def _old_relative_pose(positions, headings, rx, tx):
 
 
 def _old_ideal_step(sensing, positions, headings):
-    """IdealSensing.step without messages, as it was: KD-tree pairs, every link packed."""
+    """IdealSensing.step without messages, plain reference: KD-tree pairs, every link packed."""
     copy = sensing.copy if sensing.n_copies > 1 else None
     rx, tx = directed_pairs(candidate_pairs(positions, sensing.platform.ir_range, copy))
     distance, bearing, heading = _old_relative_pose(positions, headings, rx, tx)
@@ -50,7 +50,7 @@ def _old_ideal_step(sensing, positions, headings):
 
 
 def _old_observations(core):
-    """SwarmCore.observations as it was: every link's values stacked and packed, then np.clip."""
+    """SwarmCore.observations, plain reference: every link's values stacked and packed, then np.clip."""
     frame = core.frame
     n, k, m, b = core.n_total, core.layout.n_neighbours, core.layout.n_messages, core.layout.message_bits
     nb = frame.neighbours

@@ -1,4 +1,4 @@
-"""The compiled IR kernels equal the numpy reference (models of swarm_envs.ir.models, SPEC 2)."""
+"""The compiled IR kernels equal the numpy reference (models of swarm_envs.ir.models, docs/design.md#infrared-physical-layer)."""
 
 import numpy as np
 import pytest

@@ -1,4 +1,4 @@
-"""Shared IR physical layer (swarm_envs.ir.layer), SPEC 2."""
+"""Shared IR physical layer (swarm_envs.ir.layer), docs/design.md#infrared-physical-layer."""
 
 import math
 
@@ -145,7 +145,7 @@ def _ray_blocked(a, b, pos, skip, radius):
 
 
 def _reference_links(pos, hd, platform):
-    """Plain per-pair, per-ray Python reference of SPEC 2 (brute-force pairs and occluders): returns
+    """Plain per-pair, per-ray Python reference of docs/design.md#infrared-physical-layer (brute-force pairs and occluders): returns
     {(u, w): (gains with per-ray occlusion, gains without occlusion)} for links with some light."""
     model = platform.ir_model
     n = len(pos)

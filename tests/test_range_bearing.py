@@ -1,4 +1,4 @@
-"""Range & bearing estimator, measurement and sensor (swarm_envs.sensing.range_bearing), SPEC 3."""
+"""Range & bearing estimator, measurement and sensor (swarm_envs.sensing.range_bearing), docs/design.md#range-and-bearing."""
 
 import numpy as np
 import pytest
@@ -171,7 +171,7 @@ def test_contention_never_two_linked_robots_fire_and_is_maximal():
     s2 = RangeBearingSensor("droplet", 40, np.random.default_rng(1), schedule="every_step")
     r = s2.step(links)
     assert s2.last_fired.all() and np.all(r.age == 0)
-    # links with signal: per-ray occlusion (SPEC 2) also keeps links that get only faint grazing light
+    # links with signal: per-ray occlusion (docs/design.md#infrared-physical-layer) also keeps links that get only faint grazing light
     signal = links.gains.reshape(len(links), -1).max(axis=1) >= get_platform("droplet").ir_model.no_reading_floor
     assert len(r) >= 0.95 * signal.sum()
 

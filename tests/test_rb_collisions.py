@@ -71,7 +71,7 @@ def test_two_hidden_transmitters_do_not_both_give_clean_readings():
         if not {(0, 1), (0, 2)} <= pairs:
             continue
         fired = np.array([False, True, True, False])
-        # the model before collisions: both clean (this is what the new model must not do)
+        # without superposition: both clean (what the collision model must not give)
         old = RangeBearingSensor("droplet", 4, np.random.default_rng(trial), collisions=False).step(links, fired=fired)
         at_rx = old.rx == 0
         assert set(old.tx[at_rx].tolist()) == {1, 2}

@@ -90,7 +90,7 @@ def test_perfect_hex_packing_is_accepted_and_the_spawner_does_not_run(monkeypatc
     np.testing.assert_array_equal(env.world.positions, pos)
     assert np.all(np.abs(env.world.headings) <= np.pi)  # positions alone: headings from the spawn stream
     env.step({a: np.zeros(2) for a in env.agents})
-    # far away in a big arena too (the old spawner enumerated the 30 m arena first: seconds)
+    # far away in a big arena too (a spawner that enumerated the 30 m arena first would take seconds)
     big = flocking_v0.parallel_env(n_robots=3, sensing="ideal", arena_size=30.0)
     monkeypatch.setattr(big.task, "spawn", no_spawn)
     far = np.array([[-14.0, -14.0], [0.0, 0.0], [14.0, 14.0]])
@@ -207,7 +207,7 @@ def test_config_check_runs_the_env_validator(override, key):
     from swarm_envs.agents.config import ConfigError, load_config
 
     with pytest.raises(ConfigError, match=f"config key '{key}'") as err:
-        load_config(None, [override])  # sensing='full' (the default): no longer swapped for 'ideal'
+        load_config(None, [override])  # sensing='full' (the default) stays 'full', never swapped for 'ideal'
     assert "\n" not in str(err.value)
 
 

@@ -1,4 +1,4 @@
-"""r-one bearings measured on decoded frames [L Sec. 3.2.1-3.2.3; SPEC 5.1] and the exchange by decoded sender."""
+"""r-one bearings measured on decoded frames [L Sec. 3.2.1-3.2.3; docs/design.md#bearing-only-sensing] and the exchange by decoded sender."""
 
 from __future__ import annotations
 

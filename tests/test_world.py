@@ -139,8 +139,8 @@ def test_step_worlds_equals_stepping_each_world_alone():
 
 
 class _PostSolveReference:
-    """Bump flags from pymunk post-solve collision callbacks attached to a world's space (the SPEC 1
-    definition, and the implementation before contacts were read in batches): every contact a sub-step's
+    """Bump flags from pymunk post-solve collision callbacks attached to a world's space (the docs/design.md#physics
+    definition, and the reference for the batched contact read): every contact a sub-step's
     solver processed flags the sector of its normal seen from each robot it touches."""
 
     def __init__(self, world):

@@ -40,7 +40,7 @@ a '1' the level decays quickly at first and slowly near the bias (the slow disch
 the next bits see the tail (inter-symbol interference). Only the e-puck has the response (other
 platforms' receivers sample instantly: ``response_c = 0``).
 
-Fit (SPEC 4.2 allows fitting to the published ranges). ``b`` and ``c`` are not both identifiable from the
+Fit (docs/design.md#swarmcom-messaging: the response is fitted to the published ranges). ``b`` and ``c`` are not both identifiable from the
 two published numbers. For each b, ``c`` is fitted to **14 cm at 1800 bps** [T20 Sec. 7] with
 ``python -m swarm_envs.validate swarmcom --fit-response`` (:func:`swarm_envs.validate.swarmcom.fit_response_c`:
 bisection in log c on a static facing pair, 7..30 cm in 1 cm steps, 300 control steps per distance,

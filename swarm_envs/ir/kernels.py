@@ -3,7 +3,7 @@
 The IR layer's per-step work is a loop over P visible pairs x n_detectors x n_emitters that numpy can
 only do through many (P, n_d, n_e) temporaries (memory-bound). These kernels do the same arithmetic
 pair by pair, skipping dark emitter-detector combinations early, and test each lit ray against the pair's
-candidate occluders (per-ray line of sight, SPEC 2). They implement exactly the models of
+candidate occluders (per-ray line of sight, docs/design.md#infrared-physical-layer). They implement exactly the models of
 :mod:`swarm_envs.ir.models` (the numpy methods there stay the reference; ``tests/test_ir_kernels.py``
 checks the two agree to 1e-12) and are used only when numba is importable (``pip install numba``, part
 of the ``fast`` extra); otherwise the layer uses the numpy path.
@@ -151,7 +151,7 @@ if HAVE_NUMBA:
         occ_radius: float,
         compact: bool = False,
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Gains of P pairs; same geometry as ``pair_cosines`` (SPEC 2), same models. ``rel_position`` (P, 2):
+        """Gains of P pairs; same geometry as ``pair_cosines`` (docs/design.md#infrared-physical-layer), same models. ``rel_position`` (P, 2):
         transmitter centre in the receiver frame (m); ``rel_cos_sin`` (P, 2): cos and sin of the transmitter's
         heading in the receiver frame.
 
@@ -161,7 +161,7 @@ if HAVE_NUMBA:
         emitter order from 0.0 (bit for bit ``acc = 0.0; for j: acc += gains[p, i, j]``; adding a dark
         ray's 0.0 changes no sum, so only lit rays are added, in that order).
 
-        Per-ray line of sight (SPEC 2): the gain of ray (i, j), from emitter j of the transmitter to detector
+        Per-ray line of sight (docs/design.md#infrared-physical-layer): the gain of ray (i, j), from emitter j of the transmitter to detector
         i of the receiver, is zero when that segment crosses an occluding disc (radius ``occ_radius``) of pair
         p: centres ``occ_xy[occ_offsets[p]:occ_offsets[p + 1]]`` in the receiver's frame; a blocked ray skips
         the model, pairs without candidate occluders cost nothing extra.
@@ -329,7 +329,7 @@ if HAVE_NUMBA:
         factor is > 1e-124 (nd, ne >= 1e-12 m) and the power >= 0.4 (L2 < 1.2 m^2), so the ray is lit
         exactly when the factor is > 0. Droplet and r-one rays: :func:`_gain`, summed as they come.
 
-        **Occlusion** (SPEC 2): a ray is blocked when :func:`_hits_disc` finds an occluder's disc on it."""
+        **Occlusion** (docs/design.md#infrared-physical-layer): a ray is blocked when :func:`_hits_disc` finds an occluder's disc on it."""
         nd, ne = det_pos.shape[0], em_pos.shape[0]
         r2 = occ_radius * occ_radius
         r2_hi, r2_lo = r2 * (1.0 + _DISC_TOL), r2 * (1.0 - _DISC_TOL)
@@ -709,7 +709,7 @@ if HAVE_NUMBA:
         lit: np.ndarray, rx: np.ndarray, tx: np.ndarray, rel: np.ndarray, rel_heading: np.ndarray, distance: np.ndarray
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """Rows ``lit`` of the links' arrays in one pass: ``(rx[lit], tx[lit], rel[lit], rel_heading[lit],
-        distance[lit])`` (numpy's fancy indexing, one array at a time, was ~5x slower at 36k links)."""
+        distance[lit])`` (numpy's fancy indexing, one array at a time, is ~5x slower at 36k links)."""
         n = lit.shape[0]
         rx_, tx_ = np.empty(n, dtype=rx.dtype), np.empty(n, dtype=tx.dtype)
         rel_, rh_, d_ = np.empty((n, 2)), np.empty(n), np.empty(n)

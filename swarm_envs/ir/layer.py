@@ -1,9 +1,9 @@
-"""Shared infrared physical layer (SPEC 2): candidate pairs, line of sight, emitter-detector geometry, gains.
+"""Shared infrared physical layer (docs/design.md#infrared-physical-layer): candidate pairs, line of sight, emitter-detector geometry, gains.
 
 Computed once per env step, vectorised over all pairs (no Python loop over robot pairs):
 
 1. candidate pairs: centres closer than the IR range, from ``scipy.spatial.cKDTree.query_pairs``;
-2. line of sight, per ray (SPEC 2): light from emitter j of w reaches detector i of u only if the
+2. line of sight, per ray: light from emitter j of w reaches detector i of u only if the
    segment from the emitter point to the detector point crosses no *third* robot's disc (radius
    ``platform.radius``) [T20 Fig. 3: "due to occlusion, not all emitter-detector pairs are relevant"].
    Blocked rays get zero gain, so a partially occluded pair gets partial light and a pair whose every
@@ -11,7 +11,7 @@ Computed once per env step, vectorised over all pairs (no Python loop over robot
    ``platform.radius + rho`` of the centre segment (rho = the largest emitter / detector offset from a
    robot's centre: every ray lies within rho of the centre segment), taken from the KD-tree neighbour
    lists of the pair's two ends (:func:`pair_occluders`); the rays are tested inside the compiled gain
-   kernel. ``occlusion="centre"`` keeps the first version's rule (one centre-to-centre segment per pair)
+   kernel. ``occlusion="centre"`` gives the centre-line rule (one centre-to-centre segment per pair)
    for comparison;
 3. for each ordered pair (receiver u, transmitter w), every detector i of u and emitter j of w:
    ``r_ij = R + Rot(psi) e_j - d_i`` (vector from detector i to emitter j in u's body frame, R = w's
@@ -87,7 +87,7 @@ class IRLinks:
 
     def ray_clear(self, platform: Platform | str) -> np.ndarray:
         """(P, n_detectors, n_emitters) bool: ray (detector i, emitter j) of each link misses every third
-        robot (SPEC 2), whether lit or not. For code that recomputes gains with another model (e.g. other
+        robot (docs/design.md#infrared-physical-layer), whether lit or not. For code that recomputes gains with another model (e.g. other
         detector arcs or emitter power) and must keep this step's occlusion: multiply by this mask."""
         platform = get_platform(platform)
         clear = np.ones((len(self), platform.n_detectors, platform.n_emitters), dtype=bool)
@@ -146,7 +146,7 @@ def pair_cosines(
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The same geometry as :func:`pair_geometry` as (distance, cos detector angle, cos emitter angle).
 
-    Every IR model is symmetric in its angles (SPEC 3.1), so gains need only the cosines, which come from
+    Every IR model is symmetric in its angles ([F14 Eqs. (19),(20)], [T20 Eqs. (24),(27)]), so gains need only the cosines, which come from
     dot products with the unit detector-emitter vectors: no arctan2 and no angle wrapping on the
     (P, n_d, n_e) hot path.
     """
@@ -192,7 +192,7 @@ def pair_gains(
             that may block pair p's rays, centres in the receiver's body frame (m), rows
             ``offsets[p]:offsets[p + 1]`` (from :func:`pair_occluders`). A ray, the segment from emitter j
             of the transmitter to detector i of the receiver, that crosses one of them gets zero gain
-            (SPEC 2, per-ray line of sight). Default: no occluders (line of sight assumed).
+            (per-ray line of sight, docs/design.md#infrared-physical-layer). Default: no occluders (line of sight assumed).
     """
     platform = get_platform(platform)
     model = platform.ir_model if model is None else model
@@ -426,7 +426,7 @@ def line_of_sight(
     j: np.ndarray,
     tree: cKDTree | None = None,
 ) -> np.ndarray:
-    """Centre-line rule (the first version's line of sight, kept for comparison): True where the segment
+    """Centre-line rule (a coarser line of sight, for comparison): True where the segment
     between centres ``positions[i]`` and ``positions[j]`` crosses no third robot's disc (open disc of
     ``radius`` m around every other centre). The simulator itself decides line of sight per ray
     (:func:`compute_links`).
@@ -449,7 +449,7 @@ def compute_links(
     occlusion: str = "ray",
     copy: np.ndarray | None = None,
 ) -> IRLinks:
-    """All directed IR links of a scene (SPEC 2), vectorised.
+    """All directed IR links of a scene (docs/design.md#infrared-physical-layer), vectorised.
 
     Args:
         positions: (N, 2) robot centres, world frame (m).
@@ -458,8 +458,8 @@ def compute_links(
         max_range: candidate cut-off on centre distance (m); default ``platform.ir_range``.
         drop_zero: drop pairs whose gain matrix is all zero (e.g. beyond the range, every ray occluded, or
             r-one pairs outside each other's cones). Default True.
-        occlusion: ``"ray"`` (SPEC 2, default): each emitter-detector ray is blocked by a third robot's disc
-            it crosses; ``"centre"``: the first version's rule, a pair is blocked entirely when its centre
+        occlusion: ``"ray"`` (docs/design.md#infrared-physical-layer, default): each emitter-detector ray is blocked by a third robot's disc
+            it crosses; ``"centre"``: the centre-line rule, a pair is blocked entirely when its centre
             segment crosses a third robot's disc, else all its rays are clear; ``"none"``: no occlusion
             (comparison / ablation only).
         copy: (N,) env copy of each robot (batched engine): no pair and no occluder crosses copies (the

@@ -10,7 +10,7 @@ light one emitter delivers to one detector:
 - ``detector_angle``: incidence angle (rad) between the detector's axis and the direction to the emitter,
 - ``emitter_angle``: angle (rad) between the emitter's axis and the direction to the detector.
 
-Beware the papers swap letters (SPEC 2): [F14] calls the detector angle alpha and the emitter angle beta,
+Beware the papers swap letters (docs/design.md#infrared-physical-layer): [F14] calls the detector angle alpha and the emitter angle beta,
 [T20] calls the emitter angle alpha and the detector angle beta. Here the arguments are named by role.
 
 Units of the gain differ per platform and are stated on each class, together with the measurement
@@ -31,12 +31,12 @@ class DropletIR:
     """Droplet IR channel [F14 Sec. IV, Eqs. (19)-(22)]; gain in 8-bit ADC counts (baseline-subtracted).
 
     ``gain = S(detector_angle) * E(emitter_angle) * A(r)`` [F14 Eq. (4)], r = emitter-sensor distance
-    in cm (SPEC 3.1 reading of [F14 Eqs. (15),(16)]). The gain is *not* clipped to the 8-bit range:
+    in cm (the reading of [F14 Eqs. (15),(16)] in docs/design.md#range-and-bearing). The gain is *not* clipped to the 8-bit range:
     saturation, rounding and noise belong to the measurement
     (:func:`swarm_envs.sensing.range_bearing.measure`).
 
     Near-range extension (ours): the fit ``A(r) = 14000/(r-3)^2 - 1`` has a pole at r = 3 cm and is only
-    valid for roughly r >= 4 cm (SPEC 3.1), yet two Droplets at one radius of gap (centre distance
+    valid for roughly r >= 4 cm [F14 Eq. (21)], yet two Droplets at one radius of gap (centre distance
     6.6 cm, channel radius 2 cm) have facing emitter-sensor distances of 2.6 cm. Below
     ``r_near = 4 cm`` we continue the fit with an inverse-square law matched in value at 4 cm,
     ``A(r) = (A(4) + 1) (4 / r)^2 - 1``, which is continuous, finite and strictly decreasing, so the
@@ -45,7 +45,7 @@ class DropletIR:
 
     name = "droplet"
     #: switch points of the piecewise sensor / emitter fits (rad) [F14 Eqs. (19),(20)], chosen so the
-    #: two branches meet continuously (SPEC 3.1)
+    #: two branches meet continuously [F14 Eqs. (19),(20)]
     sensor_switch = 0.618614
     emitter_switch = 0.720527
     amp_coeff = 14000.0  # [F14 Eq. (21)]
@@ -53,10 +53,10 @@ class DropletIR:
     inv_coeff = 118.0  # [F14 Eq. (22)] (118^2 = 13924 ~ 14000, the paper's rounding)
     r_near_cm = 4.0  # below this the inverse-square continuation is used (ours, see class doc)
 
-    # measurement constants (SPEC 3.1)
+    # measurement constants (docs/design.md#range-and-bearing)
     adc_scale = 1.0  # ADC counts per gain unit (the gain already is in counts)
     adc_max = 255.0  # 8-bit ADC
-    no_reading_floor = 7.0  # firmware rejects a matrix whose entries are all below 7 counts [SPEC 3.2 step 6]
+    no_reading_floor = 7.0  # firmware rejects a matrix whose entries are all below 7 counts (docs/design.md#range-and-bearing, estimator step 6)
     default_noise_sigma = 2.0  # counts; see swarm_envs.sensing.range_bearing for the choice
 
     def __init__(self, platform: Any = None) -> None:
@@ -125,7 +125,7 @@ class DropletLowPowerIR(DropletIR):
     """The Droplet emitters fired at the firmware's low power setting 250, for near range [F14 Sec. IV].
 
     The firmware's near fit is ``A(R) = 1100 / (R - 4)^2 + 12.5`` counts with R the centre distance in cm
-    (SPEC 3.1). With both channels at rho = 2 cm, R - 4 = R - 2 rho is the facing emitter-sensor
+    [F14 Sec. IV]. With both channels at rho = 2 cm, R - 4 = R - 2 rho is the facing emitter-sensor
     distance r, so in this module's convention (r = emitter-sensor distance) ``A_low(r) = 1100 / r^2 +
     12.5``; inverse ``r = sqrt(1100 / (x - 12.5))`` for x > 12.5 counts (x <= 12.5 reads as far away).
     Directivities S and E are the full-power ones. Used by the range & bearing sensor's

@@ -1,4 +1,4 @@
-"""r-one bearing-only sensor: sector bearing and neighbour orientation [L Sec. 3.2.1, 3.2.3; SPEC 5.1].
+"""r-one bearing-only sensor: sector bearing and neighbour orientation [L Sec. 3.2.1, 3.2.3; docs/design.md#bearing-only-sensing].
 
 The r-one has 8 IR receivers at ``22.5 + 45 k`` degrees, each seeing a 68-degree arc; the overlaps form 16
 sectors, so the bearing resolution is 22.5 degrees [L Fig. 3.9]. The firmware keeps the *longest
@@ -22,7 +22,7 @@ link p iff any emitter of the transmitter reaches it (``gains[p, i, :] > thresho
 (:class:`swarm_envs.ir.models.RoneIR`). Everything is vectorised over links through a 256-entry lookup table
 indexed by the 8-bit mask.
 
-Message-borne readings (:class:`MessageBearings`, SPEC 5.1): on the robot, a bearing and an orientation
+Message-borne readings (:class:`MessageBearings`, docs/design.md#bearing-only-sensing): on the robot, a bearing and an orientation
 exist only for a message that was received: the receivers that picked up the frame give the bearing and the
 transmitter indices encoded in it give the orientation [L Sec. 3.2.1, 3.2.3]. :class:`MessageBearings`
 measures them on the frames the SwarmCom receiver decoded (:class:`swarm_envs.comm.network.Deliveries`),
@@ -228,7 +228,7 @@ def link_masks(
 def sense_bearings(
     links, platform: Platform | str = "rone", threshold: float = 0.0, half_arcs: np.ndarray | None = None
 ) -> BearingReadings:
-    """Sector bearings and orientations for every link [L Sec. 3.2.1, 3.2.3; SPEC 5.1].
+    """Sector bearings and orientations for every link [L Sec. 3.2.1, 3.2.3; docs/design.md#bearing-only-sensing].
 
     The nominal, per-link geometry of the sensor (what a receiver *would* measure on a message from each
     linked neighbour); the env's r-one readings are measured on decoded frames only (:class:`MessageBearings`).
@@ -260,7 +260,7 @@ def draw_half_arcs(
 
 
 class MessageBearings:
-    """Message-borne sector bearings and orientations of neighbours [L Sec. 3.2.1-3.2.3; SPEC 5.1].
+    """Message-borne sector bearings and orientations of neighbours [L Sec. 3.2.1-3.2.3; docs/design.md#bearing-only-sensing].
 
     Each decoded frame (any kind: on the r-one every message carries the transmitter's encoded orientation
     bit [L Sec. 3.2.3, Table 3.3]) is a measurement by its receiver of the robot its header names

@@ -1,4 +1,4 @@
-"""Round-based bearing exchange for scale-free coordinates [L Sec. 5.2.2, Sec. 3.2.1; SPEC 5.2].
+"""Round-based bearing exchange for scale-free coordinates [L Sec. 5.2.2, Sec. 3.2.1; docs/design.md#bearing-exchange].
 
 [L Sec. 5.2.2]: in communication step 1 every robot broadcasts its id and receivers record the bearing of
 the sender; in step 2 every robot broadcasts its id plus the ids and bearings of its neighbours. After the

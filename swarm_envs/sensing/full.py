@@ -12,7 +12,7 @@ Each control step, in this order (data flows one way):
    is empty (so the newest payload goes out as soon as the radio is free). Decoded application frames
    become the ``messages`` observation; the sender's bearing is the axis of the receiver's brightest
    detector during the frame (a coarse bearing from the detector itself, not from ground truth).
-   **Sector bearings** (``bearing_source="sectors"``, the ``rone`` default, SPEC 5.1) are measured on the
+   **Sector bearings** (``bearing_source="sectors"``, the ``rone`` default, docs/design.md#bearing-only-sensing) are measured on the
    decoded frames (:class:`swarm_envs.sensing.bearing_sensor.MessageBearings`): each decoded frame gives
    its receiver the sector bearing and orientation of the robot its header names, refreshed only then,
    with the age since; a reading without a decoded frame for ``max_age`` = 1.5 beacon periods disappears

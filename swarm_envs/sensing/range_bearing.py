@@ -1,4 +1,4 @@
-"""Droplet range & bearing from the brightness matrix [F14], and its per-step sensor (SPEC 3).
+"""Droplet range & bearing from the brightness matrix [F14], and its per-step sensor (docs/design.md#range-and-bearing).
 
 Pipeline for one (receiver RX, transmitter TX) pair:
 
@@ -6,19 +6,19 @@ Pipeline for one (receiver RX, transmitter TX) pair:
    cols = TX emitters j), ``lambda_ij = S(alpha_ij) E(beta_ij) A(r_ij)`` [F14 Eq. (4)], from the shared
    IR layer (:func:`swarm_envs.ir.layer.pair_gains`).
 2. :func:`measure` -- what the RX's ADC reads: ``clip(round(p lambda + n), 0, adc_max)``, n ~ N(0, sigma^2)
-   i.i.d. per entry, with power selection (SPEC 3.1): if the full-power reading saturates, the TX fires
+   i.i.d. per entry, with power selection (docs/design.md#range-and-bearing): if the full-power reading saturates, the TX fires
    again at the largest power factor p of :data:`POWER_LADDER` whose reading does not saturate.
 3. :func:`estimate` -- range R, bearing theta and heading phi from Lambda / p [F14 Sec. II, Eqs. (5)-(18)],
    generic over the number and layout of channels (Droplet 6x6, e-puck 8x8).
 
 :class:`RangeBearingSensor` runs this each 0.1 s control step for all pairs of an
-:class:`~swarm_envs.ir.layer.IRLinks`, with the firing schedule of SPEC 3.3 and reading ages.
+:class:`~swarm_envs.ir.layer.IRLinks`, with the firing schedule of docs/design.md#range-and-bearing and reading ages.
 
 Noise level (``sigma``). [F14 Sec. IV] calls the calibrated error "approximately Gaussian with mu = 0";
 the sigma is lost in the PDF. We use sigma = 2 ADC counts for the Droplet: it is "a few counts", it
 puts the firmware's 7-count no-reading floor at 3.5 sigma (pure noise passes it in ~2 % of 6x6 matrices,
 the paper's rare "spurious data point"), and with it the validation sweep (``python -m swarm_envs.validate range-bearing``) meets the
-paper's claims of SPEC 3.4 with margin (range |mean| + std well below one diameter at every distance,
+paper's claims of [F14 Sec. V] with margin (range |mean| + std well below one diameter at every distance,
 bearing error a few degrees, heading error larger and 60-degree periodic). The sweep also reports
 sigma = 0, 1, 4, 8 counts so the sensitivity to this choice is visible. For the e-puck the ADC noise of
 [T20] (variance 2.5 counts^2) is used.
@@ -29,7 +29,7 @@ its conclusion notes that sensors and emitters differ from robot to robot (also 
 measured asymmetry to cite, we add no bias or per-robot gain spread: the brightness noise above *is*
 the hardware error model (see the README for what it gives beside Figs. 6-7).
 
-Collisions and the decoded transmitter (SPEC 3.3). A measurement starts with a message: [F14 Sec. II]
+Collisions and the decoded transmitter (docs/design.md#range-and-bearing). A measurement starts with a message: [F14 Sec. II]
 "RX ... requests R&B information from a specific robot TX"; in the Droplet firmware the TX broadcasts an
 ``rnb_r`` command (a UART frame on the 38 kHz carrier whose header holds the 16-bit sender id and a
 CRC-16) and, a fixed delay after it, lights emitter 0..5 in turn for fixed times; a receiver that decodes
@@ -108,7 +108,7 @@ __all__ = [
     "RangeBearingSensor",
 ]
 
-#: Emitter power factors tried in order when the full-power reading saturates (SPEC 3.1). Halving steps
+#: Emitter power factors tried in order when the full-power reading saturates (docs/design.md#range-and-bearing). Halving steps
 #: down to 1/256: two Droplets one radius apart (R = 6.6 cm) give up to ~31000 model counts at full
 #: power, so 1/256 is needed to stay below 255 (the Droplet sets LED current with a 7-bit digital
 #: potentiometer [F14 Sec. III], so a ~1/100 dynamic range is plausible).
@@ -319,7 +319,7 @@ def measure(
     ladder: tuple[float, ...] = POWER_LADDER,
     row_copy: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Simulated ADC reading of brightness matrices with power selection (SPEC 3.1).
+    """Simulated ADC reading of brightness matrices with power selection (docs/design.md#range-and-bearing).
 
     ``measured = clip(round(p * lambda * s + n), 0, adc_max) / s`` with n ~ N(0, sigma^2) counts i.i.d. per
     entry and s = ``model.adc_scale`` counts per gain unit (1 for the Droplet). A matrix *saturates* when
@@ -398,7 +398,7 @@ def estimate(
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Range, bearing and heading from brightness matrices [F14 Sec. II], vectorised over P pairs.
 
-    Steps (SPEC 3.2), with b_i / b_j the unit axis vectors of RX sensor i and TX emitter j, d_i / e_j
+    Steps ([F14 Sec. II]; docs/design.md#range-and-bearing), with b_i / b_j the unit axis vectors of RX sensor i and TX emitter j, d_i / e_j
     their positions in their own body frames (d_i = rho b_i on the Droplet):
 
     1. ``S_i = sum_j lambda_ij``, ``T_j = sum_i lambda_ij`` [Eqs. (5),(6)].
@@ -563,11 +563,11 @@ class RangeBearingReadings:
 
 
 class RangeBearingSensor:
-    """Per-step range & bearing sensing for a swarm (SPEC 3.3), fed by the IR layer's links.
+    """Per-step range & bearing sensing for a swarm (docs/design.md#range-and-bearing), fed by the IR layer's links.
 
     Each control step (0.1 s, the Droplet's 10 Hz R&B rate [F14 Sec. V]):
 
-    - power control: a saturated matrix is re-measured on the power ladder (SPEC 3.1), or with
+    - power control: a saturated matrix is re-measured on the power ladder (docs/design.md#range-and-bearing), or with
       ``near_model=True`` (Droplet) once at the firmware's low power and inverted with its own amplitude
       fit (:class:`swarm_envs.ir.models.DropletLowPowerIR`).
     - ``schedule="contention"``: every robot draws a random priority; a robot *fires* (sends the request
@@ -585,8 +585,8 @@ class RangeBearingSensor:
     - earlier readings persist with ``age + 1`` until refreshed, and are dropped once older than
       ``max_age`` steps.
 
-    ``collisions=False`` measures every firing as if alone and attributes it to the true TX (the model
-    before collisions; a baseline for validation). ``id_check=False``: the sender id is not CRC-checked.
+    ``collisions=False`` measures every firing as if alone and attributes it to the true TX (no
+    superposition; a baseline for validation). ``id_check=False``: the sender id is not CRC-checked.
     Nothing here reads ground truth except through the links' gains (the brightness matrices); the
     true transmitter goes only to the ground-truth fields of the readings.
     """

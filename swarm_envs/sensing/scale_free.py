@@ -1,7 +1,7 @@
 """Scale-free neighbour coordinates from bearing-only measurements [L Ch. 4-5].
 
 A robot u measures only bearings ``theta_u(w)`` (angle of ``p_w - p_u`` in u's body frame, radians,
-counter-clockwise, SPEC section 0). After the two-step exchange of [L Sec. 5.2.2] it also knows, for each
+counter-clockwise, docs/design.md#conventions). After the two-step exchange of [L Sec. 5.2.2] it also knows, for each
 neighbour v, the bearings ``theta_v(w)`` that v measured. From these it computes *scale-free*
 coordinates: its neighbours' positions in its own frame up to one unknown positive scale
 ``f_u(w) = a_u ||p_u - p_w||`` [L Sec. 4.2]. We fix the scale so that the mean neighbour distance is 1.
@@ -548,7 +548,7 @@ def null_space_lengths(
 
 
 # --------------------------------------------------------------------------------------------------
-# Single-robot entry point (SPEC section 8)
+# Single-robot entry point (public API)
 # --------------------------------------------------------------------------------------------------
 
 
@@ -631,7 +631,7 @@ class ScaleFreeSensor:
     Per control step: ``sensor.send(network)`` (network mode only, before the network step), then
     ``result = sensor.step(links, deliveries)``. Bearings come from the r-one sector rule
     (:func:`swarm_envs.sensing.bearing_sensor.sense_bearings`) unless ``readings`` is passed to
-    :meth:`step` (any object with ``rx, tx, bearing, valid`` per link, e.g. R&B estimates: SPEC 5.1
+    :meth:`step` (any object with ``rx, tx, bearing, valid`` per link, e.g. R&B estimates: docs/design.md#bearing-only-sensing
     ``bearing_source``).
 
     Args:

@@ -7,7 +7,7 @@ R from one radius of gap (6.6 cm) to 4.5 diameters (~20 cm) on the Droplet (scal
 other platforms), every bearing and heading on a grid, noisy measurement with power selection
 (:func:`swarm_envs.sensing.range_bearing.measure`) then the [F14] estimator. Errors are estimate - truth
 (range in cm, angles wrapped, in degrees). The paper gives its results as plots; the claims compared
-are those of its text (SPEC 3.4):
+are those of its text [F14 Sec. V, Figs. 5-7]:
 
 - range error bounded within one robot diameter (|mean| + std < diameter) and roughly constant with
   distance up to 4.5 diameters [F14 Sec. V, Fig. 5];
@@ -15,7 +15,7 @@ are those of its text (SPEC 3.4):
 - heading error larger than the bearing error, periodic with the 60-degree channel spacing [Fig. 7];
 - usable down to one robot radius of gap.
 
-Then the collision rows (:func:`collisions`, issue 11): fractions of clean, corrupted, misattributed and
+Then the collision rows (:func:`collisions`): fractions of clean, corrupted, misattributed and
 lost readings (i) for two transmitters hidden from each other firing in the same step at a receiver that
 sees both, and (ii) in a dense random swarm under the contention schedule, each beside the model without
 collisions (every firing measured alone and attributed to the true transmitter).
@@ -264,7 +264,7 @@ def collisions(platform_name="droplet", sigma=None, seed=0, trials=2000, n=50, s
     sigma = float(platform.ir_model.default_noise_sigma if sigma is None else sigma)
     scale = platform.diameter / (DROPLET_DIAMETER_CM / 100.0)
     rows = []
-    for label, col, chk in (("no collisions (before)", False, True), ("collisions, CRC id check", True, True),
+    for label, col, chk in (("no collisions (each alone)", False, True), ("collisions, CRC id check", True, True),
                             ("collisions, id unchecked", True, False)):
         hp, T = _hidden_pairs(platform, trials, sigma, seed, col, chk)
         ds, per_robot, ov = _dense_swarm(platform, n, side * scale, scenes, steps, sigma, seed + 1, col, chk)
@@ -367,7 +367,7 @@ def main(argv: list[str]) -> int:
         print(f"  {r['sigma']:5.1f}                              {r['worst_range_bound']:7.2f}           "
               f"{r['bearing_std']:7.2f}      {r['heading_std']:7.2f}     {100 * r['no_reading']:5.1f}%")
     col = res["collisions"]
-    print(f"\ncollisions (issue 11): fractions of the readings a receiver would get if every firing were alone;"
+    print(f"\ncollisions: fractions of the readings a receiver would get if every firing were alone;"
           f"\n  hidden pair: 2 TXs hidden from each other fire in one step, RX sees both ({col['rows'][0]['hidden_trials']} trials);"
           f"\n  dense swarm: N={col['dense_n']} in a {100 * col['dense_side_m']:.0f} cm square, contention schedule;"
           f"\n  corrupted = right id but |range err| > 25% of range or |bearing err| > 15 deg; lost = rejected or below floor"

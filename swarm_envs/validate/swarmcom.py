@@ -1,4 +1,4 @@
-"""Validation of the SwarmCom simulation against [T20] (SPEC 4.3).
+"""Validation of the SwarmCom simulation against [T20] (its Secs. 6, 7; docs/validation.md).
 
 ``python -m swarm_envs.validate swarmcom [--json] [--experiment a|b|c|d|e|all] [--out DIR] [--quick] [--fit-response]``
 
@@ -8,7 +8,7 @@
 (b) channels per robot n_C vs density: a centre robot, range 61 cm, 1..272 others at random in that disc
     (n_C bounded by ~15, 6 at hexagonal packing [T20 Sec. 6.2.6, Fig. 20a]) and the 72 x 72 cm arena
     with 10, 20, 30 robots (n_C = 4, 6, 9 in single snapshots [Fig. 21]; ours: the distribution over
-    random-walk snapshots); per-ray line of sight (SPEC 2) beside the first version's centre-line rule,
+    random-walk snapshots); per-ray line of sight (docs/design.md#infrared-physical-layer) beside the centre-line rule,
     and the detection threshold m_tr swept over the paper's 61/45/33/21 cm settings;
 (c) local broadcast vs flooding: 2..7 robots doing the random walk of [T20 Alg. 1] (t_m = 2 s) in the
     72 x 72 cm arena, 310 bps, m_tr = 10; message loss P_l (a message is lost for a robot that has not
@@ -52,7 +52,7 @@ PAPER_RELIABLE_CM = 61.0  # [T20 Sec. 7]
 PAPER_ARENA_NC = {10: 4, 20: 6, 30: 9}  # [T20 Fig. 21]
 ARENA = 0.72  # m [T20 Sec. 6.1]
 DISC_R = 0.61  # m, communication range used for Fig. 20a
-OCC_RULES = ("ray", "centre")  # per-ray line of sight (SPEC 2, simulated) and the first version's centre line
+OCC_RULES = ("ray", "centre")  # per-ray line of sight (docs/design.md#infrared-physical-layer, simulated) and the centre-line rule
 PAPER_MTR = 5  # Fig. 20a: the 61 cm range of m_tr = 5 [T20 Sec. 6.2.6, Table 12a]
 M_TR_SWEEP = (5, 10, 25, 75)  # relative thresholds of the paper's ranges 61, 45, 33, 21 cm [Sec. 6.2.4, 7]
 PAPER_FIG20A = {"bound": 15, "densest": 6}  # [T20 Sec. 6.2.6]
@@ -231,8 +231,8 @@ def centre_amplitude(pos: np.ndarray, head: np.ndarray, max_range: float = DISC_
 
     Same physics as the simulator (:func:`swarm_envs.ir.layer.pair_gains` with the occluders of
     :func:`swarm_envs.ir.layer.pair_occluders`, [T20 Eqs. (7)-(22)] without noise), computed only for
-    the pairs (receiver k, transmitter 0). ``occlusion``: ``"ray"`` (SPEC 2, per-ray line of sight, as
-    simulated) or ``"centre"`` (the first version's centre-segment rule).
+    the pairs (receiver k, transmitter 0). ``occlusion``: ``"ray"`` (per-ray line of sight, docs/design.md#infrared-physical-layer, as
+    simulated) or ``"centre"`` (the centre-segment rule).
     """
     p = get_platform(PLATFORM)
     amp = np.zeros(pos.shape[0])
@@ -508,7 +508,7 @@ def bitrate_ranges(
 
 
 def fit_response_c(bias: float = RESPONSE_BIAS, target_cm: float = PAPER_BITRATE_RELIABLE[1800], steps: int = 300, seed: int = 11) -> dict[str, float]:
-    """Fit the detector response's charge constant c (s) for a given bias b (SPEC 4.2, channel module
+    """Fit the detector response's charge constant c (s) for a given bias b (docs/design.md#swarmcom-messaging, channel module
     docstring): bisection in log c, on a static facing pair at 1800 bps (7..30 cm, 1 cm steps, ``steps``
     control steps per distance, fixed seed), for the two edges of the plateau where the reliable range
     equals ``target_cm`` (14 cm [T20 Sec. 7]); returns both edges and their geometric mean (the fit)."""
@@ -646,8 +646,8 @@ def _print(results: dict[str, Any]) -> None:
     if "b" in results:
         b = results["b"]
         print(f"(b) channels n_C of the centre robot, 61 cm disc, {b['trials_per_density']} trials per density, m_tr = {PAPER_MTR}")
-        print("  a channel: noiseless received amplitude above m_tr (m < m_t); 'ray' = per-ray line of sight (SPEC 2, as")
-        print("  simulated), 'centre' = the first version's centre-segment rule")
+        print("  a channel: noiseless received amplitude above m_tr (m < m_t); 'ray' = per-ray line of sight (docs/design.md#infrared-physical-layer, as")
+        print("  simulated), 'centre' = the centre-segment rule")
         print(f"  {'others':>6} | {'placed':>6} | {'rho/m^2':>7} | {'ray mean':>8} | {'ray max':>7} | {'centre mean':>11} | {'centre max':>10}")
         k = f"mtr{PAPER_MTR}"
         for c in b["curve"]:
