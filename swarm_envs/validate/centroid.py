@@ -1,4 +1,4 @@
-"""Centroid seeking with scale-free coordinates [L Sec. 6.2.2, Figs. 6.3-6.4; SPEC 5.4].
+"""Centroid seeking with scale-free coordinates [L Sec. 6.2.2, Figs. 6.3-6.4].
 
 Kinematic reproduction (no physics env): 4 static r-one robots at the corners of a random convex
 quadrilateral (circumradius ``--polygon-radius`` range, every pair within the 1 m IR range) and one seeker
@@ -24,7 +24,7 @@ bearing vectors of the anchors it sees (a bearing-only fallback, ours; counted i
 Metric (thesis Fig. 6.4(b)): mean seeker-centroid distance over the rounds in which the seeker is inside
 the polygon ("errors outside the polygon are not included"); paper 14.03 cm, within 2 d_step = 22 cm.
 Optional motion noise (``--heading-noise-deg``, ``--step-noise``; default off) perturbs each step's
-direction and length, as a real robot's odometry would. Also reported: the mean over the second half of each run (the env's metric, SPEC 6), and the same runs
+direction and length, as a real robot's odometry would. Also reported: the mean over the second half of each run (the env's metric), and the same runs
 with exact bearings (no quantisation) as a reference. The thesis's bearing-error histogram [L Fig. 3.13(a)]
 has no numbers in its text; the arc spread is the only measured hardware figure used (nothing is tuned
 to the 14.03 cm).

@@ -7,7 +7,7 @@ R from one radius of gap (6.6 cm) to 4.5 diameters (~20 cm) on the Droplet (scal
 other platforms), every bearing and heading on a grid, noisy measurement with power selection
 (:func:`swarm_envs.sensing.range_bearing.measure`) then the [F14] estimator. Errors are estimate - truth
 (range in cm, angles wrapped, in degrees). The paper gives its results as plots; the claims compared
-are those of its text (SPEC 3.4):
+are those of its text:
 
 - range error bounded within one robot diameter (|mean| + std < diameter) and roughly constant with
   distance up to 4.5 diameters [F14 Sec. V, Fig. 5];

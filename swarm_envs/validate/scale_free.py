@@ -1,4 +1,4 @@
-"""Scale-free coordinates validation [L Sec. 5.4, 6.1; Figs. 5.1, 6.2; SPEC 5.4].
+"""Scale-free coordinates validation [L Sec. 5.4, 6.1; Figs. 5.1, 6.2].
 
 Experiment 1 (rigidity vs degree, [L Sec. 5.4.1, Fig. 5.1(a)]): N robots (10 cm discs, no overlap) uniform
 in a 4 m diameter circular arena, an edge between robots whose centres are within 1 m (lossless,
