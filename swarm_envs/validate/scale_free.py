@@ -194,7 +194,8 @@ class EdgeErrors:
 
 
 def edge_error_experiment(
-    rng: np.random.Generator, configs: int, workspace: float, n: int = 6, arc_range: tuple[float, float] | None = None
+    rng: np.random.Generator, configs: int, workspace: float, n: int = 6, arc_range: tuple[float, float] | None = None,
+    extra_noise_deg: float = 0.0,
 ) -> dict:
     """6-robot 2-hop edge error on sector bearings from the IR layer and an ideal exchange (module doc).
     ``arc_range`` (deg): if given, the hardware noise model: every reading draws its receiver arcs and
@@ -202,8 +203,10 @@ def edge_error_experiment(
     instead of the nominal 68 deg, from the same emitter-detector geometry and per-ray occlusion of the
     shared IR layer (:func:`swarm_envs.sensing.bearing_sensor.link_masks`). Noise draws come from a child
     generator, so runs with and without noise from the same seed draw the same scenes (the noise can still
-    change which of them are connected and kept). Returns the :class:`EdgeErrors` summary plus the kept
-    ``scenes`` (positions, headings) and the sector bearing error."""
+    change which of them are connected and kept). ``extra_noise_deg`` > 0 adds a Gaussian error of that std
+    (deg) to every sector bearing: not a model of the hardware, a sensitivity run showing how large a bearing
+    error a given edge error implies. Returns the :class:`EdgeErrors` summary plus the kept ``scenes``
+    (positions, headings) and the sector bearing error."""
     from swarm_envs.ir.layer import compute_links
     from swarm_envs.platforms import get_platform
     from swarm_envs.sensing.bearing_sensor import draw_half_arcs, sense_bearings
@@ -211,7 +214,7 @@ def edge_error_experiment(
     from scipy.sparse import coo_matrix
 
     plat = get_platform("rone")
-    noise_rng, pick_rng = rng.spawn(2)
+    noise_rng, pick_rng, extra_rng = rng.spawn(3)
     errors = EdgeErrors()
     bearing_err = []
     scenes = []
@@ -231,15 +234,18 @@ def edge_error_experiment(
             links = compute_links(pos, hd, plat, drop_zero=False)  # wider arcs may light a nominally dark pair
             rd = sense_bearings(links, plat, half_arcs=draw_half_arcs(noise_rng, len(links.rx), plat, arc_range))
         ok = rd.valid
+        bearing = rd.bearing[ok]
+        if extra_noise_deg > 0:
+            bearing = bearing + np.deg2rad(extra_rng.normal(0.0, extra_noise_deg, bearing.shape))
         B = np.full((n, n), np.nan)
-        B[rd.rx[ok], rd.tx[ok]] = rd.bearing[ok]
+        B[rd.rx[ok], rd.tx[ok]] = bearing
         sym = ~np.isnan(B) & ~np.isnan(B.T)
         ncomp, _ = connected_components(coo_matrix(sym), directed=False)
         if ncomp > 1:
             continue
         scenes.append((pos, hd))
         true_b = np.arctan2(*(pos[rd.tx[ok]] - pos[rd.rx[ok]]).T[::-1]) - hd[rd.rx[ok]]
-        bearing_err.append(np.abs(np.pi - np.mod(np.pi - (rd.bearing[ok] - true_b), 2 * np.pi)))
+        bearing_err.append(np.abs(np.pi - np.mod(np.pi - (bearing - true_b), 2 * np.pi)))
         kn = knowledge_from_matrix(B)
         errors.add({v: coordinates_all(kn, **kw) for v, kw in VARIANTS.items()}, pos, pick_rng)
     be = np.rad2deg(np.concatenate(bearing_err)) if bearing_err else np.zeros(0)
@@ -361,12 +367,18 @@ def main(argv: list[str]) -> int:
     ap.add_argument("--env-steps", type=int, default=3 * BEACON_PERIOD,
                     help=f"control steps the env run lets the exchange work before reading it (default 3 beacon periods = {3 * BEACON_PERIOD})")
     ap.add_argument("--no-env", action="store_true", help="skip the edge-error run through the env's stack")
+    ap.add_argument("--extra-bearing-noise-deg", type=float, nargs="+", default=[], metavar="S",
+                    help="sensitivity runs: the ideal-exchange edge error with a Gaussian error of std S deg added to every sector "
+                         "bearing (shows how large a bearing error an edge error implies; not a hardware model)")
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--out", default="validation_output", help="directory for plots")
     ap.add_argument("--no-plots", action="store_true")
     args = ap.parse_args(argv)
     if args.env_steps < 1:
         ap.error(f"--env-steps must be >= 1, got {args.env_steps}")
+    bad = [x for x in args.extra_bearing_noise_deg if not x >= 0]
+    if bad:
+        ap.error(f"--extra-bearing-noise-deg must be >= 0, got {bad[0]}")
     rng = np.random.default_rng(args.seed)
     t0 = time.time()
     rows_ = rigidity_experiment(rng, args.populations, args.trials, args.ks)
@@ -378,6 +390,9 @@ def main(argv: list[str]) -> int:
     ee_env = None
     if not args.no_env:
         ee_env = edge_error_env(ee["_scenes"], args.seed + 2, args.env_steps, np.random.default_rng(args.seed + 3))
+    sensitivity = {}
+    for sigma in args.extra_bearing_noise_deg:
+        sensitivity[sigma] = edge_error_experiment(np.random.default_rng(args.seed + 1), configs, args.workspace, extra_noise_deg=sigma)
     t3 = time.time()
     table = summarise_rigidity(rows_, args.ks)
     all_rigid = {f"k{k}": float(np.mean([r[f"rigid_k{k}"] == 100.0 for r in rows_]) * 100) for k in args.ks}
@@ -396,12 +411,14 @@ def main(argv: list[str]) -> int:
         "edge_error_hardware_noise": public(ee_arc),
         "arc_range_deg": args.arc_range,
         "paper": PAPER,
-        "runtime_s": {"rigidity": t1 - t0, "edge_error": t2 - t1, "edge_error_env": t3 - t2},
+        "runtime_s": {"rigidity": t1 - t0, "edge_error": t2 - t1, "edge_error_env_and_sensitivity": t3 - t2},
         "trials_per_population": args.trials,
         "populations": args.populations,
     }
     if ee_env is not None:
         summary["edge_error_env"] = public(ee_env)
+    if sensitivity:
+        summary["extra_bearing_noise"] = {str(k): public(v) for k, v in sensitivity.items()}
     summary["rows"] = rows_json(rows(summary))
     if not args.no_plots:
         try:
@@ -445,7 +462,13 @@ def main(argv: list[str]) -> int:
         for v in VARIANT_NAMES:
             print(f"{VARIANT_NAMES[v]:>28} {r['thesis_edges'][v]:12d} {r['thesis_configs']:7d} {r['thesis_mean_edge_error_pct'][v]:13.1f} "
                   f"{r['edges'][v]:15d} {r['mean_edge_error_pct'][v]:16.1f}  {VARIANT_PAPER[v]}")
-    print(f"runtime: rigidity {t1 - t0:.1f} s, edge error {t2 - t1:.1f} s, edge error in the env {t3 - t2:.1f} s")
+    if sensitivity:
+        print("sensitivity (not a hardware model): nominal-arc sector bearings plus a Gaussian error of std S, ideal exchange")
+        print(f"{'S (deg)':>8} {'bearing err mean':>16} {'thesis Alg.1 %':>14} {'thesis Alg.4 %':>14} {'configs':>7}   paper 23.4 / 19.4 %")
+        for sigma, r in sensitivity.items():
+            print(f"{sigma:8.1f} {r['bearing_error_deg_mean']:13.1f} deg {r['thesis_mean_edge_error_pct']['alg1']:14.1f} "
+                  f"{r['thesis_mean_edge_error_pct']['alg4']:14.1f} {r['thesis_configs']:7d}")
+    print(f"runtime: rigidity {t1 - t0:.1f} s, edge error {t2 - t1:.1f} s, edge error in the env and sensitivity runs {t3 - t2:.1f} s")
     if "plots" in summary:
         print("plots:", ", ".join(summary["plots"]))
     print_rows("Scale-free coordinates [L]", rows(summary))

@@ -862,8 +862,10 @@ def rows(results: dict[str, Any]) -> list[Row]:
     if "a" in results:
         r = results["a"]["ranges"]
         out.append(Row("[T20 Fig. 12a, Sec. 6.2.4]", "communication range at m_tr = 75 / 25 / 10",
-                       _cm([r[m]["range_cm_Pl<=0.5"] for m in (75, 25, 10)]), "21 / 33 / 45 cm", pair,
-                       "static facing pair, range = farthest distance with P_l <= 0.5 at every distance before it"))
+                       _cm([r[m]["range_cm_Pl<=0.5"] for m in (75, 25, 10)]) + " (P_l <= 0.5); "
+                       + _cm([r[m]["reliable_cm_Pe<0.01"] for m in (75, 25, 10)]) + " (P_e < 0.01)", "21 / 33 / 45 cm",
+                       pair + "; range = the farthest distance at which 100 messages were received",
+                       "static facing pair, 1 cm grid; range = farthest distance up to which every distance has P_l <= 0.5 (or P_e < 0.01)"))
         out.append(Row("[T20 Sec. 7, Fig. 11]", "reliable range (P_e < 0.01), m_tr = 5", _cm([r[5]["reliable_cm_Pe<0.01"]]), "61 cm", pair,
                        "static facing pair, P_e on aligned frames"))
     if "b" in results:
