@@ -187,8 +187,9 @@ class PauseStepSeeker:
     1. pause ``pause_steps`` control steps ("the robot pauses in a stationary state when measuring neighbor
        bearings"; one beacon / exchange round by default), zero action;
     2. read the observation: the direction of the centroid of the valid ``scale_free`` rows (the anchors it
-       has coordinates for, in its own frame; only the direction is used). With none, the mean bearing of
-       the valid ``range_bearing`` rows (the kinematic run's bearing-only fallback, counted); with neither,
+       has coordinates for, in its own frame; only the direction is used; straight ahead when the estimate
+       is exactly at the robot, as the thesis's robot "cannot stop"). With none, the mean bearing of the
+       valid ``range_bearing`` rows (the kinematic run's bearing-only fallback, counted); with neither,
        pause another round (counted);
     3. turn in place to that direction, open loop, at up to the platform's maximum angular speed;
     4. drive ``d_step`` (11 cm) at up to the maximum speed, then pause again.
@@ -221,8 +222,10 @@ class PauseStepSeeker:
         rb = obs["range_bearing"]
         seen = rb[..., 0] > 0.5
         bx, by = (rb[..., 2] * seen).sum(axis=1), (rb[..., 3] * seen).sum(axis=1)
-        has_sf = (count > 0) & (np.hypot(cx, cy) > 1e-9)
-        has_rb = seen.any(axis=1) & (np.hypot(bx, by) > 1e-9)
+        has_sf = count > 0
+        has_rb = seen.any(axis=1)
+        # an estimate exactly at the robot (a symmetric sector pattern) gives atan2(0, 0) = 0: straight ahead,
+        # as the thesis's robot "cannot stop"
         angle = np.where(has_sf, np.arctan2(cy, cx), np.arctan2(by, bx))
         return angle, np.where(has_sf, 1, np.where(has_rb, 2, 0))
 

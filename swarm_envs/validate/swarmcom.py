@@ -37,6 +37,7 @@ Run times are printed at the end of each run.
 from __future__ import annotations
 
 import argparse
+import functools
 import json
 import os
 import time
@@ -413,10 +414,11 @@ def _detector_counts(scenes: list, m_tr: float, rng: np.random.Generator, max_ra
     return {"n_c": np.concatenate(n_c), "n_c_any": np.concatenate(n_any)}
 
 
-def experiment_b(rng: np.random.Generator, quick: bool) -> dict[str, Any]:
+def experiment_b(rng: np.random.Generator, quick: bool, fig21_mtrs: tuple[float, ...] = FIG21_MTRS) -> dict[str, Any]:
     """Channels per robot [T20 Sec. 6.2.6, Figs. 20a, 21]: the noiseless amplitude count for both occlusion
     rules and every m_tr of ``M_TR_SWEEP``, and the detector count (:func:`detector_channels`, per-ray
-    occlusion) at each figure's m_tr (Fig. 20a: ``PAPER_MTR``; Fig. 21: ``FIG21_MTR`` and ``PAPER_MTR``)."""
+    occlusion) at each figure's m_tr (Fig. 20a: ``PAPER_MTR``; Fig. 21: ``fig21_mtrs``, default ``FIG21_MTR`` and
+    ``PAPER_MTR``)."""
     det_rng = rng.spawn(1)[0]  # the detector's draws: the scenes are the same with or without them
     if quick:
         counts = [1, 5, 10, 20, 40, 80, 120, 160, 200, 240, 272]
@@ -462,7 +464,7 @@ def experiment_b(rng: np.random.Generator, quick: bool) -> dict[str, Any]:
                 a = np.array([centre_amplitude(q, h, kmax, rule) for q, h in sc])
                 for m_tr in M_TR_SWEEP:
                     arena[n][f"{placement}_{rule}_mtr{m_tr}"] = _spread((a > m_tr).sum(axis=1).astype(float), PAPER_ARENA_NC[n])
-        for m_tr in FIG21_MTRS:
+        for m_tr in fig21_mtrs:
             det = _detector_counts(scenes["walk"], m_tr, det_rng, kmax)
             arena[n][f"walk_detector_mtr{m_tr}"] = _spread(det["n_c"].astype(float), PAPER_ARENA_NC[n])
             arena[n][f"walk_detector_any_mtr{m_tr}"] = _spread(det["n_c_any"].astype(float), PAPER_ARENA_NC[n])
@@ -475,7 +477,7 @@ def experiment_b(rng: np.random.Generator, quick: bool) -> dict[str, Any]:
         "arena_snapshots": {"uniform": arena_trials, "walk": replicas * snapshots},
         "rules": list(OCC_RULES),
         "m_tr_sweep": list(M_TR_SWEEP),
-        "fig21_m_tr": list(FIG21_MTRS),
+        "fig21_m_tr": list(fig21_mtrs),
         "channel_rule": {"frames": CHANNEL_FRAMES, "min_share": CHANNEL_MIN_SHARE},
         "peak_mean": max(c[key]["mean"] for c in curve),
         "overall_max": max(c[key]["max"] for c in curve),
@@ -715,8 +717,9 @@ def _plots(results: dict[str, Any], out_dir: str) -> list[str]:
         ax[0].set(xlabel="robot density (1/m^2)", ylabel="n_C", title=f"[T20 Fig. 20a]: 61 cm disc, m_tr={PAPER_MTR}")
         ax[0].legend(fontsize=7)
         ns = np.array(sorted(b["arena"]))
-        series = [(f"walk_detector_mtr{m}", f"detector m_tr={m}") for m in FIG21_MTRS] + [(f"walk_ray_mtr{m}", f"noiseless m_tr={m}") for m in M_TR_SWEEP]
-        for k, ((key, label), col) in enumerate(zip(series, ("k", "0.45", "C0", "C1", "C2", "C3"))):
+        series = [(f"walk_detector_mtr{m}", f"detector m_tr={m:g}") for m in b["fig21_m_tr"]] + [(f"walk_ray_mtr{m}", f"noiseless m_tr={m}") for m in M_TR_SWEEP]
+        colours = [str(g) for g in np.linspace(0.0, 0.6, len(b["fig21_m_tr"]))] + ["C0", "C1", "C2", "C3"]
+        for k, ((key, label), col) in enumerate(zip(series, colours)):
             st = [b["arena"][n][key] for n in ns]
             xs = ns + 0.5 * (k - (len(series) - 1) / 2)
             ax[1].errorbar(xs, [q["median"] for q in st], yerr=[[q["median"] - q["p10"] for q in st], [q["p90"] - q["median"] for q in st]], fmt="o", color=col, label=label)
@@ -795,8 +798,8 @@ def _print(results: dict[str, Any]) -> None:
         print(f"  72 x 72 cm arena [Fig. 21]: the paper's values are single snapshots; ours = distribution over {sn['walk']} random-walk")
         print(f"  snapshots [Alg. 1, one per 30 s; the detector count holds each snapshot still while the centre sends {CHANNEL_FRAMES} frames]")
         print(f"  and {sn['uniform']} uniform static placements (noiseless only): median [10%, 90%] (mean)")
-        cols = [(f"walk detector m_tr={m}", f"walk_detector_mtr{m}") for m in FIG21_MTRS]
-        cols += [(f"walk any m_tr={m}", f"walk_detector_any_mtr{m}") for m in FIG21_MTRS]
+        cols = [(f"walk detector m_tr={m:g}", f"walk_detector_mtr{m}") for m in b["fig21_m_tr"]]
+        cols += [(f"walk any m_tr={m:g}", f"walk_detector_any_mtr{m}") for m in b["fig21_m_tr"]]
         cols += [(f"walk noiseless m_tr={m}", f"walk_ray_mtr{m}") for m in FIG21_MTRS]
         cols += [(f"uniform noiseless m_tr={PAPER_MTR}", f"uniform_ray_mtr{PAPER_MTR}")]
         print(f"  {'robots':>6} | {'paper':>5} | " + " | ".join(f"{name:>25}" for name, _ in cols))
@@ -885,9 +888,11 @@ def rows(results: dict[str, Any]) -> list[Row]:
         fig21 = ("centre e-puck static sending s_1, 10 / 20 / 30 robots doing the random walk [Alg. 1] in 72 x 72 cm light their LEDs "
                  "on detecting it, counted every 30 s, 30 times per size; m_tr not stated (the mobile experiments of Sec. 6.2.2: 10)")
         snaps = b["arena_snapshots"]["walk"]
-        for m in FIG21_MTRS:
+        for m in b["fig21_m_tr"]:
             for label, key, how in (("detector", f"walk_detector_mtr{m}", f"median [10 %, 90 %] of {snaps} random-walk snapshots, each held still; detector: >= {CHANNEL_MIN_SHARE:.0%} of {CHANNEL_FRAMES} frames intact"),
                                     ("noiseless count", f"walk_ray_mtr{m}", f"median [10 %, 90 %] of {snaps} random-walk snapshots; noiseless amplitude > m_tr")):
+                if key not in arena[ns[0]]:
+                    continue  # the noiseless sweep covers M_TR_SWEEP only
                 cells = " / ".join(f"{arena[n][key]['median']:.0f} [{arena[n][key]['p10']:.0f}, {arena[n][key]['p90']:.0f}]" for n in ns)
                 out.append(Row("[T20 Fig. 21]", f"n_C with 10 / 20 / 30 robots, m_tr = {m} ({label})", cells,
                                " / ".join(str(arena[n]["paper"]) for n in ns), fig21, how))
@@ -942,15 +947,20 @@ def main(argv: list[str]) -> int:
     ap.add_argument("--quick", action="store_true", help="fewer trials/distances (well under a minute)")
     ap.add_argument("--json", action="store_true", help="print results as JSON")
     ap.add_argument("--out", default="validation_output", help="directory for plots")
+    ap.add_argument("--fig21-mtr", type=float, nargs="+", default=list(FIG21_MTRS), metavar="M_TR",
+                    help=f"(b) detection thresholds of the detector count in the 72 cm arena (default {' '.join(str(m) for m in FIG21_MTRS)})")
     ap.add_argument("--seed", type=int, default=2020)
     args = ap.parse_args(argv)
+    bad = [m for m in args.fig21_mtr if not 0 < m <= M_MAX - M_MIN]
+    if bad:
+        ap.error(f"--fig21-mtr values must be in (0, {M_MAX - M_MIN:g}] ADC counts, got {bad[0]}")
     rng = np.random.default_rng(args.seed)
     if args.fit_response:
         fit = fit_response_c()
         print(json.dumps(fit) if args.json else f"detector response fit (b = {fit['bias']}): 14 cm at 1800 bps for c in [{fit['c_low']:.3e}, {fit['c_high']:.3e}] s; c = {fit['c_fit']:.3e} s")
         return 0
     which = ["a", "b", "c", "d", "e"] if args.experiment == "all" else [args.experiment]
-    fns = {"a": experiment_a, "b": experiment_b, "c": experiment_c, "d": experiment_d, "e": experiment_e}
+    fns = {"a": experiment_a, "b": functools.partial(experiment_b, fig21_mtrs=tuple(int(m) if float(m).is_integer() else m for m in args.fig21_mtr)), "c": experiment_c, "d": experiment_d, "e": experiment_e}
     results: dict[str, Any] = {}
     timing = {}
     for w in which:
