@@ -500,13 +500,14 @@ def _plots(rows: list[dict], ee: dict, ee_env: dict | None, args) -> None:
     fig.savefig(os.path.join(args.out, "scale_free_rigidity.png"), dpi=120)
     plt.close(fig)
     runs = [("IR layer, ideal exchange", ee)] + ([("env stack", ee_env)] if ee_env is not None else [])
-    fig, axs = plt.subplots(len(runs), 2, figsize=(8, 3.2 * len(runs)), sharey="row", squeeze=False)
+    fig, axs = plt.subplots(len(runs), 2, figsize=(9, 3.2 * len(runs)), sharey="row", squeeze=False)
     for row, (label, run) in enumerate(runs):
         for ax, v, pap in zip(axs[row], ("alg1", "alg4"), (23.4, 19.4)):
             e = np.asarray(run["_thesis_errors"][v])
             ax.hist(e, bins=np.arange(0, 105, 5))
             ax.set_title(f"{label}, {v}: mean {e.mean() if e.size else float('nan'):.1f}% (paper {pap}%)", fontsize=9)
-            ax.set_xlabel("edge error (%), one fully connected robot per configuration")
+            ax.set_xlabel("edge error (%)")
+    fig.suptitle("[L Fig. 6.2] 2-hop edge error, one fully connected robot per configuration, best-fit scale", fontsize=10)
     fig.tight_layout()
     fig.savefig(os.path.join(args.out, "scale_free_edge_error.png"), dpi=120)
     plt.close(fig)
