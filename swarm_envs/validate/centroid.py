@@ -346,7 +346,7 @@ def experiment_env(
     }
 
 
-THESIS_SETUP = ("4 static r-ones in an arbitrary polygon, one seeker starting outside it at several places; it pauses for "
+THESIS_SETUP = ("real r-ones: 4 static in an arbitrary polygon, one seeker starting outside it at several places; it pauses for "
                 "each neighbour round, then steps d_step = 11 cm towards its scale-free centroid; distances inside the polygon [L Sec. 6.2.2, Fig. 6.4]")
 
 

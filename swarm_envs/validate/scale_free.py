@@ -315,7 +315,7 @@ def paper_for_bin(lo: float) -> str:
     return ""
 
 
-EDGE_SETUP = ("28 of 32 random connected configurations of 6 r-ones (4 failed: lost messages), one fully connected robot "
+EDGE_SETUP = ("real r-ones, camera ground truth: 28 of 32 random connected configurations of 6 (4 failed: lost messages), one fully connected robot "
               "each (140 edges), 22.5-degree sectors, best-fit scale per configuration [L Sec. 6.1]")
 VARIANT_NAMES = {"alg1": "Alg.1 (no noise sensitivity)", "alg1_anglebalance": "Alg.1 + ANGLEBALANCE", "alg4": "Alg.4 (AB + NS MST)"}
 VARIANT_PAPER = {"alg1": "23.4 %", "alg1_anglebalance": "-", "alg4": "19.4 %"}

@@ -877,7 +877,7 @@ def rows(results: dict[str, Any]) -> list[Row]:
     if "b" in results:
         b = results["b"]
         k = f"mtr{PAPER_MTR}"
-        disc = (f"centre + 1..272 static e-pucks at random in its 61 cm range, 10000 trials per density, m_tr = {PAPER_MTR} (61 cm); "
+        disc = (f"simulation: centre + 1..272 static e-pucks at random in its 61 cm range, 10000 trials per density, m_tr = {PAPER_MTR} (61 cm); "
                 "a channel: the receiver distinguishes s_0 from s_1 (signal below m_t,dyn) [Sec. 6.2.6]")
         det = f"{b['trials_per_density']} trials per density; detector: >= {CHANNEL_MIN_SHARE:.0%} of {CHANNEL_FRAMES} frames intact"
         curve = b["curve"]
@@ -888,7 +888,7 @@ def rows(results: dict[str, Any]) -> list[Row]:
                            f"{curve[-1][key]['mean']:.1f} / {curve[-1][key]['max']:.0f}", "6", disc, how))
         arena = b["arena"]
         ns = sorted(arena)
-        fig21 = ("centre e-puck static sending s_1, 10 / 20 / 30 robots doing the random walk [Alg. 1] in 72 x 72 cm light their LEDs "
+        fig21 = ("real e-pucks: centre static sending s_1, 10 / 20 / 30 robots doing the random walk [Alg. 1] in 72 x 72 cm light their LEDs "
                  "on detecting it, counted every 30 s, 30 times per size; m_tr not stated (the mobile experiments of Sec. 6.2.2: 10)")
         snaps = b["arena_snapshots"]["walk"]
         for m in b["fig21_m_tr"]:
