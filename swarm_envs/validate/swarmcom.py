@@ -1,15 +1,21 @@
-"""Validation of the SwarmCom simulation against [T20] (its Secs. 6, 7; docs/validation.md).
+"""Validation of the SwarmCom simulation against [T20] (Secs. 5-7).
 
-``python -m swarm_envs.validate swarmcom [--json] [--experiment a|b|c|d|e|all] [--out DIR] [--quick] [--fit-response]``
+``python -m swarm_envs.validate swarmcom [--json] [--experiment a|b|c|d|e|all] [--out DIR] [--no-plots] [--quick]
+[--fig21-mtr M ...] [--seed S] [--fit-response]``; each experiment draws from its own stream of the seed, so
+``--experiment x`` gives the numbers of x in a full run.
 
 (a) two static e-pucks facing each other, 310 bps, dynamic detector: communication range vs relative
     threshold m_tr (75, 25, 10 -> 21, 33, 45 cm [T20 Sec. 6.2.4, Fig. 12a]) and bit error probability vs
     distance (reliable, P_e < 0.01, up to 61 cm with m_tr = 5 [T20 Sec. 7, Fig. 11]);
 (b) channels per robot n_C vs density: a centre robot, range 61 cm, 1..272 others at random in that disc
-    (n_C bounded by ~15, 6 at hexagonal packing [T20 Sec. 6.2.6, Fig. 20a]) and the 72 x 72 cm arena
-    with 10, 20, 30 robots (n_C = 4, 6, 9 in single snapshots [Fig. 21]; ours: the distribution over
-    random-walk snapshots); per-ray line of sight (docs/design.md#infrared-physical-layer) beside the centre-line rule,
-    and the detection threshold m_tr swept over the paper's 61/45/33/21 cm settings;
+    (n_C bounded by ~15, 6 at hexagonal packing [T20 Sec. 6.2.6, Fig. 20a], m_tr = 5) and the 72 x 72 cm
+    arena with 10, 20, 30 robots (n_C = 4, 6, 9 in single snapshots [Fig. 21]; ours: the distribution over
+    random-walk snapshots; m_tr = 10, the mobile experiments' [Sec. 6.2.2], and 5). A robot is a channel
+    when it can distinguish the centre's s_0 from s_1 [Sec. 6.2.6]: counted through the simulated receiver
+    (:func:`detector_channels`: ADC noise, detector response, min over detectors, start detection and
+    dynamic threshold; it must receive at least half of the centre's frames intact) and, as a second row,
+    as a noiseless amplitude above m_tr (:func:`centre_amplitude`) for per-ray line of sight (as
+    simulated) and for a centre-line rule, with m_tr swept over the paper's 61/45/33/21 cm settings;
 (c) local broadcast vs flooding: 2..7 robots doing the random walk of [T20 Alg. 1] (t_m = 2 s) in the
     72 x 72 cm arena, 310 bps, m_tr = 10; message loss P_l (a message is lost for a robot that has not
     received it 2 s after it was queued) [T20 Sec. 6.2.2, Fig. 16b]; flooding is run with the network's
@@ -17,7 +23,9 @@
 (d) channel coding: measured 15-bit block (message) error with [15,11] and [15,1] vs the prediction
     1 - P_f of Eq. (34) from the P_e measured without coding [T20 Sec. 5.4, Fig. 13];
 (e) reliable range (P_e < 0.01) and communication range vs bit rate, static facing pair, m_tr = 5: 61 cm
-    at 310 bps, 14 cm at 1800 bps [T20 Sec. 7], the rates between (Figs. 10-12b, values not in the text),
+    at 310 bps, 14 cm at 1800 bps [T20 Sec. 7] -- a two-parameter fit (the detector response's c to 14 cm at
+    1800 bps, b to 61 cm at 310 bps), so these two agree by construction -- and the rates between, the
+    model's predictions (Figs. 10-12b, values not in the text),
     and the 21 cm setting of [T20 Sec. 6.2.5] at 310/1080/1670 bps. ``--fit-response`` refits the detector
     response's charge constant c to 14 cm at 1800 bps (:mod:`swarm_envs.comm.channel` docstring).
 
@@ -25,15 +33,17 @@ Everything runs the bit-level :class:`swarm_envs.comm.network.Network` over the 
 :func:`swarm_envs.ir.layer.compute_links`; independent static pairs (a, d) and independent arenas (c) are
 simulated side by side in one network, 3 m apart (beyond the 1 m IR range), so they cannot interact
 (the id field is then wider than for one pair: 8 bits instead of 6, a few more header bits).
-The default run takes ~3-4 minutes on 2 cores (plus ~1 minute for (e)), ``--quick`` ~15 s.
+Run times are printed at the end of each run.
 """
 
 from __future__ import annotations
 
 import argparse
+import functools
 import json
 import os
 import time
+from types import SimpleNamespace
 from typing import Any
 
 import numpy as np
@@ -42,8 +52,10 @@ from scipy.spatial import cKDTree
 from swarm_envs.comm.bch import error_free_probability
 from swarm_envs.comm.channel import M_MAX, M_MIN, RESPONSE_BIAS, ADCModel, gain_to_intensity
 from swarm_envs.comm.network import Network
+from swarm_envs.copies import CopyRandom
 from swarm_envs.ir.layer import compute_links, line_of_sight, occluder_width, pair_gains, pair_occluders, wrap_angle
 from swarm_envs.platforms import get_platform
+from swarm_envs.validate.report import Row, print_rows, rows_json
 
 PLATFORM = "epuck"
 SEP = 3.0  # m between independent scenes (> ir_range)
@@ -52,8 +64,12 @@ PAPER_RELIABLE_CM = 61.0  # [T20 Sec. 7]
 PAPER_ARENA_NC = {10: 4, 20: 6, 30: 9}  # [T20 Fig. 21]
 ARENA = 0.72  # m [T20 Sec. 6.1]
 DISC_R = 0.61  # m, communication range used for Fig. 20a
-OCC_RULES = ("ray", "centre")  # per-ray line of sight (docs/design.md#infrared-physical-layer, simulated) and the centre-line rule
-PAPER_MTR = 5  # Fig. 20a: the 61 cm range of m_tr = 5 [T20 Sec. 6.2.6, Table 12a]
+OCC_RULES = ("ray", "centre")  # per-ray line of sight (as simulated) and a centre-line rule (a pair cut by any robot on the segment)
+PAPER_MTR = 5  # Fig. 20a: the 61 cm range of m_tr = 5 [T20 Sec. 6.2.6 ("see Table 12a"), Sec. 7]
+#: Fig. 21's m_tr is not stated in [T20 Sec. 6.2.6]; the mobile experiments of Sec. 6.2.2 (and 6.2.3, configured
+#: "as in the flooding experiment") use m_tr = 10 (45 cm). Both that and Fig. 20a's m_tr = 5 are measured.
+FIG21_MTR = 10
+FIG21_MTRS = (FIG21_MTR, PAPER_MTR)
 M_TR_SWEEP = (5, 10, 25, 75)  # relative thresholds of the paper's ranges 61, 45, 33, 21 cm [Sec. 6.2.4, 7]
 PAPER_FIG20A = {"bound": 15, "densest": 6}  # [T20 Sec. 6.2.6]
 PAPER_BITRATE_RELIABLE = {310: 61.0, 1800: 14.0}  # cm, P_e < 0.01, m_tr = 5 [T20 Sec. 7]
@@ -225,21 +241,18 @@ def disc_configuration(n_others: int, rng: np.random.Generator, radius: float = 
     return _hex_disc(n_others, rng, radius, dmin, sweeps=60)
 
 
-def centre_amplitude(pos: np.ndarray, head: np.ndarray, max_range: float = DISC_R, occlusion: str = "ray") -> np.ndarray:
-    """Noiseless received amplitude (ADC counts below ambient, m_max - min over detectors of m) at every
-    robot when robot 0 transmits s1 with all emitters on; 0 for robots farther than ``max_range`` (m).
-
-    Same physics as the simulator (:func:`swarm_envs.ir.layer.pair_gains` with the occluders of
-    :func:`swarm_envs.ir.layer.pair_occluders`, [T20 Eqs. (7)-(22)] without noise), computed only for
-    the pairs (receiver k, transmitter 0). ``occlusion``: ``"ray"`` (per-ray line of sight, docs/design.md#infrared-physical-layer, as
-    simulated) or ``"centre"`` (the centre-segment rule).
-    """
+def centre_links(pos: np.ndarray, head: np.ndarray, max_range: float = DISC_R, occlusion: str = "ray") -> tuple[np.ndarray, np.ndarray]:
+    """The links (receiver k, transmitter 0) of every robot within ``max_range`` (m) of robot 0: the
+    receivers (P,) and their noiseless gains (P, n_detectors, n_emitters) with robot 0 lit on all
+    emitters, from the simulator's physics (:func:`swarm_envs.ir.layer.pair_gains` with the occluders of
+    :func:`swarm_envs.ir.layer.pair_occluders`, [T20 Eqs. (7)-(14)]). ``occlusion``: ``"ray"`` (per-ray
+    line of sight, as simulated) or ``"centre"`` (a pair is cut when a third robot crosses the segment
+    between the two centres)."""
     p = get_platform(PLATFORM)
-    amp = np.zeros(pos.shape[0])
     others = np.arange(1, pos.shape[0])
     others = others[np.hypot(*(pos[others] - pos[0]).T) <= max_range + 1e-12]
     if others.size == 0:
-        return amp
+        return others, np.zeros((0, p.n_detectors, p.n_emitters))
     tx = np.zeros(others.size, dtype=np.intp)
     occluders = None
     if occlusion == "centre":
@@ -253,7 +266,21 @@ def centre_amplitude(pos: np.ndarray, head: np.ndarray, max_range: float = DISC_
     d = pos[0] - pos[others]
     c, s = np.cos(head[others]), np.sin(head[others])
     rel = np.stack([c * d[:, 0] + s * d[:, 1], -s * d[:, 0] + c * d[:, 1]], axis=-1)
-    g = pair_gains(rel, wrap_angle(head[0] - head[others]), p, occluders=occluders)
+    return others, pair_gains(rel, wrap_angle(head[0] - head[others]), p, occluders=occluders)
+
+
+def centre_amplitude(pos: np.ndarray, head: np.ndarray, max_range: float = DISC_R, occlusion: str = "ray") -> np.ndarray:
+    """Noiseless received amplitude (ADC counts below ambient, m_max - min over detectors of m) at every
+    robot when robot 0 transmits s1 with all emitters on; 0 for robots farther than ``max_range`` (m).
+
+    The links of :func:`centre_links`, turned into counts by the measurement model without noise
+    [T20 Eqs. (15)-(22)]; no detector response, no start detection.
+    """
+    p = get_platform(PLATFORM)
+    amp = np.zeros(pos.shape[0])
+    others, g = centre_links(pos, head, max_range, occlusion)
+    if others.size == 0:
+        return amp
     y = gain_to_intensity(g.sum(axis=-1), p)
     m = np.floor((M_MAX - M_MIN) * (1.0 - y) + M_MIN).min(axis=1)
     amp[others] = M_MAX - m
@@ -268,6 +295,74 @@ def channels_of_centre(
     amplitude above m_tr; with one transmitter the dynamic threshold of Eq. (36) lies halfway between m_t
     and the signal, so "below m_t,dyn" is the same test)."""
     return int((centre_amplitude(pos, head, max_range, occlusion) > relative_threshold).sum())
+
+
+#: frames the centre robot sends per scene in the detector count, and the share of them a robot must receive
+#: intact to count as a channel (the same P_l <= 0.5 rule as the communication range of experiment (a))
+CHANNEL_FRAMES = 10
+CHANNEL_MIN_SHARE = 0.5
+
+
+def detector_channels(
+    scenes: list[tuple[np.ndarray, np.ndarray]],
+    relative_threshold: float,
+    rng: np.random.Generator,
+    frames: int = CHANNEL_FRAMES,
+    min_share: float = CHANNEL_MIN_SHARE,
+    max_range: float = DISC_R,
+    occlusion: str = "ray",
+) -> dict[str, np.ndarray]:
+    """n_C of each scene through the simulated receiver [T20 Sec. 6.2.6]: a robot is a channel when its
+    detector distinguishes the centre's s_0 from s_1, i.e. receives at least ``min_share`` of the centre's
+    ``frames`` frames intact.
+
+    Each scene ``(positions (n, 2) m, headings (n,) rad)`` with the centre as robot 0 is one env copy of a
+    bit-level :class:`swarm_envs.comm.network.Network` (310 bps, uncoded, m_tr = ``relative_threshold``).
+    Only the centre transmits (a random 8-bit payload whenever its queue is empty; the last steps drain),
+    over the links of :func:`centre_links`; every other robot receives with the full detector model: ADC
+    noise, the detector response, the minimum over its 8 detectors, start detection below
+    m_t = m_max - m_tr and the dynamic threshold of [T20 Eq. (36)]. "Intact" compares the decoded frame
+    with the one sent (ground truth, used for counting only). Scenes may differ in size; smaller ones are
+    padded with unlinked robots.
+
+    Returns ``n_c`` (S,) channels per scene, ``sent`` (S,) frames the centre put on air and, per scene, the
+    receivers' ``intact`` counts as a list of (n_s,) arrays (index 0, the centre, is 0).
+    """
+    S = len(scenes)
+    size = max(q.shape[0] for q, _ in scenes)
+    rx_parts, gain_parts = [], []
+    for b, (pos, head) in enumerate(scenes):
+        others, g = centre_links(pos, head, max_range, occlusion)
+        rx_parts.append(b * size + others)
+        gain_parts.append(g)
+    rx = np.concatenate(rx_parts).astype(np.int64)
+    links = SimpleNamespace(rx=rx, tx=(rx // size) * size, gains=np.concatenate(gain_parts))
+    streams = CopyRandom(list(rng.spawn(S)))
+    net = Network(PLATFORM, size, streams, bitrate=310, relative_threshold=relative_threshold, n_copies=S)
+    centres = np.arange(S) * size
+    steps_per_frame = int(np.ceil(net.frame_slots(8) / net.slots_per_step)) + 1
+    drain = 2 * steps_per_frame + 2
+    intact = np.zeros(S * size, dtype=np.int64)
+    payload_rng = rng.spawn(1)[0]
+    k = 0
+    while True:
+        sent = net.stats["tx_started_per_robot"][centres]
+        if sent.min() >= frames and not net.sending[centres].any():
+            break
+        wanted = centres[(sent + net.q_count[centres] < frames) & (net.q_count[centres] == 0)]
+        if wanted.size:
+            net.send_many(wanted, payload_rng.integers(0, 2, (wanted.size, 8)).astype(bool))
+        d = net.step(links)
+        if len(d):
+            ok = (d.origin == centres[d.receiver // size]) & ~d.corrupt & (d.kind == "app")
+            np.add.at(intact, d.receiver[ok], 1)
+        k += 1
+        if k > frames * steps_per_frame * 20 + drain:
+            raise RuntimeError("the centre robots did not get their frames on air")
+    sent = net.stats["tx_started_per_robot"][centres].astype(float)
+    per_scene = [intact[b * size : b * size + q.shape[0]] for b, (q, _) in enumerate(scenes)]
+    n_c = np.array([(c[1:] >= min_share * sent[b]).sum() for b, c in enumerate(per_scene)])
+    return {"n_c": n_c, "sent": sent, "intact": per_scene}
 
 
 def arena_configuration(n: int, rng: np.random.Generator, side: float = ARENA) -> np.ndarray:
@@ -300,7 +395,33 @@ def arena_walk_snapshots(n: int, rng: np.random.Generator, replicas: int, snapsh
     return out
 
 
-def experiment_b(rng: np.random.Generator, quick: bool) -> dict[str, Any]:
+def _spread(nc: np.ndarray, paper: float | None = None) -> dict[str, float]:
+    """Mean, max, min, std and the 10/25/50/75/90 % points of a sample of channel counts."""
+    q = np.percentile(nc, [10, 25, 50, 75, 90])
+    out = {"mean": float(nc.mean()), "max": float(nc.max()), "min": float(nc.min()), "std": float(nc.std()),
+           "p10": q[0], "q25": q[1], "median": q[2], "q75": q[3], "p90": q[4], "samples": int(nc.size)}
+    if paper is not None:
+        out["P(=paper)"] = float(np.mean(nc == paper))
+    return out
+
+
+def _detector_counts(scenes: list, m_tr: float, rng: np.random.Generator, max_range: float, chunk: int = 100) -> dict[str, np.ndarray]:
+    """:func:`detector_channels` over many scenes, ``chunk`` scenes per network: channels with at least half
+    of the frames intact (``n_c``) and with at least one (``n_c_any``)."""
+    n_c, n_any = [], []
+    for k in range(0, len(scenes), chunk):
+        r = detector_channels(scenes[k : k + chunk], m_tr, rng, max_range=max_range)
+        n_c.append(r["n_c"])
+        n_any.append(np.array([(c[1:] >= 1).sum() for c in r["intact"]]))
+    return {"n_c": np.concatenate(n_c), "n_c_any": np.concatenate(n_any)}
+
+
+def experiment_b(rng: np.random.Generator, quick: bool, fig21_mtrs: tuple[float, ...] = FIG21_MTRS) -> dict[str, Any]:
+    """Channels per robot [T20 Sec. 6.2.6, Figs. 20a, 21]: the noiseless amplitude count for both occlusion
+    rules and every m_tr of ``M_TR_SWEEP``, and the detector count (:func:`detector_channels`, per-ray
+    occlusion) at each figure's m_tr (Fig. 20a: ``PAPER_MTR``; Fig. 21: ``fig21_mtrs``, default ``FIG21_MTR`` and
+    ``PAPER_MTR``)."""
+    det_rng = rng.spawn(1)[0]  # the detector's draws: the scenes are the same with or without them
     if quick:
         counts = [1, 5, 10, 20, 40, 80, 120, 160, 200, 240, 272]
         trials = 20
@@ -314,9 +435,11 @@ def experiment_b(rng: np.random.Generator, quick: bool) -> dict[str, Any]:
     for n in counts:
         ncs = {(rule, m_tr): np.empty(trials) for rule in OCC_RULES for m_tr in M_TR_SWEEP}
         placed = np.empty(trials)
+        scenes = []
         for t in range(trials):
             pos = disc_configuration(n, rng)
             head = rng.uniform(-np.pi, np.pi, pos.shape[0])
+            scenes.append((pos, head))
             placed[t] = pos.shape[0] - 1
             for rule in OCC_RULES:
                 amp = centre_amplitude(pos, head, DISC_R, rule)
@@ -325,8 +448,10 @@ def experiment_b(rng: np.random.Generator, quick: bool) -> dict[str, Any]:
         row: dict[str, Any] = {"n_others": n, "n_placed": placed.mean(), "density_per_m2": (placed.mean() + 1) / area}
         for rule in OCC_RULES:
             for m_tr in M_TR_SWEEP:
-                nc = ncs[rule, m_tr]
-                row[f"{rule}_mtr{m_tr}"] = {"mean": nc.mean(), "max": float(nc.max()), "min": float(nc.min()), "std": nc.std()}
+                row[f"{rule}_mtr{m_tr}"] = _spread(ncs[rule, m_tr])
+        det = _detector_counts(scenes, PAPER_MTR, det_rng, DISC_R)
+        row[f"detector_mtr{PAPER_MTR}"] = _spread(det["n_c"].astype(float))
+        row[f"detector_any_mtr{PAPER_MTR}"] = _spread(det["n_c_any"].astype(float))
         curve.append(row)
     arena: dict[int, Any] = {}
     kmax = get_platform(PLATFORM).ir_range
@@ -340,13 +465,13 @@ def experiment_b(rng: np.random.Generator, quick: bool) -> dict[str, Any]:
             for rule in OCC_RULES:
                 a = np.array([centre_amplitude(q, h, kmax, rule) for q, h in sc])
                 for m_tr in M_TR_SWEEP:
-                    nc = (a > m_tr).sum(axis=1)
-                    q = np.percentile(nc, [10, 25, 50, 75, 90])
-                    arena[n][f"{placement}_{rule}_mtr{m_tr}"] = {
-                        "mean": nc.mean(), "p10": q[0], "q25": q[1], "median": q[2], "q75": q[3], "p90": q[4],
-                        "P(=paper)": float(np.mean(nc == PAPER_ARENA_NC[n])), "snapshots": int(nc.size),
-                    }
+                    arena[n][f"{placement}_{rule}_mtr{m_tr}"] = _spread((a > m_tr).sum(axis=1).astype(float), PAPER_ARENA_NC[n])
+        for m_tr in fig21_mtrs:
+            det = _detector_counts(scenes["walk"], m_tr, det_rng, kmax)
+            arena[n][f"walk_detector_mtr{m_tr}"] = _spread(det["n_c"].astype(float), PAPER_ARENA_NC[n])
+            arena[n][f"walk_detector_any_mtr{m_tr}"] = _spread(det["n_c_any"].astype(float), PAPER_ARENA_NC[n])
     key = f"ray_mtr{PAPER_MTR}"
+    dkey = f"detector_mtr{PAPER_MTR}"
     return {
         "curve": curve,
         "trials_per_density": trials,
@@ -354,10 +479,16 @@ def experiment_b(rng: np.random.Generator, quick: bool) -> dict[str, Any]:
         "arena_snapshots": {"uniform": arena_trials, "walk": replicas * snapshots},
         "rules": list(OCC_RULES),
         "m_tr_sweep": list(M_TR_SWEEP),
+        "fig21_m_tr": list(fig21_mtrs),
+        "channel_rule": {"frames": CHANNEL_FRAMES, "min_share": CHANNEL_MIN_SHARE},
         "peak_mean": max(c[key]["mean"] for c in curve),
         "overall_max": max(c[key]["max"] for c in curve),
         "densest_mean": curve[-1][key]["mean"],
         "densest_max": curve[-1][key]["max"],
+        "detector_peak_mean": max(c[dkey]["mean"] for c in curve),
+        "detector_overall_max": max(c[dkey]["max"] for c in curve),
+        "detector_densest_mean": curve[-1][dkey]["mean"],
+        "detector_densest_max": curve[-1][dkey]["max"],
     }
 
 
@@ -508,7 +639,7 @@ def bitrate_ranges(
 
 
 def fit_response_c(bias: float = RESPONSE_BIAS, target_cm: float = PAPER_BITRATE_RELIABLE[1800], steps: int = 300, seed: int = 11) -> dict[str, float]:
-    """Fit the detector response's charge constant c (s) for a given bias b (docs/design.md#swarmcom-messaging, channel module
+    """Fit the detector response's charge constant c (s) for a given bias b ([T20 Sec. 7], channel module
     docstring): bisection in log c, on a static facing pair at 1800 bps (7..30 cm, 1 cm steps, ``steps``
     control steps per distance, fixed seed), for the two edges of the plateau where the reliable range
     equals ``target_cm`` (14 cm [T20 Sec. 7]); returns both edges and their geometric mean (the fit)."""
@@ -577,23 +708,25 @@ def _plots(results: dict[str, Any], out_dir: str) -> list[str]:
         files.append(_save(fig, out_dir, "swarmcom_a_range_pe.png"))
     if "b" in results:
         b = results["b"]
-        fig, ax = plt.subplots(1, 2, figsize=(11, 4))
+        fig, ax = plt.subplots(1, 2, figsize=(12, 4.5))
         x = [c["density_per_m2"] for c in b["curve"]]
-        for rule, col in (("ray", "C0"), ("centre", "C1")):
-            key = f"{rule}_mtr{PAPER_MTR}"
-            ax[0].plot(x, [c[key]["mean"] for c in b["curve"]], "o-", color=col, label=f"{rule}: mean")
-            ax[0].plot(x, [c[key]["max"] for c in b["curve"]], "s--", color=col, label=f"{rule}: max")
+        for key, label, col in ((f"detector_mtr{PAPER_MTR}", "detector", "k"), (f"ray_mtr{PAPER_MTR}", "noiseless, per ray", "C0"),
+                                (f"centre_mtr{PAPER_MTR}", "noiseless, centre line", "C1")):
+            ax[0].plot(x, [c[key]["mean"] for c in b["curve"]], "o-", color=col, label=f"{label}: mean")
+            ax[0].plot(x, [c[key]["max"] for c in b["curve"]], "s--", color=col, lw=0.8, label=f"{label}: max")
         ax[0].axhline(PAPER_FIG20A["bound"], color="gray", ls=":", label="paper bound ~15")
         ax[0].axhline(PAPER_FIG20A["densest"], color="gray", ls="--", label="paper densest 6")
-        ax[0].set(xlabel="robot density (1/m^2)", ylabel="n_C", title=f"channels of the centre robot (61 cm disc, m_tr={PAPER_MTR})")
+        ax[0].set(xlabel="robot density (1/m^2)", ylabel="n_C", title=f"[T20 Fig. 20a]: 61 cm disc, m_tr={PAPER_MTR}")
         ax[0].legend(fontsize=7)
-        ns = sorted(b["arena"])
-        for k, (m_tr, col) in enumerate(zip(M_TR_SWEEP, ("C0", "C1", "C2", "C3"))):
-            st = [b["arena"][n][f"walk_ray_mtr{m_tr}"] for n in ns]
-            xs = np.array(ns) + 0.6 * (k - 1.5)
-            ax[1].errorbar(xs, [q["median"] for q in st], yerr=[[q["median"] - q["p10"] for q in st], [q["p90"] - q["median"] for q in st]], fmt="o", color=col, label=f"m_tr={m_tr}: median, 10-90%")
-        ax[1].plot(ns, [b["arena"][n]["paper"] for n in ns], "r*", ms=10, label="paper Fig. 21 (one snapshot each)")
-        ax[1].set(xlabel="robots in 72x72 cm", ylabel="n_C", title="arena, random-walk snapshots, per-ray occlusion")
+        ns = np.array(sorted(b["arena"]))
+        series = [(f"walk_detector_mtr{m}", f"detector m_tr={m:g}") for m in b["fig21_m_tr"]] + [(f"walk_ray_mtr{m}", f"noiseless m_tr={m}") for m in M_TR_SWEEP]
+        colours = [str(g) for g in np.linspace(0.0, 0.6, len(b["fig21_m_tr"]))] + ["C0", "C1", "C2", "C3"]
+        for k, ((key, label), col) in enumerate(zip(series, colours)):
+            st = [b["arena"][n][key] for n in ns]
+            xs = ns + 0.5 * (k - (len(series) - 1) / 2)
+            ax[1].errorbar(xs, [q["median"] for q in st], yerr=[[q["median"] - q["p10"] for q in st], [q["p90"] - q["median"] for q in st]], fmt="o", color=col, label=label)
+        ax[1].plot(ns, [b["arena"][n]["paper"] for n in ns], "r*", ms=11, label="paper (one snapshot each)")
+        ax[1].set(xlabel="robots in 72 x 72 cm", ylabel="n_C (median, 10-90 %)", title="[T20 Fig. 21]: random-walk snapshots")
         ax[1].legend(fontsize=7)
         files.append(_save(fig, out_dir, "swarmcom_b_channels.png"))
     if "c" in results:
@@ -614,7 +747,8 @@ def _plots(results: dict[str, Any], out_dir: str) -> list[str]:
         ax.axhline(0.01, color="k", ls=":")
         for br, x in PAPER_BITRATE_RELIABLE.items():
             ax.axvline(x, color="gray", ls="--", lw=0.8)
-        ax.set(xlabel="distance (cm)", ylabel="P_e (floored at 1e-5)", title="P_e vs distance and bit rate, m_tr=5 (paper: 61 / 14 cm dashed)")
+        ax.set(xlabel="distance (cm)", ylabel="P_e (floored at 1e-5)",
+               title="P_e vs distance and bit rate, m_tr=5\n(paper 61 / 14 cm dashed: fitted with two parameters; rates between predicted)")
         ax.legend(fontsize=7)
         files.append(_save(fig, out_dir, "swarmcom_e_bitrate.png"))
     if "d" in results:
@@ -645,35 +779,37 @@ def _print(results: dict[str, Any]) -> None:
         print("  P_e / P_l vs distance (m_tr = 5): " + ", ".join(f"{c5['distance_cm'][i]:.0f}cm {c5['P_e'][i]:.1e}/{c5['P_l'][i]:.2f}" for i in sel))
     if "b" in results:
         b = results["b"]
-        print(f"(b) channels n_C of the centre robot, 61 cm disc, {b['trials_per_density']} trials per density, m_tr = {PAPER_MTR}")
-        print("  a channel: noiseless received amplitude above m_tr (m < m_t); 'ray' = per-ray line of sight (docs/design.md#infrared-physical-layer, as")
-        print("  simulated), 'centre' = the centre-segment rule")
-        print(f"  {'others':>6} | {'placed':>6} | {'rho/m^2':>7} | {'ray mean':>8} | {'ray max':>7} | {'centre mean':>11} | {'centre max':>10}")
         k = f"mtr{PAPER_MTR}"
+        print(f"(b) channels n_C of the centre robot, 61 cm disc, {b['trials_per_density']} trials per density, m_tr = {PAPER_MTR}")
+        print(f"  detector: the receiver's simulated detector gets >= {CHANNEL_MIN_SHARE:.0%} of the centre's {CHANNEL_FRAMES} frames intact")
+        print("  (ADC noise, detector response, min over detectors, start detection, dynamic threshold; per-ray line of")
+        print("  sight); 'any' = at least one intact frame. noiseless: received amplitude above m_tr without noise or")
+        print("  detector ('ray' per-ray line of sight as simulated, 'centre' a pair cut by any robot on the centre line)")
+        print(f"  {'others':>6} | {'placed':>6} | {'rho/m^2':>7} | {'detector mean':>13} | {'max':>4} | {'any mean':>8} | {'ray mean':>8} | {'max':>4} | {'centre mean':>11} | {'max':>4}")
         for c in b["curve"]:
-            print(f"  {c['n_others']:>6} | {c['n_placed']:6.0f} | {c['density_per_m2']:7.1f} | {c['ray_' + k]['mean']:8.2f} | {c['ray_' + k]['max']:7.0f} | {c['centre_' + k]['mean']:11.2f} | {c['centre_' + k]['max']:10.0f}")
-        print(f"  Fig. 20a, bound: paper ~{PAPER_FIG20A['bound']} (its curve; the text reads as a per-density average, see README)")
-        for rule in OCC_RULES:
-            key = f"{rule}_{k}"
-            print(
-                f"    {rule:>6}: peak of the mean curve {max(c[key]['mean'] for c in b['curve']):.1f}, max over all trials "
-                f"{max(c[key]['max'] for c in b['curve']):.0f}; densest: mean {b['curve'][-1][key]['mean']:.1f}, max {b['curve'][-1][key]['max']:.0f} (paper 6)"
-            )
-        print("  other detection thresholds (per ray): peak mean / densest mean, by m_tr: " + ", ".join(
+            d, da, r, ce = c["detector_" + k], c["detector_any_" + k], c["ray_" + k], c["centre_" + k]
+            print(f"  {c['n_others']:>6} | {c['n_placed']:6.0f} | {c['density_per_m2']:7.1f} | {d['mean']:13.2f} | {d['max']:4.0f} | {da['mean']:8.2f} | "
+                  f"{r['mean']:8.2f} | {r['max']:4.0f} | {ce['mean']:11.2f} | {ce['max']:4.0f}")
+        for label, key in (("detector", "detector_" + k), ("detector, any frame", "detector_any_" + k), ("noiseless ray", "ray_" + k), ("noiseless centre", "centre_" + k)):
+            print(f"  {label:>20}: peak of the mean curve {max(c[key]['mean'] for c in b['curve']):.1f}, max over all trials "
+                  f"{max(c[key]['max'] for c in b['curve']):.0f}; densest: mean {b['curve'][-1][key]['mean']:.1f}, max {b['curve'][-1][key]['max']:.0f}")
+        print(f"  paper [Fig. 20a]: bounded by ~{PAPER_FIG20A['bound']}, {PAPER_FIG20A['densest']} at the densest packing")
+        print("  noiseless, other detection thresholds (per ray): peak mean / densest mean, by m_tr: " + ", ".join(
             f"{m}: {max(c[f'ray_mtr{m}']['mean'] for c in b['curve']):.1f} / {b['curve'][-1][f'ray_mtr{m}']['mean']:.1f}" for m in M_TR_SWEEP
         ))
         sn = b["arena_snapshots"]
         print(f"  72 x 72 cm arena [Fig. 21]: the paper's values are single snapshots; ours = distribution over {sn['walk']} random-walk")
-        print(f"  snapshots [Alg. 1, one per 30 s] and {sn['uniform']} uniform static placements: median [10%, 90%] (mean)")
-        print(f"  {'robots':>6} | {'paper':>5} | " + " | ".join(f"{f'{pl} {rule} m_tr={m}':>24}" for pl in ("walk", "uniform") for rule in OCC_RULES for m in (PAPER_MTR,)))
+        print(f"  snapshots [Alg. 1, one per 30 s; the detector count holds each snapshot still while the centre sends {CHANNEL_FRAMES} frames]")
+        print(f"  and {sn['uniform']} uniform static placements (noiseless only): median [10%, 90%] (mean)")
+        cols = [(f"walk detector m_tr={m:g}", f"walk_detector_mtr{m}") for m in b["fig21_m_tr"]]
+        cols += [(f"walk any m_tr={m:g}", f"walk_detector_any_mtr{m}") for m in b["fig21_m_tr"]]
+        cols += [(f"walk noiseless m_tr={m}", f"walk_ray_mtr{m}") for m in FIG21_MTRS]
+        cols += [(f"uniform noiseless m_tr={PAPER_MTR}", f"uniform_ray_mtr{PAPER_MTR}")]
+        print(f"  {'robots':>6} | {'paper':>5} | " + " | ".join(f"{name:>25}" for name, _ in cols))
         for n, r in b["arena"].items():
-            cells = []
-            for pl in ("walk", "uniform"):
-                for rule in OCC_RULES:
-                    q = r[f"{pl}_{rule}_mtr{PAPER_MTR}"]
-                    cells.append(f"{q['median']:4.0f} [{q['p10']:.0f}, {q['p90']:.0f}] ({q['mean']:.1f})")
-            print(f"  {n:>6} | {r['paper']:>5} | " + " | ".join(f"{c:>24}" for c in cells))
-        print("  detection threshold sweep, walk snapshots, per ray: median [10%, 90%] (mean) by m_tr (paper ranges 61/45/33/21 cm)")
+            cells = [f"{r[key]['median']:4.0f} [{r[key]['p10']:.0f}, {r[key]['p90']:.0f}] ({r[key]['mean']:.1f})" for _, key in cols]
+            print(f"  {n:>6} | {r['paper']:>5} | " + " | ".join(f"{c:>25}" for c in cells))
+        print("  noiseless threshold sweep, walk snapshots, per ray: median [10%, 90%] (mean) by m_tr (paper ranges 61/45/33/21 cm)")
         for n, r in b["arena"].items():
             print(f"  {n:>6} | {r['paper']:>5} | " + " | ".join(
                 f"m_tr={m}: {r[f'walk_ray_mtr{m}']['median']:.0f} [{r[f'walk_ray_mtr{m}']['p10']:.0f}, {r[f'walk_ray_mtr{m}']['p90']:.0f}] ({r[f'walk_ray_mtr{m}']['mean']:.1f})" for m in M_TR_SWEEP
@@ -708,7 +844,8 @@ def _print(results: dict[str, Any]) -> None:
 
 def _print_e(e: dict[str, Any]) -> None:
     print(f"(e) reliable range vs bit rate, static facing pair, m_tr = 5, dynamic detector ({e['steps']} steps per distance, {e['step_cm']:.0f} cm grid)")
-    print("  fitted: the response's c to 14 cm at 1800 bps (b: smallest value keeping 61 cm at 310 bps); other rates: predictions")
+    print("  a two-parameter fit: the detector response's c is fitted to 14 cm at 1800 bps and its b to 61 cm at 310 bps")
+    print("  (the smallest b keeping 61 cm), so 310 and 1800 bps agree by construction; the rates between are the model's predictions")
     print(f"  {'bps':>5} | {'ours P_e<0.01':>13} | {'paper P_e<0.01':>14} | {'ours P_l<=0.5':>13} | {'max P_e within P_l<=0.5':>23}")
     for br, r in e["ranges"].items():
         pp = e["paper"].get(br)
@@ -718,6 +855,78 @@ def _print_e(e: dict[str, Any]) -> None:
     print("  no numbers in the text: only the trend (higher bit rate, shorter reliable range) is compared.")
     print("  range restricted to 21 cm (m_tr = 75) [T20 Sec. 6.2.5: bit rate matters little for P_e then]:")
     print("  " + ", ".join(f"{br} bps: range {r['range_cm_Pl<=0.5']:.0f} cm, max P_e {r['max_Pe_within_range']:.3f}" for br, r in e["restricted_mtr75"].items()))
+
+
+def _cm(values: list[float]) -> str:
+    return " / ".join("-" if v is None or np.isnan(v) else f"{v:.0f}" for v in values) + " cm"
+
+
+def rows(results: dict[str, Any]) -> list[Row]:
+    """The compared figures of the experiments in ``results``, one :class:`Row` each."""
+    out: list[Row] = []
+    pair = "2 static e-pucks facing each other, 310 bps, dynamic detector; receiver moved away 1 cm at a time, 100 messages per distance [Sec. 5.1]"
+    if "a" in results:
+        r = results["a"]["ranges"]
+        out.append(Row("[T20 Fig. 12a, Sec. 6.2.4]", "communication range at m_tr = 75 / 25 / 10",
+                       _cm([r[m]["range_cm_Pl<=0.5"] for m in (75, 25, 10)]) + " (P_l <= 0.5); "
+                       + _cm([r[m]["reliable_cm_Pe<0.01"] for m in (75, 25, 10)]) + " (P_e < 0.01)", "21 / 33 / 45 cm",
+                       pair + "; range = the farthest distance at which 100 messages were received",
+                       "static facing pair, 1 cm grid; range = farthest distance up to which every distance has P_l <= 0.5 (or P_e < 0.01)"))
+        out.append(Row("[T20 Sec. 7, Fig. 11]", "reliable range (P_e < 0.01), m_tr = 5", _cm([r[5]["reliable_cm_Pe<0.01"]]), "61 cm", pair,
+                       "static facing pair, P_e on aligned frames"))
+    if "b" in results:
+        b = results["b"]
+        k = f"mtr{PAPER_MTR}"
+        disc = (f"simulation: centre + 1..272 static e-pucks at random in its 61 cm range, 10000 trials per density, m_tr = {PAPER_MTR} (61 cm); "
+                "a channel: the receiver distinguishes s_0 from s_1 (signal below m_t,dyn) [Sec. 6.2.6]")
+        det = f"{b['trials_per_density']} trials per density; detector: >= {CHANNEL_MIN_SHARE:.0%} of {CHANNEL_FRAMES} frames intact"
+        curve = b["curve"]
+        for label, key, how in (("detector", "detector_" + k, det),
+                                ("noiseless count", "ray_" + k, f"{b['trials_per_density']} trials per density; noiseless amplitude > m_tr, no detector")):
+            out.append(Row("[T20 Fig. 20a]", f"n_C, peak of the mean over trials ({label})", f"{max(c[key]['mean'] for c in curve):.1f}", "~15", disc, how))
+            out.append(Row("[T20 Fig. 20a]", f"n_C at the densest packing, mean / max ({label})",
+                           f"{curve[-1][key]['mean']:.1f} / {curve[-1][key]['max']:.0f}", "6", disc, how))
+        arena = b["arena"]
+        ns = sorted(arena)
+        fig21 = ("real e-pucks: centre static sending s_1, 10 / 20 / 30 robots doing the random walk [Alg. 1] in 72 x 72 cm light their LEDs "
+                 "on detecting it, counted every 30 s, 30 times per size; m_tr not stated (the mobile experiments of Sec. 6.2.2: 10)")
+        snaps = b["arena_snapshots"]["walk"]
+        for m in b["fig21_m_tr"]:
+            for label, key, how in (("detector", f"walk_detector_mtr{m}", f"median [10 %, 90 %] of {snaps} random-walk snapshots, each held still; detector: >= {CHANNEL_MIN_SHARE:.0%} of {CHANNEL_FRAMES} frames intact"),
+                                    ("noiseless count", f"walk_ray_mtr{m}", f"median [10 %, 90 %] of {snaps} random-walk snapshots; noiseless amplitude > m_tr")):
+                if key not in arena[ns[0]]:
+                    continue  # the noiseless sweep covers M_TR_SWEEP only
+                cells = " / ".join(f"{arena[n][key]['median']:.0f} [{arena[n][key]['p10']:.0f}, {arena[n][key]['p90']:.0f}]" for n in ns)
+                out.append(Row("[T20 Fig. 21]", f"n_C with 10 / 20 / 30 robots, m_tr = {m} ({label})", cells,
+                               " / ".join(str(arena[n]["paper"]) for n in ns), fig21, how))
+    if "c" in results:
+        c = results["c"]
+        ns = sorted(c["broadcast"])
+        fewer = [n for n in ns if c["flooding"][n]["P_l"] < c["broadcast"][n]["P_l"]]
+        out.append(Row("[T20 Fig. 16b]", "P_l broadcast / flooding with 2 .. 7 robots",
+                       ", ".join(f"{c['broadcast'][n]['P_l']:.2f}/{c['flooding'][n]['P_l']:.2f}" for n in ns) + f" (flooding lower for n = {fewer})",
+                       "flooding below broadcast as the group grows (values in the figure only)",
+                       "2-7 e-pucks, random walk [Alg. 1, t_m = 2 s] in 72 x 72 cm, 310 bps, m_tr = 10, 1000 messages, lost after 2 s [Secs. 6.1, 6.2.2]",
+                       f"{c['broadcast'][ns[0]]['messages']} messages per point; flooding with a CRC-8 (ours)"))
+    if "d" in results:
+        d = results["d"]
+        x = np.array(d["distance_cm"])
+        near = x <= 50
+        worst = {code: np.nanmax(np.array(d[code]["measured_block_error"], float)[near]) for code in ("15,15", "15,11", "15,1")}
+        out.append(Row("[T20 Fig. 13, Sec. 5.4]", "largest 15-bit block error within 50 cm, [15,15] / [15,11] / [15,1]",
+                       " / ".join(f"{worst[k]:.1e}" for k in ("15,15", "15,11", "15,1")), "[15,1] predicted <= 1e-16 up to 50 cm (Eq. (34))",
+                       "2 static facing e-pucks, 310 and 1800 bps, measured uncoded error and the Eq. (34) prediction for c = 1, 7",
+                       "static facing pair, 310 bps, the codes run in the simulator (a measured 0 means below ~1 / blocks)"))
+    if "e" in results:
+        e = results["e"]["ranges"]
+        fit = "a two-parameter fit: c fitted to 14 cm at 1800 bps, b to 61 cm at 310 bps; agreement at these two rates is by construction"
+        out.append(Row("[T20 Sec. 7]", "reliable range (P_e < 0.01) at 310 / 1800 bps, m_tr = 5",
+                       _cm([e[310]["reliable_cm_Pe<0.01"], e[1800]["reliable_cm_Pe<0.01"]]), "61 / 14 cm", pair.replace("310 bps", "310 and 1800 bps"), fit))
+        mid = [br for br in e if 310 < br < 1800]
+        out.append(Row("[T20 Figs. 10-12b]", f"reliable range at {' / '.join(str(br) for br in mid)} bps, m_tr = 5",
+                       _cm([e[br]["reliable_cm_Pe<0.01"] for br in mid]), "- (figures only)", pair.replace("310 bps", "each bit rate"),
+                       "the model's prediction between the two fitted rates"))
+    return out
 
 
 def _jsonable(x: Any) -> Any:
@@ -741,26 +950,34 @@ def main(argv: list[str]) -> int:
     ap.add_argument("--quick", action="store_true", help="fewer trials/distances (well under a minute)")
     ap.add_argument("--json", action="store_true", help="print results as JSON")
     ap.add_argument("--out", default="validation_output", help="directory for plots")
+    ap.add_argument("--no-plots", action="store_true")
+    ap.add_argument("--fig21-mtr", type=float, nargs="+", default=list(FIG21_MTRS), metavar="M_TR",
+                    help=f"(b) detection thresholds of the detector count in the 72 cm arena (default {' '.join(str(m) for m in FIG21_MTRS)})")
     ap.add_argument("--seed", type=int, default=2020)
     args = ap.parse_args(argv)
-    rng = np.random.default_rng(args.seed)
+    bad = [m for m in args.fig21_mtr if not 0 < m <= M_MAX - M_MIN]
+    if bad:
+        ap.error(f"--fig21-mtr values must be in (0, {M_MAX - M_MIN:g}] ADC counts, got {bad[0]}")
     if args.fit_response:
         fit = fit_response_c()
         print(json.dumps(fit) if args.json else f"detector response fit (b = {fit['bias']}): 14 cm at 1800 bps for c in [{fit['c_low']:.3e}, {fit['c_high']:.3e}] s; c = {fit['c_fit']:.3e} s")
         return 0
     which = ["a", "b", "c", "d", "e"] if args.experiment == "all" else [args.experiment]
-    fns = {"a": experiment_a, "b": experiment_b, "c": experiment_c, "d": experiment_d, "e": experiment_e}
+    fns = {"a": experiment_a, "b": functools.partial(experiment_b, fig21_mtrs=tuple(int(m) if float(m).is_integer() else m for m in args.fig21_mtr)), "c": experiment_c, "d": experiment_d, "e": experiment_e}
     results: dict[str, Any] = {}
     timing = {}
     for w in which:
         t0 = time.perf_counter()
-        results[w] = fns[w](np.random.default_rng(rng.integers(2**63)), args.quick)
+        # each experiment its own stream of the seed: --experiment x gives the same numbers as x in a full run
+        results[w] = fns[w](np.random.default_rng([args.seed, "abcde".index(w)]), args.quick)
         timing[w] = time.perf_counter() - t0
-    files = _plots(results, args.out)
+    files = [] if args.no_plots else _plots(results, args.out)
     if args.json:
-        print(json.dumps(_jsonable({"results": results, "plots": files, "seconds": timing}), indent=1))
+        print(json.dumps(_jsonable({"results": results, "rows": rows_json(rows(results)), "plots": files, "seconds": timing}), indent=1))
     else:
         _print(results)
-        print("plots: " + ", ".join(files))
+        print_rows("SwarmCom [T20]", rows(results))
+        if files:
+            print("plots: " + ", ".join(files))
         print("seconds: " + ", ".join(f"{k}={v:.1f}" for k, v in timing.items()))
     return 0
