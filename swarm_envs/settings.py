@@ -22,7 +22,8 @@ from __future__ import annotations
 
 import math
 import numbers
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
+import argparse
 from dataclasses import dataclass, replace
 from typing import Any
 
@@ -44,6 +45,8 @@ __all__ = [
     "validate_settings",
     "task_settings",
     "settings_table",
+    "cli_type",
+    "OneLineArgumentParser",
 ]
 
 #: Robots (agents and static robots) of one env copy at most: the IR layer's work and memory grow with
@@ -284,8 +287,8 @@ COMMON_SETTINGS: dict[str, Setting] = {
     "physics_substeps": Int(
         None, "pymunk sub-steps per control step", low=1, high=MAX_SUBSTEPS, allow_none=True,
         why="None: the platform's default (8 Droplet, 21 e-puck, 32 r-one; swarm_envs.world.default_substeps), at "
-        "which robots overlap by at most 2 % of a diameter; at least the platform's minimum (2 Droplet, 4 e-puck, "
-        f"6 r-one; fewer let robots close more than 10 % of a diameter per sub-step); at most {MAX_SUBSTEPS} "
+        "which robots overlap by at most 2 % of a diameter; at least the platform's minimum (3 Droplet, 4 e-puck, "
+        f"6 r-one; fewer let robots close more than 10 % of a diameter per sub-step, or leave their arcs); at most {MAX_SUBSTEPS} "
         "(the cost grows linearly: 1,000 sub-steps of 10 robots take ~5 ms per step)",
     ),
 }
@@ -362,3 +365,33 @@ def settings_table(settings: Mapping[str, Setting] | None = None) -> str:
         rule = setting.rule().replace("|", "\\|")
         rows.append(f"| `{key}` | `{setting.default!r}` | {rule} | {setting.why or '-'} |")
     return "\n".join(rows) + "\n"
+
+
+def cli_type(setting: Setting, what: str = "value") -> Callable[[str], Any]:
+    """An argparse ``type`` that applies ``setting``'s rule to a command-line string: a bad value (``--trials
+    0``, ``--noise nan``) is argparse's usage error naming the option, exit code 2, like a bad env setting."""
+    def parse(text: str) -> Any:
+        value: Any = text
+        if isinstance(setting, (Int, Real)):
+            if getattr(setting, "allow_none", False) and text.strip().lower() == "none":
+                value = None
+            else:
+                try:
+                    value = int(text) if isinstance(setting, Int) else float(text)
+                except ValueError:
+                    raise argparse.ArgumentTypeError(f"{what} must be {setting.rule()}, got {text!r:.80}") from None
+        try:
+            return setting.check(what, value)
+        except SettingsError as err:
+            raise argparse.ArgumentTypeError(str(err)) from None
+
+    parse.__name__ = setting.rule()
+    return parse
+
+
+class OneLineArgumentParser(argparse.ArgumentParser):
+    """argparse whose usage errors are one line, ``prog: error: message (see --help)``, exit code 2 (the
+    command-line tools' errors, like train.py's)."""
+
+    def error(self, message: str) -> None:  # type: ignore[override]
+        self.exit(2, f"{self.prog}: error: {' '.join(message.split())} (see --help)\n")

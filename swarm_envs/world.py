@@ -15,7 +15,7 @@ sub-step to the platform: the smallest count (at least 8) at which two robots cl
 :data:`DEFAULT_CLOSING` (1.75 %) of a diameter per sub-step -- 8 for the Droplet, 21 for the e-puck, 32
 for the r-one -- which keeps every overlap and every wall penetration within :data:`MAX_OVERLAP` (2 %) of
 a diameter (``benchmarks/physics_substeps.py`` measures the worst case over dense crushes). The motors'
-force is sized to what tracking needs, a full reversal within one sub-step with a 25 % margin
+force is sized to what tracking needs, the largest velocity change of one sub-step with a 25 % margin
 (:func:`motor_limits`), so the solver's iterations are not spent fighting a motor far stronger than the
 contacts can absorb. The env settings refuse fewer sub-steps than :func:`min_substeps` (robots closing
 more than :data:`MAX_CLOSING` of a diameter per sub-step). A placement (:meth:`World.check_placement`)
@@ -83,7 +83,7 @@ MAX_OVERLAP = 0.02
 PLACEMENT_OVERLAP = 0.5
 #: fraction of a diameter a robot of a placement may reach past a wall (its centre stays half a radius inside)
 PLACEMENT_WALL_DEPTH = 0.25
-#: motor force over what a full reversal within one sub-step needs
+#: motor force over the largest velocity change of one sub-step (:func:`motor_limits`)
 MOTOR_MARGIN = 1.25
 #: pymunk solver iterations per sub-step (contacts and motor joints)
 SOLVER_ITERATIONS = 10
@@ -196,18 +196,21 @@ def default_substeps(platform: Platform) -> int:
 
 def min_substeps(platform: Platform) -> int:
     """The fewest sub-steps per control step the platform may use: two robots close at most
-    :data:`MAX_CLOSING` of a diameter per sub-step, and at least 2 (with one, the motors act only from the
-    next control step on)."""
+    :data:`MAX_CLOSING` of a diameter per sub-step, and at least 3 (the motors then keep every robot on its
+    exact arc, :func:`motor_limits`)."""
     need = 2.0 * platform.max_speed * CONTROL_STEP / (MAX_CLOSING * platform.diameter)
-    return max(2, math.ceil(need - 1e-9))
+    return max(3, math.ceil(need - 1e-9))
 
 
 def motor_limits(platform: Platform, substeps: int) -> tuple[float, float]:
-    """The motors' largest force (N) and torque (N m): :data:`MOTOR_MARGIN` times what changes the velocity
-    from full speed one way to full speed the other within one sub-step (the control velocities of the
-    module docstring ask for up to ``2 dt / (dt - h)`` times the maximum), linear and angular."""
+    """The motors' largest force (N) and torque (N m): :data:`MOTOR_MARGIN` times the largest velocity
+    change the control velocities of the module docstring ask for within one sub-step, linear and angular.
+
+    A control velocity is ``c = (D - h u) / (dt - h)`` with ``|D| <= v dt`` and ``u`` the previous one, so
+    ``|c| <= v dt / (dt - 2 h)`` however the commands alternate, and a change ``c - u`` is at most twice
+    that (3 or more sub-steps; with 2 the bound grows without limit, with 1 the motors act a step late)."""
     h = CONTROL_STEP / substeps
-    reach = 2.0 * CONTROL_STEP / (CONTROL_STEP - h) if substeps > 1 else 2.0
+    reach = 2.0 * CONTROL_STEP / (CONTROL_STEP - 2 * h) if substeps >= 3 else 2.0 * substeps
     moment = pymunk.moment_for_circle(platform.mass, 0.0, platform.radius)
     force = MOTOR_MARGIN * platform.mass * reach * platform.max_speed / h
     torque = MOTOR_MARGIN * moment * reach * platform.max_angular_speed / h
