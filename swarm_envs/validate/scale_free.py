@@ -30,7 +30,6 @@ is tuned to the 23.4 / 19.4%.
 
 from __future__ import annotations
 
-import argparse
 import json
 import os
 import sys
@@ -39,6 +38,7 @@ import time
 import numpy as np
 
 from swarm_envs.sensing.scale_free import coordinates_all, knowledge_from_matrix, null_space_lengths
+from swarm_envs.settings import Int, OneLineArgumentParser, Real, cli_type
 
 PAPER = {
     "rigid_k1_deg4_min": 50.0,
@@ -212,19 +212,24 @@ def paper_for_bin(lo: float) -> str:
 
 
 def main(argv: list[str]) -> int:
-    ap = argparse.ArgumentParser(prog="python -m swarm_envs.validate scale-free", description=__doc__.split("\n")[0])
+    ap = OneLineArgumentParser(prog="python -m swarm_envs.validate scale-free", description=__doc__.split("\n")[0])
     ap.add_argument("--json", action="store_true", help="print a JSON summary instead of tables")
-    ap.add_argument("--trials", type=int, default=100, help="trials per population (thesis: 100)")
-    ap.add_argument("--configs", type=int, default=None, help="6-robot configurations for the edge-error test (default 10 x trials/4, min 28)")
-    ap.add_argument("--populations", type=int, nargs="+", default=[20, 30, 40, 50])
-    ap.add_argument("--ks", type=int, nargs="+", default=[1, 2, 3])
-    ap.add_argument("--workspace", type=float, default=1.0, help="side of the square workspace (m) for experiment 2")
-    ap.add_argument("--arc-range", type=float, nargs=2, default=[63.0, 74.0], metavar=("MIN", "MAX"),
+    ap.add_argument("--trials", type=cli_type(Int(100, low=1, high=100_000)), default=100, help="trials per population (thesis: 100)")
+    ap.add_argument("--configs", type=cli_type(Int(None, low=1, high=1_000_000)), default=None,
+                    help="6-robot configurations for the edge-error test (default 10 x trials/4, min 28)")
+    ap.add_argument("--populations", type=cli_type(Int(20, low=3, high=1000)), nargs="+", default=[20, 30, 40, 50])
+    ap.add_argument("--ks", type=cli_type(Int(1, low=1, high=4)), nargs="+", default=[1, 2, 3])
+    ap.add_argument("--workspace", type=cli_type(Real(1.0, low=0.0, low_open=True, high=100.0, unit="of metres")), default=1.0,
+                    help="side of the square workspace (m) for experiment 2")
+    ap.add_argument("--arc-range", type=cli_type(Real(63.0, low=0.0, low_open=True, high=360.0, unit="of degrees")), nargs=2,
+                    default=[63.0, 74.0], metavar=("MIN", "MAX"),
                     help="receiver-arc / transmitter-cone spread (deg) of the hardware-noise run (thesis: 63-74)")
-    ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--seed", type=cli_type(Int(0, low=0, high=2**63 - 1)), default=0)
     ap.add_argument("--out", default="validation_output", help="directory for plots")
     ap.add_argument("--no-plots", action="store_true")
     args = ap.parse_args(argv)
+    if args.arc_range[0] > args.arc_range[1]:
+        ap.error(f"argument --arc-range: MIN must not exceed MAX, got {args.arc_range}")
     rng = np.random.default_rng(args.seed)
     t0 = time.time()
     rows = rigidity_experiment(rng, args.populations, args.trials, args.ks)

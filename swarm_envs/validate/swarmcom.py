@@ -30,7 +30,6 @@ The default run takes ~3-4 minutes on 2 cores (plus ~1 minute for (e)), ``--quic
 
 from __future__ import annotations
 
-import argparse
 import json
 import os
 import time
@@ -44,6 +43,7 @@ from swarm_envs.comm.channel import M_MAX, M_MIN, RESPONSE_BIAS, ADCModel, gain_
 from swarm_envs.comm.network import Network
 from swarm_envs.ir.layer import compute_links, line_of_sight, occluder_width, pair_gains, pair_occluders, wrap_angle
 from swarm_envs.platforms import get_platform
+from swarm_envs.settings import Int, OneLineArgumentParser, cli_type
 
 PLATFORM = "epuck"
 SEP = 3.0  # m between independent scenes (> ir_range)
@@ -735,13 +735,13 @@ def _jsonable(x: Any) -> Any:
 
 
 def main(argv: list[str]) -> int:
-    ap = argparse.ArgumentParser(prog="python -m swarm_envs.validate swarmcom", description=__doc__.split("\n\n")[0])
+    ap = OneLineArgumentParser(prog="python -m swarm_envs.validate swarmcom", description=__doc__.split("\n\n")[0])
     ap.add_argument("--experiment", default="all", choices=["a", "b", "c", "d", "e", "all"])
     ap.add_argument("--fit-response", action="store_true", help="refit the detector response's charge constant c (channel module docstring) and exit")
     ap.add_argument("--quick", action="store_true", help="fewer trials/distances (well under a minute)")
     ap.add_argument("--json", action="store_true", help="print results as JSON")
     ap.add_argument("--out", default="validation_output", help="directory for plots")
-    ap.add_argument("--seed", type=int, default=2020)
+    ap.add_argument("--seed", type=cli_type(Int(2020, low=0, high=2**63 - 1)), default=2020)
     args = ap.parse_args(argv)
     rng = np.random.default_rng(args.seed)
     if args.fit_response:
