@@ -33,7 +33,7 @@ from typing import Any
 import numpy as np
 import yaml
 
-__all__ = ["ConfigError", "DEFAULTS", "load_config", "apply_overrides", "validate", "resolve"]
+__all__ = ["ConfigError", "DEFAULTS", "BOUNDS", "load_config", "apply_overrides", "validate", "resolve", "bounds_table"]
 
 
 class ConfigError(ValueError):
@@ -370,3 +370,13 @@ def resolve(cfg: dict[str, Any]) -> dict[str, Any]:
     if out["agent"]["scripted"] is None:
         out["agent"]["scripted"] = scripted_policy(out["task"])
     return out
+
+
+def bounds_table() -> str:
+    """A Markdown table of :data:`BOUNDS`: config key, range and the reason for it."""
+    rows = ["| config key | range | why |", "|---|---|---|"]
+    for key, (low, high, why) in BOUNDS.items():
+        low_s, high_s = (str(b) if isinstance(b, int) else f"{b:g}" for b in (low, high))
+        span = f"({low_s}, {high_s}]" if key in _OPEN_LOW else f"[{low_s}, {high_s}]"
+        rows.append(f"| `{key}` | {span} | {why} |")
+    return "\n".join(rows) + "\n"

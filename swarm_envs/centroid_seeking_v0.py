@@ -33,7 +33,14 @@ ANCHOR_DRAWS = 10
 class CentroidSeekingTask(Task):
     """Centroid-seeking rewards and metrics over all env copies; extra kwarg ``n_anchors`` (default 4, >= 3)."""
 
-    SETTINGS = {"n_robots": 1, "n_anchors": Int(4, "static robots on a convex polygon", low=3, high=1000)}
+    SETTINGS = {
+        "n_robots": 1,
+        "n_anchors": Int(
+            4, "static robots on a convex polygon", low=3, high=1000,
+            why="at least 3 corners for a polygon around the centroid; at most 1,000 static robots (they must also fit on "
+            "their circle, checked when the env is built)",
+        ),
+    }
     METRICS = {"mean_distance_second_half": "final", "mean_distance_to_centroid": "final"}
     HEADLINE = ("mean_distance_second_half", -1)
     SCRIPTED_POLICY = "swarm_envs.agents.scripted:CentroidSeeker"

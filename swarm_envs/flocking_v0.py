@@ -26,7 +26,9 @@ __all__ = ["FlockingTask", "FlockingEnv", "raw_env", "parallel_env", "env"]
 class FlockingTask(Task):
     """Flocking rewards and metrics over all env copies; extra kwarg ``collision_penalty`` (default 0.1)."""
 
-    SETTINGS = {"collision_penalty": Real(0.1, "weight of the fraction of robots bumping", low=0.0, high=1000.0)}
+    SETTINGS = {
+        "collision_penalty": Real(0.1, "weight of the fraction of robots bumping", low=0.0, high=1000.0, why="a reward weight; rewards stay within +-1000 per step")
+    }
     METRICS = {"polarisation": "mean", "cohesion": "mean", "collision_fraction": "mean"}
     HEADLINE = ("polarisation", +1)
     SCRIPTED_POLICY = "swarm_envs.agents.scripted:OrientationFlocking"
