@@ -384,7 +384,8 @@ def spawn_positions(
         check_capacity(n, radius, region, lattice_gap)
     placed = np.empty((0, 2))
     stalled = 0
-    for _ in range(max_tries):
+    room = region.half - radius - 0.5 * gap > 0  # random placement keeps the gap from the walls too
+    for _ in range(max_tries if room else 0):
         need = n - len(placed)
         if need == 0 or stalled >= SPAWN_STALL_ROUNDS:
             break
