@@ -1,4 +1,4 @@
-"""Centroid seeking: seekers move to the centroid of static anchor robots (SPEC 6, [L] Sec. 6.2).
+"""Centroid seeking: seekers move to the centroid of static anchor robots ([L] Sec. 6.2).
 
 ``n_anchors`` static robots (default 4) stand at the corners of a random convex polygon; they are not
 agents but still emit infrared and talk, so seekers can sense them. The agents are the ``n_robots``
@@ -230,7 +230,7 @@ def parallel_env(
 
     ## Description
 
-    Centroid seeking ([L] Sec. 6.2, SPEC 6): ``n_anchors`` static robots stand at the corners of a
+    Centroid seeking ([L] Sec. 6.2): ``n_anchors`` static robots stand at the corners of a
     random convex polygon; the ``n_robots`` seekers (the agents, ``robot_0`` ..) should reach the
     anchors' centroid. Anchors are not agents, but they emit infrared and talk, so seekers sense them
     like any robot (for example through scale-free coordinates).

@@ -358,7 +358,7 @@ def spawn_positions(
     arena: Arena,
     region: Arena | None = None,
     gap: float | None = None,
-    max_tries: int = 200,
+    max_tries: int = 50,
     avoid: np.ndarray | None = None,
     avoid_distance: float = 0.0,
     lattice_gap: float = 0.0,
