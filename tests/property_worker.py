@@ -84,17 +84,18 @@ class EnvWorker:
         """:func:`try_env` in the child; ``("crash", exit code, "")`` or ``("hang", seconds, "")`` if it dies
         or takes longer than ``timeout`` seconds (the child is then restarted)."""
         self.conn.send((env_id, kwargs, num_envs))
+        timed_out = False
         try:
             if self.conn.poll(timeout):
                 return self.conn.recv()
-        except (EOFError, OSError):
-            pass
-        alive = self.proc.is_alive()
+            timed_out = True
+        except (EOFError, OSError):  # the child closed the pipe: it died
+            self.proc.join(timeout=10)
         self.proc.kill()
         self.proc.join()
         code = self.proc.exitcode
         self._start()
-        return ("hang", str(timeout), "") if alive else ("crash", str(code), "")
+        return ("hang", str(timeout), "") if timed_out else ("crash", str(code), "")
 
     def close(self) -> None:
         try:

@@ -275,6 +275,9 @@ def test_the_worker_reports_crashes_and_hangs(env_worker, monkeypatch):
     kind, code, _ = env_worker.run("swarm_envs/Flocking-v0", {**BASE, "platform": broken}, "single", EXAMPLE_TIME_LIMIT)
     assert kind == "crash" and code != "0"
     assert env_worker.run("swarm_envs/Flocking-v0", BASE, "single", EXAMPLE_TIME_LIMIT)[0] == "ok"
+    # an example slower than its time limit is a hang
+    assert env_worker.run("swarm_envs/Flocking-v0", {**BASE, "n_robots": 2000}, "single", 0.05)[0] == "hang"
+    assert env_worker.run("swarm_envs/Flocking-v0", BASE, "single", EXAMPLE_TIME_LIMIT)[0] == "ok"
 
 
 # -- train.py configs: a one-line error naming the key and exit code 2, or a run that starts -----------------
