@@ -30,7 +30,7 @@ from typing import Any
 from swarm_envs.comm.bch import SUPPORTED as BCH_CODES
 from swarm_envs.comm.protocol import MAX_PAYLOAD
 from swarm_envs.platforms import PLATFORMS, Platform, get_platform
-from swarm_envs.world import MAX_SUBSTEPS, default_substeps, min_substeps
+from swarm_envs.world import MAX_CLOSING, MAX_SUBSTEPS, default_substeps, min_substeps
 
 __all__ = [
     "Setting",
@@ -287,8 +287,8 @@ COMMON_SETTINGS: dict[str, Setting] = {
     "physics_substeps": Int(
         None, "pymunk sub-steps per control step", low=1, high=MAX_SUBSTEPS, allow_none=True,
         why="None: the platform's default (8 Droplet, 21 e-puck, 32 r-one; swarm_envs.world.default_substeps), at "
-        "which robots overlap by at most 2 % of a diameter at the default arena size; at least the platform's minimum (3 Droplet, 4 e-puck, "
-        f"6 r-one; fewer let robots close more than 10 % of a diameter per sub-step, or leave their arcs); at most {MAX_SUBSTEPS} "
+        "which robots overlap by at most 2 % of a diameter at the default arena size; at least the platform's minimum (3 Droplet, 8 e-puck, "
+        f"11 r-one; fewer let robots close more than 5 % of a diameter per sub-step, or leave their arcs); at most {MAX_SUBSTEPS} "
         "(the cost grows linearly: 1,000 sub-steps of 10 robots take ~5 ms per step)",
     ),
 }
@@ -346,7 +346,7 @@ def validate_settings(task: Any, settings: Mapping[str, Any]) -> dict[str, Any]:
         raise SettingsError(
             "physics_substeps",
             f"physics_substeps={substeps} is too few for platform {platform.name!r}: at least {min_substeps(platform)} "
-            f"(fewer let two robots close more than 10 % of a diameter per sub-step; None: its default {default_substeps(platform)})",
+            f"(fewer let two robots close more than {MAX_CLOSING:.0%} of a diameter per sub-step; None: its default {default_substeps(platform)})",
         )
     if cfg["rb_near_model"] and platform.name != "droplet":
         raise SettingsError("rb_near_model", "rb_near_model=True is the Droplet firmware's low-power fit; use platform='droplet'")

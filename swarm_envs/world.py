@@ -69,9 +69,9 @@ CONTROL_STEP = 0.1
 DEFAULT_CLOSING = 0.0175
 #: the fewest sub-steps a platform gets by default
 MIN_DEFAULT_SUBSTEPS = 8
-#: fraction of a diameter two robots may close per sub-step at most (any ``physics_substeps``): beyond it
-#: crushes of many robots overlap by more than :data:`PLACEMENT_OVERLAP`
-MAX_CLOSING = 0.1
+#: fraction of a diameter two robots may close per sub-step at most (any ``physics_substeps``): with more,
+#: crushes of hundreds of robots overlap by half a diameter (:data:`PLACEMENT_OVERLAP`)
+MAX_CLOSING = 0.05
 #: sub-steps per control step at most (the ``physics_substeps`` setting's bound: cost grows linearly)
 MAX_SUBSTEPS = 1000
 #: fraction of a diameter robots overlap (or enter a wall) at most at the default sub-steps and densities
@@ -79,7 +79,8 @@ MAX_OVERLAP = 0.02
 #: fraction of a diameter two robots of a placement (``reset(options=...)``) may overlap: a deeper overlap
 #: (centres closer than one radius) is a mistake, such as two robots on one spot. The physics itself
 #: stays far below it (``benchmarks/physics_substeps.py``): <= 2 % at the default sub-steps and densities,
-#: ~10 % in a crush of 1,500 robots, ~30 % in crushes of hundreds of robots at the fewest sub-steps
+#: ~13 % in a crush of 1,500 robots covering 60 % of the arena, ~23 % in such a crush of 400 robots at the
+#: fewest sub-steps
 PLACEMENT_OVERLAP = 0.5
 #: fraction of a diameter a robot of a placement may reach past a wall (its centre stays half a radius inside)
 PLACEMENT_WALL_DEPTH = 0.25

@@ -67,11 +67,11 @@ def test_default_substeps_per_platform_and_the_minimum_is_enforced():
     env = swarm_envs.make("swarm_envs/Flocking-v0", platform="rone", sensing="ideal")
     assert env.config["physics_substeps"] is None and env.world.substeps == 32
     assert swarm_envs.make("swarm_envs/Flocking-v0", physics_substeps=12, sensing="ideal").world.substeps == 12
-    with pytest.raises(SettingsError, match=r"physics_substeps=5 is too few for platform 'rone': at least 6") as err:
-        swarm_envs.make("swarm_envs/Flocking-v0", platform="rone", physics_substeps=5)
+    with pytest.raises(SettingsError, match=r"physics_substeps=10 is too few for platform 'rone': at least 11") as err:
+        swarm_envs.make("swarm_envs/Flocking-v0", platform="rone", physics_substeps=10)
     assert err.value.key == "physics_substeps"
-    assert min_substeps(PLATFORMS["epuck"]) == 4
-    swarm_envs.make("swarm_envs/Flocking-v0", platform="epuck", physics_substeps=4, sensing="ideal").reset(seed=0)
+    assert {name: min_substeps(p) for name, p in PLATFORMS.items()} == {"droplet": 3, "epuck": 8, "rone": 11}
+    swarm_envs.make("swarm_envs/Flocking-v0", platform="epuck", physics_substeps=8, sensing="ideal").reset(seed=0)
 
 
 @pytest.mark.parametrize("platform", sorted(PLATFORMS))
