@@ -108,10 +108,10 @@ class Staging:
     Raises :class:`TrainError` if the directory cannot be made (``out`` is not writable)."""
 
     def __init__(self, out: Path) -> None:
-        self.out = out
+        self.out = Path(os.path.abspath(out))  # "." or "runs/.." get a real name and parent
         try:
-            out.parent.mkdir(parents=True, exist_ok=True)
-            self.path = Path(tempfile.mkdtemp(prefix=f".{out.name}.", suffix=".partial", dir=out.parent))
+            self.out.parent.mkdir(parents=True, exist_ok=True)
+            self.path = Path(tempfile.mkdtemp(prefix=f".{self.out.name}.", suffix=".partial", dir=self.out.parent))
         except OSError as err:
             raise TrainError(f"output directory '{out}' is not writable: {err.strerror or err}") from None
 
@@ -136,27 +136,25 @@ class Staging:
             raise TrainError(f"could not write '{self.final(path)}': {err.strerror or err}") from None
 
     def publish(self) -> None:
-        """Move the staged files into ``out``: a new (or empty) ``out`` is the staging directory renamed; an
-        ``out`` without a run gets the files added; a run in ``out`` (allowed with ``--force``) is set aside,
-        replaced by the staged files and deleted, keeping ``out``'s other files. Ctrl-C waits until it ends."""
+        """Move the staged files into ``out``: a new ``out`` is the staging directory renamed; otherwise the
+        run already in ``out`` (allowed with ``--force``) is first moved aside and deleted once the staged
+        files are in, keeping ``out`` itself (a shell inside it stays there) and its other files. Ctrl-C
+        waits until it ends."""
         with _sigint_ignored():
             try:
-                if not self.out.exists() or (self.out.is_dir() and not any(self.out.iterdir())):
+                if not self.out.exists():
                     os.replace(self.path, self.out)
                     return
-                if not run_entries(self.out):
-                    for entry in self.path.iterdir():
-                        os.replace(entry, self.out / entry.name)
-                    self.path.rmdir()
-                    return
-                old = Path(tempfile.mkdtemp(prefix=f".{self.out.name}.", suffix=".replaced", dir=self.out.parent))
-                os.replace(self.out, old / "run")
-                os.replace(self.path, self.out)
-                kept = set(run_entries(old / "run"))
-                for entry in (old / "run").iterdir():
-                    if entry.name not in kept and not (self.out / entry.name).exists():
-                        os.replace(entry, self.out / entry.name)
-                shutil.rmtree(old, ignore_errors=True)
+                old, aside = run_entries(self.out), None
+                if old:
+                    aside = Path(tempfile.mkdtemp(prefix=f".{self.out.name}.", suffix=".replaced", dir=self.out.parent))
+                    for name in old:
+                        os.replace(self.out / name, aside / name)
+                for entry in self.path.iterdir():
+                    os.replace(entry, self.out / entry.name)
+                self.path.rmdir()
+                if aside is not None:
+                    shutil.rmtree(aside, ignore_errors=True)
             except OSError as err:
                 raise TrainError(
                     f"could not move the finished files from '{self.path}' into '{self.out}': {err.strerror or err}"
