@@ -249,9 +249,14 @@ def _check_bounds(dotted: str, value: Any) -> None:
     above = number > low if dotted in _OPEN_LOW else number >= low
     if not (math.isfinite(number) and above and number <= high):
         kind = "an integer" if isinstance(value, numbers.Integral) else "a finite number"
-        low_s, high_s = (str(b) if isinstance(b, int) else f"{b:g}" for b in (low, high))
-        span = f"({low_s}, {high_s}]" if dotted in _OPEN_LOW else f"[{low_s}, {high_s}]"
-        raise ConfigError(f"config key {dotted!r} must be {kind} in {span} ({why}), got {value!r:.80}")
+        raise ConfigError(f"config key {dotted!r} must be {kind} in {_span(dotted)} ({why}), got {value!r:.80}")
+
+
+def _span(dotted: str) -> str:
+    """The range of :data:`BOUNDS` ``dotted`` as text, ``[low, high]`` or ``(low, high]``."""
+    low, high, _ = BOUNDS[dotted]
+    low_s, high_s = (str(b) if isinstance(b, int) else f"{b:g}" for b in (low, high))
+    return f"({low_s}, {high_s}]" if dotted in _OPEN_LOW else f"[{low_s}, {high_s}]"
 
 
 def _check_batch(cfg: dict[str, Any], env: dict[str, int]) -> None:
@@ -375,8 +380,6 @@ def resolve(cfg: dict[str, Any]) -> dict[str, Any]:
 def bounds_table() -> str:
     """A Markdown table of :data:`BOUNDS`: config key, range and the reason for it."""
     rows = ["| config key | range | why |", "|---|---|---|"]
-    for key, (low, high, why) in BOUNDS.items():
-        low_s, high_s = (str(b) if isinstance(b, int) else f"{b:g}" for b in (low, high))
-        span = f"({low_s}, {high_s}]" if key in _OPEN_LOW else f"[{low_s}, {high_s}]"
-        rows.append(f"| `{key}` | {span} | {why} |")
+    for key, (_, _, why) in BOUNDS.items():
+        rows.append(f"| `{key}` | {_span(key)} | {why} |")
     return "\n".join(rows) + "\n"
