@@ -16,19 +16,24 @@ tasks (``flocking``), and has five sections besides ``task``, ``imports``, ``see
   torch threads, checkpoints;
 - ``eval``: seeds and episode settings for the final comparison.
 
-Unknown keys, wrong types and bad values raise :class:`ConfigError` naming the dotted key.
+Unknown keys, wrong types and bad values raise :class:`ConfigError` naming the dotted key: every number is
+finite and within bounds whose reasons :data:`BOUNDS` states (e.g. ``seed`` < 2**32, the seeds numpy and
+SB3 take), every section is a mapping with string keys, and the env settings pass the env's own validator
+and build. Nothing is written while checking, and a run only starts once the whole config has passed.
 """
 
 from __future__ import annotations
 
 import copy
+import math
 import numbers
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import yaml
 
-__all__ = ["ConfigError", "DEFAULTS", "load_config", "apply_overrides", "validate", "resolve"]
+__all__ = ["ConfigError", "DEFAULTS", "BOUNDS", "load_config", "apply_overrides", "validate", "resolve", "bounds_table"]
 
 
 class ConfigError(ValueError):
@@ -77,12 +82,38 @@ DEFAULTS: dict[str, Any] = {
 }
 
 _CHOICES = {"agent.activation": ("tanh", "relu")}
-_POSITIVE_INT = {"agent.n_steps", "agent.batch_size", "agent.n_epochs", "train.total_timesteps", "train.n_envs", "train.n_workers",
-                 "train.torch_threads", "eval.n_seeds"}
-_NON_NEGATIVE_INT = {"train.checkpoint_freq", "seed", "eval.seed_start"}
-_POSITIVE_FLOAT = {"agent.learning_rate", "agent.clip_range", "agent.max_grad_norm", "agent.reward_scale"}
-_UNIT_FLOAT = {"agent.gamma", "agent.gae_lambda"}
-_NON_NEGATIVE_FLOAT = {"agent.ent_coef", "agent.vf_coef"}
+#: every numeric key: (low, high, reason for the bounds); floats must also be finite. ``low`` is exclusive
+#: for the keys of :data:`_OPEN_LOW`.
+BOUNDS: dict[str, tuple[float, float, str]] = {
+    "seed": (0, 2**32 - 1, "numpy's and SB3's global seeding takes 32-bit seeds"),
+    "agent.learning_rate": (0.0, 1.0, "Adam steps beyond 1 diverge"),
+    "agent.n_steps": (1, 1_000_000, "rollout steps per robot; the rollout buffer is also bounded in bytes"),
+    "agent.batch_size": (1, 10_000_000, "at most the rollout size"),
+    "agent.n_epochs": (1, 1000, "passes over each rollout"),
+    "agent.gamma": (0.0, 1.0, "a discount factor"),
+    "agent.gae_lambda": (0.0, 1.0, "a GAE weight"),
+    "agent.clip_range": (0.0, 10.0, "PPO's ratio clip; beyond 10 it clips nothing"),
+    "agent.ent_coef": (0.0, 1000.0, "a loss weight"),
+    "agent.vf_coef": (0.0, 1000.0, "a loss weight"),
+    "agent.max_grad_norm": (0.0, 1e6, "a gradient-norm clip"),
+    "agent.log_std_init": (-20.0, 5.0, "exp(5) = 148 is already far wider than the action range [-1, 1]"),
+    "agent.reward_scale": (0.0, 1e6, "a factor on the rewards PPO sees"),
+    "train.total_timesteps": (1, 10**12, "robot-steps; 10^12 take decades at this simulator's speed"),
+    "train.n_envs": (1, 100_000, "env copies of one batched core (make_vec's bound)"),
+    "train.n_workers": (1, 64, "worker processes, each with its own batched core"),
+    "train.torch_threads": (1, 256, "more threads than cores only add overhead"),
+    "train.checkpoint_freq": (0, 10**12, "robot-steps between checkpoints (0: only the final model)"),
+    "eval.n_seeds": (1, 100_000, "evaluation episodes per policy"),
+    "eval.seed_start": (0, 2**63 - 1, "env seeds are non-negative integers"),
+    "eval.max_cycles": (1, 10**9, "the env's max_cycles rule"),
+}
+_OPEN_LOW = {"agent.learning_rate", "agent.clip_range", "agent.max_grad_norm", "agent.reward_scale"}
+#: keys whose default is null and otherwise take a value of this type
+_NULLABLE = {"eval.max_cycles": 1, "agent.scripted": ""}
+#: agent.net_arch: layers and units per layer at most (memory of the policy and value networks)
+MAX_LAYERS, MAX_UNITS = 16, 4096
+#: bytes of the PPO rollout buffer at most (n_steps x n_envs x robots x (observation + action + 6) float32)
+MAX_ROLLOUT_BYTES = 4 << 30
 
 
 def _type_ok(value: Any, default: Any) -> bool:
@@ -144,12 +175,19 @@ def validate(cfg: dict[str, Any]) -> dict[str, Any]:
     except ValueError as err:
         raise ConfigError(f"config key 'task': {err}") from None
 
-    def walk(node: dict, schema: dict, path: str) -> None:
+    def walk(node: Any, schema: dict, path: str) -> None:
+        if not isinstance(node, dict):
+            raise ConfigError(f"config key {path.rstrip('.')!r} must be a mapping (a section), got {node!r:.80}")
         for key, value in node.items():
+            if not isinstance(key, str):
+                raise ConfigError(f"config section {path.rstrip('.') or 'top level'!r} has a key {key!r:.80} that is not a string")
             dotted = f"{path}{key}"
             if dotted in ("env", "agent.scripted_kwargs"):
                 if not isinstance(value, dict):
-                    raise ConfigError(f"config key {dotted!r} must be a mapping, got {value!r}")
+                    raise ConfigError(f"config key {dotted!r} must be a mapping, got {value!r:.80}")
+                bad = [k for k in value if not isinstance(k, str)]
+                if bad:
+                    raise ConfigError(f"config key {dotted!r} has a key {bad[0]!r:.80} that is not a string")
                 continue
             if key not in schema:
                 raise ConfigError(f"unknown config key {dotted!r}; allowed keys here: {sorted(schema)}")
@@ -157,25 +195,25 @@ def validate(cfg: dict[str, Any]) -> dict[str, Any]:
             if isinstance(default, dict):
                 walk(value, default, dotted + ".")
                 continue
-            if not _type_ok(value, default):
-                raise ConfigError(f"config key {dotted!r} must be of type {type(default).__name__}, got {value!r}")
+            if dotted in _NULLABLE and value is None:
+                continue
+            example = _NULLABLE.get(dotted, default)
+            if not _type_ok(value, example):
+                raise ConfigError(f"config key {dotted!r} must be of type {type(example).__name__}, got {value!r:.80}")
             if dotted in _CHOICES and value not in _CHOICES[dotted]:
                 raise ConfigError(f"config key {dotted!r}={value!r} not allowed; allowed values: {list(_CHOICES[dotted])}")
-            if dotted in _POSITIVE_INT and value < 1:
-                raise ConfigError(f"config key {dotted!r} must be an integer >= 1, got {value!r}")
-            if dotted in _NON_NEGATIVE_INT and value < 0:
-                raise ConfigError(f"config key {dotted!r} must be an integer >= 0, got {value!r}")
-            if dotted in _POSITIVE_FLOAT and not value > 0:
-                raise ConfigError(f"config key {dotted!r} must be > 0, got {value!r}")
-            if dotted in _UNIT_FLOAT and not 0 <= value <= 1:
-                raise ConfigError(f"config key {dotted!r} must be in [0, 1], got {value!r}")
-            if dotted in _NON_NEGATIVE_FLOAT and value < 0:
-                raise ConfigError(f"config key {dotted!r} must be >= 0, got {value!r}")
+            if dotted in BOUNDS:
+                _check_bounds(dotted, value)
 
     walk(cfg, DEFAULTS, "")
     net = cfg["agent"]["net_arch"]
-    if not net or not all(isinstance(h, int) and not isinstance(h, bool) and h > 0 for h in net):
-        raise ConfigError(f"config key 'agent.net_arch' must be a non-empty list of positive layer sizes, got {net!r}")
+    if not net or len(net) > MAX_LAYERS or not all(isinstance(h, int) and not isinstance(h, bool) and 0 < h <= MAX_UNITS for h in net):
+        raise ConfigError(
+            f"config key 'agent.net_arch' must be a list of 1 to {MAX_LAYERS} layer sizes in [1, {MAX_UNITS}] "
+            f"(memory of the networks), got {net!r:.80}"
+        )
+    if not isinstance(cfg["output_dir"], str) or not cfg["output_dir"].strip():
+        raise ConfigError(f"config key 'output_dir' must be a non-empty path, got {cfg['output_dir']!r:.80}")
     scripted = cfg["agent"]["scripted"]
     if scripted is None:
         from swarm_envs.agents.tasks import scripted_policy
@@ -188,30 +226,69 @@ def validate(cfg: dict[str, Any]) -> dict[str, Any]:
             raise ConfigError(f"config key 'agent.scripted' / 'agent.scripted_kwargs': {err}") from None
     elif cfg["agent"]["scripted_kwargs"]:
         raise ConfigError(f"config key 'agent.scripted_kwargs' is set but task {cfg['task']!r} has no scripted baseline")
-    mc = cfg["eval"]["max_cycles"]
-    if mc is not None and (isinstance(mc, bool) or not isinstance(mc, int) or mc < 1):
-        raise ConfigError(f"config key 'eval.max_cycles' must be null or an integer >= 1, got {mc!r}")
     allowed = _env_allowed(cfg["task"])
     unknown = sorted(set(cfg["env"]) - set(allowed) - {"flatten", "render_mode"})
     if unknown:
         raise ConfigError(f"unknown env key(s) {['env.' + k for k in unknown]} for task {cfg['task']!r}; allowed: {sorted(allowed)}")
     if "flatten" in cfg["env"] or "render_mode" in cfg["env"]:
         raise ConfigError("env.flatten and env.render_mode are set by train.py; remove them from the config")
-    _check_env_settings(cfg["task"], cfg["env"])
+    env = _check_env_settings(cfg["task"], cfg["env"])
     if cfg["train"]["n_workers"] > cfg["train"]["n_envs"]:
         raise ConfigError(f"train.n_workers ({cfg['train']['n_workers']}) must not exceed train.n_envs ({cfg['train']['n_envs']})")
-    if cfg["agent"]["batch_size"] > cfg["agent"]["n_steps"] * cfg["train"]["n_envs"] * _n_agents(cfg):
-        raise ConfigError(
-            "agent.batch_size must not exceed the rollout size n_steps * n_envs * n_robots "
-            f"({cfg['agent']['n_steps']} * {cfg['train']['n_envs']} * {_n_agents(cfg)})"
-        )
+    _check_batch(cfg, env)
     return cfg
 
 
-def _check_env_settings(task: str, env: dict[str, Any]) -> None:
+def _check_bounds(dotted: str, value: Any) -> None:
+    """:class:`ConfigError` unless ``value`` is finite and within :data:`BOUNDS` of ``dotted``."""
+    low, high, why = BOUNDS[dotted]
+    try:
+        number = float(value)
+    except OverflowError:  # an int too large for a float
+        number = math.inf
+    above = number > low if dotted in _OPEN_LOW else number >= low
+    if not (math.isfinite(number) and above and number <= high):
+        kind = "an integer" if isinstance(value, numbers.Integral) else "a finite number"
+        raise ConfigError(f"config key {dotted!r} must be {kind} in {_span(dotted)} ({why}), got {value!r:.80}")
+
+
+def _span(dotted: str) -> str:
+    """The range of :data:`BOUNDS` ``dotted`` as text, ``[low, high]`` or ``(low, high]``."""
+    low, high, _ = BOUNDS[dotted]
+    low_s, high_s = (str(b) if isinstance(b, int) else f"{b:g}" for b in (low, high))
+    return f"({low_s}, {high_s}]" if dotted in _OPEN_LOW else f"[{low_s}, {high_s}]"
+
+
+def _check_batch(cfg: dict[str, Any], env: dict[str, int]) -> None:
+    """The rollout fits make_vec's bounds and memory, and the batch fits the rollout."""
+    from swarm_envs.vector import MAX_TOTAL_ROBOTS
+
+    a, t = cfg["agent"], cfg["train"]
+    if t["n_envs"] * env["n_world"] > MAX_TOTAL_ROBOTS:
+        raise ConfigError(
+            f"config key 'train.n_envs': {t['n_envs']} copies of {env['n_world']} robots exceed the {MAX_TOTAL_ROBOTS} robots "
+            "one batched core takes; use fewer copies"
+        )
+    rollout = a["n_steps"] * t["n_envs"] * env["n_agents"]
+    size = rollout * (env["obs_size"] + env["act_size"] + 6) * 4
+    if size > MAX_ROLLOUT_BYTES:
+        raise ConfigError(
+            f"config key 'agent.n_steps': the PPO rollout of n_steps x n_envs x n_robots = {rollout} robot-steps would take "
+            f"{size / 2**30:.1f} GiB of memory ({env['obs_size']} observation entries each), at most {MAX_ROLLOUT_BYTES / 2**30:.0f} GiB"
+        )
+    if a["batch_size"] > rollout:
+        raise ConfigError(
+            "config key 'agent.batch_size' must not exceed the rollout size n_steps * n_envs * n_robots "
+            f"({a['n_steps']} * {t['n_envs']} * {env['n_agents']})"
+        )
+
+
+def _check_env_settings(task: str, env: dict[str, Any]) -> dict[str, int]:
     """Run the env's own validator (:func:`swarm_envs.settings.validate_settings`) on the settings train.py
     would build the env with (YAML lists as tuples, ``flatten=True``), then build that env once (cheap: no
-    reset) for the checks that need its arena (robots and anchors fit). Raises :class:`ConfigError`."""
+    reset) for the checks that need its arena (robots and anchors fit; the build's fit test is exact, so
+    every seed resets). Returns its sizes (``n_agents``, ``n_world``, ``obs_size``, ``act_size``); raises
+    :class:`ConfigError`."""
     import swarm_envs
     from swarm_envs.agents.tasks import env_id
     from swarm_envs.settings import SettingsError
@@ -220,15 +297,20 @@ def _check_env_settings(task: str, env: dict[str, Any]) -> None:
     if isinstance(kwargs.get("code"), list):
         kwargs["code"] = tuple(kwargs["code"])
     try:
-        swarm_envs.make(env_id(task), **kwargs).close()
+        env = swarm_envs.make(env_id(task), **kwargs)
     except SettingsError as err:
         raise ConfigError(f"bad env settings: {err} (config key 'env.{err.key}')") from None
     except (ValueError, TypeError) as err:
         raise ConfigError(f"bad env settings: {err}") from None
-
-
-def _n_agents(cfg: dict[str, Any]) -> int:
-    return int(cfg["env"].get("n_robots", _env_allowed(cfg["task"])["n_robots"]))
+    agent = env.possible_agents[0]
+    sizes = {
+        "n_agents": env.n_agents,
+        "n_world": env.n_world,
+        "obs_size": int(np.prod(env.observation_space(agent).shape)),
+        "act_size": int(np.prod(env.action_space(agent).shape)),
+    }
+    env.close()
+    return sizes
 
 
 def _parse_value(text: str) -> Any:
@@ -266,12 +348,18 @@ def load_config(path: str | Path | None, overrides: list[str] | None = None) -> 
     raw: dict[str, Any] = {}
     if path is not None:
         try:
-            with open(path) as fh:
-                raw = yaml.safe_load(fh) or {}
+            with open(path, encoding="utf-8") as fh:
+                raw = yaml.safe_load(fh)
         except FileNotFoundError:
             raise ConfigError(f"config file {str(path)!r} not found") from None
+        except UnicodeDecodeError:
+            raise ConfigError(f"config file {str(path)!r} is not a text (UTF-8 YAML) file") from None
+        except OSError as err:
+            raise ConfigError(f"config file {str(path)!r} cannot be read: {err.strerror or err}") from None
         except yaml.YAMLError as err:
-            raise ConfigError(f"config file {str(path)!r} is not valid YAML: {err}") from None
+            first = " ".join(str(err).split())
+            raise ConfigError(f"config file {str(path)!r} is not valid YAML: {first:.200}") from None
+        raw = {} if raw is None else raw
         if not isinstance(raw, dict):
             raise ConfigError(f"config file {str(path)!r} must hold a mapping at the top level")
     cfg = _merge(DEFAULTS, raw)
@@ -287,3 +375,11 @@ def resolve(cfg: dict[str, Any]) -> dict[str, Any]:
     if out["agent"]["scripted"] is None:
         out["agent"]["scripted"] = scripted_policy(out["task"])
     return out
+
+
+def bounds_table() -> str:
+    """A Markdown table of :data:`BOUNDS`: config key, range and the reason for it."""
+    rows = ["| config key | range | why |", "|---|---|---|"]
+    for key, (_, _, why) in BOUNDS.items():
+        rows.append(f"| `{key}` | {_span(key)} | {why} |")
+    return "\n".join(rows) + "\n"

@@ -174,7 +174,11 @@ def _merge(parts: list[Any]) -> Any:
 
 
 def _worker(conn, env_cls: type, n_copies: int, kwargs: dict[str, Any]) -> None:  # pragma: no cover - runs in a child
+    import signal
+
     from swarm_envs.vector import SwarmVectorEnv
+
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the trainer's to handle; it closes the workers
 
     vec = SwarmVectorEnv(env_cls, n_copies, **kwargs)
     while True:

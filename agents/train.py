@@ -1,7 +1,7 @@
 """Train one PPO policy shared by all robots of a swarm task, then compare it with the scripted baseline and
 a random policy on the task metrics.
 
-    python train.py --config configs/aggregation.yaml [--output DIR] [--render] [--set key=value ...]
+    python train.py --config configs/aggregation.yaml [--output DIR [--force]] [--render] [--set key=value ...]
     python train.py --config configs/aggregation.yaml --eval-only CHECKPOINT [--output DIR [--force]]
 
 Training writes into DIR (``output_dir`` of the config unless ``--output``): ``config.yaml`` (resolved),
@@ -16,26 +16,47 @@ The budget ``train.total_timesteps`` counts robot-steps; PPO collects whole roll
 ``n_steps x n_envs x n_robots`` robot-steps, so the run does the budget rounded *up* to whole rollouts
 (200000 -> 202240 with the default config); the progress bar and the log show that real total.
 
-``--eval-only`` never overwrites a training run: it writes into ``eval-<UTC timestamp>/`` beside the checkpoint
-(in the run directory when the checkpoint is in ``checkpoints/``), or into ``--output``, which must not already
-hold results unless ``--force`` is given.
+No run on disk is changed by a failed or interrupted command:
 
-Ctrl-C during training saves the current model (``model.zip``) and the resolved config, then exits with
-code 130 and a one-line message. Bad input (output directory, checkpoint) gives a one-line error and exit code 2.
+- the whole config and every ``--set`` are checked first (one-line ``config error`` naming the key, exit
+  code 2), and so are the output directory and the checkpoint, before anything is written;
+- a directory that already holds a run (any of :data:`RUN_ENTRIES`, or an ``eval-*`` directory) is refused
+  unless ``--force`` is given;
+- a command writes its files into a hidden staging directory beside DIR (``.DIR.<random>.partial``; the
+  learning curve and TensorBoard events can be watched there) and moves them into DIR only when it ends;
+  with ``--force`` the old run's files are replaced together at that moment (other files in DIR are kept).
+  Each file is written under a temporary name and renamed when complete.
+- a failure (a full disk included) is a one-line ``error`` naming the path, exit code 2, and leaves DIR as
+  it was; a staging directory that already holds a trained model is kept (the message names it), any
+  other is removed.
+
+``--eval-only`` writes into ``eval-<UTC timestamp>/`` beside the checkpoint (in the run directory when the
+checkpoint is in ``checkpoints/``), or into ``--output``, with the same rules (never the checkpoint's own
+directory).
+
+Ctrl-C during training saves the current model (``model.zip``), the learning curve and the resolved
+config, moves them into DIR (replacing an old run only with ``--force``), then exits with code 130 and a
+one-line message; worker processes (``train.n_workers``) ignore Ctrl-C and are closed by the trainer.
+Ctrl-C before training or during an ``--eval-only`` evaluation writes nothing; during the final
+evaluation it keeps the trained model (without results).
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import importlib.util
 import json
 import math
 import os
+import shutil
 import signal
 import sys
+import tempfile
 import threading
 import time
 import zipfile
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
@@ -54,17 +75,125 @@ from swarm_envs.agents.evaluation import (
     write_csv,
 )
 
-__all__ = ["main", "TrainError", "planned_timesteps", "load_checkpoint", "plot_learning_curve", "is_interrupt"]
+__all__ = ["main", "TrainError", "Staging", "RUN_ENTRIES", "planned_timesteps", "load_checkpoint", "plot_learning_curve", "is_interrupt"]
 
 #: exit code after Ctrl-C (128 + SIGINT), as shells report it
 EXIT_INTERRUPTED = 130
 #: exit code of bad input (config, output directory, checkpoint)
 EXIT_BAD_INPUT = 2
 RESULT_FILES = ("results.csv", "results.md", "per_seed.json")
+#: the entries a run of train.py writes (besides ``eval-*`` directories): a directory holding any is a run
+RUN_ENTRIES = ("config.yaml", "model.zip", "progress.csv", "learning_curve.png", "results.csv", "results.md",
+               "results.png", "per_seed.json", "timing.json", "episode.gif", "checkpoints", "tensorboard")
 
 
 class TrainError(Exception):
-    """Bad input found by train.py (output directory, checkpoint); reported as one line, exit code 2."""
+    """Bad input or a failed write found by train.py (output directory, checkpoint, disk); reported as one
+    line, exit code 2."""
+
+
+def run_entries(directory: Path) -> list[str]:
+    """The names in ``directory`` that belong to a run (:data:`RUN_ENTRIES` and ``eval-*`` directories)."""
+    try:
+        names = sorted(p.name for p in directory.iterdir())
+    except OSError:  # missing, or not a directory
+        return []
+    return [n for n in names if n in RUN_ENTRIES or (n.startswith("eval-") and (directory / n).is_dir())]
+
+
+class Staging:
+    """A hidden directory beside ``out`` that a command writes its files into; :meth:`publish` moves them
+    into ``out`` at the end, so a run already in ``out`` changes only then, and only as a whole.
+
+    Raises :class:`TrainError` if the directory cannot be made (``out`` is not writable)."""
+
+    def __init__(self, out: Path) -> None:
+        self.out = Path(os.path.abspath(out))  # "." or "runs/.." get a real name and parent
+        try:
+            self.out.parent.mkdir(parents=True, exist_ok=True)
+            self.path = Path(tempfile.mkdtemp(prefix=f".{self.out.name}.", suffix=".partial", dir=self.out.parent))
+        except OSError as err:
+            raise TrainError(f"output directory '{out}' is not writable: {err.strerror or err}") from None
+
+    def final(self, path: Path) -> Path:
+        """Where the staged ``path`` ends up in ``out``."""
+        try:
+            return self.out / Path(path).relative_to(self.path)
+        except ValueError:
+            return Path(path)
+
+    @contextlib.contextmanager
+    def writing(self, path: Path) -> Iterator[Path]:
+        """Yield a temporary name beside ``path`` to write to; it becomes ``path`` only when the block ends
+        without error. An ``OSError`` (a full disk) becomes a :class:`TrainError` naming the file."""
+        tmp = path.with_name(f".tmp-{os.getpid()}-{path.name}")  # keeps the suffix: writers pick the format by it
+        try:
+            yield tmp
+            os.replace(tmp, path)
+        except OSError as err:
+            with contextlib.suppress(OSError):
+                tmp.unlink()
+            raise TrainError(f"could not write '{self.final(path)}': {err.strerror or err}") from None
+
+    def publish(self) -> None:
+        """Move the staged files into ``out``: a new ``out`` is the staging directory renamed; otherwise the
+        run already in ``out`` (allowed with ``--force``) is first moved aside and deleted once the staged
+        files are in, keeping ``out`` itself (a shell inside it stays there) and its other files. Ctrl-C
+        waits until it ends."""
+        with _sigint_ignored():
+            try:
+                if not self.out.exists():
+                    os.replace(self.path, self.out)
+                    return
+                old, aside = run_entries(self.out), None
+                if old:
+                    aside = Path(tempfile.mkdtemp(prefix=f".{self.out.name}.", suffix=".replaced", dir=self.out.parent))
+                    for name in old:
+                        os.replace(self.out / name, aside / name)
+                for entry in self.path.iterdir():
+                    os.replace(entry, self.out / entry.name)
+                self.path.rmdir()
+                if aside is not None:
+                    shutil.rmtree(aside, ignore_errors=True)
+            except OSError as err:
+                raise TrainError(
+                    f"could not move the finished files from '{self.path}' into '{self.out}': {err.strerror or err}"
+                ) from None
+
+    def abandon(self) -> str:
+        """After a failure: delete the staging directory, unless it holds a trained model, which is kept;
+        returns a note for the error message (empty if nothing was kept)."""
+        if (self.path / "model.zip").is_file():
+            return f"; the trained model is kept in '{self.path}'"
+        shutil.rmtree(self.path, ignore_errors=True)
+        return ""
+
+
+@contextlib.contextmanager
+def _sigint_ignored() -> Iterator[None]:
+    """Ignore Ctrl-C inside the block (main thread only), so a file move is never cut short."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
+
+
+@contextlib.contextmanager
+def _naming(path: Path) -> Iterator[None]:
+    """Turn an ``OSError`` inside the block (a full disk) into a :class:`TrainError` naming ``path``."""
+    try:
+        yield
+    except OSError as err:
+        raise TrainError(f"could not write '{path}': {err.strerror or err}") from None
+
+
+def _one_line(message: object) -> str:
+    """``message`` on one line (newlines and runs of spaces collapsed)."""
+    return " ".join(str(message).split())
 
 
 def is_interrupt(err: BaseException) -> bool:
@@ -220,8 +349,10 @@ def make_callbacks(cfg: dict[str, Any], out: Path, num_envs: int, total: int):
     return CallbackList(callbacks)
 
 
-def train(cfg: dict[str, Any], out: Path) -> tuple[Any, float, bool]:
-    """Train PPO and save ``out/model.zip``; returns (model, seconds, interrupted by Ctrl-C)."""
+def train(cfg: dict[str, Any], stage: Staging) -> tuple[Any, float, bool]:
+    """Train PPO and save ``model.zip`` in the staging directory; returns (model, seconds, interrupted by Ctrl-C).
+    A failed write of the logs or checkpoints is a :class:`TrainError`."""
+    out = stage.path
     from swarm_envs.agents.sb3_vec_env import SwarmVecEnv
 
     venv = SwarmVecEnv(env_id(cfg["task"]), cfg["train"]["n_envs"], env_kwargs_of(cfg), n_workers=cfg["train"]["n_workers"])
@@ -246,14 +377,22 @@ def train(cfg: dict[str, Any], out: Path) -> tuple[Any, float, bool]:
         interrupted = True
         if threading.current_thread() is threading.main_thread():
             signal.signal(signal.SIGINT, signal.SIG_IGN)  # a second Ctrl-C must not cut the save short
+    except OSError as err:  # the logger or a checkpoint could not write (a full disk)
+        venv.close()
+        where = stage.final(Path(err.filename)) if getattr(err, "filename", None) else stage.out
+        raise TrainError(f"could not write the training logs or checkpoints in '{where}': {err.strerror or err}") from None
     finally:
         for cb in callbacks.callbacks:
             if hasattr(cb, "close"):
                 cb.close()
-        logger.close()
+        with contextlib.suppress(OSError):
+            logger.close()
     seconds = time.perf_counter() - t0
-    model.save(out / "model.zip")
-    venv.close()
+    try:
+        with stage.writing(out / "model.zip") as tmp:
+            model.save(tmp)
+    finally:
+        venv.close()
     return model, seconds, interrupted
 
 
@@ -266,8 +405,20 @@ def _read_progress(path: Path) -> dict[str, np.ndarray]:
     return {k: np.array([float(r[k]) if r.get(k) not in (None, "") else np.nan for r in rows]) for k in keys}
 
 
+def _save_figure(fig: Any, path: Path) -> None:
+    """Save a matplotlib figure to ``path`` under a temporary name, renamed when complete."""
+    tmp = path.with_name(f".tmp-{os.getpid()}-{path.name}")
+    try:
+        fig.savefig(tmp, dpi=110)
+        os.replace(tmp, path)
+    finally:
+        with contextlib.suppress(OSError):
+            tmp.unlink()
+
+
 def plot_learning_curve(csv_path: str | Path, png_path: str | Path, title: str) -> bool:
-    """Plot ``progress.csv`` (mean episode return, episode length, losses vs robot-steps); False if no data."""
+    """Plot ``progress.csv`` (mean episode return, episode length, losses vs robot-steps); False if no data.
+    The PNG is written under a temporary name and renamed when complete."""
     data = _read_progress(Path(csv_path))
     steps = data.get("time/total_timesteps")
     if steps is None or not np.isfinite(steps).any():
@@ -293,8 +444,10 @@ def plot_learning_curve(csv_path: str | Path, png_path: str | Path, title: str) 
         ax.tick_params(labelsize=7)
     fig.suptitle(title, fontsize=10)
     fig.tight_layout()
-    fig.savefig(png_path, dpi=110)
-    plt.close(fig)
+    try:
+        _save_figure(fig, Path(png_path))
+    finally:
+        plt.close(fig)
     return True
 
 
@@ -317,8 +470,10 @@ def plot_results(rows: list[dict[str, Any]], path: Path, title: str) -> None:
         ax.tick_params(labelsize=8)
     fig.suptitle(title, fontsize=10)
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    try:
+        _save_figure(fig, Path(path))
+    finally:
+        plt.close(fig)
 
 
 def write_gif(cfg: dict[str, Any], policy_factory, path: Path, seed: int) -> None:
@@ -332,31 +487,39 @@ def write_gif(cfg: dict[str, Any], policy_factory, path: Path, seed: int) -> Non
     frames: list = []
     run_episode(env, policy_factory(env), seed, cfg["task"], frames=frames)
     env.close()
-    imageio.mimsave(path, [np.asarray(f) for f in frames if f is not None], duration=100, loop=0)
+    tmp = path.with_name(f".tmp-{os.getpid()}-{path.name}")
+    try:
+        imageio.mimsave(tmp, [np.asarray(f) for f in frames if f is not None], duration=100, loop=0)
+        os.replace(tmp, path)
+    finally:
+        with contextlib.suppress(OSError):
+            tmp.unlink()
 
 
-def prepare_output(out: Path) -> None:
-    """Create ``out`` (and parents); :class:`TrainError` if it is a file or cannot be written."""
+def check_output(out: Path, force: bool, eval_only: bool = False) -> None:
+    """:class:`TrainError` if ``out`` is a file, or holds a run (:func:`run_entries`) and ``force`` is not
+    set. Reads only; the staging directory (:class:`Staging`) is the write test."""
     if out.exists() and not out.is_dir():
         raise TrainError(f"output directory '{out}' exists and is a file, not a directory")
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-        probe = out / f".write-test-{os.getpid()}"
-        probe.write_bytes(b"")
-        probe.unlink()
-    except OSError as err:
-        raise TrainError(f"output directory '{out}' is not writable: {err.strerror or err}") from None
+    existing = run_entries(out)
+    if existing and not force:
+        kind = "results" if eval_only and set(existing) & set(RESULT_FILES) else "a run"
+        shown = [n for n in existing if n in RESULT_FILES] if kind == "results" else existing
+        hint = "omit it (a new eval-<timestamp> directory)" if eval_only else "use another --output"
+        raise TrainError(f"output directory '{out}' already holds {kind} ({', '.join(shown[:6])}); {hint}, "
+                         "or add --force to replace it")
 
 
 def eval_output_dir(checkpoint: Path, output: str | None, force: bool) -> Path:
-    """Where ``--eval-only`` writes: ``output`` (refused if it holds results, unless ``force``), else a new
-    ``eval-<UTC timestamp>`` directory beside the checkpoint (its run directory for ``checkpoints/*.zip``)."""
+    """Where ``--eval-only`` writes: ``output`` (refused if it holds a run, unless ``force``, and if it holds
+    the checkpoint), else a new ``eval-<UTC timestamp>`` directory beside the checkpoint (its run directory
+    for ``checkpoints/*.zip``)."""
     if output is not None:
         out = Path(output)
-        existing = [name for name in RESULT_FILES if (out / name).exists()]
-        if existing and not force:
-            raise TrainError(f"output directory '{out}' already holds results ({', '.join(existing)}); "
-                             "choose another --output, omit it (a new eval-<timestamp> directory), or add --force")
+        if out.resolve() in checkpoint.resolve().parents:
+            raise TrainError(f"--output '{out}' holds the checkpoint being evaluated; omit --output (a new "
+                             "eval-<timestamp> directory is made beside it) or choose another directory")
+        check_output(out, force, eval_only=True)
         return out
     run = checkpoint.parent.parent if checkpoint.parent.name == "checkpoints" else checkpoint.parent
     stamp = time.strftime("%Y%m%d-%H%M%S", time.gmtime())
@@ -417,48 +580,68 @@ def _parser() -> argparse.ArgumentParser:
                              "eval-<timestamp> directory beside the checkpoint)")
     parser.add_argument("--render", action="store_true", help="write a GIF of one evaluation episode")
     parser.add_argument("--eval-only", metavar="CHECKPOINT", default=None, help="skip training; evaluate this PPO .zip")
-    parser.add_argument("--force", action="store_true", help="with --eval-only: allow --output to overwrite existing results")
+    parser.add_argument("--force", action="store_true",
+                        help="replace the run already in the output directory (when the command ends; never before)")
     parser.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
                         help="override a config value (dotted key), e.g. train.total_timesteps=2000; repeatable")
     return parser
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Command line of ``train.py``; returns the exit code (0 ok, 2 bad input, 130 interrupted)."""
+    """Command line of ``train.py``; returns the exit code (0 ok, 2 bad input or a failed write, 130 interrupted).
+    Every failure is one line on stderr; no run on disk is changed by a failed or interrupted command."""
     args = _parser().parse_args(argv)
     state: dict[str, Any] = {"phase": "setup"}
     try:
         return _run(args, state)
-    except TrainError as err:
-        print(f"error: {err}", file=sys.stderr)
+    except (TrainError, OSError, MemoryError) as err:
+        stage = state.get("stage")
+        note = stage.abandon() if stage is not None else ""
+        if isinstance(err, MemoryError):
+            text = "out of memory; use fewer env copies (train.n_envs), robots or rollout steps (agent.n_steps)"
+        elif isinstance(err, OSError):
+            path = f" '{err.filename}'" if getattr(err, "filename", None) else ""
+            text = f"could not write{path}: {err.strerror or err}"
+        else:
+            text = str(err)
+        print(_one_line(f"error: {text}{note}"), file=sys.stderr)
         return EXIT_BAD_INPUT
     except (KeyboardInterrupt, SystemError) as err:
         if not is_interrupt(err):
             raise
-        where = {"setup": "before training started; nothing saved",
-                 "train": "while setting up training; nothing saved",
-                 "eval": f"during evaluation; the model is saved in {state.get('model', '?')}",
-                 "eval-only": f"during the evaluation of {state.get('model', '?')}; results are incomplete"}[state["phase"]]
-        print(f"interrupted by Ctrl-C {where}", file=sys.stderr)
-        return EXIT_INTERRUPTED
+        return _interrupted(state)
+
+
+def _interrupted(state: dict[str, Any]) -> int:
+    """One line after Ctrl-C outside training; keeps a trained model (published), discards anything else."""
+    stage, phase = state.get("stage"), state["phase"]
+    where = {"setup": "before training started; nothing saved",
+             "train": "while setting up training; nothing saved",
+             "eval": "during evaluation; the trained model is saved in ",
+             "eval-only": f"during the evaluation of {state.get('model', '?')}; no results written"}[phase]
+    if phase == "eval" and stage is not None:
+        try:
+            stage.publish()
+            where += str(stage.out / "model.zip")
+        except TrainError as err:
+            where += f"{stage.path / 'model.zip'} ({err})"
+    elif stage is not None:
+        stage.abandon()
+    print(_one_line(f"interrupted by Ctrl-C {where}"), file=sys.stderr)
+    return EXIT_INTERRUPTED
 
 
 def _run(args: argparse.Namespace, state: dict[str, Any]) -> int:
     try:
         cfg = resolve(load_config(args.config, args.overrides))
     except ConfigError as err:
-        print(f"config error: {err}", file=sys.stderr)
+        print(_one_line(f"config error: {err}"), file=sys.stderr)
         return EXIT_BAD_INPUT
-    if args.force and not args.eval_only:
-        raise TrainError("--force only applies to --eval-only (training always writes into its output directory)")
 
     task = cfg["task"]
     eval_kwargs = env_kwargs_of(cfg)
     if cfg["eval"]["max_cycles"] is not None:
         eval_kwargs["max_cycles"] = cfg["eval"]["max_cycles"]
-    import torch
-
-    torch.set_num_threads(cfg["train"]["torch_threads"])
     checkpoint = model = None
     if args.eval_only:
         checkpoint = resolve_checkpoint(args.eval_only)
@@ -466,9 +649,15 @@ def _run(args: argparse.Namespace, state: dict[str, Any]) -> int:
         model = load_checkpoint(checkpoint, cfg, eval_kwargs)
     else:
         out = Path(args.output or cfg["output_dir"])
-    prepare_output(out)
-    with open(out / "config.yaml", "w") as fh:
-        yaml.safe_dump(cfg, fh, sort_keys=False)
+        check_output(out, args.force)
+    import torch
+
+    torch.set_num_threads(cfg["train"]["torch_threads"])
+    # everything is checked: from here on files are written, into the staging directory
+    stage = state["stage"] = Staging(out)
+    staged = stage.path
+    with stage.writing(staged / "config.yaml") as tmp:
+        tmp.write_text(yaml.safe_dump(cfg, sort_keys=False))
     t_start = time.perf_counter()
 
     from swarm_envs.agents.sb3_vec_env import SB3Policy
@@ -477,19 +666,20 @@ def _run(args: argparse.Namespace, state: dict[str, Any]) -> int:
     timing: dict[str, float] = {}
     if checkpoint is not None:
         state.update(phase="eval-only", model=checkpoint)
-        print(f"loaded {checkpoint}; writing results to {out}")
+        print(f"loaded {checkpoint}; writing results to {out} (staged in {staged} until the evaluation ends)")
     else:
         state["phase"] = "train"
-        model, timing["train_s"], interrupted = train(cfg, out)
+        print(f"training into {out} (staged in {staged} until the run ends)")
+        model, timing["train_s"], interrupted = train(cfg, stage)
         timing["robot_steps"] = model.num_timesteps
-        state.update(phase="eval", model=out / "model.zip")
-        if plot_learning_curve(out / "progress.csv", out / "learning_curve.png", f"{task}: PPO learning curve"):
-            print(f"wrote {out / 'learning_curve.png'}")
+        state["phase"] = "eval"
+        with _naming(out / "learning_curve.png"):
+            if plot_learning_curve(staged / "progress.csv", staged / "learning_curve.png", f"{task}: PPO learning curve"):
+                print(f"wrote {out / 'learning_curve.png'}")
         if interrupted:
-            with open(out / "config.yaml", "w") as fh:
-                yaml.safe_dump(cfg, fh, sort_keys=False)
-            with open(out / "timing.json", "w") as fh:
-                json.dump(timing | {"interrupted": True}, fh, indent=1)
+            with stage.writing(staged / "timing.json") as tmp:
+                tmp.write_text(json.dumps(timing | {"interrupted": True}, indent=1))
+            stage.publish()
             print(f"interrupted by Ctrl-C after {model.num_timesteps} robot-steps: saved the model to {out / 'model.zip'} "
                   f"and the config to {out / 'config.yaml'}", file=sys.stderr)
             return EXIT_INTERRUPTED
@@ -505,7 +695,8 @@ def _run(args: argparse.Namespace, state: dict[str, Any]) -> int:
                for name, f in factories.items()}
     timing["eval_s"] = time.perf_counter() - t0
     rows = summarise(results, seed=cfg["seed"])
-    write_csv(rows, out / "results.csv")
+    with stage.writing(staged / "results.csv") as tmp:
+        write_csv(rows, tmp)
     best = headline(task)
     reductions = ", ".join(f"{m} {how}" for m, how in metric_reductions(task).items())
     header = (
@@ -519,16 +710,21 @@ def _run(args: argparse.Namespace, state: dict[str, Any]) -> int:
         + "; episode_return = mean per-robot return.\n\n"
     )
     table = markdown_table(rows, n_seeds=len(seeds))
-    (out / "results.md").write_text(header + table)
-    with open(out / "per_seed.json", "w") as fh:
-        json.dump({p: {m: v.tolist() for m, v in r.items()} for p, r in results.items()} | {"seeds": seeds}, fh)
-    plot_results(rows, out / "results.png", f"{task} (n={len(seeds)} seeds, bootstrap 95% CI)")
+    with stage.writing(staged / "results.md") as tmp:
+        tmp.write_text(header + table)
+    with stage.writing(staged / "per_seed.json") as tmp:
+        tmp.write_text(json.dumps({p: {m: v.tolist() for m, v in r.items()} for p, r in results.items()} | {"seeds": seeds}))
+    with _naming(out / "results.png"):
+        plot_results(rows, staged / "results.png", f"{task} (n={len(seeds)} seeds, bootstrap 95% CI)")
     if args.render:
-        write_gif(cfg, factories["ppo"], out / "episode.gif", seeds[0])
+        with _naming(out / "episode.gif"):
+            write_gif(cfg, factories["ppo"], staged / "episode.gif", seeds[0])
         print(f"wrote {out / 'episode.gif'}")
     timing["total_s"] = time.perf_counter() - t_start
-    with open(out / "timing.json", "w") as fh:
-        json.dump(timing, fh, indent=1)
+    with stage.writing(staged / "timing.json") as tmp:
+        tmp.write_text(json.dumps(timing, indent=1))
+    stage.publish()
+    state["stage"] = None
     print(f"\n{header}{table}")
     print(f"wrote {out / 'results.csv'}, {out / 'results.md'}, {out / 'results.png'}; timing {json.dumps({k: round(v, 1) for k, v in timing.items()})}")
     return 0

@@ -1,4 +1,4 @@
-"""Centroid seeking: seekers move to the centroid of static anchor robots ([L] Sec. 6.2; docs/design.md#tasks).
+"""Centroid seeking: seekers move to the centroid of static anchor robots ([L] Sec. 6.2).
 
 ``n_anchors`` static robots (default 4) stand at the corners of a random convex polygon; they are not
 agents but still emit infrared and talk, so seekers can sense them. The agents are the ``n_robots``
@@ -16,20 +16,31 @@ from typing import Any, Literal
 import numpy as np
 from pettingzoo import AECEnv
 from pettingzoo.utils.conversions import parallel_to_aec
-from scipy.spatial import cKDTree
 
 from swarm_envs.env import SwarmEnv
 from swarm_envs.factories import reports_unknown_kwargs
 from swarm_envs.platforms import Platform
-from swarm_envs.task import BatchState, Int, SettingsError, Task, spawn_positions
+from swarm_envs.task import BatchState, Int, SettingsError, Task, lattice_positions, spawn_positions
 
 __all__ = ["CentroidSeekingTask", "CentroidSeekingEnv", "raw_env", "parallel_env", "env"]
+
+#: gap (fraction of the radius) random placement keeps between seekers and from the anchors
+SEEKER_GAP = 0.2
+#: random anchor polygons a reset tries before it takes the fallback layout (crowded arenas only)
+ANCHOR_DRAWS = 10
 
 
 class CentroidSeekingTask(Task):
     """Centroid-seeking rewards and metrics over all env copies; extra kwarg ``n_anchors`` (default 4, >= 3)."""
 
-    SETTINGS = {"n_robots": 1, "n_anchors": Int(4, "static robots on a convex polygon", low=3, high=1000)}
+    SETTINGS = {
+        "n_robots": 1,
+        "n_anchors": Int(
+            4, "static robots on a convex polygon", low=3, high=1000,
+            why="at least 3 corners for a polygon around the centroid; at most 1,000 static robots (they must also fit on "
+            "their circle, checked when the env is built)",
+        ),
+    }
     METRICS = {"mean_distance_second_half": "final", "mean_distance_to_centroid": "final"}
     HEADLINE = ("mean_distance_second_half", -1)
     SCRIPTED_POLICY = "swarm_envs.agents.scripted:CentroidSeeker"
@@ -53,6 +64,8 @@ class CentroidSeekingTask(Task):
         return 2 * float(np.arcsin(ratio)) if ratio < 1 else np.inf
 
     def check_layout(self) -> None:
+        """The anchors fit on their circle and inside the arena, and the seekers beside them for every
+        seed: the spawner's last resort (:meth:`fallback_layout`) holds them."""
         n_a, angle = self.n_static, self._anchor_min_angle()
         if n_a * angle >= 2 * np.pi:
             fit = int(np.ceil(2 * np.pi / angle)) - 1 if np.isfinite(angle) else 0
@@ -62,15 +75,48 @@ class CentroidSeekingTask(Task):
                 f"of radius {self.polygon_radius:.3f} m (0.3 x min(IR range, arena size)): at most {fit} fit; "
                 "use fewer anchors",
             )
+        if self.polygon_radius + self.platform.radius > self.arena.half:
+            raise SettingsError(
+                self.size_key,
+                f"the anchors (diameter {self.platform.diameter:.3f} m) on their circle of radius {self.polygon_radius:.3f} m "
+                f"(0.3 x arena size) reach past the walls of the {self.arena.size:.4g} m arena: use arena_size >= "
+                f"{5 * self.platform.radius:.4g} m",
+            )
+        fit = len(self.fallback_layout()[1])
+        if fit < self.n_agents:
+            raise SettingsError(
+                self.size_key,
+                f"n_robots={self.n_agents} seekers of diameter {self.platform.diameter:.3f} m do not fit beside "
+                f"{n_a} anchors in a {self.arena.shape} arena of size {self.arena.size:.4g} m: at most {fit} fit for sure "
+                "(a lattice around evenly spaced anchors); use fewer robots or a larger arena_size",
+            )
 
     @property
     def polygon_radius(self) -> float:
         """Radius (m) of the circle the anchors stand on: within IR range of each other."""
         return min(0.3 * self.platform.ir_range, 0.3 * self.arena.size)
 
-    def spawn(self, rng: np.random.Generator):
-        n_a, radius = self.n_static, self.platform.radius
-        # points on a circle are in convex position; keep corners apart by at least a diameter + margin
+    def fallback_layout(self) -> tuple[np.ndarray, np.ndarray]:
+        """The spawner's last resort, fixed when the env is built: (anchors (n_anchors, 2) m evenly spaced
+        on their circle, seeker spots (k, 2) m on a lattice, touching neighbours and at least a diameter from
+        every anchor). A reset that cannot draw a random layout takes these anchors and a random choice of
+        ``n_robots`` of the spots."""
+        if getattr(self, "_fallback", None) is None:
+            n_a, radius = self.n_static, self.platform.radius
+            best = None
+            for offset in (0.0, np.pi / n_a):  # two rotations of the regular polygon
+                angles = offset + 2 * np.pi * np.arange(n_a) / n_a
+                anchors = self.polygon_radius * np.stack([np.cos(angles), np.sin(angles)], -1)
+                spots = lattice_positions(self.arena, radius, n=self.n_agents, avoid=anchors, avoid_distance=2 * radius)
+                if best is None or len(spots) > len(best[1]):
+                    best = (anchors, spots)
+            self._fallback = best
+        return self._fallback
+
+    def _draw_anchors(self, rng: np.random.Generator) -> np.ndarray | None:
+        """Anchors (n_anchors, 2) m at random angles on their circle, corners apart by at least a diameter
+        and a margin and no gap wider than 0.95 pi (a convex polygon around the centre); None if the draws fail."""
+        n_a = self.n_static
         min_gap = max(2 * np.pi / n_a * 0.4, self._anchor_min_angle())
         for _ in range(1000):
             angles = np.sort(rng.uniform(-np.pi, np.pi, n_a))
@@ -83,22 +129,27 @@ class CentroidSeekingTask(Task):
                 if gaps.max() < np.pi * 0.95:
                     break
             else:
-                raise ValueError(f"could not place {n_a} anchors in convex position; use fewer anchors")
+                return None
             angles = np.sort((rng.uniform(-np.pi, np.pi) + np.cumsum(gaps) + np.pi) % (2 * np.pi) - np.pi)
-        anchors = self.polygon_radius * np.stack([np.cos(angles), np.sin(angles)], -1)
-        seekers = np.empty((0, 2))
-        for _ in range(200):
-            cand = spawn_positions(rng, self.n_agents, radius, self.arena, gap=0.2 * radius)
-            d, _ = cKDTree(anchors).query(cand)
-            if np.all(d > 2.2 * radius):
-                seekers = cand
+        return self.polygon_radius * np.stack([np.cos(angles), np.sin(angles)], -1)
+
+    def spawn(self, rng: np.random.Generator):
+        radius = self.platform.radius
+        for _ in range(ANCHOR_DRAWS):
+            anchors = self._draw_anchors(rng)
+            if anchors is None:
                 break
-        else:  # crowded: place the seekers around the anchors directly
-            seekers = spawn_positions(
-                rng, self.n_agents, radius, self.arena, gap=0.2 * radius, avoid=anchors, avoid_distance=2.2 * radius * (1 + 1e-9)
-            )
-        positions = np.concatenate([anchors, seekers])
-        return positions, rng.uniform(-np.pi, np.pi, self.n_world)
+            try:  # seekers uniformly at random, SEEKER_GAP apart and from the anchors
+                seekers = spawn_positions(
+                    rng, self.n_agents, radius, self.arena, gap=SEEKER_GAP * radius, max_tries=50,
+                    avoid=anchors, avoid_distance=(2 + SEEKER_GAP) * radius,
+                )
+            except ValueError:  # crowded: draw another polygon
+                continue
+            return np.concatenate([anchors, seekers]), rng.uniform(-np.pi, np.pi, self.n_world)
+        anchors, spots = self.fallback_layout()  # holds the seekers (checked when the env was built)
+        seekers = spots[np.sort(rng.choice(len(spots), self.n_agents, replace=False))]
+        return np.concatenate([anchors, seekers]), rng.uniform(-np.pi, np.pi, self.n_world)
 
     def centroids(self, positions: np.ndarray) -> np.ndarray:
         """The anchors' centroid (..., 2) m of positions (..., n_world, 2), ground truth."""
@@ -173,13 +224,13 @@ def parallel_env(
     exchange: Literal["network", "ideal"] = "network",
     scale_free_method: Literal["two_hop", "null_space"] = "two_hop",
     scale_free_k: int = 1,
-    physics_substeps: int = 8,
+    physics_substeps: int | None = None,
 ) -> CentroidSeekingEnv:
     """Create the centroid-seeking environment (a native PettingZoo ``ParallelEnv``).
 
     ## Description
 
-    Centroid seeking ([L] Sec. 6.2, docs/design.md#tasks): ``n_anchors`` static robots stand at the corners of a
+    Centroid seeking ([L] Sec. 6.2): ``n_anchors`` static robots stand at the corners of a
     random convex polygon; the ``n_robots`` seekers (the agents, ``robot_0`` ..) should reach the
     anchors' centroid. Anchors are not agents, but they emit infrared and talk, so seekers sense them
     like any robot (for example through scale-free coordinates).
@@ -221,8 +272,9 @@ def parallel_env(
 
     Anchors stand at random angles on a circle around the arena centre of radius
     ``min(0.3 ir_range, 0.3 arena_size)`` (corners kept apart, so the polygon is convex); seekers are
-    placed uniformly at random at least 2.2 robot radii from every anchor. The default ``arena_size`` is
-    at least 0.9 ``ir_range``. In ``options["positions"]`` the anchors come first. Headings are uniform in [-pi, pi). ``reset(seed=..., options={"positions": (N, 2) m, "headings": (N,)
+    placed uniformly at random at least 2.2 robot radii from every anchor. In an arena too crowded for
+    random draws, a reset takes evenly spaced anchors and seekers on lattice spots instead; the env is only
+    built if those hold the seekers, so every seed resets. The default ``arena_size`` is at least 0.9 ``ir_range``. In ``options["positions"]`` the anchors come first. Headings are uniform in [-pi, pi). ``reset(seed=..., options={"positions": (N, 2) m, "headings": (N,)
     rad})`` places the robots exactly instead; overlapping or out-of-arena placements raise. All
     randomness flows from the seed through independent child streams.
 
@@ -263,7 +315,7 @@ def parallel_env(
     | ``exchange`` | ``"network"`` | bearing lists for scale-free coordinates over SwarmCom (``"network"``) or ``"ideal"`` |
     | ``scale_free_method`` | ``"two_hop"`` | ``"two_hop"`` [L Algs. 1-4] or ``"null_space"`` [L Eq. (5.1)] (slow) |
     | ``scale_free_k`` | 1 | hops k of the null-space method |
-    | ``physics_substeps`` | 8 | pymunk sub-steps per control step |
+    | ``physics_substeps`` | ``None`` | pymunk sub-steps per control step; ``None``: the platform's (8 Droplet, 21 e-puck, 32 r-one), at which robots overlap by at most 2 % of a diameter at the default arena size |
 
     ## Version History
 

@@ -26,7 +26,9 @@ __all__ = ["FlockingTask", "FlockingEnv", "raw_env", "parallel_env", "env"]
 class FlockingTask(Task):
     """Flocking rewards and metrics over all env copies; extra kwarg ``collision_penalty`` (default 0.1)."""
 
-    SETTINGS = {"collision_penalty": Real(0.1, "weight of the fraction of robots bumping", low=0.0, high=1000.0)}
+    SETTINGS = {
+        "collision_penalty": Real(0.1, "weight of the fraction of robots bumping", low=0.0, high=1000.0, why="a reward weight; rewards stay within +-1000 per step")
+    }
     METRICS = {"polarisation": "mean", "cohesion": "mean", "collision_fraction": "mean"}
     HEADLINE = ("polarisation", +1)
     SCRIPTED_POLICY = "swarm_envs.agents.scripted:OrientationFlocking"
@@ -106,7 +108,7 @@ def parallel_env(
     exchange: Literal["network", "ideal"] = "network",
     scale_free_method: Literal["two_hop", "null_space"] = "two_hop",
     scale_free_k: int = 1,
-    physics_substeps: int = 8,
+    physics_substeps: int | None = None,
 ) -> FlockingEnv:
     """Create the flocking environment (a native PettingZoo ``ParallelEnv``).
 
@@ -194,7 +196,7 @@ def parallel_env(
     | ``exchange`` | ``"network"`` | bearing lists for scale-free coordinates over SwarmCom (``"network"``) or ``"ideal"`` |
     | ``scale_free_method`` | ``"two_hop"`` | ``"two_hop"`` [L Algs. 1-4] or ``"null_space"`` [L Eq. (5.1)] (slow) |
     | ``scale_free_k`` | 1 | hops k of the null-space method |
-    | ``physics_substeps`` | 8 | pymunk sub-steps per control step |
+    | ``physics_substeps`` | ``None`` | pymunk sub-steps per control step; ``None``: the platform's (8 Droplet, 21 e-puck, 32 r-one), at which robots overlap by at most 2 % of a diameter at the default arena size |
 
     ## Version History
 

@@ -4,18 +4,24 @@ All quantities are SI (metres, seconds, radians) in the robot's body frame: orig
 x-axis forward, angles counter-clockwise. The infrared *hardware model* (gain functions) of each
 platform lives in :mod:`swarm_envs.ir.models`; :attr:`Platform.ir_model` (or :func:`model_for`) returns it.
 
-Sources (docs/design.md#platforms):
+Sources:
 - ``droplet``: Farrow et al., ICRA 2014 [F14 Sec. III]: 4.4 cm diameter, 6 emitters and 6 sensors
   co-located at radius 2.0 cm, channel k at 30 + 60 k degrees. Max speed 2 cm/s is assumed.
 - ``epuck``: Trenkwalder et al. 2020 [T20 Sec. 2, Eqs. (1),(2)]: 7.0 cm diameter, 8 proximity
   sensors; each has an emitter and a detector 0.127 cm either side of the sensor point, both facing
-  the sensor's direction. Layout from the public Webots e-puck model (docs/design.md#platforms).
+  the sensor's direction. Layout from the public Webots e-puck model.
 - ``rone``: Lynch thesis [L Sec. 3.2]: 11 cm diameter, 8 IR receivers at 22.5 + 45 k degrees with
   68-degree arcs, 8 transmitters at 45 k degrees.
+
+A custom robot is a :class:`Platform` of its own (``dataclasses.replace(get_platform("epuck"), mass=0.2)``);
+every field is checked when it is made (:meth:`Platform.__post_init__`), so a bad value fails there with a
+``ValueError`` naming the field, never inside the physics engine or the IR layer.
 """
 
 from __future__ import annotations
 
+import math
+import numbers
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -23,7 +29,51 @@ import numpy as np
 
 from swarm_envs.ir.models import MODEL_CLASSES
 
-__all__ = ["Platform", "PLATFORMS", "get_platform", "model_for"]
+__all__ = ["Platform", "PLATFORMS", "get_platform", "model_for", "MAX_RADIUS", "MAX_SPEED", "MAX_MASS", "MAX_IR_RANGE", "MAX_CHANNELS"]
+
+#: m: the largest body radius; the arena, spawn and IR geometry are sized for robots of centimetres to decimetres
+MAX_RADIUS = 1.0
+#: m/s: the largest wheel speed; with the sub-step counts the physics allows (``physics_substeps`` <= 1000)
+#: faster robots would close more than their contacts can stop within one sub-step
+#: (:func:`swarm_envs.world.default_substeps` also bounds it for small robots)
+MAX_SPEED = 10.0
+#: kg: the heaviest robot; pymunk needs a finite positive mass, and the motor forces scale with it
+MAX_MASS = 1000.0
+#: m: the longest infrared reach; the IR layer considers every pair of robots closer than this, so its
+#: work grows with the square of the range (the presets reach 0.5-1 m)
+MAX_IR_RANGE = 10.0
+#: emitters or detectors per robot at most (the presets have 6-8; the IR layer's work grows with their product)
+MAX_CHANNELS = 64
+
+
+def _positive(name: str, value: Any, high: float, unit: str, why: str = "") -> float:
+    """``value`` as a float in (0, high]; ``ValueError`` naming the field otherwise."""
+    ok = isinstance(value, numbers.Real) and not isinstance(value, bool)
+    try:
+        number = float(value) if ok else math.nan
+    except (OverflowError, ValueError):  # an int or fraction too large for a float
+        number = math.nan
+    if not (math.isfinite(number) and 0.0 < number <= high):
+        why = f" ({why})" if why else ""
+        raise ValueError(f"Platform.{name} must be a finite number of {unit} in (0, {high:g}]{why}, got {value!r:.80}")
+    return number
+
+
+def _layout(name: str, value: Any, shape: tuple[int | None, ...]) -> np.ndarray:
+    """``value`` as a read-only float array of ``shape`` (None: any length in [1, MAX_CHANNELS]), finite."""
+    try:
+        arr = np.array(value, dtype=float)
+    except (TypeError, ValueError):
+        raise ValueError(f"Platform.{name} must be a real-valued array, got {value!r:.80}") from None
+    want = "(" + ", ".join("n" if d is None else str(d) for d in shape) + ("," if len(shape) == 1 else "") + ")"
+    if arr.ndim != len(shape) or any(d is not None and a != d for a, d in zip(arr.shape, shape)):
+        raise ValueError(f"Platform.{name} must have shape {want}, got {arr.shape}")
+    if not 1 <= arr.shape[0] <= MAX_CHANNELS:
+        raise ValueError(f"Platform.{name} must list 1 to {MAX_CHANNELS} channels, got {arr.shape[0]}")
+    if not np.all(np.isfinite(arr)):
+        raise ValueError(f"Platform.{name} must be finite")
+    arr.setflags(write=False)
+    return arr
 
 
 @dataclass(frozen=True, eq=False)
@@ -56,6 +106,33 @@ class Platform:
     detector_directions: np.ndarray
     sensor_arc: float | None = None
     extras: dict[str, Any] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        """Check every field; ``ValueError`` naming the field. Numbers become floats and the layouts
+        read-only float arrays (the emitters and detectors on the body: at most ``radius`` from the centre)."""
+        if not isinstance(self.name, str) or not self.name:
+            raise ValueError(f"Platform.name must be a non-empty string, got {self.name!r:.80}")
+        radius = _positive("radius", self.radius, MAX_RADIUS, "metres")
+        values = {
+            "radius": radius,
+            "max_speed": _positive("max_speed", self.max_speed, MAX_SPEED, "metres per second"),
+            "wheel_base": _positive("wheel_base", self.wheel_base, 2.0 * radius, "metres", "at most the diameter: wheels on the body"),
+            "mass": _positive("mass", self.mass, MAX_MASS, "kilograms"),
+            "ir_range": _positive("ir_range", self.ir_range, MAX_IR_RANGE, "metres"),
+            "emitter_positions": _layout("emitter_positions", self.emitter_positions, (None, 2)),
+            "detector_positions": _layout("detector_positions", self.detector_positions, (None, 2)),
+        }
+        for kind in ("emitter", "detector"):
+            positions = values[f"{kind}_positions"]
+            values[f"{kind}_directions"] = _layout(f"{kind}_directions", getattr(self, f"{kind}_directions"), (positions.shape[0],))
+            if np.any(np.hypot(positions[:, 0], positions[:, 1]) > radius * (1 + 1e-9)):
+                raise ValueError(f"Platform.{kind}_positions must lie on the body (at most radius = {radius:g} m from the centre)")
+        if self.sensor_arc is not None:
+            values["sensor_arc"] = _positive("sensor_arc", self.sensor_arc, 2 * math.pi, "radians", "or None")
+        if not isinstance(self.extras, dict):
+            raise ValueError(f"Platform.extras must be a dict, got {type(self.extras).__name__}")
+        for key, value in values.items():
+            object.__setattr__(self, key, value)
 
     @property
     def diameter(self) -> float:
@@ -166,29 +243,27 @@ def get_platform(platform: str | Platform) -> Platform:
         ) from None
 
 
-_MODEL_CACHE: dict[str, Any] = {}
-
-
 def model_for(platform: Any) -> Any:
-    """The IR model of a platform (a :class:`Platform` or a preset name), cached by platform name.
+    """The IR model of a platform (a :class:`Platform` or a preset name), made once per platform object
+    (a model reads its platform's fields, so a custom platform never shares a preset's model).
 
-    A custom platform may name a model class via ``platform.extras["ir_model"]`` (``"droplet"``,
-    ``"epuck"`` or ``"rone"``, see :data:`swarm_envs.ir.models.MODEL_CLASSES`); it is then cached under
-    its own name.
+    The model class is the one named by the platform's name, or by ``platform.extras["ir_model"]``
+    (``"droplet"``, ``"epuck"`` or ``"rone"``, see :data:`swarm_envs.ir.models.MODEL_CLASSES`) for a
+    custom platform.
     """
     if isinstance(platform, str):
         platform = get_platform(platform)
-    name = platform.name
-    model = _MODEL_CACHE.get(name)
+    model = platform.__dict__.get("_ir_model")
     if model is None:
+        name = platform.name
         kind = (getattr(platform, "extras", None) or {}).get("ir_model", name)
         try:
             cls = MODEL_CLASSES[kind]
-        except KeyError:
+        except (KeyError, TypeError):
             raise ValueError(
                 f"no IR model for platform {name!r}; allowed: {sorted(MODEL_CLASSES)} "
                 "(or set platform.extras['ir_model'])"
             ) from None
         model = cls(platform)
-        _MODEL_CACHE[name] = model
+        object.__setattr__(platform, "_ir_model", model)  # a Platform is frozen; the model is derived data
     return model

@@ -13,19 +13,24 @@ the built arena (do the robots fit?) is checked by the task right after (:class:
 
 Errors: unknown keys raise ``TypeError`` (like any unknown keyword argument); bad values raise
 :class:`SettingsError` (a ``ValueError``) whose ``key`` attribute names the setting.
+
+Every bound has a reason (the rule's ``why``); :func:`settings_table` lists the rules with their reasons
+(the table of ``docs/settings.md``, checked against this module by the tests).
 """
 
 from __future__ import annotations
 
 import math
 import numbers
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
+import argparse
 from dataclasses import dataclass, replace
 from typing import Any
 
 from swarm_envs.comm.bch import SUPPORTED as BCH_CODES
 from swarm_envs.comm.protocol import MAX_PAYLOAD
 from swarm_envs.platforms import PLATFORMS, Platform, get_platform
+from swarm_envs.world import MAX_CLOSING, MAX_SUBSTEPS, default_substeps, min_substeps
 
 __all__ = [
     "Setting",
@@ -39,6 +44,9 @@ __all__ = [
     "SettingsError",
     "validate_settings",
     "task_settings",
+    "settings_table",
+    "cli_type",
+    "OneLineArgumentParser",
 ]
 
 #: Robots (agents and static robots) of one env copy at most: the IR layer's work and memory grow with
@@ -64,10 +72,17 @@ def _is_real(value: Any) -> bool:
 
 @dataclass(frozen=True)
 class Setting:
-    """A keyword argument: its default and its rule. Subclasses implement :meth:`check`."""
+    """A keyword argument: its default and its rule. Subclasses implement :meth:`check`.
+
+    Attributes:
+        default: the value when the keyword is not given.
+        doc: what the value means (shown in error messages).
+        why: the reason for the rule's bounds (shown in the settings table of the docs).
+    """
 
     default: Any
     doc: str = ""
+    why: str = ""
 
     def check(self, key: str, value: Any) -> Any:
         """``value`` in its canonical type, or :class:`SettingsError` naming ``key``."""
@@ -80,15 +95,19 @@ class Setting:
 
 @dataclass(frozen=True)
 class Int(Setting):
-    """An integer in ``[low, high]`` (numpy integers accepted; bools and floats refused)."""
+    """An integer in ``[low, high]`` (numpy integers accepted; bools and floats refused), or None when allowed."""
 
     low: int = 0
     high: int | None = None
+    allow_none: bool = False
 
     def rule(self) -> str:
-        return f"an integer >= {self.low}" if self.high is None else f"an integer in [{self.low}, {self.high}]"
+        span = f"an integer >= {self.low}" if self.high is None else f"an integer in [{self.low}, {self.high}]"
+        return span + (" or None" if self.allow_none else "")
 
-    def check(self, key: str, value: Any) -> int:
+    def check(self, key: str, value: Any) -> int | None:
+        if value is None and self.allow_none:
+            return None
         if not _is_int(value) or value < self.low or (self.high is not None and value > self.high):
             raise SettingsError(key, f"{key} must be {self.rule()}{self.doc and ' (' + self.doc + ')'}, got {value!r}")
         return int(value)
@@ -174,11 +193,18 @@ class _PlatformSetting(Setting):
         return f"one of {sorted(PLATFORMS)} or a swarm_envs.Platform"
 
     def check(self, key: str, value: Any) -> str | Platform:
-        if isinstance(value, Platform):
-            return value
         if isinstance(value, str) and value in PLATFORMS:
             return value
-        raise SettingsError(key, f"unknown platform {value!r:.80}; allowed values: {sorted(PLATFORMS)} or a swarm_envs.Platform")
+        if not isinstance(value, Platform):
+            raise SettingsError(key, f"unknown platform {value!r:.80}; allowed values: {sorted(PLATFORMS)} or a swarm_envs.Platform")
+        # its fields were checked when it was made (Platform.__post_init__); here what the physics can take
+        if default_substeps(value) > MAX_SUBSTEPS:
+            raise SettingsError(
+                key,
+                f"platform {value.name!r} is too fast for its size: max_speed={value.max_speed:g} m/s with radius "
+                f"{value.radius:g} m needs {default_substeps(value)} physics sub-steps per control step, at most {MAX_SUBSTEPS}",
+            )
+        return value
 
 
 @dataclass(frozen=True)
@@ -195,41 +221,76 @@ class _CodeSetting(Setting):
         return code
 
 
-#: The settings every task takes (defaults and rules). The bounds are hard limits, not advice.
+#: The settings every task takes (defaults and rules). The bounds are hard limits, not advice; each
+#: rule's ``why`` states the reason for its bounds.
 COMMON_SETTINGS: dict[str, Setting] = {
-    "n_robots": Int(10, "agents per env copy", low=1, high=MAX_ROBOTS),
-    "platform": _PlatformSetting("epuck"),
+    "n_robots": Int(
+        10, "agents per env copy", low=1, high=MAX_ROBOTS,
+        why=f"agents and static robots of one copy together at most {MAX_ROBOTS:,}: the IR layer's work and memory grow with "
+        "robots x neighbours, and 10,000 robots already take ~1 s per step with ideal sensing",
+    ),
+    "platform": _PlatformSetting(
+        "epuck", why="a custom Platform's fields are checked when it is made (swarm_envs.platforms); here also "
+        f"that its speed and size need at most {MAX_SUBSTEPS} physics sub-steps",
+    ),
     "sensing": Choice("full", choices=("full", "ideal")),
-    "max_cycles": Int(500, "control steps of 0.1 s per episode", low=1, high=10**9),
+    "max_cycles": Int(
+        500, "control steps of 0.1 s per episode", low=1, high=10**9,
+        why="10^9 steps are 3.2 years of simulated time; episode memory grows with the steps taken, never with this bound",
+    ),
     "render_mode": Choice(None, choices=(None, "rgb_array", "human")),
     "arena": Choice("square", choices=("square", "circle")),
-    # m; None = platform spacing * sqrt(number of robots). Above 10 km float64 positions lose the
-    # sub-millimetre resolution the physics needs.
-    "arena_size": Real(None, low=0.0, low_open=True, high=10_000.0, allow_none=True, unit="of metres"),
+    "arena_size": Real(
+        None, low=0.0, low_open=True, high=10_000.0, allow_none=True, unit="of metres",
+        why="None: the platform's spacing x sqrt(robots), at most 45 m; above 10 km an arena only adds empty space "
+        "(float64 positions still resolve 2e-12 m there). Whether the robots fit is checked when the env is built",
+    ),
     "reward_mode": Choice("global", choices=("global", "local")),
     "flatten": Flag(False),
-    "n_neighbours": Int(8, "observation rows", low=1, high=256),
-    "n_messages": Int(8, "observation rows", low=1, high=256),
-    "message_bits": Int(0, "the SwarmCom frame's length field", low=0, high=MAX_PAYLOAD),
+    "n_neighbours": Int(
+        8, "observation rows", low=1, high=256,
+        why="rows of range & bearing and scale-free coordinates per agent; memory grows with robots x rows",
+    ),
+    "n_messages": Int(8, "observation rows", low=1, high=256, why="rows of decoded messages per agent; memory grows with robots x rows"),
+    "message_bits": Int(
+        0, "the SwarmCom frame's length field", low=0, high=MAX_PAYLOAD,
+        why=f"the SwarmCom frame's 8-bit length field counts at most {MAX_PAYLOAD} payload bits (swarm_envs.comm.protocol)",
+    ),
     # SwarmCom messaging [T20]
-    "bitrate": Choice(310, choices=(310, 650, 1080, 1160, 1670, 1800)),
-    # m_tr (ADC counts); None = the platform's: 5 e-puck/r-one [T20], 8 droplet. At most the detector's
-    # full swing m_max - m_min = 4080 - 150 counts [T20 Eqs. (15)-(22)].
-    "relative_threshold": Real(None, low=0.0, low_open=True, high=3930.0, allow_none=True, unit="of ADC counts (m_tr)"),
-    "code": _CodeSetting((15, 15)),
+    "bitrate": Choice(310, choices=(310, 650, 1080, 1160, 1670, 1800), why="the bit rates measured in [T20]"),
+    # m_tr (ADC counts); None = the platform's: 5 e-puck/r-one [T20], 8 droplet.
+    "relative_threshold": Real(
+        None, low=0.0, low_open=True, high=3930.0, allow_none=True, unit="of ADC counts (m_tr)",
+        why="None: 5 counts on the e-puck and r-one [T20], 8 on the Droplet; at most the detector's full swing "
+        "m_max - m_min = 4080 - 150 counts [T20 Eqs. (15)-(22)]",
+    ),
+    "code": _CodeSetting((15, 15), why="the BCH codes SwarmCom implements [T20 Sec. 4.3]"),
     "comm_mode": Choice("broadcast", choices=("broadcast", "flooding")),
     # range & bearing [F14]
     "rb_schedule": Choice("contention", choices=("contention", "every_step")),
-    "rb_max_age": Int(10, "steps a reading persists", low=1, high=100_000),
-    "rb_noise": Real(None, low=0.0, high=1000.0, allow_none=True, unit="of ADC counts"),
+    "rb_max_age": Int(
+        10, "steps a reading persists", low=1, high=100_000,
+        why="100,000 steps are 2.8 h of simulated time, far longer than a reading of a moving robot means anything",
+    ),
+    "rb_noise": Real(
+        None, low=0.0, high=1000.0, allow_none=True, unit="of ADC counts",
+        why="None: 2 counts on the Droplet, sqrt(2.5) on the e-puck; 1,000 counts exceed the Droplet's 8-bit "
+        "ADC range (255) and a quarter of the e-puck's, so every reading is noise",
+    ),
     "rb_near_model": Flag(False),
     # bearing-only sensing and scale-free coordinates [L]
     "bearing_source": Choice(None, choices=(None, "sectors", "range_bearing")),
     "bearing_noise": Flag(True),
     "exchange": Choice("network", choices=("network", "ideal")),
     "scale_free_method": Choice("two_hop", choices=("two_hop", "null_space")),
-    "scale_free_k": Int(1, "hops of the null-space method", low=1, high=4),
-    "physics_substeps": Int(8, "pymunk sub-steps per control step", low=1, high=1000),
+    "scale_free_k": Int(1, "hops of the null-space method", low=1, high=4, why="a robot's k-hop neighbourhood, and the null-space method's work, grow with degree^k"),
+    "physics_substeps": Int(
+        None, "pymunk sub-steps per control step", low=1, high=MAX_SUBSTEPS, allow_none=True,
+        why="None: the platform's default (8 Droplet, 21 e-puck, 32 r-one; swarm_envs.world.default_substeps), at "
+        "which robots overlap by at most 2 % of a diameter at the default arena size; at least the platform's minimum (3 Droplet, 8 e-puck, "
+        f"11 r-one; fewer let robots close more than 5 % of a diameter per sub-step, or leave their arcs); at most {MAX_SUBSTEPS} "
+        "(the cost grows linearly: 1,000 sub-steps of 10 robots take ~5 ms per step)",
+    ),
 }
 
 #: The default of every common setting.
@@ -280,6 +341,13 @@ def validate_settings(task: Any, settings: Mapping[str, Any]) -> dict[str, Any]:
     cfg = {key: rule.check(key, settings[key]) if key in settings else rule.default for key, rule in rules.items()}
 
     platform = get_platform(cfg["platform"])
+    substeps = cfg["physics_substeps"]
+    if substeps is not None and substeps < min_substeps(platform):
+        raise SettingsError(
+            "physics_substeps",
+            f"physics_substeps={substeps} is too few for platform {platform.name!r}: at least {min_substeps(platform)} "
+            f"(fewer let two robots close more than {MAX_CLOSING:.0%} of a diameter per sub-step; None: its default {default_substeps(platform)})",
+        )
     if cfg["rb_near_model"] and platform.name != "droplet":
         raise SettingsError("rb_near_model", "rb_near_model=True is the Droplet firmware's low-power fit; use platform='droplet'")
     if cfg["bearing_source"] == "range_bearing" and not hasattr(platform.ir_model, "amplitude_inverse"):
@@ -287,3 +355,43 @@ def validate_settings(task: Any, settings: Mapping[str, Any]) -> dict[str, Any]:
             "bearing_source", f"bearing_source='range_bearing' needs a range & bearing platform; {platform.name!r} has none (use 'sectors')"
         )
     return cfg
+
+
+def settings_table(settings: Mapping[str, Setting] | None = None) -> str:
+    """A Markdown table of ``settings`` (default: :data:`COMMON_SETTINGS`): name, default, rule and the reason
+    for its bounds."""
+    rows = ["| setting | default | rule | why these bounds |", "|---|---|---|---|"]
+    for key, setting in (COMMON_SETTINGS if settings is None else settings).items():
+        rule = setting.rule().replace("|", "\\|")
+        rows.append(f"| `{key}` | `{setting.default!r}` | {rule} | {setting.why or '-'} |")
+    return "\n".join(rows) + "\n"
+
+
+def cli_type(setting: Setting, what: str = "value") -> Callable[[str], Any]:
+    """An argparse ``type`` that applies ``setting``'s rule to a command-line string: a bad value (``--trials
+    0``, ``--noise nan``) is argparse's usage error naming the option, exit code 2, like a bad env setting."""
+    def parse(text: str) -> Any:
+        value: Any = text
+        if isinstance(setting, (Int, Real)):
+            if getattr(setting, "allow_none", False) and text.strip().lower() == "none":
+                value = None
+            else:
+                try:
+                    value = int(text) if isinstance(setting, Int) else float(text)
+                except ValueError:
+                    raise argparse.ArgumentTypeError(f"{what} must be {setting.rule()}, got {text!r:.80}") from None
+        try:
+            return setting.check(what, value)
+        except SettingsError as err:
+            raise argparse.ArgumentTypeError(str(err)) from None
+
+    parse.__name__ = setting.rule()
+    return parse
+
+
+class OneLineArgumentParser(argparse.ArgumentParser):
+    """argparse whose usage errors are one line, ``prog: error: message (see --help)``, exit code 2 (the
+    command-line tools' errors, like train.py's)."""
+
+    def error(self, message: str) -> None:  # type: ignore[override]
+        self.exit(2, f"{self.prog}: error: {' '.join(message.split())} (see --help)\n")

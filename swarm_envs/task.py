@@ -27,7 +27,7 @@ rewards and ``infos``, never as observations. The suite's own tasks are written 
 
 Everything a task needs is exported here: the base class, the state, the setting rules
 (:class:`Int`, :class:`Real`, :class:`Choice`, :class:`Flag`, :class:`SettingsError`), spawn and fit
-helpers (:func:`spawn_positions`, :func:`check_capacity`, :class:`Arena`) and metric helpers over copies
+helpers (:func:`spawn_positions`, :func:`check_capacity`, :func:`lattice_positions`, :class:`Arena`) and metric helpers over copies
 (:func:`pairs_within`, :func:`largest_component_fraction`, :func:`neighbourhood_sums`,
 :func:`nearest_distances`, :func:`bump_any`).
 """
@@ -43,7 +43,7 @@ from scipy.spatial import cKDTree
 from swarm_envs.metrics import largest_component_fraction, neighbourhood_sums
 from swarm_envs.platforms import Platform
 from swarm_envs.settings import MAX_ROBOTS, Choice, Flag, Int, Real, Setting, SettingsError, task_settings
-from swarm_envs.world import N_BUMP_SECTORS, Arena, check_capacity, spawn_positions
+from swarm_envs.world import N_BUMP_SECTORS, Arena, check_capacity, lattice_positions, spawn_positions
 
 __all__ = [
     "Task",
@@ -59,6 +59,7 @@ __all__ = [
     "N_BUMP_SECTORS",
     "spawn_positions",
     "check_capacity",
+    "lattice_positions",
     "pairs_within",
     "largest_component_fraction",
     "neighbourhood_sums",
@@ -158,13 +159,18 @@ class Task:
         size = config["arena_size"] if config["arena_size"] is not None else self.default_arena_size()
         self.arena = Arena(config["arena"], float(size))
         self.agent_robots = np.arange(self.n_static, self.n_world)
-        # robots that cannot fit even touching fail here; the random spawner also keeps a gap of 0.1
-        # radius, so an arena within ~10 % of a full packing can still fail at reset (without positions)
+        # an exact fit test: it passes if and only if the spawner (whose last resort is the densest lattice
+        # placement, robots touching) places the robots for every seed
         try:
-            check_capacity(self.n_world, platform.radius, self.arena, gap=0.0)
+            check_capacity(self.n_world, platform.radius, self.arena)
         except ValueError as err:
-            raise SettingsError("arena_size" if config["arena_size"] is not None else "n_robots", str(err)) from None
+            raise SettingsError(self.size_key, str(err)) from None
         self.check_layout()
+
+    @property
+    def size_key(self) -> str:
+        """The setting a fit error names: ``arena_size`` when it was given, else ``n_robots``."""
+        return "arena_size" if self.config["arena_size"] is not None else "n_robots"
 
     # -- what a task may override --------------------------------------------------------------------
     def n_static_robots(self) -> int:
@@ -173,14 +179,17 @@ class Task:
         return 0
 
     def check_layout(self) -> None:
-        """Raise :class:`SettingsError` naming the setting when the task's initial layout cannot fit."""
+        """Raise :class:`SettingsError` naming the setting when the task's initial layout cannot fit. A task
+        that overrides :meth:`spawn` checks here that its spawner succeeds for every seed."""
 
     def default_arena_size(self) -> float:
         """Arena size (m) when ``arena_size=None``: the platform's spacing times sqrt(robots)."""
         return SPACING.get(self.platform.name, 4 * self.platform.diameter) * float(np.sqrt(self.n_world))
 
     def spawn(self, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
-        """One copy's initial (positions (n_world, 2) m, headings (n_world,) rad), drawn from ``rng``."""
+        """One copy's initial (positions (n_world, 2) m, headings (n_world,) rad), drawn from ``rng``:
+        robots uniformly at random without overlap (:func:`spawn_positions`), which succeeds for every seed
+        once the build's fit test has passed."""
         positions = spawn_positions(rng, self.n_world, self.platform.radius, self.arena)
         return positions, rng.uniform(-np.pi, np.pi, self.n_world)
 

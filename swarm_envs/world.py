@@ -4,9 +4,23 @@ One :class:`pymunk.Space` per world, robots as dynamic circles, arena walls as s
 Each control step (``dt`` = 0.1 s) is split into physics sub-steps. Every robot is dragged by a
 kinematic *control body* (pymunk's top-down "tank" pattern): a pivot joint and a gear joint with zero
 bias and bounded force make the body's velocity track the control body's as motors would, while
-contacts, which have unbounded force, win over the motors: robots push each other but never overlap
-and walls hold; bump sensing reads the contacts pymunk's solver processed in each sub-step (docs/design.md#physics; the
-contacts its post-solve collision callbacks would report, see :func:`_substeps`).
+contacts, which have unbounded force, win over the motors: robots push each other and walls hold; bump
+sensing reads the contacts pymunk's solver processed in each sub-step (the contacts its post-solve
+collision callbacks would report, see :func:`_substeps`).
+
+Contacts and sub-steps. pymunk finds a contact only once two discs overlap, so two robots driving
+head-on at full speed overlap by up to the distance they close within one sub-step before their contact
+stops them (and chains of pushing robots add a little). :func:`default_substeps` therefore sizes the
+sub-step to the platform: the smallest count (at least 8) at which two robots close at most
+:data:`DEFAULT_CLOSING` (1.75 %) of a diameter per sub-step -- 8 for the Droplet, 21 for the e-puck, 32
+for the r-one -- which keeps every overlap and every wall penetration within :data:`MAX_OVERLAP` (2 %) of
+a diameter (``benchmarks/physics_substeps.py`` measures the worst case over dense crushes). The motors'
+force is sized to what tracking needs, the largest velocity change of one sub-step with a 25 % margin
+(:func:`motor_limits`), so the solver's iterations are not spent fighting a motor far stronger than the
+contacts can absorb. The env settings refuse fewer sub-steps than :func:`min_substeps` (robots closing
+more than :data:`MAX_CLOSING` of a diameter per sub-step). A placement (:meth:`World.check_placement`)
+may overlap as deep as :data:`PLACEMENT_OVERLAP`, far beyond what the physics produces, so a state read
+back from ``infos`` is always accepted by ``reset(options=...)``.
 
 The control bodies are set once per control step (no Python work per sub-step): translation along the
 chord of the differential-drive arc, ``D = v dt sinc(w dt / 2)`` towards ``heading + w dt / 2``, and
@@ -37,15 +51,46 @@ from scipy.spatial import cKDTree
 from swarm_envs.geometry import wrap_angle
 from swarm_envs.platforms import Platform
 
-__all__ = ["Arena", "World", "step_worlds", "spawn_positions", "check_capacity", "lattice_lower_bound", "as_real_array", "wrap_angle", "N_BUMP_SECTORS"]
+__all__ = [
+    "Arena", "World", "step_worlds", "spawn_positions", "check_capacity", "lattice_lower_bound", "as_real_array", "wrap_angle",
+    "N_BUMP_SECTORS", "CONTROL_STEP", "default_substeps", "min_substeps", "motor_limits", "fit_count", "lattice_positions",
+]
 
 #: bytes of commands a world keeps per episode for exact copies (16 per robot and step; 64 MB = 400,000
 #: steps of 10 robots); a longer episode's copy falls back to pymunk's copy of the space
 COPY_LOG_BYTES = 64 << 20
 N_BUMP_SECTORS = 8  # bump sensor: one flag per 45-degree sector of the body (sector 0 centred ahead)
 _ROBOT, _WALL = 1, 2
-MOTOR_ACCELERATION = 50.0  # m/s^2: bounded motor force / mass; full speed within one physics sub-step
-MOTOR_ANGULAR_ACCELERATION = 2000.0  # rad/s^2
+#: straight walls of a circular arena (a regular polygon around the circle)
+WALL_SEGMENTS = 64
+#: s: the control step the physics defaults are sized for (the env's step, ``swarm_envs.core.DT``)
+CONTROL_STEP = 0.1
+#: fraction of a diameter two robots driving head-on at full speed close per sub-step at the default count
+DEFAULT_CLOSING = 0.0175
+#: the fewest sub-steps a platform gets by default
+MIN_DEFAULT_SUBSTEPS = 8
+#: fraction of a diameter two robots may close per sub-step at most (any ``physics_substeps``): with more,
+#: crushes of hundreds of robots overlap by half a diameter (:data:`PLACEMENT_OVERLAP`)
+MAX_CLOSING = 0.05
+#: sub-steps per control step at most (the ``physics_substeps`` setting's bound: cost grows linearly)
+MAX_SUBSTEPS = 1000
+#: fraction of a diameter robots overlap (or enter a wall) at most at the default sub-steps and densities
+MAX_OVERLAP = 0.02
+#: fraction of a diameter two robots of a placement (``reset(options=...)``) may overlap: a deeper overlap
+#: (centres closer than one radius) is a mistake, such as two robots on one spot. The physics itself
+#: stays far below it (``benchmarks/physics_substeps.py``): <= 2 % at the default sub-steps and densities,
+#: ~13 % in a crush of 1,500 robots covering 60 % of the arena, ~23 % in such a crush of 400 robots at the
+#: fewest sub-steps
+PLACEMENT_OVERLAP = 0.5
+#: fraction of a diameter a robot of a placement may reach past a wall (its centre stays half a radius inside)
+PLACEMENT_WALL_DEPTH = 0.25
+#: motor force over the largest velocity change of one sub-step (:func:`motor_limits`)
+MOTOR_MARGIN = 1.25
+#: pymunk solver iterations per sub-step (contacts and motor joints)
+SOLVER_ITERATIONS = 10
+#: fraction of an overlap left after one second of contact correction: 30 % of it is removed every 1/60 s
+#: (pymunk's default removes 10 %), which keeps chains of robots pushed together within :data:`MAX_OVERLAP`
+COLLISION_BIAS = (1.0 - 0.3) ** 60
 # pymunk.batch fields: every body's (x, y, angle, vx, vy, omega) read in one call per space, and the
 # (vx, vy, omega) written in one call; a space's bodies come in insertion order (robot, its control, ...)
 _READ = pymunk.batch.BodyFields.POSITION | pymunk.batch.BodyFields.ANGLE | pymunk.batch.BodyFields.VELOCITY | pymunk.batch.BodyFields.ANGULAR_VELOCITY
@@ -102,13 +147,27 @@ class Arena:
             return np.all(np.abs(points) <= self.half - margin + 1e-12, axis=-1)
         return np.linalg.norm(points, axis=-1) <= self.half - margin + 1e-12
 
-    def wall_segments(self, n_circle_segments: int = 64) -> np.ndarray:
+    def wall_depth(self, points: np.ndarray, radius: float) -> np.ndarray:
+        """How far (m) discs of ``radius`` at ``points`` (..., 2) reach past the physical walls (<= 0 inside);
+        for a circle the walls are the polygon of :meth:`wall_segments`, whose corners lie a little outside
+        the circle."""
+        points = np.asarray(points, dtype=float)
+        if self.shape == "square":
+            return np.abs(points).max(axis=-1) + radius - self.half
+        sides = WALL_SEGMENTS
+        normals = (2 * np.arange(sides) + 1) * np.pi / sides  # side k faces the middle of corners k and k + 1
+        reach = points[..., 0, None] * np.cos(normals) + points[..., 1, None] * np.sin(normals)
+        return reach.max(axis=-1) + radius - self.half
+
+    def wall_segments(self, n_circle_segments: int | None = None) -> np.ndarray:
         """Wall segments (S, 2, 2) in metres; a circle is a regular polygon circumscribing it."""
         if self.shape == "square":
             h = self.half
             corners = np.array([[-h, -h], [h, -h], [h, h], [-h, h]])
         else:
-            # circumscribed polygon: its inscribed circle is the arena, so discs never leave it
+            # circumscribed polygon: its inscribed circle is the arena, so a disc placed in the circle is
+            # inside the walls (a pushed robot can reach a little past the circle, into a corner)
+            n_circle_segments = n_circle_segments or WALL_SEGMENTS
             rad = self.half / np.cos(np.pi / n_circle_segments)
             ang = 2 * np.pi * np.arange(n_circle_segments) / n_circle_segments
             corners = rad * np.stack([np.cos(ang), np.sin(ang)], -1)
@@ -124,20 +183,103 @@ class Arena:
         return np.stack([r * np.cos(a), r * np.sin(a)], -1)
 
 
-def _lattice_points(arena: Arena, radius: float, gap: float, shift: np.ndarray) -> np.ndarray:
-    """Points of a shifted hexagonal lattice (pitch 2 radius + gap) whose discs fit in the arena."""
-    pitch = 2 * radius + gap
-    n_side = int(np.ceil(arena.size / pitch)) + 2
-    i, j = np.meshgrid(np.arange(-n_side, n_side + 1), np.arange(-n_side, n_side + 1))
-    pts = np.stack([(i + 0.5 * (j % 2)) * pitch, j * pitch * np.sqrt(3) / 2], -1).reshape(-1, 2) + shift
-    return pts[arena.contains(pts, radius + 0.5 * gap)]
+def closing_per_substep(platform: Platform, substeps: int) -> float:
+    """Distance (m) two robots driving head-on at full speed close within one sub-step of the control step."""
+    return 2.0 * platform.max_speed * CONTROL_STEP / substeps
 
 
-def _best_lattice(arena: Arena, radius: float, gap: float) -> np.ndarray:
-    """The hexagonal lattice placement (over a grid of shifts) that fits the most discs."""
+def default_substeps(platform: Platform) -> int:
+    """The platform's default sub-steps per control step: the fewest (at least :data:`MIN_DEFAULT_SUBSTEPS`)
+    at which two robots close at most :data:`DEFAULT_CLOSING` of a diameter per sub-step."""
+    need = 2.0 * platform.max_speed * CONTROL_STEP / (DEFAULT_CLOSING * platform.diameter)
+    return max(MIN_DEFAULT_SUBSTEPS, math.ceil(need - 1e-9))
+
+
+def min_substeps(platform: Platform) -> int:
+    """The fewest sub-steps per control step the platform may use: two robots close at most
+    :data:`MAX_CLOSING` of a diameter per sub-step, and at least 3 (the motors then keep every robot on its
+    exact arc, :func:`motor_limits`)."""
+    need = 2.0 * platform.max_speed * CONTROL_STEP / (MAX_CLOSING * platform.diameter)
+    return max(3, math.ceil(need - 1e-9))
+
+
+def motor_limits(platform: Platform, substeps: int) -> tuple[float, float]:
+    """The motors' largest force (N) and torque (N m): :data:`MOTOR_MARGIN` times the largest velocity
+    change the control velocities of the module docstring ask for within one sub-step, linear and angular.
+
+    A control velocity is ``c = (D - h u) / (dt - h)`` with ``|D| <= v dt`` and ``u`` the previous one, so
+    ``|c| <= v dt / (dt - 2 h)`` however the commands alternate, and a change ``c - u`` is at most twice
+    that (3 or more sub-steps; with 2 the bound grows without limit, with 1 the motors act a step late)."""
+    h = CONTROL_STEP / substeps
+    reach = 2.0 * CONTROL_STEP / (CONTROL_STEP - 2 * h) if substeps >= 3 else 2.0 * substeps
+    moment = pymunk.moment_for_circle(platform.mass, 0.0, platform.radius)
+    force = MOTOR_MARGIN * platform.mass * reach * platform.max_speed / h
+    torque = MOTOR_MARGIN * moment * reach * platform.max_angular_speed / h
+    return force, torque
+
+
+#: the gap (fraction of the radius) random placement keeps between robots and from the walls
+SPAWN_GAP = 0.1
+#: random placement rounds in a row that place no robot before the spawner turns to a lattice
+SPAWN_STALL_ROUNDS = 8
+#: lattices tried by :func:`_best_lattice`: hexagonal with rows along x, hexagonal with rows along y, square
+LATTICES = ("hex", "hex_rotated", "square")
+#: shifts per axis of a lattice cell tried by :func:`_best_lattice` (besides the wall-aligned and centred ones)
+LATTICE_SHIFTS = 8
+
+
+def _lattice(kind: str, pitch: float, extent: float, shift: tuple[float, float]) -> np.ndarray:
+    """Points (k, 2) of a lattice of ``kind`` (:data:`LATTICES`) with nearest-neighbour distance ``pitch``
+    (m), shifted by ``shift`` (m), covering the square [-extent, extent]^2."""
+    row = pitch * np.sqrt(3) / 2 if kind != "square" else pitch
+    n_i, n_j = int(np.ceil(extent / pitch)) + 2, int(np.ceil(extent / row)) + 2
+    i, j = np.meshgrid(np.arange(-n_i, n_i + 1), np.arange(-n_j, n_j + 1))
+    offset = 0.5 * (j % 2) if kind != "square" else 0.0
+    pts = np.stack([(i + offset) * pitch + shift[0], j * row + shift[1]], -1).reshape(-1, 2)
+    return pts[:, ::-1].copy() if kind == "hex_rotated" else pts
+
+
+def _shifts(kind: str, pitch: float, inner: float) -> list[tuple[float, float]]:
+    """Shifts of a lattice to try: centred, aligned with the walls (a point on the lowest row and column a
+    centre may take, ``-inner``, for either row parity) and a grid over the lattice cell."""
+    row = pitch * np.sqrt(3) / 2 if kind != "square" else pitch
+    along, across = (pitch, row) if kind != "hex_rotated" else (row, pitch)
+    period = (2 * along if kind == "hex_rotated" else along, 2 * across if kind == "hex" else across)
+    aligned = [(-inner + a, -inner + b) for a in (0.0, 0.5 * pitch) for b in (0.0, row if kind != "square" else 0.0)]
+    grid = [(a, b) for a in np.linspace(0, period[0], LATTICE_SHIFTS, endpoint=False) for b in np.linspace(0, period[1], LATTICE_SHIFTS, endpoint=False)]
+    return [(0.0, 0.0), (0.5 * pitch, 0.0), (0.0, 0.5 * pitch)] + aligned + grid
+
+
+def _best_lattice(region: Arena, radius: float, gap: float, avoid: np.ndarray | None = None, avoid_distance: float = 0.0) -> np.ndarray:
+    """The lattice placement of discs of ``radius`` (m) with ``gap`` (m) between neighbours that fits the
+    most discs in ``region`` (at least ``avoid_distance`` m from every point of ``avoid``), over the
+    :data:`LATTICES` and their :func:`_shifts`: the densest placement the spawner falls back to, and the
+    fit test of the build. Deterministic; O(area / pitch^2) per lattice and shift."""
     pitch = 2 * radius + gap
-    shifts = np.stack(np.meshgrid(np.linspace(0, pitch, 6, endpoint=False), np.linspace(0, pitch * np.sqrt(3), 10, endpoint=False)), -1).reshape(-1, 2)
-    return max((_lattice_points(arena, radius, gap, s) for s in shifts), key=len)
+    inner = region.half - radius - 0.5 * gap  # centres stay within this distance of the middle
+    best = np.empty((0, 2))
+    if inner < 0:
+        return best
+    if avoid is None and (region.shape, region.size, radius, gap) in _LATTICE_CACHE:
+        return _LATTICE_CACHE[region.shape, region.size, radius, gap]
+    for kind in LATTICES:
+        for shift in _shifts(kind, pitch, inner):
+            pts = _lattice(kind, pitch, region.half, shift)
+            pts = pts[region.contains(pts, radius + 0.5 * gap)]
+            if avoid is not None and len(avoid) and len(pts):
+                pts = pts[_far_from(pts, avoid, avoid_distance)]
+            if len(pts) > len(best):
+                best = pts
+    best.setflags(write=False)
+    if avoid is None:
+        if len(_LATTICE_CACHE) >= 64:
+            _LATTICE_CACHE.clear()
+        _LATTICE_CACHE[region.shape, region.size, radius, gap] = best
+    return best
+
+
+#: the best lattice of recent (shape, size, radius, gap): a crowded scene spawns from it at every reset
+_LATTICE_CACHE: dict[tuple, np.ndarray] = {}
 
 
 def lattice_lower_bound(region: Arena, radius: float, gap: float) -> int:
@@ -153,19 +295,60 @@ def lattice_lower_bound(region: Arena, radius: float, gap: float) -> int:
     return int(np.floor(2 * inner / (pitch * np.sqrt(3) / 2))) * int(np.floor(2 * inner / pitch))
 
 
-def check_capacity(n: int, radius: float, region: Arena, gap: float | None = None) -> None:
-    """Raise ``ValueError`` when ``n`` discs of ``radius`` (m) plus ``gap`` (default 0.1 radius) cannot fit
-    in ``region`` as a hexagonal packing. O(1) when the region is roomy (:func:`lattice_lower_bound`);
-    otherwise the lattices are enumerated, which costs O(n) because the region is then small."""
-    gap = 0.1 * radius if gap is None else gap
+def _lattice_block(region: Arena, radius: float, gap: float, n: int) -> np.ndarray:
+    """At least ``n`` <= :func:`lattice_lower_bound` lattice points (hexagonal, pitch 2 radius + gap) in the
+    smallest centred square that holds them inside ``region``: O(n), whatever the region's size."""
+    pitch = 2 * radius + gap
+    row = pitch * np.sqrt(3) / 2
+    inner = region.half - radius - 0.5 * gap
+    if region.shape == "circle":
+        inner /= np.sqrt(2.0)
+    half = inner
+    for rows in range(1, n + 1):  # the narrowest square of rows x columns >= n (the lower bound's count)
+        w = 0.5 * rows * row
+        if np.floor(2 * w / row) * np.floor(2 * w / pitch) >= n:
+            half = min(inner, w + 1e-9 * pitch)
+            break
+    pts = _lattice("hex", pitch, half, (0.0, 0.0))
+    return pts[np.all(np.abs(pts) <= half, axis=1)]
+
+
+def lattice_positions(
+    region: Arena, radius: float, gap: float = 0.0, n: int | None = None, avoid: np.ndarray | None = None, avoid_distance: float = 0.0
+) -> np.ndarray:
+    """The lattice points (k, 2) m the spawner falls back to: discs of ``radius`` (m) with ``gap`` (m)
+    between neighbours inside ``region``, at least ``avoid_distance`` (m) from every point of ``avoid``.
+    The densest lattice placement (:func:`_best_lattice`; deterministic), or, when ``n`` is given and the
+    region is roomy, an O(n) block of at least ``n`` points of one lattice (fewer only if ``avoid`` is
+    crowded). A spawner that picks its robots among these points succeeds whenever there are enough."""
+    avoid = None if avoid is None or not len(avoid) else np.asarray(avoid, dtype=float)
+    extra = 0 if avoid is None else 7 * len(avoid)  # an open disc of one pitch holds at most 4 lattice points
+    if n is not None and n + extra <= lattice_lower_bound(region, radius, gap):
+        pts = _lattice_block(region, radius, gap, n + extra)
+        return pts if avoid is None else pts[_far_from(pts, avoid, avoid_distance)]
+    return _best_lattice(region, radius, gap, avoid, avoid_distance)
+
+
+def fit_count(n: int, radius: float, region: Arena, gap: float = 0.0) -> int:
+    """How many discs of ``radius`` (m) with ``gap`` (m) between neighbours the spawner can place in
+    ``region`` for sure, up to ``n`` (a lattice placement, :func:`_best_lattice`). O(1) when the region is
+    roomy (:func:`lattice_lower_bound` >= n); otherwise the lattices are enumerated, which costs O(n)
+    because the region is then small."""
     if n <= lattice_lower_bound(region, radius, gap):
-        return
-    fit = len(_best_lattice(region, radius, gap))
+        return n
+    return min(n, len(_best_lattice(region, radius, gap)))
+
+
+def check_capacity(n: int, radius: float, region: Arena, gap: float = 0.0) -> None:
+    """Raise ``ValueError`` saying how many fit when :func:`spawn_positions` cannot place ``n`` discs of
+    ``radius`` (m) in ``region`` for every seed, i.e. when no lattice of :func:`_best_lattice` with ``gap``
+    (m; default 0, discs touching) holds them. If it passes, ``spawn_positions`` succeeds for every seed."""
+    fit = fit_count(n, radius, region, gap)
     if n > fit:
         raise ValueError(
             f"cannot place {n} robots of diameter {2 * radius:.3f} m in a {region.shape} region of size "
-            f"{region.size:.3f} m: at most {fit} fit (hexagonal packing with a {gap * 1e3:.1f} mm gap); "
-            "use fewer robots or a larger arena_size"
+            f"{region.size:.4g} m: at most {fit} fit (the densest lattice placement, robots "
+            + (f"{gap * 1e3:.1f} mm apart" if gap else "touching") + "); use fewer robots or a larger arena_size"
         )
 
 
@@ -176,29 +359,39 @@ def spawn_positions(
     arena: Arena,
     region: Arena | None = None,
     gap: float | None = None,
-    max_tries: int = 200,
+    max_tries: int = 50,
     avoid: np.ndarray | None = None,
     avoid_distance: float = 0.0,
+    lattice_gap: float = 0.0,
 ) -> np.ndarray:
     """Seeded non-overlapping disc positions (n, 2) in metres inside ``region`` (default: the arena),
     each at least ``avoid_distance`` (m) from every point of ``avoid`` (k, 2) m (e.g. robots already placed).
 
-    Random sequential placement (batched candidates, KD-tree checks): cost O(n log n), independent of the
-    region's area. For densities where that stalls, a random subset of a randomly shifted hexagonal
-    lattice (enumerated only then, when the region is small). Raises ``ValueError`` when ``n`` discs of
-    ``radius`` (plus ``gap``) cannot fit at all (:func:`check_capacity`).
+    Random sequential placement (batched candidates, KD-tree checks) keeping ``gap`` (m; default
+    :data:`SPAWN_GAP` radius) between discs: cost O(n log n), independent of the region's area. Where that
+    stalls (:data:`SPAWN_STALL_ROUNDS` rounds without progress, or ``max_tries`` rounds), a random subset
+    of a randomly shifted hexagonal lattice with the same gap, and last a random subset of the densest
+    lattice placement with ``lattice_gap`` (m; default 0, touching; :func:`_best_lattice`, or an O(n) block
+    of it in a roomy region). Without ``avoid`` this always succeeds when :func:`check_capacity` (with
+    ``lattice_gap``) passes and raises its ``ValueError`` otherwise; with ``avoid`` it raises
+    ``ValueError`` when even the lattice cannot keep away from those points.
     """
     region = region or arena
-    gap = 0.1 * radius if gap is None else gap
+    gap = SPAWN_GAP * radius if gap is None else gap
     min_dist = 2 * radius + gap
-    check_capacity(n, radius, region, gap)
+    if avoid is not None and not len(avoid):
+        avoid = None
+    if avoid is None:
+        check_capacity(n, radius, region, lattice_gap)
     placed = np.empty((0, 2))
-    for _ in range(max_tries):
+    stalled = 0
+    room = region.half - radius - 0.5 * gap > 0  # random placement keeps the gap from the walls too
+    for _ in range(max_tries if room else 0):
         need = n - len(placed)
-        if need == 0:
-            return placed
+        if need == 0 or stalled >= SPAWN_STALL_ROUNDS:
+            break
         cand = region.sample(rng, 4 * need + 8, radius + 0.5 * gap)
-        if avoid is not None and len(avoid):
+        if avoid is not None:
             cand = cand[_far_from(cand, avoid, avoid_distance)]
         if len(placed):
             d, _ = cKDTree(placed).query(cand, k=1)
@@ -218,20 +411,26 @@ def spawn_positions(
                     blocked[neighbours[idx]] = True
                     if len(keep) == need:
                         break
+        stalled = 0 if keep else stalled + 1
         placed = np.concatenate([placed, cand[keep]], axis=0)
-    # dense: random subset of a randomly shifted lattice that still fits
-    for _ in range(50):
-        pts = _lattice_points(region, radius, gap, rng.uniform(0, 2 * radius + gap, 2))
-        if avoid is not None and len(avoid):
-            pts = pts[_far_from(pts, avoid, avoid_distance)]
-        if len(pts) >= n:
-            return pts[rng.choice(len(pts), n, replace=False)]
-    lattice = _best_lattice(region, radius, gap)
-    if avoid is not None and len(avoid):
-        lattice = lattice[_far_from(lattice, avoid, avoid_distance)]
+    if len(placed) == n:
+        return placed
+    roomy = avoid is None and n <= lattice_lower_bound(region, radius, lattice_gap)
+    if not roomy or (region.size / min_dist) ** 2 <= 50 * n:  # enumerating the region costs O(n)
+        for _ in range(10):  # a random subset of a randomly shifted lattice with the random placement's gap
+            pts = _lattice("hex", min_dist, region.half, tuple(rng.uniform(0, min_dist, 2)))
+            pts = pts[region.contains(pts, radius + 0.5 * gap)]
+            if avoid is not None and len(pts):
+                pts = pts[_far_from(pts, avoid, avoid_distance)]
+            if len(pts) >= n:
+                return pts[np.sort(rng.choice(len(pts), n, replace=False))]
+    lattice = lattice_positions(region, radius, lattice_gap, n, avoid, avoid_distance)
     if len(lattice) < n:
-        raise ValueError(f"could not place {n} robots of radius {radius:.3f} m away from the {len(avoid)} given points; use a larger arena_size")
-    return lattice[rng.choice(len(lattice), n, replace=False)]
+        raise ValueError(
+            f"could not place {n} robots of radius {radius:.3f} m away from the {len(avoid)} given points: at most "
+            f"{len(lattice)} fit; use a larger arena_size"
+        )
+    return lattice[np.sort(rng.choice(len(lattice), n, replace=False))]
 
 
 def _far_from(points: np.ndarray, others: np.ndarray, distance: float) -> np.ndarray:
@@ -258,9 +457,10 @@ class World:
     ``angular_velocities (n,)``, and ``bumps (n, N_BUMP_SECTORS)`` for the last control step.
     """
 
-    def __init__(self, platform: Platform, n_robots: int, arena: Arena, substeps: int = 8) -> None:
-        if substeps < 1:
-            raise ValueError(f"physics substeps must be >= 1, got {substeps}")
+    def __init__(self, platform: Platform, n_robots: int, arena: Arena, substeps: int | None = None) -> None:
+        substeps = default_substeps(platform) if substeps is None else substeps
+        if not 1 <= substeps <= MAX_SUBSTEPS:
+            raise ValueError(f"physics substeps must be in [1, {MAX_SUBSTEPS}], got {substeps}")
         self.platform = platform
         self.n = int(n_robots)
         self.arena = arena
@@ -276,30 +476,39 @@ class World:
         self._commands: list[tuple[np.ndarray, np.ndarray, float]] | None = []
         self._command_bytes = 0
 
-    def _build_space(self) -> None:
-        """A new pymunk space with every robot at the origin and the walls: no contact, arbiter or
-        solver cache from an earlier episode survives (a reused world behaves like a fresh one)."""
+    def _build_space(self, positions: np.ndarray | None = None, headings: np.ndarray | None = None) -> None:
+        """A new pymunk space with the walls and every robot at rest at ``positions`` (n, 2) m with
+        ``headings`` (n,) rad (default: apart on a row, as pymunk's bounding-box tree needs; robots stacked on
+        one spot make every insertion and removal cost O(n)): no contact, arbiter or solver cache from an
+        earlier episode survives (a reused world behaves like a fresh one)."""
         platform, arena = self.platform, self.arena
+        if positions is None:
+            positions = np.stack([3.0 * platform.radius * np.arange(self.n), np.zeros(self.n)], axis=1)
+            headings = np.zeros(self.n)
         self.space = pymunk.Space()
         self.space.gravity = (0.0, 0.0)
         self.space.collision_slop = 1e-4  # m: allowed interpenetration before the solver pushes apart
-        self.space.iterations = 20
+        self.space.iterations = SOLVER_ITERATIONS
+        self.space.collision_bias = COLLISION_BIAS
         self.bodies: list[pymunk.Body] = []
         self.controls: list[pymunk.Body] = []
         moment = pymunk.moment_for_circle(platform.mass, 0.0, platform.radius)
-        for _ in range(self.n):
+        max_force, max_torque = motor_limits(platform, self.substeps)
+        for p, h in zip(positions.tolist(), headings.tolist()):
             body = pymunk.Body(platform.mass, moment)
+            body.position, body.angle = p, h
             shape = pymunk.Circle(body, platform.radius)
             shape.friction = 0.0
             shape.elasticity = 0.0
             shape.collision_type = _ROBOT
             control = pymunk.Body(body_type=pymunk.Body.KINEMATIC)
+            control.position, control.angle = p, h
             pivot = pymunk.PivotJoint(control, body, (0, 0), (0, 0))
             pivot.max_bias = 0.0  # correct velocity only, never position
-            pivot.max_force = platform.mass * MOTOR_ACCELERATION
+            pivot.max_force = max_force
             gear = pymunk.GearJoint(control, body, 0.0, 1.0)
             gear.max_bias = 0.0
-            gear.max_force = moment * MOTOR_ANGULAR_ACCELERATION
+            gear.max_force = max_torque
             self.space.add(body, shape, control, pivot, gear)
             self.bodies.append(body)
             self.controls.append(control)
@@ -380,7 +589,9 @@ class World:
     # -- state -----------------------------------------------------------------------------------
     def check_placement(self, positions: np.ndarray, headings: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """``positions`` (n, 2) m and ``headings`` (n,) rad as float arrays; raises ``ValueError`` when they
-        have the wrong shape, are not finite, leave the arena or overlap. Changes nothing."""
+        have the wrong shape, are not finite, reach past the walls by more than :data:`PLACEMENT_WALL_DEPTH`
+        or overlap each other by more than :data:`PLACEMENT_OVERLAP` of a diameter (far more than the physics
+        produces, so any state the world reached is accepted). Changes nothing."""
         positions = as_real_array(positions, "positions")
         headings = as_real_array(headings, "headings")
         if positions.shape != (self.n, 2) or headings.shape != (self.n,):
@@ -390,29 +601,27 @@ class World:
             )
         if not (np.all(np.isfinite(positions)) and np.all(np.isfinite(headings))):
             raise ValueError("positions and headings must be finite")
-        outside = np.flatnonzero(~self.arena.contains(positions, self.platform.radius))
+        d = self.platform.diameter
+        outside = np.flatnonzero(self.arena.wall_depth(positions, self.platform.radius) > PLACEMENT_WALL_DEPTH * d)
         if len(outside):
             raise ValueError(
-                f"robots {outside.tolist()} are (partly) outside the {self.arena.shape} arena of size "
-                f"{self.arena.size} m (robot radius {self.platform.radius} m)"
+                f"robots {outside[:10].tolist()} are outside the {self.arena.shape} arena of size {self.arena.size} m "
+                f"(robot radius {self.platform.radius} m; a robot may reach at most {PLACEMENT_WALL_DEPTH:.0%} of its diameter past a wall)"
             )
-        overlap = cKDTree(positions).query_pairs(2 * self.platform.radius - 1e-9, output_type="ndarray")
+        overlap = cKDTree(positions).query_pairs((1.0 - PLACEMENT_OVERLAP) * d, output_type="ndarray")
         if len(overlap):
-            raise ValueError(f"robots overlap: pairs {overlap[:5].tolist()} are closer than one diameter")
+            raise ValueError(
+                f"robots overlap: pairs {overlap[:5].tolist()} overlap by more than {PLACEMENT_OVERLAP:.0%} of a "
+                f"diameter ({d} m; their centres are closer than {(1.0 - PLACEMENT_OVERLAP) * d:.4g} m)"
+            )
         return positions, headings
 
     def place(self, positions: np.ndarray, headings: np.ndarray) -> None:
         """Put robots exactly at ``positions`` (n, 2) m with ``headings`` (n,) rad, at rest, in a new
         physics space (nothing of the previous episode survives). Raises like :meth:`check_placement`."""
         positions, headings = self.check_placement(positions, headings)
-        self._build_space()
-        for body, control, p, h in zip(self.bodies, self.controls, positions, headings):
-            body.position = control.position = (float(p[0]), float(p[1]))
-            body.angle = control.angle = float(h)
-            body.velocity = control.velocity = (0.0, 0.0)
-            body.angular_velocity = control.angular_velocity = 0.0
-        for body in self.bodies:
-            self.space.reindex_shapes_for_body(body)
+        self.space = None  # the previous episode's space is freed before the new one is built
+        self._build_space(positions, headings)
         self.positions = positions.copy()
         self.headings = wrap_angle(headings)
         self.velocities = np.zeros((self.n, 2))

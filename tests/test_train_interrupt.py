@@ -1,5 +1,7 @@
 """Ctrl-C during ``python train.py``: the current model and the resolved config are saved, and the command
-exits with code 130 and a one-line message (no traceback). Runs train.py in a subprocess and sends SIGINT."""
+exits with code 130 and a one-line message (no traceback, also with worker processes). Runs train.py in a
+subprocess and sends SIGINT. With ``--force`` over an old run, the old run stays as it was while the new
+one trains (in its staging directory) and is replaced as a whole at the end: no stale results survive."""
 
 from __future__ import annotations
 
@@ -21,7 +23,7 @@ TINY = [
     "env.n_robots=4",
     "env.max_cycles=20",
     "train.total_timesteps=10000000",  # far more than the test waits for
-    "train.n_envs=1",
+    "train.n_envs=2",
     "train.checkpoint_freq=0",
     "train.progress_bar=false",
     "agent.n_steps=64",
@@ -37,25 +39,47 @@ def _rows(path: Path) -> int:
         return 0
 
 
+def _own_group_default_sigint() -> None:
+    """In the child: its own process group (so Ctrl-C can reach it and its workers together) and SIGINT's
+    default action."""
+    os.setpgrp()
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
+def _old_run(out: Path) -> dict[str, bytes]:
+    """A fake earlier run in ``out`` (with a user's file beside it); returns its files' bytes."""
+    out.mkdir(parents=True)
+    files = {"config.yaml": b"seed: 1\n", "model.zip": b"old model", "results.csv": b"policy,metric\nold,1\n",
+             "progress.csv": b"old\n", "notes.txt": b"mine\n"}
+    for name, data in files.items():
+        (out / name).write_bytes(data)
+    return files
+
+
 @pytest.mark.skipif(sys.platform == "win32", reason="SIGINT to a child process is POSIX")
-def test_ctrl_c_saves_model_and_config(tmp_path):
+@pytest.mark.parametrize("n_workers", [1, 2])
+def test_ctrl_c_saves_model_and_config(tmp_path, n_workers):
     from stable_baselines3 import PPO
 
     out = tmp_path / "run"
-    cmd = [sys.executable, str(ROOT / "train.py"), "--config", str(ROOT / "configs" / "aggregation.yaml"), "--output", str(out)]
-    cmd += [x for o in TINY for x in ("--set", o)]
+    old = _old_run(out)
+    cmd = [sys.executable, str(ROOT / "train.py"), "--config", str(ROOT / "configs" / "aggregation.yaml"), "--output", str(out), "--force"]
+    cmd += [x for o in TINY + [f"train.n_workers={n_workers}"] for x in ("--set", o)]
     env = {**os.environ, "PYTHONUNBUFFERED": "1", "PYTHONPATH": str(ROOT)}
     # a shell starts background jobs with SIGINT ignored, and children inherit that: give the child the default
     proc = subprocess.Popen(cmd, cwd=ROOT, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+                            preexec_fn=_own_group_default_sigint)
     try:
         deadline = time.monotonic() + 180
-        # training has started once PPO has logged two iterations (header + 2 rows of progress.csv)
-        while _rows(out / "progress.csv") < 3:
+        # training has started once PPO has logged two iterations (header + 2 rows of progress.csv), in the
+        # staging directory beside the output
+        while max([_rows(p) for p in tmp_path.glob(".run.*.partial/progress.csv")] or [0]) < 3:
             assert proc.poll() is None, proc.communicate()
             assert time.monotonic() < deadline, "training did not start within 180 s"
             time.sleep(0.2)
-        proc.send_signal(signal.SIGINT)
+        assert {name: (out / name).read_bytes() for name in old} == old  # the old run is untouched meanwhile
+        # Ctrl-C in a terminal reaches the whole foreground process group: the trainer and its workers
+        os.killpg(proc.pid, signal.SIGINT) if n_workers > 1 else proc.send_signal(signal.SIGINT)
         stdout, stderr = proc.communicate(timeout=120)
     finally:
         if proc.poll() is None:
@@ -71,7 +95,9 @@ def test_ctrl_c_saves_model_and_config(tmp_path):
     cfg = load_config(out / "config.yaml")  # the resolved config is a valid config again
     assert cfg["train"]["total_timesteps"] == 10_000_000 and cfg["agent"]["scripted"] == "swarm_envs.agents.scripted:BearingAggregation"
     assert json.loads((out / "timing.json").read_text())["interrupted"] is True
-    assert not (out / "results.csv").exists()
+    assert not (out / "results.csv").exists(), "the old run's results must not outlive its model"
+    assert (out / "notes.txt").read_bytes() == old["notes.txt"]  # files that are not part of a run stay
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["run"]  # no staging directory left
 
 
 def _ctrl_c_in_compiled_code():

@@ -1,7 +1,7 @@
 """Infrared hardware models: emitter directivity x detector directivity x medium attenuation.
 
 One small object per platform, obtained with ``platform.ir_model`` or
-:func:`swarm_envs.platforms.model_for` (cached by platform name; this module knows no platform presets,
+:func:`swarm_envs.platforms.model_for` (made once per platform object; this module knows no platform presets,
 so it does not import :mod:`swarm_envs.platforms`). Every model
 has ``gain(distance_m, detector_angle, emitter_angle) -> ndarray`` (numpy broadcasting), the noiseless
 light one emitter delivers to one detector:

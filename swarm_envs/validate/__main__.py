@@ -1,7 +1,10 @@
 """Validation command line: reproduce the source papers' published figures and print ours beside theirs.
 
 Usage: ``python -m swarm_envs.validate {range-bearing,swarmcom,scale-free,centroid} [--json] [options]``.
-Each experiment lives in its own module with a ``main(argv) -> int`` function.
+Each experiment lives in its own module with a ``main(argv) -> int`` function. Options are checked by the
+same rules as the env settings (:func:`swarm_envs.settings.cli_type`): a bad value is a one-line usage error
+naming the option (:class:`swarm_envs.settings.OneLineArgumentParser`), exit code 2; a plot directory
+that cannot be written is one ``error:`` line, exit code 2.
 """
 
 from __future__ import annotations
@@ -29,7 +32,12 @@ def main(argv: list[str] | None = None) -> int:
             return 2
         return 0
     module = importlib.import_module(EXPERIMENTS[argv[0]][0])
-    return int(module.main(argv[1:]) or 0)
+    try:
+        return int(module.main(argv[1:]) or 0)
+    except OSError as err:  # e.g. --out names a file, or a directory that cannot be written
+        where = f" '{err.filename}'" if getattr(err, "filename", None) else ""
+        print(f"error: could not write{where}: {err.strerror or err}", file=sys.stderr)
+        return 2
 
 
 if __name__ == "__main__":

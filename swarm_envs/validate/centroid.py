@@ -40,7 +40,6 @@ to the 14.03 cm).
 
 from __future__ import annotations
 
-import argparse
 import json
 import os
 import sys
@@ -55,6 +54,7 @@ from swarm_envs.sensing.bearing_sensor import BearingReadings, draw_half_arcs, s
 from swarm_envs.sensing.exchange import BearingExchange
 from swarm_envs.sensing.scale_free import coordinates_all
 from swarm_envs.validate.report import Row, print_rows, rows_json
+from swarm_envs.settings import Int, OneLineArgumentParser, Real, cli_type
 
 PAPER_MEAN_CM = 14.03
 D_STEP = 0.11  # m [L Sec. 6.2.2]
@@ -372,21 +372,26 @@ def rows(summary: dict[str, Any]) -> list[Row]:
 def main(argv: list[str]) -> int:
     from swarm_envs.sensing.full import BEACON_PERIOD
 
-    ap = argparse.ArgumentParser(prog="python -m swarm_envs.validate centroid", description=__doc__.split("\n")[0])
+    ap = OneLineArgumentParser(prog="python -m swarm_envs.validate centroid", description=__doc__.split("\n")[0])
     ap.add_argument("--json", action="store_true")
-    ap.add_argument("--polygons", type=int, default=20)
-    ap.add_argument("--starts", type=int, default=10, help="starting points per polygon")
-    ap.add_argument("--rounds", type=int, default=40)
-    ap.add_argument("--polygon-radius", type=float, nargs=2, default=[0.3, 0.5], metavar=("MIN", "MAX"))
-    ap.add_argument("--heading-noise-deg", type=float, default=0.0, help="kinematic runs: std of the seeker's turn error per step (deg)")
-    ap.add_argument("--step-noise", type=float, default=0.0, help="kinematic runs: relative std of the step length")
-    ap.add_argument("--pause-rounds", type=float, default=1.0,
+    ap.add_argument("--polygons", type=cli_type(Int(20, low=1, high=100_000)), default=20)
+    ap.add_argument("--starts", type=cli_type(Int(10, low=1, high=100_000)), default=10, help="starting points per polygon")
+    ap.add_argument("--rounds", type=cli_type(Int(40, low=1, high=100_000)), default=40)
+    ap.add_argument("--polygon-radius", type=cli_type(Real(0.3, low=0.0, low_open=True, high=100.0, unit="of metres")), nargs=2,
+                    default=[0.3, 0.5], metavar=("MIN", "MAX"))
+    ap.add_argument("--heading-noise-deg", type=cli_type(Real(0.0, low=0.0, high=360.0, unit="of degrees")), default=0.0,
+                    help="kinematic runs: std of the seeker's turn error per step (deg)")
+    ap.add_argument("--step-noise", type=cli_type(Real(0.0, low=0.0, high=10.0)), default=0.0,
+                    help="kinematic runs: relative std of the step length")
+    ap.add_argument("--pause-rounds", type=cli_type(Real(1.0, low=0.0, low_open=True, high=1000.0)), default=1.0,
                     help=f"env run: the seeker's pause before each step, in beacon / exchange rounds of {BEACON_PERIOD} control steps (default 1)")
     ap.add_argument("--no-env", action="store_true", help="skip the run in the env")
-    ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--seed", type=cli_type(Int(0, low=0, high=2**63 - 1)), default=0)
     ap.add_argument("--out", default="validation_output")
     ap.add_argument("--no-plots", action="store_true")
     args = ap.parse_args(argv)
+    if args.polygon_radius[0] > args.polygon_radius[1]:
+        ap.error(f"argument --polygon-radius: MIN must not exceed MAX, got {args.polygon_radius}")
     pause_steps = int(round(args.pause_rounds * BEACON_PERIOD))
     if pause_steps < 1:
         ap.error(f"--pause-rounds must give at least one control step, got {args.pause_rounds}")

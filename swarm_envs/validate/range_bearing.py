@@ -31,7 +31,6 @@ collisions (every firing measured alone and attributed to the true transmitter).
 
 from __future__ import annotations
 
-import argparse
 import json
 import os
 import time
@@ -44,6 +43,7 @@ from swarm_envs.ir.layer import IRLinks, compute_links, pair_gains, wrap_angle
 from swarm_envs.platforms import get_platform
 from swarm_envs.sensing.range_bearing import RangeBearingSensor, brightness, read
 from swarm_envs.validate.report import Row, print_rows, rows_json
+from swarm_envs.settings import Int, OneLineArgumentParser, Real, cli_type
 
 DROPLET_DIAMETER_CM = 4.4
 
@@ -457,19 +457,20 @@ def _plots(res, out_dir):
 
 
 def main(argv: list[str]) -> int:
-    ap = argparse.ArgumentParser(prog="python -m swarm_envs.validate range-bearing", description=__doc__.split("\n")[0])
+    ap = OneLineArgumentParser(prog="python -m swarm_envs.validate range-bearing", description=__doc__.split("\n")[0])
     ap.add_argument("--json", action="store_true", help="print the results as JSON")
-    ap.add_argument("--noise", type=float, default=None, help="ADC noise sigma in counts (default: the model's)")
+    ap.add_argument("--noise", type=cli_type(Real(None, low=0.0, high=1000.0, unit="of ADC counts")), default=None,
+                    help="ADC noise sigma in counts (default: the model's)")
     ap.add_argument("--platform", default="droplet", choices=["droplet", "epuck"])
     ap.add_argument("--out", default="validation_output", help="directory for the PNG plots")
-    ap.add_argument("--repeats", type=int, default=2, help="noisy measurements per grid point")
-    ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--repeats", type=cli_type(Int(2, low=1, high=10_000)), default=2, help="noisy measurements per grid point")
+    ap.add_argument("--seed", type=cli_type(Int(0, low=0, high=2**63 - 1)), default=0)
     ap.add_argument("--no-plots", action="store_true")
     ap.add_argument("--near-model", action="store_true", help="Droplet: firmware low-power fit instead of the power ladder")
     ap.add_argument("--variation", action="append", default=[], metavar="KEY=VALUE",
                     help="env setting for the in-env run with per-robot hardware variation (repeat for several); "
                          "a setting this swarm_envs does not have skips that run with a message")
-    ap.add_argument("--env-steps", type=int, default=8, help="control steps of the in-env runs (default 8)")
+    ap.add_argument("--env-steps", type=cli_type(Int(8, low=1, high=1_000_000)), default=8, help="control steps of the in-env runs (default 8)")
     ap.add_argument("--no-env", action="store_true", help="skip the in-env runs")
     args = ap.parse_args(argv)
     if args.near_model and args.platform != "droplet":

@@ -45,7 +45,6 @@ the only hardware figure the noise is sized from; nothing is tuned to the 23.4 /
 
 from __future__ import annotations
 
-import argparse
 import json
 import os
 import sys
@@ -56,6 +55,7 @@ import numpy as np
 
 from swarm_envs.sensing.scale_free import coordinates_all, knowledge_from_matrix, null_space_lengths
 from swarm_envs.validate.report import Row, print_rows, rows_json
+from swarm_envs.settings import Int, OneLineArgumentParser, Real, cli_type
 
 PAPER = {
     "rigid_k1_deg4_min": 50.0,
@@ -355,30 +355,30 @@ def rows(summary: dict[str, Any]) -> list[Row]:
 def main(argv: list[str]) -> int:
     from swarm_envs.sensing.full import BEACON_PERIOD
 
-    ap = argparse.ArgumentParser(prog="python -m swarm_envs.validate scale-free", description=__doc__.split("\n")[0])
+    ap = OneLineArgumentParser(prog="python -m swarm_envs.validate scale-free", description=__doc__.split("\n")[0])
     ap.add_argument("--json", action="store_true", help="print a JSON summary instead of tables")
-    ap.add_argument("--trials", type=int, default=100, help="trials per population (thesis: 100)")
-    ap.add_argument("--configs", type=int, default=None, help="6-robot configurations for the edge-error test (default 10 x trials/4, min 28)")
-    ap.add_argument("--populations", type=int, nargs="+", default=[20, 30, 40, 50])
-    ap.add_argument("--ks", type=int, nargs="+", default=[1, 2, 3])
-    ap.add_argument("--workspace", type=float, default=1.0, help="side of the square workspace (m) for experiment 2")
-    ap.add_argument("--arc-range", type=float, nargs=2, default=[63.0, 74.0], metavar=("MIN", "MAX"),
+    ap.add_argument("--trials", type=cli_type(Int(100, low=1, high=100_000)), default=100, help="trials per population (thesis: 100)")
+    ap.add_argument("--configs", type=cli_type(Int(None, low=1, high=1_000_000)), default=None,
+                    help="6-robot configurations for the edge-error test (default 10 x trials/4, min 28)")
+    ap.add_argument("--populations", type=cli_type(Int(20, low=3, high=1000)), nargs="+", default=[20, 30, 40, 50])
+    ap.add_argument("--ks", type=cli_type(Int(1, low=1, high=4)), nargs="+", default=[1, 2, 3])
+    ap.add_argument("--workspace", type=cli_type(Real(1.0, low=0.0, low_open=True, high=100.0, unit="of metres")), default=1.0,
+                    help="side of the square workspace (m) for experiment 2")
+    ap.add_argument("--arc-range", type=cli_type(Real(63.0, low=0.0, low_open=True, high=360.0, unit="of degrees")), nargs=2,
+                    default=[63.0, 74.0], metavar=("MIN", "MAX"),
                     help="receiver-arc / transmitter-cone spread (deg) of the hardware-noise run (thesis: 63-74)")
-    ap.add_argument("--env-steps", type=int, default=3 * BEACON_PERIOD,
+    ap.add_argument("--env-steps", type=cli_type(Int(3 * BEACON_PERIOD, low=1, high=1_000_000)), default=3 * BEACON_PERIOD,
                     help=f"control steps the env run lets the exchange work before reading it (default 3 beacon periods = {3 * BEACON_PERIOD})")
     ap.add_argument("--no-env", action="store_true", help="skip the edge-error run through the env's stack")
-    ap.add_argument("--extra-bearing-noise-deg", type=float, nargs="+", default=[], metavar="S",
+    ap.add_argument("--extra-bearing-noise-deg", type=cli_type(Real(0.0, low=0.0, high=180.0, unit="of degrees")), nargs="+", default=[], metavar="S",
                     help="sensitivity runs: the ideal-exchange edge error with a Gaussian error of std S deg added to every sector "
                          "bearing (shows how large a bearing error an edge error implies; not a hardware model)")
-    ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--seed", type=cli_type(Int(0, low=0, high=2**63 - 1)), default=0)
     ap.add_argument("--out", default="validation_output", help="directory for plots")
     ap.add_argument("--no-plots", action="store_true")
     args = ap.parse_args(argv)
-    if args.env_steps < 1:
-        ap.error(f"--env-steps must be >= 1, got {args.env_steps}")
-    bad = [x for x in args.extra_bearing_noise_deg if not x >= 0]
-    if bad:
-        ap.error(f"--extra-bearing-noise-deg must be >= 0, got {bad[0]}")
+    if args.arc_range[0] > args.arc_range[1]:
+        ap.error(f"argument --arc-range: MIN must not exceed MAX, got {args.arc_range}")
     rng = np.random.default_rng(args.seed)
     t0 = time.time()
     rows_ = rigidity_experiment(rng, args.populations, args.trials, args.ks)

@@ -38,7 +38,6 @@ Run times are printed at the end of each run.
 
 from __future__ import annotations
 
-import argparse
 import functools
 import json
 import os
@@ -56,6 +55,7 @@ from swarm_envs.copies import CopyRandom
 from swarm_envs.ir.layer import compute_links, line_of_sight, occluder_width, pair_gains, pair_occluders, wrap_angle
 from swarm_envs.platforms import get_platform
 from swarm_envs.validate.report import Row, print_rows, rows_json
+from swarm_envs.settings import Int, OneLineArgumentParser, cli_type
 
 PLATFORM = "epuck"
 SEP = 3.0  # m between independent scenes (> ir_range)
@@ -944,7 +944,7 @@ def _jsonable(x: Any) -> Any:
 
 
 def main(argv: list[str]) -> int:
-    ap = argparse.ArgumentParser(prog="python -m swarm_envs.validate swarmcom", description=__doc__.split("\n\n")[0])
+    ap = OneLineArgumentParser(prog="python -m swarm_envs.validate swarmcom", description=__doc__.split("\n\n")[0])
     ap.add_argument("--experiment", default="all", choices=["a", "b", "c", "d", "e", "all"])
     ap.add_argument("--fit-response", action="store_true", help="refit the detector response's charge constant c (channel module docstring) and exit")
     ap.add_argument("--quick", action="store_true", help="fewer trials/distances (well under a minute)")
@@ -953,7 +953,7 @@ def main(argv: list[str]) -> int:
     ap.add_argument("--no-plots", action="store_true")
     ap.add_argument("--fig21-mtr", type=float, nargs="+", default=list(FIG21_MTRS), metavar="M_TR",
                     help=f"(b) detection thresholds of the detector count in the 72 cm arena (default {' '.join(str(m) for m in FIG21_MTRS)})")
-    ap.add_argument("--seed", type=int, default=2020)
+    ap.add_argument("--seed", type=cli_type(Int(2020, low=0, high=2**63 - 1)), default=2020)
     args = ap.parse_args(argv)
     bad = [m for m in args.fig21_mtr if not 0 < m <= M_MAX - M_MIN]
     if bad:
