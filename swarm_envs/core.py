@@ -24,7 +24,7 @@ from typing import Any
 import numpy as np
 
 from swarm_envs._worker import worker
-from swarm_envs.observation import ObservationLayout, nearest_slots, pack_nearest, range_bearing_rows
+from swarm_envs.observation import ObservationLayout, id_rows, nearest_slots, own_id_rows, pack_nearest, range_bearing_rows
 from swarm_envs.sensing.base import SensorFrame
 from swarm_envs.task import BatchState, Task
 from swarm_envs.world import N_BUMP_SECTORS, World, step_worlds
@@ -51,8 +51,9 @@ class SwarmCore:
         self.n_world = task.n_world
         self.n_total = self.B * self.n_world
         self.copy_of_robot = np.repeat(np.arange(self.B), self.n_world)
-        self.worlds = [World(self.platform, self.n_world, task.arena, substeps=cfg["physics_substeps"]) for _ in range(self.B)]
-        self.sensing = _make_sensing(cfg, self.platform, self.n_world, self.B)
+        obstacles = task.obstacle_segments
+        self.worlds = [World(self.platform, self.n_world, task.arena, substeps=cfg["physics_substeps"], obstacles=obstacles) for _ in range(self.B)]
+        self.sensing = _make_sensing(cfg, self.platform, self.n_world, self.B, obstacles)
         self.generators = [np.random.default_rng() for _ in range(self.B)]
         self.static = (np.arange(self.n_total) % self.n_world) < task.n_static
         self.last_actions = np.zeros((self.n_total, layout.action_size))
@@ -66,6 +67,12 @@ class SwarmCore:
         self.terms: dict[str, np.ndarray] = {}
         self.metrics: dict[str, np.ndarray] = {}
         self._starting = np.zeros(self.B, dtype=bool)
+        #: robots switched off in the last step (Task.switched_off), (n_total,) bool
+        self.switched_off = np.zeros(self.n_total, dtype=bool)
+        # the static robots' firmware (Task.static_messages): what they queue next, (n_total, b) bool
+        self._firmware = type(task).static_messages is not Task.static_messages and task.n_static > 0 and layout.message_bits > 0
+        self._static_payloads = np.zeros((self.n_total, layout.message_bits), dtype=bool)
+        self._observation_cache: tuple[Any, dict[str, np.ndarray], dict[str, np.ndarray] | None] | None = None
 
     # -- episodes ------------------------------------------------------------------------------------
     def seed(self, copy: int, seed: int | None) -> None:
@@ -115,13 +122,15 @@ class SwarmCore:
         moving = ~starting
         size = self.layout.action_size
         act = np.zeros((self.n_total, size)) if actions is None else np.asarray(actions, dtype=float).reshape(self.n_total, size)
-        act = np.where(self.static[:, None], 0.0, act)
+        off = self._switched_off(np.where(starting, 0, self.num_cycles + 1))
+        act = np.where((self.static | off)[:, None], 0.0, act)
         p = self.platform
         row_moving = moving[self.copy_of_robot]
         payloads = None
         if self.layout.message_bits:
-            payloads = (act[:, 2:] > 0) & ~self.static[:, None]  # static robots send no application messages
-        sending = row_moving if payloads is not None else None
+            # static robots send what their firmware says (Task.static_messages), by default nothing
+            payloads = np.where(self.static[:, None], self._static_payloads, act[:, 2:] > 0)
+        sending = row_moving & ~off if payloads is not None else None
         # a large single scene (the sensing's last step said so): the part of the sensing step that reads
         # nothing the physics changes (queueing the messages, drawing the channel's random numbers) on the
         # worker thread while the physics runs here (chipmunk and the kernels release the GIL; same result)
@@ -138,16 +147,46 @@ class SwarmCore:
         state = self.state()
         # and the rewards, from the ground truth only, on the worker thread while the sensing runs here
         rewards = worker().submit(self.task.rewards, state, starting) if large else None
+        silent = off if off.any() else None
         try:
             if prepared is None:
-                self.frame = self.sensing.step(self.positions, self.headings, payloads, sending)
+                self.frame = self.sensing.step(self.positions, self.headings, payloads, sending, silent=silent)
             else:
-                self.frame = self.sensing.step(self.positions, self.headings, prepared=prepared.result())
+                self.frame = self.sensing.step(self.positions, self.headings, prepared=prepared.result(), silent=silent)
         finally:  # never leave the worker running on the task's state
             if rewards is not None:
                 rewards.exception()  # waits
         self.rewards, self.terms, self.metrics = self.task.rewards(state, starting) if rewards is None else rewards.result()
         self._starting[:] = False
+        if self._firmware:
+            self._run_firmware(starting)
+
+    def _switched_off(self, cycles: np.ndarray) -> np.ndarray:
+        """(n_total,) bool robots the task switches off during the step ``cycles`` (B,) (Task.switched_off)."""
+        mask = self.task.switched_off(cycles)
+        if mask is None:
+            self.switched_off = np.zeros(self.n_total, dtype=bool)
+        else:
+            mask = np.asarray(mask)
+            if mask.shape != (self.B, self.n_world) or mask.dtype != bool:
+                raise ValueError(f"{type(self.task).__name__}.switched_off must return a ({self.B}, {self.n_world}) bool array or None, got {mask.dtype} {mask.shape}")
+            self.switched_off = mask.reshape(-1).copy()
+        return self.switched_off
+
+    def _run_firmware(self, first: np.ndarray) -> None:
+        """The static robots' payloads for the next step, from their observation of this one."""
+        parts, ids = self._observation_parts()
+        B, n_static, b = self.B, self.task.n_static, self.layout.message_bits
+        rows = self.static
+        obs = {k: v[rows].reshape(B, n_static, *v.shape[1:]) for k, v in {**parts, **ids}.items()}
+        bits = self.task.static_messages(obs, first)
+        if bits is None:
+            self._static_payloads[:] = False
+            return
+        bits = np.asarray(bits)
+        if bits.shape != (B, n_static, b):
+            raise ValueError(f"{type(self.task).__name__}.static_messages must return ({B}, {n_static}, {b}) message bits or None, got shape {bits.shape}")
+        self._static_payloads[rows] = bits.reshape(B * n_static, b).astype(bool)
 
     def _gather(self) -> None:
         w = self.worlds
@@ -170,6 +209,14 @@ class SwarmCore:
     # -- observations ---------------------------------------------------------------------------------
     def observations(self) -> dict[str, np.ndarray]:
         """Observation parts of every robot (leading axis = robot of all copies), from the last frame."""
+        return self._observation_parts()[0]
+
+    def _observation_parts(self) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:
+        """(the layout's parts, the id parts (built when the layout or the static firmware reads them)) of the
+        last frame, built once per frame."""
+        cache = self._observation_cache
+        if cache is not None and cache[0] is self.frame:
+            return cache[1], cache[2]
         frame = self.frame
         n, k, m, b = self.n_total, self.layout.n_neighbours, self.layout.n_messages, self.layout.message_bits
         nb = frame.neighbours
@@ -189,9 +236,9 @@ class SwarmCore:
             msg_values = np.concatenate(
                 [np.ones((len(msg.receiver), 1)), msg.bearing[:, None] / np.pi, msg.payload.reshape(len(msg.receiver), b)], axis=1
             )
-            messages, _ = pack_nearest(n, msg.receiver, key, msg_values, m)
+            messages, message_slots = pack_nearest(n, msg.receiver, key, msg_values, m)
         else:
-            messages = np.zeros((n, m, 2 + b), np.float32)
+            messages, message_slots = np.zeros((n, m, 2 + b), np.float32), np.full((n, m), -1)
         sf = frame.scale_free
         scale_free = np.empty(sf.xy.shape[:-1] + (3,), np.float32)
         scale_free[..., 0] = sf.valid
@@ -199,18 +246,41 @@ class SwarmCore:
         proprio = np.empty((n, N_BUMP_SECTORS + self.last_actions.shape[1]), np.float32)
         proprio[:, :N_BUMP_SECTORS] = self.bumps
         proprio[:, N_BUMP_SECTORS:] = self.last_actions
-        return self.layout.build(range_bearing, messages, scale_free, sf.rigid.astype(np.float32), proprio)
+        ids = self._id_parts(slots, nb.tx, message_slots, msg.sender, sf.ids) if self.layout.observe_ids or self._firmware else {}
+        parts = self.layout.build(range_bearing, messages, scale_free, sf.rigid.astype(np.float32), proprio, ids)
+        self._observation_cache = (frame, parts, ids)
+        return parts, ids
+
+    def _id_parts(
+        self, slots: np.ndarray, tx: np.ndarray, message_slots: np.ndarray, sender: np.ndarray, scale_free_ids: np.ndarray | None
+    ) -> dict[str, np.ndarray]:
+        """The id parts (``observe_ids``) of every robot: its own id and, per observation row, the id the
+        sensing stack decoded (``NeighbourReadings.tx`` of the row's reading, ``MessageReadings.sender`` of
+        the row's message, ``ScaleFreeReadings.ids``), as a copy's own robot numbers."""
+        n_world = self.n_world
+        own = np.arange(self.n_total) % n_world
+
+        def decoded(index: np.ndarray, rows: np.ndarray) -> np.ndarray:  # robot rows of the slots -> ids, -1 empty
+            return np.where(index >= 0, rows[np.maximum(index, 0)] % n_world if len(rows) else -1, -1)
+
+        sf_ids = np.full((self.n_total, self.layout.n_neighbours), -1) if scale_free_ids is None else np.where(scale_free_ids >= 0, scale_free_ids % n_world, -1)
+        return {
+            "own_id": own_id_rows(own, n_world),
+            "range_bearing_ids": id_rows(decoded(slots, tx), own, n_world),
+            "message_ids": id_rows(decoded(message_slots, sender), own, n_world),
+            "scale_free_ids": id_rows(sf_ids, own, n_world),
+        }
 
     def agent_rows(self) -> np.ndarray:
         """(B, n_agents) row index of every agent of every copy."""
         return np.arange(self.B)[:, None] * self.n_world + self.task.agent_robots[None, :]
 
 
-def _make_sensing(cfg: dict[str, Any], platform, n_world: int, n_copies: int):
+def _make_sensing(cfg: dict[str, Any], platform, n_world: int, n_copies: int, obstacles: np.ndarray | None = None):
     if cfg["sensing"] == "ideal":
         from swarm_envs.sensing.ideal import IdealSensing
 
-        return IdealSensing(platform, n_world, cfg["n_neighbours"], cfg["message_bits"], n_copies)
+        return IdealSensing(platform, n_world, cfg["n_neighbours"], cfg["message_bits"], n_copies, obstacles=obstacles)
     from swarm_envs.sensing.full import FullSensing
 
-    return FullSensing(platform, n_world, cfg, n_copies)
+    return FullSensing(platform, n_world, cfg, n_copies, obstacles=obstacles)

@@ -48,8 +48,8 @@ def resolve_config(task: Any, kwargs: dict[str, Any]) -> dict[str, Any]:
     return validate_settings(task, kwargs)
 
 
-def make_layout(cfg: dict[str, Any], platform: Platform) -> ObservationLayout:
-    """One robot's observation layout for resolved settings ``cfg``."""
+def make_layout(cfg: dict[str, Any], platform: Platform, n_world: int = 1) -> ObservationLayout:
+    """One robot's observation layout for resolved settings ``cfg`` and ``n_world`` robots per copy."""
     return ObservationLayout(
         n_neighbours=cfg["n_neighbours"],
         n_messages=cfg["n_messages"],
@@ -57,6 +57,8 @@ def make_layout(cfg: dict[str, Any], platform: Platform) -> ObservationLayout:
         max_range=platform.ir_range,
         max_age=cfg["rb_max_age"],
         flatten=cfg["flatten"],
+        observe_ids=cfg["observe_ids"],
+        n_world=n_world,
     )
 
 
@@ -145,7 +147,7 @@ class SwarmEnv(ParallelEnv):
         self.agents: list[str] = []
         self._agent_index = {a: i for i, a in enumerate(self.possible_agents)}
         self.agent_robots = self.task.agent_robots  # robot index of each agent
-        self.layout = make_layout(cfg, self.platform)
+        self.layout = make_layout(cfg, self.platform, self.n_world)
         self._obs_space = self.layout.space()
         self._act_space = self.layout.action_space()
         self.core = SwarmCore(self.task, self.layout)
@@ -379,7 +381,9 @@ class SwarmEnv(ParallelEnv):
         from swarm_envs.render import Renderer, render_env
 
         if self._renderer is None:
-            self._renderer = Renderer(self.arena, self.platform, human=self.render_mode == "human", fps=self.metadata["render_fps"])
+            self._renderer = Renderer(
+                self.arena, self.platform, human=self.render_mode == "human", fps=self.metadata["render_fps"], obstacles=self.task.obstacle_segments
+            )
         if self._frame is None:  # before the first reset: the robots where they are, no links
             return self._renderer.draw(self.world.positions, self.world.headings, None, self._markers(), static=np.arange(self.n_world) < self.n_static)
         return render_env(self, self._renderer, legend=False)  # the IR links that carried a reading this step

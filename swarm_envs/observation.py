@@ -1,4 +1,4 @@
-"""Observation layout (docs/design.md#observations-and-actions) and the vectorised packing of per-link readings into fixed slots.
+"""Observation layout (``docs/observations.md``) and the vectorised packing of per-link readings into fixed slots.
 
 Every robot observes a ``Dict``:
 
@@ -10,6 +10,15 @@ Every robot observes a ``Dict``:
   neighbour distance is 1 (clipped to +-``SCALE_FREE_CLIP``), nearest first;
 - ``rigid`` (1,): 1 when the robot's scale-free coordinates are determined (rigid neighbourhood);
 - ``proprio`` (8 + 2 + b): ``[bump sector 0..7, last action]``.
+
+With ``observe_ids=True`` four more parts give the robot its own id and, per row, the id its sensing
+*decoded* (:data:`ID_FIELDS`): ``own_id`` (2,) ``[own id / (n_world - 1), own id parity]``, and
+``range_bearing_ids`` (K, 4), ``message_ids`` (M, 4), ``scale_free_ids`` (K, 4), one row per row of
+``range_bearing``, ``messages`` and ``scale_free``: ``[an id was decoded, id / (n_world - 1), id < own
+id, same parity as own id]`` (all zero where the row is empty). The ids are a copy's own robot numbers
+(agents and static robots, 0 .. n_world - 1) as the stack decoded them: the R&B request frame [F14], the
+SwarmCom header origin [T20] or the r-one message that carried the bearing [L]; a corrupted or colliding
+frame gives the wrong id here exactly as the receiver decoded it. ``sensing="ideal"`` gives the true ids.
 
 ``flatten=True`` concatenates them (``gymnasium.spaces.flatten``, keys in sorted order) into one ``Box``.
 """
@@ -28,14 +37,47 @@ __all__ = [
     "ObservationLayout",
     "nearest_slots",
     "pack_nearest",
+    "id_rows",
+    "own_id_rows",
     "RB_FIELDS",
+    "ID_FIELDS",
+    "ID_PARTS",
     "SCALE_FREE_CLIP",
     "relative_pose",
     "wrapped_difference",
 ]
 
 RB_FIELDS = ("valid", "range", "cos_bearing", "sin_bearing", "cos_heading", "sin_heading", "age")
+#: columns of the id parts (``observe_ids=True``), one row per observation row
+ID_FIELDS = ("decoded", "id", "lower_than_own", "same_parity")
+#: the parts ``observe_ids=True`` adds: id part -> the part whose rows it names (``own_id``: the robot)
+ID_PARTS = {"own_id": None, "range_bearing_ids": "range_bearing", "message_ids": "messages", "scale_free_ids": "scale_free"}
 SCALE_FREE_CLIP = 10.0
+
+
+def _id_scale(n_world: int) -> float:
+    return float(max(int(n_world) - 1, 1))
+
+
+def own_id_rows(own: np.ndarray, n_world: int) -> np.ndarray:
+    """(n, 2) float32 ``own_id`` rows ``[own id / (n_world - 1), own id parity]`` of ids ``own`` (n,)."""
+    own = np.asarray(own, dtype=np.int64)
+    return np.stack([own / _id_scale(n_world), own % 2], axis=-1).astype(np.float32)
+
+
+def id_rows(ids: np.ndarray, own: np.ndarray, n_world: int) -> np.ndarray:
+    """(n, r, 4) float32 id rows (:data:`ID_FIELDS`) of decoded ids ``ids`` (n, r) (a copy's own robot
+    numbers, -1 where a row has none) seen by robots with ids ``own`` (n,): ``[decoded, id / (n_world -
+    1), id < own, same parity]``, all zero where no id was decoded."""
+    ids = np.asarray(ids, dtype=np.int64)
+    own = np.asarray(own, dtype=np.int64)[:, None]
+    decoded = ids >= 0
+    out = np.zeros(ids.shape + (4,), np.float32)
+    out[..., 0] = decoded
+    out[..., 1] = np.where(decoded, ids / _id_scale(n_world), 0.0)
+    out[..., 2] = decoded & (ids < own)
+    out[..., 3] = decoded & (ids % 2 == own % 2)
+    return out
 
 
 def relative_pose(
@@ -289,6 +331,9 @@ class ObservationLayout:
     max_range: float = 1.0
     max_age: int = 10
     flatten: bool = False
+    observe_ids: bool = False
+    #: robots per copy (agents and static robots): ids are scaled by ``n_world - 1``
+    n_world: int = 1
     _dict_space: spaces.Dict | None = field(default=None, init=False, repr=False)
 
     @property
@@ -310,15 +355,19 @@ class ObservationLayout:
             sf_high = np.tile(np.array([1, SCALE_FREE_CLIP, SCALE_FREE_CLIP], np.float32), (k, 1))
             pro_low = np.concatenate([np.zeros(N_BUMP_SECTORS), -np.ones(self.action_size)]).astype(np.float32)
             pro_high = np.ones(self.proprio_size, np.float32)
-            self._dict_space = spaces.Dict(
-                {
-                    "range_bearing": spaces.Box(rb_low, rb_high, dtype=np.float32),
-                    "messages": spaces.Box(msg_low, msg_high, dtype=np.float32),
-                    "scale_free": spaces.Box(sf_low, sf_high, dtype=np.float32),
-                    "rigid": spaces.Box(0.0, 1.0, (1,), dtype=np.float32),
-                    "proprio": spaces.Box(pro_low, pro_high, dtype=np.float32),
-                }
-            )
+            parts = {
+                "range_bearing": spaces.Box(rb_low, rb_high, dtype=np.float32),
+                "messages": spaces.Box(msg_low, msg_high, dtype=np.float32),
+                "scale_free": spaces.Box(sf_low, sf_high, dtype=np.float32),
+                "rigid": spaces.Box(0.0, 1.0, (1,), dtype=np.float32),
+                "proprio": spaces.Box(pro_low, pro_high, dtype=np.float32),
+            }
+            if self.observe_ids:
+                parts["own_id"] = spaces.Box(0.0, 1.0, (2,), dtype=np.float32)
+                for name, rows_of in ID_PARTS.items():
+                    if rows_of is not None:
+                        parts[name] = spaces.Box(0.0, 1.0, (parts[rows_of].shape[0], len(ID_FIELDS)), dtype=np.float32)
+            self._dict_space = spaces.Dict(parts)  # gymnasium sorts the keys
         return self._dict_space
 
     def space(self) -> spaces.Space:
@@ -335,15 +384,17 @@ class ObservationLayout:
         scale_free: np.ndarray,
         rigid: np.ndarray,
         proprio: np.ndarray,
+        ids: dict[str, np.ndarray] | None = None,
     ) -> dict[str, np.ndarray]:
         """Clip batched parts (leading robot axis; float64, or float32 cast from float64) into the space
-        bounds, as float32 arrays."""
+        bounds, as float32 arrays; ``ids``: the id parts (:data:`ID_PARTS`) when ``observe_ids``."""
         parts = {
             "range_bearing": range_bearing,
             "messages": messages,
             "scale_free": scale_free,
             "rigid": rigid.reshape(-1, 1),
             "proprio": proprio,
+            **(ids or {}),
         }
         out = {}
         for name, box in self.dict_space().spaces.items():

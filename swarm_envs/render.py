@@ -1,4 +1,4 @@
-"""Top-down rendering with pygame: arena, robots with heading, IR links, task markers, a caption and a legend.
+"""Top-down rendering with pygame: arena and obstacle walls, robots with heading, IR links, task markers, a caption and a legend.
 
 ``rgb_array`` draws on an off-screen surface (no display needed); ``human`` opens a window.
 
@@ -137,7 +137,10 @@ def overlay_of(env: Any, agent: int = 0) -> NeighbourOverlay:
 class Renderer:
     """Draws one frame per call; ``pixels`` is the square image size."""
 
-    def __init__(self, arena: Arena, platform: Platform, human: bool = False, pixels: int = 480, fps: int = 10) -> None:
+    def __init__(
+        self, arena: Arena, platform: Platform, human: bool = False, pixels: int = 480, fps: int = 10, obstacles: np.ndarray | None = None
+    ) -> None:
+        self.obstacles = np.zeros((0, 2, 2)) if obstacles is None else np.asarray(obstacles, dtype=float).reshape(-1, 2, 2)
         if not human:
             os.environ.setdefault("SDL_VIDEODRIVER", "dummy")
         os.environ.setdefault("PYGAME_HIDE_SUPPORT_PROMPT", "1")
@@ -293,7 +296,7 @@ class Renderer:
         corner = self._px(np.array([-self.arena.half, self.arena.half]))
         side = int(np.ceil(self.arena.size * self.scale)) + 3
         surf.set_clip(pg.Rect(int(corner[0]) - 1, int(corner[1]) - 1, side, side))  # the scene stays inside the arena
-        for a, b in self.arena.wall_segments():
+        for a, b in np.concatenate([self.arena.wall_segments(), self.obstacles]):
             pg.draw.line(surf, _WALL, self._px(a), self._px(b), 2)
         centres = self._px(positions)
         for pairs, colour, width in ((links, _LINK, 1), (messages, _MESSAGE, 2)):

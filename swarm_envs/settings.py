@@ -256,6 +256,8 @@ COMMON_SETTINGS: dict[str, Setting] = {
         0, "the SwarmCom frame's length field", low=0, high=MAX_PAYLOAD,
         why=f"the SwarmCom frame's 8-bit length field counts at most {MAX_PAYLOAD} payload bits (swarm_envs.comm.protocol)",
     ),
+    # the robot's own id and the neighbour / sender ids its sensing decoded (swarm_envs.observation)
+    "observe_ids": Flag(False),
     # SwarmCom messaging [T20]
     "bitrate": Choice(310, choices=(310, 650, 1080, 1160, 1670, 1800), why="the bit rates measured in [T20]"),
     # m_tr (ADC counts); None = the platform's: 5 e-puck/r-one [T20], 8 droplet.

@@ -27,7 +27,8 @@ rewards and ``infos``, never as observations. The suite's own tasks are written 
 
 Everything a task needs is exported here: the base class, the state, the setting rules
 (:class:`Int`, :class:`Real`, :class:`Choice`, :class:`Flag`, :class:`SettingsError`), spawn and fit
-helpers (:func:`spawn_positions`, :func:`check_capacity`, :func:`lattice_positions`, :class:`Arena`) and metric helpers over copies
+helpers (:func:`spawn_positions`, :func:`check_capacity`, :func:`lattice_positions`, :class:`Arena`,
+:func:`obstacle_points`, :func:`distance_to_segments`, :func:`segments_crossed`) and metric helpers over copies
 (:func:`pairs_within`, :func:`largest_component_fraction`, :func:`neighbourhood_sums`,
 :func:`nearest_distances`, :func:`bump_any`).
 """
@@ -43,12 +44,23 @@ from scipy.spatial import cKDTree
 from swarm_envs.metrics import largest_component_fraction, neighbourhood_sums
 from swarm_envs.platforms import Platform
 from swarm_envs.settings import MAX_ROBOTS, Choice, Flag, Int, Real, Setting, SettingsError, task_settings
-from swarm_envs.world import N_BUMP_SECTORS, Arena, check_capacity, lattice_positions, spawn_positions
+from swarm_envs.world import (
+    N_BUMP_SECTORS,
+    Arena,
+    check_capacity,
+    check_obstacles,
+    distance_to_segments,
+    lattice_positions,
+    obstacle_points,
+    spawn_positions,
+)
 
 __all__ = [
     "Task",
     "BatchState",
     "SPACING",
+    "MESSAGE_RANGE",
+    "message_range",
     "Setting",
     "Int",
     "Real",
@@ -60,6 +72,9 @@ __all__ = [
     "spawn_positions",
     "check_capacity",
     "lattice_positions",
+    "obstacle_points",
+    "distance_to_segments",
+    "segments_crossed",
     "pairs_within",
     "largest_component_fraction",
     "neighbourhood_sums",
@@ -69,6 +84,13 @@ __all__ = [
 
 #: default centre spacing (m) used to size the arena when ``arena_size`` is None
 SPACING = {"droplet": 0.15, "epuck": 0.25, "rone": 0.45}
+
+#: reliable message range (m) of each platform: the largest distance at which a facing pair exchanges
+#: SwarmCom frames with bit error probability below 0.01 at 310 bps. e-puck 0.61 m [T20 Sec. 7]; Droplet
+#: 0.43 m and r-one 1.0 m measured with that facing-pair experiment on our channel model (``swarm-validate
+#: behaviours --message-range``; the r-one's binary receivers hear every frame within their arcs up to the
+#: 1 m range of [L Sec. 6.1]). Tasks size neighbourhoods by it (:func:`message_range`).
+MESSAGE_RANGE = {"droplet": 0.43, "epuck": 0.61, "rone": 1.0}
 
 #: how a metric is reduced over an episode for evaluation: its value after the last step, or its mean
 #: over the steps after the reset
@@ -108,7 +130,9 @@ class Task:
       or None.
 
     Override :meth:`rewards` (required) and, if needed, :meth:`n_static_robots`, :meth:`check_layout`,
-    :meth:`default_arena_size`, :meth:`spawn` and :meth:`markers`. The constructor gets the resolved
+    :meth:`default_arena_size`, :meth:`spawn`, :meth:`markers`, :meth:`obstacles` (walls inside the
+    arena), :meth:`static_messages` (what the static robots broadcast) and :meth:`switched_off` (robots
+    taken out mid-episode). The constructor gets the resolved
     settings (``self.config``: every common setting, see :data:`swarm_envs.settings.COMMON_SETTINGS`,
     plus the task's own), the platform and the number of copies.
 
@@ -188,10 +212,44 @@ class Task:
 
     def spawn(self, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
         """One copy's initial (positions (n_world, 2) m, headings (n_world,) rad), drawn from ``rng``:
-        robots uniformly at random without overlap (:func:`spawn_positions`), which succeeds for every seed
-        once the build's fit test has passed."""
-        positions = spawn_positions(rng, self.n_world, self.platform.radius, self.arena)
+        robots uniformly at random without overlap and clear of the task's :meth:`obstacles`
+        (:func:`spawn_positions`), which succeeds for every seed once the build's fit test has passed
+        (the fit test does not count the room walls take: a task with walls checks its own layout)."""
+        avoid, distance = obstacle_points(self.obstacle_segments, self.platform.radius)
+        positions = spawn_positions(rng, self.n_world, self.platform.radius, self.arena, avoid=avoid, avoid_distance=distance)
         return positions, rng.uniform(-np.pi, np.pi, self.n_world)
+
+    def obstacles(self) -> np.ndarray:
+        """Static obstacle segments (S, 2, 2) (m, arena frame) inside the arena, e.g. the walls of a
+        corridor: like the arena walls they stop robots, and like robots they block infrared light per ray
+        (a ray from an emitter to a detector that crosses a segment carries no light). The same in every
+        copy and episode; read once when the env is built. Default: none."""
+        return np.zeros((0, 2, 2))
+
+    @property
+    def obstacle_segments(self) -> np.ndarray:
+        """:meth:`obstacles`, checked (shape, finite, inside the arena) and cached."""
+        if getattr(self, "_obstacle_segments", None) is None:
+            self._obstacle_segments = check_obstacles(self.obstacles(), self.arena, f"{type(self).__name__}.obstacles()")
+        return self._obstacle_segments
+
+    def static_messages(self, observations: dict[str, np.ndarray], first: np.ndarray) -> np.ndarray | None:
+        """The static robots' firmware: message bits (B, n_static, message_bits) bool each static robot
+        queues next (sent as an agent's message bits are: whenever its transmit queue is empty), computed
+        from its own observation ``observations`` ``{part: (B, n_static, ...)}`` of this step, built by the
+        sensing stack like an agent's and always with the id parts (``own_id``, ``message_ids``, ...: a
+        robot knows its id and reads the ids in the headers it decodes). Called after every step and reset
+        when ``message_bits > 0``; ``first`` (B,) marks the copies whose episode starts with this step.
+        Default None: static robots send empty payloads."""
+        return None
+
+    def switched_off(self, num_cycles: np.ndarray) -> np.ndarray | None:
+        """(B, n_world) bool robots switched off during the control step about to run, ``num_cycles``
+        (B,) (0 = a copy's reset step), or None (none; the default). A switched-off robot is taken out of
+        the swarm as if its power were cut: it stands still (its actions are ignored), emits and detects no
+        infrared (no range & bearing, no messages either way), but its body stays where it stopped and
+        still stops robots and blocks light. Its agent stays in the env, observing nothing new."""
+        return None
 
     def rewards(self, state: BatchState, first: np.ndarray) -> tuple[np.ndarray, dict[str, np.ndarray], dict[str, np.ndarray]]:
         """(rewards (B, n_agents), reward terms {name: (B, n_agents)}, metrics {name: (B,)}).
@@ -211,6 +269,24 @@ class Task:
     def agents_of(self, array: np.ndarray) -> np.ndarray:
         """The agent rows of a (B, n_world, ...) array."""
         return array[:, self.n_static :]
+
+
+def segments_crossed(starts: np.ndarray, ends: np.ndarray, segments: np.ndarray) -> np.ndarray:
+    """(...,) bool: the straight line from ``starts`` (..., 2) to ``ends`` (..., 2) (m) crosses or touches
+    one of ``segments`` (S, 2, 2) (m), e.g. a task's :meth:`Task.obstacles` (the test the IR layer uses
+    for light)."""
+    from swarm_envs.ir.layer import rays_blocked
+
+    segments = np.asarray(segments, dtype=float).reshape(-1, 2, 2)
+    if len(segments) == 0:
+        return np.zeros(np.broadcast_shapes(np.shape(starts), np.shape(ends))[:-1], dtype=bool)
+    return rays_blocked(starts, ends, segments)
+
+
+def message_range(platform: Platform) -> float:
+    """The platform's reliable message range (m), :data:`MESSAGE_RANGE`; 0.6 IR ranges for a platform
+    of your own."""
+    return float(MESSAGE_RANGE.get(platform.name, 0.6 * platform.ir_range))
 
 
 def bump_any(bumps: np.ndarray) -> np.ndarray:

@@ -71,7 +71,7 @@ class SwarmVectorEnv(VectorEnv):
             raise SettingsError(
                 "num_envs", f"{num_envs} copies of {self.task.n_world} robots exceed {MAX_TOTAL_ROBOTS} robots in one batched core; use fewer copies"
             )
-        self.layout = make_layout(cfg, self.platform)
+        self.layout = make_layout(cfg, self.platform, self.task.n_world)
         self.core = SwarmCore(self.task, self.layout)
         self.num_envs = int(num_envs)
         self.n_agents = self.task.n_agents

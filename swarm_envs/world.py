@@ -54,6 +54,7 @@ from swarm_envs.platforms import Platform
 __all__ = [
     "Arena", "World", "step_worlds", "spawn_positions", "check_capacity", "lattice_lower_bound", "as_real_array", "wrap_angle",
     "N_BUMP_SECTORS", "CONTROL_STEP", "default_substeps", "min_substeps", "motor_limits", "fit_count", "lattice_positions",
+    "check_obstacles", "obstacle_points", "distance_to_segments",
 ]
 
 #: bytes of commands a world keeps per episode for exact copies (16 per robot and step; 64 MB = 400,000
@@ -433,6 +434,51 @@ def spawn_positions(
     return lattice[np.sort(rng.choice(len(lattice), n, replace=False))]
 
 
+def check_obstacles(segments: object, arena: Arena, name: str = "obstacles") -> np.ndarray:
+    """``segments`` as a float (S, 2, 2) array of obstacle segments (m) whose end points lie inside
+    ``arena``; ``ValueError`` naming ``name`` otherwise."""
+    arr = as_real_array(segments, name)
+    if arr.size == 0:
+        return np.zeros((0, 2, 2))
+    if arr.ndim != 3 or arr.shape[1:] != (2, 2):
+        raise ValueError(f"{name} must be segments of shape (S, 2, 2) metres, got shape {arr.shape}")
+    if not np.all(np.isfinite(arr)):
+        raise ValueError(f"{name} must be finite")
+    if not np.all(arena.contains(arr.reshape(-1, 2))):
+        raise ValueError(f"{name}: every end point must lie inside the {arena.shape} arena of size {arena.size} m")
+    return arr
+
+
+def distance_to_segments(points: np.ndarray, segments: np.ndarray) -> np.ndarray:
+    """(...,) distance (m) from each of ``points`` (..., 2) to the nearest of ``segments`` (S, 2, 2) (inf
+    without segments)."""
+    points = np.asarray(points, dtype=float)
+    if len(segments) == 0:
+        return np.full(points.shape[:-1], np.inf)
+    a, b = segments[:, 0], segments[:, 1]
+    ab = b - a
+    length2 = np.maximum((ab * ab).sum(-1), 1e-300)
+    rel = points[..., None, :] - a
+    t = np.clip((rel * ab).sum(-1) / length2, 0.0, 1.0)
+    gap = rel - t[..., None] * ab
+    return np.sqrt((gap * gap).sum(-1)).min(axis=-1)
+
+
+def obstacle_points(segments: np.ndarray, radius: float) -> tuple[np.ndarray, float]:
+    """Points along ``segments`` (S, 2, 2) m every radius / 2, and the distance (m) a robot centre of
+    ``radius`` keeps from all of them to stay clear of the segments with a tenth of a radius to spare:
+    ``avoid`` and ``avoid_distance`` for :func:`spawn_positions` ((0, 2) points without segments)."""
+    if len(segments) == 0:
+        return np.zeros((0, 2)), 0.0
+    spacing = 0.5 * radius
+    points = []
+    for a, b in np.asarray(segments, dtype=float):
+        n = max(1, int(np.ceil(np.linalg.norm(b - a) / spacing)))
+        points.append(a + np.linspace(0.0, 1.0, n + 1)[:, None] * (b - a))
+    # a centre farther than r' from every point of a segment sampled every s is >= sqrt(r'^2 - s^2/4) from it
+    return np.concatenate(points), float(np.hypot(1.1 * radius, 0.5 * spacing))
+
+
 def _far_from(points: np.ndarray, others: np.ndarray, distance: float) -> np.ndarray:
     """(len(points),) bool: the point is at least ``distance`` from every one of ``others``."""
     d, _ = cKDTree(others).query(points, k=1)
@@ -457,13 +503,15 @@ class World:
     ``angular_velocities (n,)``, and ``bumps (n, N_BUMP_SECTORS)`` for the last control step.
     """
 
-    def __init__(self, platform: Platform, n_robots: int, arena: Arena, substeps: int | None = None) -> None:
+    def __init__(self, platform: Platform, n_robots: int, arena: Arena, substeps: int | None = None, obstacles: np.ndarray | None = None) -> None:
         substeps = default_substeps(platform) if substeps is None else substeps
         if not 1 <= substeps <= MAX_SUBSTEPS:
             raise ValueError(f"physics substeps must be in [1, {MAX_SUBSTEPS}], got {substeps}")
         self.platform = platform
         self.n = int(n_robots)
         self.arena = arena
+        #: static obstacle segments (S, 2, 2) m inside the arena, walls like the arena's own
+        self.obstacles = np.zeros((0, 2, 2)) if obstacles is None else check_obstacles(obstacles, arena)
         self.substeps = int(substeps)
         self._build_space()
         self.positions = np.zeros((self.n, 2))
@@ -512,7 +560,7 @@ class World:
             self.space.add(body, shape, control, pivot, gear)
             self.bodies.append(body)
             self.controls.append(control)
-        for a, b in arena.wall_segments():
+        for a, b in np.concatenate([arena.wall_segments(), self.obstacles]):
             wall = pymunk.Segment(self.space.static_body, tuple(a), tuple(b), 0.0)
             wall.friction = 0.0
             wall.elasticity = 0.0
@@ -614,6 +662,10 @@ class World:
                 f"robots overlap: pairs {overlap[:5].tolist()} overlap by more than {PLACEMENT_OVERLAP:.0%} of a "
                 f"diameter ({d} m; their centres are closer than {(1.0 - PLACEMENT_OVERLAP) * d:.4g} m)"
             )
+        # as the arena walls: a robot pressed against a wall may reach into it as deep as the physics lets it
+        on_obstacle = np.flatnonzero(distance_to_segments(positions, self.obstacles) < self.platform.radius - PLACEMENT_WALL_DEPTH * d)
+        if len(on_obstacle):
+            raise ValueError(f"robots {on_obstacle[:5].tolist()} reach more than {PLACEMENT_WALL_DEPTH:.0%} of their diameter into an obstacle wall")
         return positions, headings
 
     def place(self, positions: np.ndarray, headings: np.ndarray) -> None:

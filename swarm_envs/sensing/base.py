@@ -62,6 +62,9 @@ class ScaleFreeReadings:
     xy: np.ndarray  # (N, K, 2)
     valid: np.ndarray  # (N, K) bool
     rigid: np.ndarray  # (N,) bool
+    #: (N, K) int robot row each slot's coordinates belong to, as the robot knows it (the decoded id its
+    #: bearing exchange stored; -1 empty); None from a stack that does not say
+    ids: np.ndarray | None = None
 
 
 @dataclass

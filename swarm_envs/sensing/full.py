@@ -88,8 +88,10 @@ def _observation_rows(neighbours: NeighbourReadings, n: int, k: int) -> None:
 class FullSensing:
     """Physically modelled sensing for ``n_robots`` robots of one platform (module docstring)."""
 
-    def __init__(self, platform: Platform, n_robots: int, config: dict[str, Any], n_copies: int = 1) -> None:
+    def __init__(self, platform: Platform, n_robots: int, config: dict[str, Any], n_copies: int = 1, obstacles: np.ndarray | None = None) -> None:
         self.platform = platform
+        #: static obstacle segments (S, 2, 2) m that block light per ray (None: none)
+        self.obstacles = obstacles if obstacles is not None and len(obstacles) else None
         self.copy_size = int(n_robots)
         self.n_copies = int(n_copies)
         self.n = self.copy_size * self.n_copies
@@ -196,10 +198,12 @@ class FullSensing:
         payloads: np.ndarray | None = None,
         sending: np.ndarray | None = None,
         prepared: PreparedStep | None = None,
+        silent: np.ndarray | None = None,
     ) -> SensorFrame:
         """One control step of sensing (module docstring) at the robots' ``positions`` (N, 2) m and
         ``headings`` (N,) rad: :meth:`prepare_step` with ``payloads`` and ``sending``, or its result
-        ``prepared`` when it has run already (then ``payloads`` must be None), then the links and sensors."""
+        ``prepared`` when it has run already (then ``payloads`` must be None), then the links and sensors.
+        ``silent`` (N,) bool: switched-off robots, in no IR link (they neither emit nor detect)."""
         if prepared is None:
             prepared = self.prepare_step(payloads, sending)
         elif payloads is not None:
@@ -207,7 +211,9 @@ class FullSensing:
         # the IR links; in a large scene the gain matrices stay where the gain kernel's chunks left them
         # (swarm_envs.ir.kernels.ChunkRows): range & bearing reads the rows it needs from there, SwarmCom
         # reads only the emitter sums, and nothing here reads links.gains before gain_rows.gather()
-        links, gain_rows = _compute_links(positions, headings, self.platform, copy=self.copy_of if self.n_copies > 1 else None, deferred=True)
+        links, gain_rows = _compute_links(
+            positions, headings, self.platform, copy=self.copy_of if self.n_copies > 1 else None, deferred=True, obstacles=self.obstacles, silent=silent
+        )
         take = None if gain_rows is None else gain_rows.take
 
         # range & bearing (large single scenes: on the worker thread, while SwarmCom runs here)
@@ -295,7 +301,8 @@ class FullSensing:
         row, slot = np.nonzero(valid)
         points = xy[row, slot]
         packed, order = pack_nearest(self.n, row, np.hypot(points[:, 0], points[:, 1]), points, self.k)
-        return ScaleFreeReadings(packed, order >= 0, np.asarray(rigid, bool))
+        ids = np.where(order >= 0, knowledge.ids[row, slot][np.maximum(order, 0)] if len(row) else -1, -1)  # decoded ids
+        return ScaleFreeReadings(packed, order >= 0, np.asarray(rigid, bool), ids)
 
     def _null_space(self, knowledge) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         n, kmax = knowledge.ids.shape

@@ -1,8 +1,8 @@
 """The ``sensing="ideal"`` stack: exact, noiseless, lossless values in the same layout as the full stack.
 
 An ablation (what would a policy do with perfect sensing?) and a check that the observation layout is
-right. Neighbours are all robots within the platform's IR range (no occlusion); messages reach every
-robot in range instantly; scale-free coordinates are the true relative positions divided by the mean
+right. Neighbours are all robots within the platform's IR range (no occlusion by robots; a static obstacle
+segment crossing the centre line separates a pair); messages reach every robot in range instantly; scale-free coordinates are the true relative positions divided by the mean
 neighbour distance.
 """
 
@@ -279,8 +279,12 @@ class IdealSensing:
     """Ground-truth sensing within IR range (see module docstring), for ``n_copies`` env copies of
     ``n_robots`` robots each (rows = robots of all copies, copy-major)."""
 
-    def __init__(self, platform: Platform, n_robots: int, n_neighbours: int, message_bits: int, n_copies: int = 1) -> None:
+    def __init__(
+        self, platform: Platform, n_robots: int, n_neighbours: int, message_bits: int, n_copies: int = 1, obstacles: np.ndarray | None = None
+    ) -> None:
         self.platform = platform
+        #: static obstacle segments (S, 2, 2) m: a pair whose centre segment crosses one is no neighbour
+        self.obstacles = obstacles if obstacles is not None and len(obstacles) else None
         self.copy_size = int(n_robots)
         self.n_copies = int(n_copies)
         self.n = self.copy_size * self.n_copies
@@ -292,13 +296,25 @@ class IdealSensing:
         """Nothing to reset: the ideal stack is stateless and noiseless."""
 
     def step(
-        self, positions: np.ndarray, headings: np.ndarray, payloads: np.ndarray | None, sending: np.ndarray | None = None
+        self,
+        positions: np.ndarray,
+        headings: np.ndarray,
+        payloads: np.ndarray | None,
+        sending: np.ndarray | None = None,
+        silent: np.ndarray | None = None,
     ) -> SensorFrame:
         """One step for all robots; ``payloads`` (N, b) bool or None, ``sending`` (N,) bool robots whose
-        payload goes out this step (default: all when payloads are given)."""
+        payload goes out this step (default: all when payloads are given); ``silent`` (N,) bool switched-off
+        robots (no neighbours, not a neighbour)."""
         positions = np.asarray(positions, dtype=np.float64)
         headings = np.asarray(headings, dtype=np.float64)
         pairs = copy_pairs(positions, self.platform.ir_range, self.copy_size)
+        if silent is not None and np.any(silent):
+            pairs = pairs[~(silent[pairs[:, 0]] | silent[pairs[:, 1]])]
+        if self.obstacles is not None and len(pairs):
+            from swarm_envs.ir.layer import rays_blocked
+
+            pairs = pairs[~rays_blocked(positions[pairs[:, 0]], positions[pairs[:, 1]], self.obstacles)]
         rx, tx, link = directed_links(pairs, self.n)
         # exact pose of tx seen by rx (as observation.relative_pose); the two directions of a pair have
         # opposite offsets, so one hypot per pair gives both distances bit for bit
@@ -333,5 +349,5 @@ class IdealSensing:
             packed = np.where(valid[..., None], distance[kept][..., None] * cos_sin / scale[..., None], 0.0)
         else:
             packed = np.zeros((self.n, self.k, 2))
-        scale_free = ScaleFreeReadings(packed, valid, valid.any(axis=1))
+        scale_free = ScaleFreeReadings(packed, valid, valid.any(axis=1), np.where(valid, tx[kept], -1) if len(rx) else np.full(order.shape, -1))
         return SensorFrame(neighbours, messages, scale_free)
