@@ -1,10 +1,12 @@
-"""Flocking: move together in one direction without collisions (docs/design.md#tasks).
+"""Flocking: move together in one direction without collisions ([L] Sec. 6.4.1).
 
 Reward (global, default) = polarisation x cohesion - collision_penalty x (fraction of robots bumping),
-with polarisation = norm of the mean unit heading weighted by speed / max speed, cohesion = size of the
-largest connected component of the IR graph (centres within the platform's IR range) / N.
-``reward_mode="local"``: each robot's polarisation is computed over itself and its IR neighbours and
-its own bump is penalised.
+with polarisation = norm of the mean unit heading weighted by speed / max speed, cohesion = the mean over
+robots of the share of the other robots within the platform's reliable message range
+(:data:`swarm_envs.task.MESSAGE_RANGE`: e-puck 0.61 m, Droplet 0.43 m, r-one 1.0 m), the neighbourhood the
+robots can keep in touch over: 1 only when every pair is that close, lower as the flock spreads or splits
+(the largest chained component over that range would be 1 in the default arenas whatever the robots do). ``reward_mode="local"``: each robot's polarisation is computed over itself and those
+neighbours and its own bump is penalised.
 """
 
 from __future__ import annotations
@@ -18,7 +20,7 @@ from pettingzoo.utils.conversions import parallel_to_aec
 from swarm_envs.env import SwarmEnv
 from swarm_envs.factories import reports_unknown_kwargs
 from swarm_envs.platforms import Platform
-from swarm_envs.task import BatchState, Real, Task, bump_any, largest_component_fraction, neighbourhood_sums, pairs_within
+from swarm_envs.task import BatchState, Real, Task, bump_any, message_range, neighbourhood_sums, pairs_within
 
 __all__ = ["FlockingTask", "FlockingEnv", "raw_env", "parallel_env", "env"]
 
@@ -42,10 +44,11 @@ class FlockingTask(Task):
         pos, head = self.agents_of(state.positions), self.agents_of(state.headings)
         speed = np.linalg.norm(self.agents_of(state.velocities), axis=2)  # (B, A)
         vmax = self.platform.max_speed
-        ir_range = self.platform.ir_range
-        # IR-range links of every copy, once, for cohesion and local polarisation (never across copies)
-        pairs = pairs_within(pos, ir_range)
-        cohesion, _ = largest_component_fraction(pos, ir_range, pairs)
+        link = message_range(self.platform)
+        # message-range links of every copy, once, for cohesion and local polarisation (never across copies)
+        pairs = pairs_within(pos, link)
+        # cohesion: the mean share of the other robots within the message range (every pair counted twice)
+        cohesion = 2.0 * np.bincount(pairs[:, 0] // A, minlength=B) / (A * (A - 1)) if A > 1 else np.ones(B)
         weight = np.clip(speed / vmax, 0.0, 1.0)
         vec = np.stack([np.cos(head), np.sin(head)], -1) * weight[..., None]  # (B, A, 2)
         pol = np.linalg.norm(vec.mean(axis=1), axis=1)  # (B,) [polarisation]
@@ -95,6 +98,7 @@ def parallel_env(
     n_neighbours: int = 8,
     n_messages: int = 8,
     message_bits: int = 0,
+    observe_ids: bool = False,
     bitrate: Literal[310, 650, 1080, 1160, 1670, 1800] = 310,
     relative_threshold: float | None = None,
     code: tuple[int, int] = (15, 15),
@@ -114,7 +118,7 @@ def parallel_env(
 
     ## Description
 
-    Flocking (docs/design.md#tasks): ``n_robots`` robots should move together in one direction without collisions,
+    Flocking ([L] Sec. 6.4.1): ``n_robots`` robots should move together in one direction without collisions,
     sensing each other only through infrared. Agents are named ``robot_0`` .. ``robot_{N-1}``.
 
     ## Action Space
@@ -139,16 +143,20 @@ def parallel_env(
     | ``rigid`` | (1,) | 1 when the scale-free coordinates are determined [L Sec. 5.5.1] |
     | ``proprio`` | (8 + 2 + b,) | bump flags of 8 45-degree sectors (sector 0 ahead, counter-clockwise), last action |
 
-    Rows are sorted nearest first by *estimated* range; empty rows are all zero. ``flatten=True`` gives
-    one ``Box`` instead (keys in sorted order; ``env.layout.unflatten(flat)`` gives the parts back).
+    Rows are sorted nearest first by *estimated* range; empty rows are all zero. ``observe_ids=True`` adds
+    ``own_id`` (2,) and, per row of ``range_bearing``, ``messages`` and ``scale_free``, the id the sensing
+    decoded (``range_bearing_ids``, ``message_ids``, ``scale_free_ids``; see ``docs/observations.md``).
+    ``flatten=True`` gives one ``Box`` instead (keys in sorted order; ``env.layout.unflatten(flat)`` gives
+    the parts back).
 
     ## Rewards
 
     ``reward_mode="global"``: ``polarisation x cohesion - collision_penalty x (fraction of robots
     bumping)``, with polarisation = norm of the mean unit heading weighted by speed / max speed (in
-    [0, 1]) and cohesion = size of the largest connected component of the IR graph (centres within the
-    platform's ``ir_range``) / N. ``"local"``: each robot's polarisation is taken over itself and its IR
-    neighbours and only its own bump is penalised. Terms in ``infos[agent]["reward_terms", name]``:
+    [0, 1]) and cohesion = the mean over robots of the share of the other robots whose centres are
+    within the platform's reliable message range (e-puck 0.61 m [T20 Sec. 7], Droplet 0.43 m, r-one
+    1.0 m). ``"local"``: each robot's polarisation is taken over itself and those neighbours and
+    only its own bump is penalised. Terms in ``infos[agent]["reward_terms", name]``:
     ``polarisation``, ``local_polarisation``, ``cohesion``, ``collision``. Metrics in
     ``infos[agent]["metrics", name]``: ``polarisation``, ``cohesion``, ``collision_fraction``.
 
@@ -183,6 +191,7 @@ def parallel_env(
     | ``n_neighbours`` | 8 | rows K of ``range_bearing`` and ``scale_free`` |
     | ``n_messages`` | 8 | rows M of ``messages`` |
     | ``message_bits`` | 0 | payload bits b an agent sends through its action (0: no message action) |
+    | ``observe_ids`` | ``False`` | add the robot's own id and the neighbour and sender ids its sensing decoded (``own_id``, ``*_ids`` parts) |
     | ``bitrate`` | 310 | SwarmCom bit rate (bps): 310, 650, 1080, 1160, 1670 or 1800 [T20] |
     | ``relative_threshold`` | ``None`` | detector threshold m_tr (ADC counts); ``None``: 5 on e-puck and r-one [T20], 8 on the Droplet |
     | ``code`` | ``(15, 15)`` | BCH code (n, k): ``(15, 15)`` uncoded, ``(15, 11)``, ``(15, 7)``, ``(15, 5)``, ``(15, 1)`` |
