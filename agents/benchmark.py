@@ -6,8 +6,7 @@
 ``--task`` (an env id or a short name such as ``flocking``) is repeatable or a comma list (default: every
 registered task with a scripted baseline); ``--import`` imports the modules (or ``.py`` files) that
 register tasks of your own first. For each task the task's scripted controller (``Task.SCRIPTED_POLICY``), the [T20] Alg. 1
-random walk and uniform random actions run on the same seeds ``0 .. N-1``; on flocking also the sorted
-following controller ([L] Alg. 6, with 4 message bits for the ids). Prints one table per task:
+random walk and uniform random actions run on the same seeds ``0 .. N-1``. Prints one table per task:
 ``mean [95 % bootstrap percentile interval]`` per metric (see :mod:`swarm_envs.agents.evaluation` for the reductions) and the wall time.
 Cost: ~5 ms per env step with ``sensing="full"`` (10 robots), so ``--episodes 20 --max-cycles 300`` takes
 ~4.5 min on 2 cores and the defaults (30 episodes x 500 steps) ~15 min; ``--sensing ideal`` is ~8x faster.
@@ -56,8 +55,6 @@ def run_benchmark(
             candidates[scripted_class(scripted).name] = (kwargs, lambda env, name=scripted: make_scripted(name, env))
         candidates["random_walk"] = (kwargs, lambda env: make_scripted("random_walk", env))
         candidates["random"] = (kwargs, random_factory)
-        if env_id(task) == SHORT_NAMES["flocking"]:
-            candidates["sorted_following"] = ({**kwargs, "message_bits": 4}, lambda env: make_scripted("sorted_following", env))
         results, seconds = {}, {}
         for name, (kw, factory) in candidates.items():
             t0 = time.perf_counter()

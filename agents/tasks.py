@@ -22,6 +22,9 @@ SHORT_NAMES = {
     "aggregation": "swarm_envs/Aggregation-v0",
     "flocking": "swarm_envs/Flocking-v0",
     "centroid_seeking": "swarm_envs/CentroidSeeking-v0",
+    "sorted_following": "swarm_envs/SortedFollowing-v0",
+    "parity_clustering": "swarm_envs/ParityClustering-v0",
+    "mid_angle_navigation": "swarm_envs/MidAngleNavigation-v0",
 }
 
 

@@ -58,6 +58,9 @@ __all__ = [
 register("swarm_envs/Aggregation-v0", "swarm_envs.aggregation_v0:AggregationEnv")
 register("swarm_envs/Flocking-v0", "swarm_envs.flocking_v0:FlockingEnv")
 register("swarm_envs/CentroidSeeking-v0", "swarm_envs.centroid_seeking_v0:CentroidSeekingEnv")
+register("swarm_envs/SortedFollowing-v0", "swarm_envs.sorted_following_v0:SortedFollowingEnv")
+register("swarm_envs/ParityClustering-v0", "swarm_envs.parity_clustering_v0:ParityClusteringEnv")
+register("swarm_envs/MidAngleNavigation-v0", "swarm_envs.mid_angle_navigation_v0:MidAngleNavigationEnv")
 
 
 def make_torchrl(env: str | type, num_envs: int, **kwargs: Any):

@@ -211,6 +211,7 @@ def parallel_env(
     n_neighbours: int = 8,
     n_messages: int = 8,
     message_bits: int = 0,
+    observe_ids: bool = False,
     bitrate: Literal[310, 650, 1080, 1160, 1670, 1800] = 310,
     relative_threshold: float | None = None,
     code: tuple[int, int] = (15, 15),
@@ -257,8 +258,11 @@ def parallel_env(
     | ``rigid`` | (1,) | 1 when the scale-free coordinates are determined [L Sec. 5.5.1] |
     | ``proprio`` | (8 + 2 + b,) | bump flags of 8 45-degree sectors (sector 0 ahead, counter-clockwise), last action |
 
-    Rows are sorted nearest first by *estimated* range; empty rows are all zero. ``flatten=True`` gives
-    one ``Box`` instead (keys in sorted order; ``env.layout.unflatten(flat)`` gives the parts back).
+    Rows are sorted nearest first by *estimated* range; empty rows are all zero. ``observe_ids=True`` adds
+    ``own_id`` (2,) and, per row of ``range_bearing``, ``messages`` and ``scale_free``, the id the sensing
+    decoded (``range_bearing_ids``, ``message_ids``, ``scale_free_ids``; see ``docs/observations.md``).
+    ``flatten=True`` gives one ``Box`` instead (keys in sorted order; ``env.layout.unflatten(flat)`` gives
+    the parts back).
 
     ## Rewards
 
@@ -302,6 +306,7 @@ def parallel_env(
     | ``n_neighbours`` | 8 | rows K of ``range_bearing`` and ``scale_free`` |
     | ``n_messages`` | 8 | rows M of ``messages`` |
     | ``message_bits`` | 0 | payload bits b an agent sends through its action (0: no message action) |
+    | ``observe_ids`` | ``False`` | add the robot's own id and the neighbour and sender ids its sensing decoded (``own_id``, ``*_ids`` parts) |
     | ``bitrate`` | 310 | SwarmCom bit rate (bps): 310, 650, 1080, 1160, 1670 or 1800 [T20] |
     | ``relative_threshold`` | ``None`` | detector threshold m_tr (ADC counts); ``None``: 5 on e-puck and r-one [T20], 8 on the Droplet |
     | ``code`` | ``(15, 15)`` | BCH code (n, k): ``(15, 15)`` uncoded, ``(15, 11)``, ``(15, 7)``, ``(15, 5)``, ``(15, 1)`` |

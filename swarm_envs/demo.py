@@ -42,6 +42,9 @@ SHOWCASE: dict[str, dict[str, Any]] = {
     "aggregation": {"platform": "epuck", "n_robots": 10, "steps": 300, "seed": 0, "overlay": 0},
     "flocking": {"platform": "droplet", "n_robots": 16, "steps": 300, "seed": 0, "overlay": None},
     "centroid_seeking": {"platform": "rone", "n_robots": 1, "steps": 300, "seed": 0, "overlay": 0},
+    "sorted_following": {"platform": "rone", "n_robots": None, "steps": 600, "seed": 0, "overlay": None},
+    "parity_clustering": {"platform": "rone", "n_robots": None, "steps": 600, "seed": 0, "overlay": None},
+    "mid_angle_navigation": {"platform": "rone", "n_robots": None, "steps": 600, "seed": 1, "overlay": None},
 }
 
 #: the settings of a task without a showcase (None: the task's own default)

@@ -45,8 +45,14 @@ def test_registry_entry_points_and_make():
     for env_id in swarm_envs.list_envs():
         assert env_id in pettingzoo.parallel_registry
         assert env_id in pettingzoo.aec_registry
-    assert swarm_envs.list_envs()[:3] == ["swarm_envs/Aggregation-v0", "swarm_envs/Flocking-v0", "swarm_envs/CentroidSeeking-v0"]
-    for module in (swarm_envs.aggregation_v0, swarm_envs.flocking_v0, swarm_envs.centroid_seeking_v0):
+    assert swarm_envs.list_envs()[:6] == [
+        "swarm_envs/Aggregation-v0", "swarm_envs/Flocking-v0", "swarm_envs/CentroidSeeking-v0",
+        "swarm_envs/SortedFollowing-v0", "swarm_envs/ParityClustering-v0", "swarm_envs/MidAngleNavigation-v0",
+    ]
+    for module in (
+        swarm_envs.aggregation_v0, swarm_envs.flocking_v0, swarm_envs.centroid_seeking_v0,
+        swarm_envs.sorted_following_v0, swarm_envs.parity_clustering_v0, swarm_envs.mid_angle_navigation_v0,
+    ):
         assert isinstance(module.parallel_env(sensing="ideal"), module.raw_env)
         aec = module.env(sensing="ideal")
         assert isinstance(aec, pettingzoo.AECEnv)
@@ -60,7 +66,8 @@ def test_rgb_array_render_headless(env_id):
     assert frame.dtype == np.uint8 and frame.shape == (480, 480, 3)
     # robots are drawn: the frame is not a blank background
     assert len(np.unique(frame.reshape(-1, 3), axis=0)) > 3
-    env.step({a: np.array([1.0, 0.5], np.float32) for a in env.agents})
+    move = np.r_[1.0, 0.5, -np.ones(env.layout.message_bits)].astype(np.float32)  # forward and turning, bits silent
+    env.step({a: move for a in env.agents})
     frame2 = env.render()
     assert not np.array_equal(frame, frame2), "moving robots must change the picture"
     env.close()

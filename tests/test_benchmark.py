@@ -26,7 +26,7 @@ def test_tasks_repeated_and_comma_list(capsys):
     assert benchmark.main(["--task", "flocking,aggregation", "--task", "aggregation", *TINY, "--json"]) == 0
     res = json.loads(capsys.readouterr().out)
     assert list(res) == ["flocking", "aggregation"]
-    assert {r["policy"] for r in res["flocking"]["rows"]} == {"orientation_flocking", "random_walk", "random", "sorted_following"}
+    assert {r["policy"] for r in res["flocking"]["rows"]} == {"orientation_flocking", "random_walk", "random"}
 
 
 def test_unknown_task_is_a_usage_error(capsys):

@@ -194,7 +194,9 @@ def test_a_task_without_rewards_says_so():
 
 # -- the suite's own tasks use only the public API --------------------------------------------------------
 PUBLIC = {"swarm_envs", "swarm_envs.task", "swarm_envs.env", "swarm_envs.factories", "swarm_envs.platforms"}
-TASK_MODULES = ["aggregation_v0", "flocking_v0", "centroid_seeking_v0"]
+TASK_MODULES = [
+    "aggregation_v0", "flocking_v0", "centroid_seeking_v0", "sorted_following_v0", "parity_clustering_v0", "mid_angle_navigation_v0",
+]
 
 
 @pytest.mark.parametrize("name", TASK_MODULES + ["../examples/custom_task"])

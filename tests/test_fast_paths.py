@@ -15,6 +15,7 @@ from swarm_envs import observation
 from swarm_envs.geometry import wrap_angle
 from swarm_envs.observation import _pack_nearest_numpy, nearest_slots, wrapped_difference
 from swarm_envs.sensing import ideal
+from swarm_envs.task import MESSAGE_RANGE
 from swarm_envs.sensing.ideal import candidate_pairs, copy_pairs, directed_links, directed_pairs
 from swarm_envs.task import bump_any
 
@@ -98,12 +99,14 @@ def _old_largest_component_fraction(positions, link_distance, pairs=None):
 
 
 def _old_flocking_rewards(task, state):
+    """The flocking rewards written plainly (per copy, a KD-tree's pairs, ``np.add.at``)."""
     B, A = task.n_copies, task.n_agents
     pos, head = task.agents_of(state.positions), task.agents_of(state.headings)
     speed = np.linalg.norm(task.agents_of(state.velocities), axis=2)
-    vmax, ir_range = task.platform.max_speed, task.platform.ir_range
-    pairs = candidate_pairs(pos.reshape(B * A, 2), ir_range, np.repeat(np.arange(B), A))
-    cohesion, _ = _old_largest_component_fraction(pos, ir_range, pairs)
+    vmax, link = task.platform.max_speed, MESSAGE_RANGE[task.platform.name]
+    pairs = candidate_pairs(pos.reshape(B * A, 2), link, np.repeat(np.arange(B), A))
+    # cohesion: the mean share of the other robots within the message range (a KD-tree's pairs, counted per copy)
+    cohesion = np.array([2.0 * np.sum(pairs[:, 0] // A == b) / (A * (A - 1)) for b in range(B)]) if A > 1 else np.ones(B)
     weight = np.clip(speed / vmax, 0.0, 1.0)
     vec = np.stack([np.cos(head), np.sin(head)], -1) * weight[..., None]
     pol = np.linalg.norm(vec.mean(axis=1), axis=1)

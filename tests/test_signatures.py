@@ -8,11 +8,11 @@ import typing
 
 import pytest
 
-from swarm_envs import aggregation_v0, centroid_seeking_v0, flocking_v0
+from swarm_envs import aggregation_v0, centroid_seeking_v0, flocking_v0, mid_angle_navigation_v0, parity_clustering_v0, sorted_following_v0
 from swarm_envs.settings import COMMON_DEFAULTS, COMMON_SETTINGS, Choice
 from swarm_envs.platforms import PLATFORMS
 
-TASK_MODULES = [aggregation_v0, flocking_v0, centroid_seeking_v0]
+TASK_MODULES = [aggregation_v0, flocking_v0, centroid_seeking_v0, sorted_following_v0, parity_clustering_v0, mid_angle_navigation_v0]
 _CHOICES = {key: rule.choices for key, rule in COMMON_SETTINGS.items() if isinstance(rule, Choice)}
 SECTIONS = ["Description", "Action Space", "Observation Space", "Rewards", "Starting State", "Episode End", "Arguments", "Version History"]
 

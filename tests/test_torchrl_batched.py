@@ -35,7 +35,7 @@ def test_check_env_specs_and_layout(env_id, sensing, flatten):
     else:
         assert set(obs_spec.keys()) == set(space.spaces)
         assert all(obs_spec[k].shape == (B, N, *space[k].shape) for k in space.spaces)
-    assert env.full_action_spec[GROUP, "action"].shape == (B, N, 2)
+    assert env.full_action_spec[GROUP, "action"].shape == (B, N, env.vec.layout.action_size)
     assert env.full_reward_spec[GROUP, "reward"].shape == (B, N, 1)
     for key in ("done", "terminated", "truncated"):
         assert env.full_done_spec[key].shape == (B, 1)

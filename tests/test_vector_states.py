@@ -23,12 +23,12 @@ def test_states_equal_single_env_states_over_an_episode_end(env_id, sensing):
         assert states.dtype == np.float32 and states.shape == (B, *singles[0].state_space.shape)
         for b, single in enumerate(singles):
             np.testing.assert_array_equal(states[b], single.state(), err_msg=f"step {t}, copy {b}")
-        actions = rng.uniform(-1, 1, (B, N, 2))
+        actions = rng.uniform(-1, 1, (B, N, vec.layout.action_size))
         vec.step(actions)
         for b, single in enumerate(singles):
             single.step({agent: actions[b, i] for i, agent in enumerate(single.possible_agents)})
     np.testing.assert_array_equal(vec.states()[:, -1], 1.0)  # progress at the last step
-    vec.step(np.zeros((B, N, 2)))  # NEXT_STEP autoreset: every copy starts again (generators continue)
+    vec.step(np.zeros((B, N, vec.layout.action_size)))  # NEXT_STEP autoreset: every copy starts again (generators continue)
     for b, single in enumerate(singles):
         single.reset()
         np.testing.assert_array_equal(vec.states()[b], single.state())

@@ -1,6 +1,6 @@
 """Validation command line: reproduce the source papers' published figures and print ours beside theirs.
 
-Usage: ``python -m swarm_envs.validate {range-bearing,swarmcom,scale-free,centroid} [--json] [options]``.
+Usage: ``python -m swarm_envs.validate {range-bearing,swarmcom,scale-free,centroid,behaviours} [--json] [options]``.
 Each experiment lives in its own module with a ``main(argv) -> int`` function. Options are checked by the
 same rules as the env settings (:func:`swarm_envs.settings.cli_type`): a bad value is a one-line usage error
 naming the option (:class:`swarm_envs.settings.OneLineArgumentParser`), exit code 2; a plot directory
@@ -17,6 +17,7 @@ EXPERIMENTS = {
     "swarmcom": ("swarm_envs.validate.swarmcom", "SwarmCom range, channels, flooding, coding [T20 Figs. 12, 13, 16, 20, 21]"),
     "scale-free": ("swarm_envs.validate.scale_free", "rigidity vs degree and 2-hop edge error [L Figs. 5.1, 6.2]"),
     "centroid": ("swarm_envs.validate.centroid", "static-anchor centroid seeking [L Sec. 6.2.2]"),
+    "behaviours": ("swarm_envs.validate.behaviours", "r-one behaviours' trajectories and metrics [L Sec. 6.4, Figs. 6.7-6.10]"),
 }
 
 

@@ -1,0 +1,504 @@
+"""Mid-angle navigation: a seeker reaches a goal robot through a network of static relays that tell it the
+hop count to the goal, steering through the mid-angles between relays [L Sec. 6.4.4, Alg. 8, Fig. 6.10].
+
+The arena holds a corridor of ``lanes`` lanes (default 1: straight) 6 robot diameters wide, walled off from
+the rest of the arena; more lanes wind, each turning into the next behind a wall. Walls are static
+obstacles: they stop robots and block infrared light. Static robots stand in *gates*, pairs across the corridor
+every gate spacing along its centre line, and the goal robot (static robot 0) at the corridor's far end;
+the seekers (the agents, ``robot_0`` ..) start at its other end, out of the goal's infrared range (and,
+with more lanes, behind walls).
+
+The static robots run a hop-count firmware over SwarmCom (the "broadcasting their hop distance from the
+goal robot" of Alg. 8): the goal broadcasts 0; every other static robot keeps, per static neighbour, the
+hop count two consecutive frames of that neighbour agreed on (a single corrupted frame changes nothing),
+and broadcasts 1 + the lowest of those confirmed in the last ``HOP_MEMORY_STEPS`` steps (2**b - 1,
+"unknown", when none), as ``message_bits`` payload bits (LSB first). It trusts a 0 only from the goal's
+id and ignores the seekers' frames. Frames are real SwarmCom frames: lost, collided and corrupted ones shape the
+gradient.
+
+Metrics (ground truth): a seeker *arrives* when its centre comes within 2.5 radii of the goal's (touching
+it, with a quarter of a diameter to spare); ``success_rate`` = share of seekers that arrived;
+``time_to_goal`` = mean over seekers of the arrival time (s), or the time elapsed for a seeker not there
+yet (censored at the episode's end); ``path_ratio`` = mean over arrived seekers of the path they drove
+until arrival over the shortest path (around the walls' ends at one robot radius, relays ignored, minus
+the contact distance), NaN while none arrived; ``collision_fraction`` = share of seekers in contact.
+"""
+
+from __future__ import annotations
+
+import heapq
+from dataclasses import dataclass
+from typing import Any, Literal
+
+import numpy as np
+from pettingzoo import AECEnv
+from pettingzoo.utils.conversions import parallel_to_aec
+
+from swarm_envs.env import DT, SwarmEnv
+from swarm_envs.factories import reports_unknown_kwargs
+from swarm_envs.platforms import Platform
+from swarm_envs.task import (
+    Arena,
+    BatchState,
+    Int,
+    Real,
+    SettingsError,
+    Task,
+    bump_any,
+    distance_to_segments,
+    message_range,
+    segments_crossed,
+    spawn_positions,
+)
+
+__all__ = ["MidAngleNavigationTask", "MidAngleNavigationEnv", "Corridor", "HOP_MEMORY_STEPS", "raw_env", "parallel_env", "env"]
+
+#: steps a static robot keeps the hop count it last confirmed for a static neighbour (5 s: at 1160 bps it
+#: decodes each neighbour every second or two; a newer confirmed value replaces it)
+HOP_MEMORY_STEPS = 50
+#: a seeker arrives within this many robot radii of the goal's centre
+ARRIVAL_RADII = 2.5
+#: default lane width, and the narrowest allowed, in robot diameters
+LANE_DIAMETERS, MIN_LANE_DIAMETERS = 6.0, 4.5
+#: a gate's relays stand this many diameters either side of the centre line (a gap of 3 diameters between them)
+GATE_OFFSET_DIAMETERS = 2.0
+
+
+@dataclass(frozen=True)
+class Corridor:
+    """The corridor layout of one env (m, arena frame): walls, centre line, gates, goal and start square.
+
+    Attributes:
+        lane_width: width W of a lane.
+        walls: (lanes - 1, 2, 2) wall segments between neighbouring lanes.
+        centre_line: (P, 2) polyline from the start square's centre to the goal.
+        relays: (R, 2) nominal relay positions (gate pairs, centre-line order).
+        goal: (2,) goal robot position.
+        start_centre: (2,) centre of the start square (side ``lane_width``).
+        nodes: (K, 2) the walls' free ends, one robot radius beyond (shortest-path waypoints).
+        node_distance: (K,) shortest distance from each node to the goal.
+    """
+
+    lane_width: float
+    walls: np.ndarray
+    centre_line: np.ndarray
+    relays: np.ndarray
+    goal: np.ndarray
+    start_centre: np.ndarray
+    nodes: np.ndarray
+    node_distance: np.ndarray
+
+    def distance_to_goal(self, points: np.ndarray) -> np.ndarray:
+        """(...,) shortest distance (m) from ``points`` (..., 2) to the goal's centre around the walls:
+        straight if the goal is in sight, else via the visible wall ends (:attr:`nodes`)."""
+        points = np.asarray(points, dtype=float)
+        targets = np.concatenate([self.goal[None], self.nodes])  # (K + 1, 2)
+        rest = np.concatenate([[0.0], self.node_distance])
+        seen = ~segments_crossed(np.broadcast_to(points[..., None, :], points.shape[:-1] + targets.shape), targets, self.walls)
+        length = np.linalg.norm(points[..., None, :] - targets, axis=-1) + rest
+        return np.where(seen, length, np.inf).min(axis=-1)
+
+
+def corridor(size: float, lanes: int, platform: Platform) -> Corridor:
+    """The corridor of ``lanes`` lanes in a square arena of side ``size`` (m) for ``platform``'s robots
+    (module docstring). Lanes are 6 robot diameters wide (narrower, down to 4.5, when ``size`` is too
+    small for that) and as long as the arena; they are stacked in a band across the arena's middle,
+    walled off from the space above and below. Lane k (from the bottom) runs right for even k, left for
+    odd k, and turns into the next at its end; a gate (two relays 2 diameters either side of the centre
+    line) stands every 0.4 message ranges (at least 3 diameters) along the centre line, from one gate
+    spacing past the start square to one before the goal."""
+    half, d, r = size / 2, platform.diameter, platform.radius
+    W = min(LANE_DIAMETERS * d, size / lanes)
+    bottom = -lanes * W / 2
+    ys = bottom + W * (np.arange(lanes) + 0.5)
+    x_lo, x_hi = -half + W / 2, half - W / 2
+    points, walls = [], []
+    for k, y in enumerate(ys):
+        a, b = (x_lo, x_hi) if k % 2 == 0 else (x_hi, x_lo)
+        points += [(a, y), (b, y)]
+        if k < lanes - 1:
+            wall_y = bottom + W * (k + 1)
+            walls.append([[-half, wall_y], [half - W, wall_y]] if k % 2 == 0 else [[-half + W, wall_y], [half, wall_y]])
+    inner = len(walls)
+    if -bottom < half - 1e-9:  # the band's outer walls, across the whole arena
+        walls += [[[-half, bottom], [half, bottom]], [[-half, -bottom], [half, -bottom]]]
+    line = np.array(points, dtype=float)
+    walls_arr = np.array(walls, dtype=float).reshape(-1, 2, 2)
+    # gates along the centre line
+    seg = np.diff(line, axis=0)
+    seg_len = np.linalg.norm(seg, axis=1)
+    cum = np.concatenate([[0.0], np.cumsum(seg_len)])
+    spacing, offset = max(0.4 * message_range(platform), 3.0 * d), GATE_OFFSET_DIAMETERS * d
+    relays = []
+    s = W / 2 + spacing
+    while s <= cum[-1] - spacing + 1e-9:
+        i = min(int(np.searchsorted(cum, s, side="right")) - 1, len(seg) - 1)
+        if seg_len[i] > 0:
+            direction = seg[i] / seg_len[i]
+            centre = line[i] + (s - cum[i]) * direction
+            normal = np.array([-direction[1], direction[0]])
+            for side in (1.0, -1.0):
+                p = centre + side * offset * normal
+                # keep relays inside their lane, clear of the walls and of each other
+                if np.all(np.abs(p) <= half - r * 1.2) and distance_to_segments(p, walls_arr) > 1.2 * r and all(
+                    np.linalg.norm(p - q) > 2.4 * r for q in relays
+                ):
+                    relays.append(p)
+        s += spacing
+    goal = line[-1].copy()
+    # shortest-path waypoints: each wall's free end, one radius beyond it
+    nodes = []
+    for k, (a, b) in enumerate(walls_arr[:inner]):
+        end = b if k % 2 == 0 else a
+        nodes.append(end + np.array([r if k % 2 == 0 else -r, 0.0]))
+    nodes_arr = np.array(nodes, dtype=float).reshape(-1, 2)
+    node_distance = _dijkstra_to_goal(nodes_arr, goal, walls_arr)
+    return Corridor(W, walls_arr, line, np.array(relays, dtype=float).reshape(-1, 2), goal, line[0].copy(), nodes_arr, node_distance)
+
+
+def _dijkstra_to_goal(nodes: np.ndarray, goal: np.ndarray, walls: np.ndarray) -> np.ndarray:
+    """(K,) shortest distance from each node to ``goal`` over straight hops between mutually visible points."""
+    points = np.concatenate([goal[None], nodes])
+    n = len(points)
+    starts = np.repeat(points, n, axis=0).reshape(n, n, 2)
+    ends = np.broadcast_to(points, (n, n, 2))
+    visible = ~segments_crossed(starts, ends, walls)
+    length = np.linalg.norm(starts - ends, axis=-1)
+    best = np.full(n, np.inf)
+    best[0] = 0.0
+    queue = [(0.0, 0)]
+    while queue:
+        dist, i = heapq.heappop(queue)
+        if dist > best[i]:
+            continue
+        for j in np.flatnonzero(visible[i]):
+            if dist + length[i, j] < best[j]:
+                best[j] = dist + length[i, j]
+                heapq.heappush(queue, (best[j], j))
+    return best[1:]
+
+
+class MidAngleNavigationTask(Task):
+    """Mid-angle navigation rewards, metrics, corridor and relay firmware over all env copies (module docstring)."""
+
+    SETTINGS = {
+        "n_robots": 1,
+        "platform": "rone",
+        "observe_ids": True,
+        "message_bits": 4,
+        "bitrate": 1160,
+        "max_cycles": 600,
+        "lanes": Int(1, "corridor lanes (1: a straight corridor)", low=1, high=12),
+        "arrival_bonus": Real(1.0, "reward of a seeker's arrival at the goal", low=0.0, high=1000.0),
+        "collision_penalty": Real(0.01, "weight of a seeker's contact per step", low=0.0, high=1000.0),
+    }
+    METRICS = {"success_rate": "final", "time_to_goal": "final", "path_ratio": "final", "collision_fraction": "mean"}
+    HEADLINE = ("success_rate", +1)
+    SCRIPTED_POLICY = "swarm_envs.agents.scripted:MidAngleNavigation"
+
+    def __init__(self, config: dict[str, Any], platform: Platform, n_copies: int = 1) -> None:
+        super().__init__(config, platform, n_copies)
+        B, A = self.n_copies, self.n_agents
+        self.hop_levels = 2 ** int(config["message_bits"]) if config["message_bits"] > 0 else 1
+        # per static robot and static sender: the hop count last decoded from it, the last one two frames in a
+        # row agreed on, and the step of that agreement
+        self._last_hop = np.full((B, self.n_static, self.n_static), -1, dtype=np.int64)
+        self._hop_of = np.zeros((B, self.n_static, self.n_static), dtype=np.int64)
+        self._heard_at = np.full((B, self.n_static, self.n_static), -(10**9), dtype=np.int64)
+        self._clock = np.zeros(B, dtype=np.int64)
+        self._arrived = np.zeros((B, A), dtype=bool)
+        self._arrival_time = np.zeros((B, A))
+        self._travelled = np.zeros((B, A))
+        self._path_at_arrival = np.zeros((B, A))
+        self._previous = np.zeros((B, A, 2))
+        self._previous_distance = np.zeros((B, A))
+        self._shortest = np.ones((B, A))
+
+    # -- layout -------------------------------------------------------------------------------------------
+    def _size(self) -> float:
+        size = self.config["arena_size"]
+        if size is not None:
+            return float(size)
+        # lanes of 6 diameters, at least 2.5 message ranges long (the goal out of the start's sight)
+        return max(self.config["lanes"] * LANE_DIAMETERS * self.platform.diameter, 2.5 * message_range(self.platform))
+
+    @property
+    def corridor(self) -> Corridor:
+        """The corridor of this env (built once from the settings)."""
+        if getattr(self, "_corridor", None) is None:
+            self._corridor = corridor(self._size(), self.config["lanes"], self.platform)
+        return self._corridor
+
+    def n_static_robots(self) -> int:
+        return 1 + len(self.corridor.relays)  # the goal, then the relays
+
+    def default_arena_size(self) -> float:
+        return self._size()
+
+    def obstacles(self) -> np.ndarray:
+        return self.corridor.walls
+
+    def check_layout(self) -> None:
+        if self.config["arena"] != "square":
+            raise SettingsError("arena", "MidAngleNavigation's corridor needs arena='square'")
+        if self.config["message_bits"] < 1:
+            raise SettingsError("message_bits", "message_bits must be >= 1: the static robots broadcast their hop count to the goal in them")
+        W, d = self.corridor.lane_width, self.platform.diameter
+        if W < MIN_LANE_DIAMETERS * d * (1 - 1e-9):
+            raise SettingsError(
+                "arena_size", f"lanes of {W:.3f} m are narrower than {MIN_LANE_DIAMETERS} robot diameters ({MIN_LANE_DIAMETERS * d:.3f} m): "
+                "use a larger arena_size or fewer lanes"
+            )
+        region = Arena("square", W - 0.2 * self.platform.radius)
+        try:
+            from swarm_envs.task import check_capacity
+
+            check_capacity(self.n_agents, self.platform.radius, region)
+        except ValueError:
+            raise SettingsError("n_robots", f"{self.n_agents} seekers do not fit in the start square of side {W:.3f} m; use fewer seekers or a larger arena_size") from None
+
+    def spawn(self, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
+        c, r = self.corridor, self.platform.radius
+        spacing = max(0.4 * message_range(self.platform), 3.0 * self.platform.diameter)
+        nominal = np.concatenate([c.goal[None], c.relays])
+        static = nominal + np.concatenate([np.zeros((1, 2)), rng.uniform(-0.1, 0.1, c.relays.shape) * spacing])  # a little jitter
+        # a jittered relay must stay clear of the walls, the arena and the others; else it stands where nominal
+        ok = (distance_to_segments(static, c.walls) > 1.05 * r) & np.all(np.abs(static) <= self.arena.half - 1.05 * r, axis=1)
+        static = np.where(ok[:, None], static, nominal)
+        for _ in range(len(static)):  # nominal positions are 2.4 radii apart: revert close pairs until none is left
+            gaps = np.linalg.norm(static[:, None] - static[None], axis=-1)
+            np.fill_diagonal(gaps, np.inf)
+            close = (gaps < 2.2 * r).any(axis=1) & np.any(static != nominal, axis=1)
+            if not close.any():
+                break
+            static[close] = nominal[close]
+        region = Arena("square", c.lane_width - 0.2 * r)
+        seekers = spawn_positions(rng, self.n_agents, r, region) + c.start_centre
+        return np.concatenate([static, seekers]), rng.uniform(-np.pi, np.pi, self.n_world)
+
+    def markers(self, positions: np.ndarray) -> dict[str, np.ndarray]:
+        return {"goal": positions[0], "centroid": positions[self.n_static :].mean(axis=0)}  # the seekers' centroid
+
+    # -- the static robots' firmware: hop counts to the goal ----------------------------------------------
+    def static_messages(self, observations: dict[str, np.ndarray], first: np.ndarray) -> np.ndarray:
+        B, S, b = self.n_copies, self.n_static, self.config["message_bits"]
+        self._heard_at[first] = -(10**9)
+        self._last_hop[first] = -1
+        self._clock[first] = 0
+        self._clock[~first] += 1
+        messages, ids = observations["messages"], observations["message_ids"]
+        values = (messages[..., 2 : 2 + b] > 0.5).astype(np.int64) @ (1 << np.arange(b))  # (B, S, M)
+        sender = np.rint(ids[..., 1] * max(self.n_world - 1, 1)).astype(np.int64)
+        good = (messages[..., 0] > 0.5) & (ids[..., 0] > 0.5) & (sender < S) & ((sender == 0) == (values == 0))
+        for m in range(messages.shape[2]):  # rows in turn: one frame per sender and row
+            bb, ss = np.nonzero(good[:, :, m])
+            who, value = sender[bb, ss, m], values[bb, ss, m]
+            agreed = self._last_hop[bb, ss, who] == value  # two frames in a row with this value: accepted
+            self._hop_of[bb[agreed], ss[agreed], who[agreed]] = value[agreed]
+            self._heard_at[bb[agreed], ss[agreed], who[agreed]] = self._clock[bb[agreed]]
+            self._last_hop[bb, ss, who] = value
+        fresh = self._clock[:, None, None] - self._heard_at <= HOP_MEMORY_STEPS  # (B, S, senders)
+        lowest = np.where(fresh, self._hop_of, self.hop_levels - 1).min(axis=2)
+        hops = np.minimum(lowest + 1, self.hop_levels - 1)
+        hops[:, 0] = 0  # the goal
+        return ((hops[..., None] >> np.arange(b)) & 1).astype(bool)
+
+    # -- rewards and metrics --------------------------------------------------------------------------------
+    def rewards(self, state: BatchState, first: np.ndarray):
+        B, A = self.n_copies, self.n_agents
+        c, r = self.corridor, self.platform.radius
+        pos = self.agents_of(state.positions)
+        goal = state.positions[:, 0]
+        reach = ARRIVAL_RADII * r
+        distance = c.distance_to_goal(pos)  # (B, A) around the walls
+        if first.any():
+            self._arrived[first] = False
+            self._arrival_time[first] = 0.0
+            self._travelled[first] = 0.0
+            self._path_at_arrival[first] = 0.0
+            self._previous[first] = pos[first]
+            self._previous_distance[first] = distance[first]
+            self._shortest[first] = np.maximum(distance[first] - 2 * r, 1e-9)
+        self._travelled += np.linalg.norm(pos - self._previous, axis=-1)
+        self._previous = pos.copy()
+        elapsed = (state.num_cycles * DT)[:, None]
+        there = np.linalg.norm(pos - goal[:, None], axis=-1) <= reach
+        new = there & ~self._arrived
+        self._arrived |= there
+        self._arrival_time = np.where(new, elapsed, self._arrival_time)
+        self._path_at_arrival = np.where(new, self._travelled, self._path_at_arrival)
+        progress = (self._previous_distance - distance) / np.maximum(self._shortest, 1e-9)
+        self._previous_distance = distance
+        bumped = bump_any(self.agents_of(state.bumps))
+        done = self._arrived & ~new  # after arrival a seeker's reward is 0
+        own = np.where(done, 0.0, progress) + self.config["arrival_bonus"] * new - self.config["collision_penalty"] * bumped
+        rewards = np.repeat(own.mean(axis=1)[:, None], A, axis=1) if self.reward_mode == "global" else own
+        n_arrived = self._arrived.sum(axis=1)
+        time_to_goal = np.where(self._arrived, self._arrival_time, elapsed).mean(axis=1)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            path_ratio = np.where(n_arrived > 0, (self._path_at_arrival / self._shortest * self._arrived).sum(axis=1) / n_arrived, np.nan)
+        metrics = {
+            "success_rate": n_arrived / A,
+            "time_to_goal": time_to_goal,
+            "path_ratio": path_ratio,
+            "collision_fraction": bumped.mean(axis=1),
+        }
+        terms = {"progress": progress, "arrived": self._arrived.astype(float), "collision": bumped.astype(float)}
+        return rewards, terms, metrics
+
+
+class MidAngleNavigationEnv(SwarmEnv):
+    """Mid-angle navigation task; see the module docstring and :func:`parallel_env` for the kwargs."""
+
+    metadata = {**SwarmEnv.metadata, "name": "mid_angle_navigation_v0"}
+    TASK = MidAngleNavigationTask
+
+
+raw_env = MidAngleNavigationEnv
+
+
+@reports_unknown_kwargs
+def parallel_env(
+    *,
+    n_robots: int = 1,
+    lanes: int = 1,
+    arrival_bonus: float = 1.0,
+    collision_penalty: float = 0.01,
+    platform: Literal["droplet", "epuck", "rone"] | Platform = "rone",
+    sensing: Literal["full", "ideal"] = "full",
+    max_cycles: int = 600,
+    render_mode: Literal["rgb_array", "human"] | None = None,
+    arena: Literal["square", "circle"] = "square",
+    arena_size: float | None = None,
+    reward_mode: Literal["global", "local"] = "global",
+    flatten: bool = False,
+    n_neighbours: int = 8,
+    n_messages: int = 8,
+    message_bits: int = 4,
+    observe_ids: bool = True,
+    bitrate: Literal[310, 650, 1080, 1160, 1670, 1800] = 1160,
+    relative_threshold: float | None = None,
+    code: tuple[int, int] = (15, 15),
+    comm_mode: Literal["broadcast", "flooding"] = "broadcast",
+    rb_schedule: Literal["contention", "every_step"] = "contention",
+    rb_max_age: int = 10,
+    rb_noise: float | None = None,
+    rb_near_model: bool = False,
+    bearing_source: Literal["sectors", "range_bearing"] | None = None,
+    bearing_noise: bool = True,
+    exchange: Literal["network", "ideal"] = "network",
+    scale_free_method: Literal["two_hop", "null_space"] = "two_hop",
+    scale_free_k: int = 1,
+    physics_substeps: int | None = None,
+) -> MidAngleNavigationEnv:
+    """Create the mid-angle navigation environment (a native PettingZoo ``ParallelEnv``).
+
+    ## Description
+
+    Mid-angle navigation ([L] Sec. 6.4.4, Algorithm 8, Fig. 6.10): ``n_robots`` seekers (the agents,
+    ``robot_0`` ..) start at one end of a winding corridor of ``lanes`` lanes and should reach the goal
+    robot at the other end. The corridor's walls stop robots and block infrared light, so the goal is out
+    of sight at the start. Static relays stand in gates (pairs across the corridor) along its centre line
+    and broadcast their hop count to the goal over SwarmCom (goal 0, "unknown" = 2**b - 1); the goal is
+    static robot 0. Static robots are not agents.
+
+    ## Action Space
+
+    Per agent ``Box(-1, 1, (2 + message_bits,), float32)``: linear and angular velocity as fractions of
+    the platform's maxima (``Platform.max_speed`` m/s and ``Platform.max_angular_speed`` rad/s; the
+    wheel speeds are then limited to ``max_speed``), followed by ``message_bits`` payload bits (each
+    entry above 0 is a 1-bit), broadcast over SwarmCom whenever the robot's transmit queue is empty.
+    Finite values outside [-1, 1] are clipped; NaN/inf, wrong shapes and actions for unknown or missing
+    agents raise. Zero actions keep a robot still.
+
+    ## Observation Space
+
+    Per agent a ``Dict`` of ``float32`` boxes, built only from the modelled infrared sensing stack
+    (never from ground truth), with K = ``n_neighbours``, M = ``n_messages``, b = ``message_bits``:
+
+    | key | shape | columns |
+    |---|---|---|
+    | ``range_bearing`` | (K, 7) | valid, range (m), cos bearing, sin bearing, cos heading, sin heading, age (steps) [F14] (r-one: sector bearings, range 0) |
+    | ``messages`` | (M, 2 + b) | valid, sender bearing / pi, payload bits (a static robot's hop count to the goal, LSB first): SwarmCom messages decoded since the last step [T20] |
+    | ``scale_free`` | (K, 3) | valid, x, y of neighbours in the robot's frame, mean neighbour distance 1, clipped to +-10 [L] |
+    | ``rigid`` | (1,) | 1 when the scale-free coordinates are determined [L Sec. 5.5.1] |
+    | ``proprio`` | (8 + 2 + b,) | bump flags of 8 45-degree sectors (sector 0 ahead, counter-clockwise), last action |
+    | ``own_id`` | (2,) | own id / (N - 1), own id parity (``observe_ids``) |
+    | ``range_bearing_ids``, ``scale_free_ids`` | (K, 4) | per row: an id was decoded, decoded id / (N - 1), id < own id, same parity |
+    | ``message_ids`` | (M, 4) | the same per message row (the header's decoded origin) |
+
+    Rows are sorted nearest first by *estimated* range; empty rows are all zero. The ids are those the
+    sensing decoded (a corrupted frame names the wrong robot); ``observe_ids=False`` drops the id parts.
+    ``flatten=True`` gives one ``Box`` instead (keys in sorted order; ``env.layout.unflatten(flat)`` gives
+    the parts back).
+
+    ## Rewards
+
+    Per seeker: its progress this step along the shortest path to the goal (around the walls' ends) over
+    that path's length at the start, ``arrival_bonus`` when it arrives (centre within 2.5 radii of the
+    goal's), nothing after that, minus ``collision_penalty`` while it is in contact. ``reward_mode="global"``:
+    the mean over seekers; ``"local"``: each its own. Terms in ``infos[agent]["reward_terms", name]``:
+    ``progress``, ``arrived``, ``collision``. Metrics in ``infos[agent]["metrics", name]``:
+    ``success_rate`` (headline: share of seekers that arrived), ``time_to_goal`` (s; the elapsed time for a
+    seeker not there yet), ``path_ratio`` (path driven until arrival over the shortest path; NaN while no
+    seeker arrived), ``collision_fraction``.
+
+    ## Starting State
+
+    The relays stand at their gate positions with a uniform jitter of +-10 % of the gate spacing, the goal
+    at the corridor's end; the seekers are placed uniformly at random without overlap in the lane-wide
+    start square at the other end. Headings are uniform in [-pi, pi). ``reset(seed=..., options={"positions":
+    (n_world, 2) m, "headings": (n_world,) rad})`` places every robot exactly (static robots first).
+
+    ## Episode End
+
+    No termination (an arrived seeker may stay or leave). Truncation: every agent is truncated after
+    ``max_cycles`` steps (default 600 = 60 s); ``env.agents`` is then empty.
+
+    ## Arguments
+
+    Keyword-only, SI units. Unknown names raise ``TypeError``; bad values raise ``ValueError``.
+
+    | argument | default | meaning |
+    |---|---|---|
+    | ``n_robots`` | 1 | number of seekers (agents) |
+    | ``lanes`` | 1 | corridor lanes: 1 a straight corridor, more a winding one (each lane turns into the next behind a wall) |
+    | ``arrival_bonus`` | 1.0 | reward of a seeker's arrival |
+    | ``collision_penalty`` | 0.01 | reward subtracted per step a seeker is in contact |
+    | ``platform`` | ``"rone"`` | ``"droplet"`` (4.4 cm, 6 IR channels), ``"epuck"`` (7 cm, 8 sensors), ``"rone"`` (11 cm, 8 RX + 8 TX), or a ``Platform`` |
+    | ``sensing`` | ``"full"`` | ``"full"``: the modelled IR stack; ``"ideal"``: exact, noiseless, lossless values (true ids) in the same layout |
+    | ``max_cycles`` | 600 | control steps of 0.1 s per episode |
+    | ``render_mode`` | ``None`` | ``"rgb_array"`` (headless) or ``"human"`` (window) |
+    | ``arena`` | ``"square"`` | ``"square"`` or ``"circle"`` |
+    | ``arena_size`` | ``None`` | side (m); ``None``: 2.5 message ranges (r-one 2.5 m), or ``lanes`` x 6 robot diameters if larger; only ``"square"`` arenas |
+    | ``reward_mode`` | ``"global"`` | ``"global"`` (one team reward) or ``"local"`` (each robot its own term) |
+    | ``flatten`` | ``False`` | one flat ``Box`` observation instead of the ``Dict`` |
+    | ``n_neighbours`` | 8 | rows K of ``range_bearing`` and ``scale_free`` |
+    | ``n_messages`` | 8 | rows M of ``messages`` |
+    | ``message_bits`` | 4 | payload bits b of every robot's messages: the static robots' hop counts (at least 1); a seeker sends its action's bits |
+    | ``observe_ids`` | ``True`` | the robot's own id and the neighbour and sender ids its sensing decoded (``own_id``, ``*_ids`` parts) |
+    | ``bitrate`` | 1160 | SwarmCom bit rate (bps): 310, 650, 1080, 1160, 1670 or 1800 [T20]; 1160 is the rate nearest the r-one's 1250 bps [L Sec. 3.2.1] (on the e-puck 310 reaches farther, 61 cm [T20 Sec. 7]) |
+    | ``relative_threshold`` | ``None`` | detector threshold m_tr (ADC counts); ``None``: 5 on e-puck and r-one [T20], 8 on the Droplet |
+    | ``code`` | ``(15, 15)`` | BCH code (n, k): ``(15, 15)`` uncoded, ``(15, 11)``, ``(15, 7)``, ``(15, 5)``, ``(15, 1)`` |
+    | ``comm_mode`` | ``"broadcast"`` | ``"broadcast"`` or ``"flooding"`` [T20 Sec. 5] |
+    | ``rb_schedule`` | ``"contention"`` | range & bearing firing: ``"contention"`` (no two linked robots fire in one step; random priorities) or ``"every_step"`` (idealised) |
+    | ``rb_max_age`` | 10 | steps a range & bearing reading persists |
+    | ``rb_noise`` | ``None`` | ADC noise sigma (counts); ``None``: 2 on the Droplet, sqrt(2.5) on the e-puck |
+    | ``rb_near_model`` | ``False`` | Droplet only: the firmware's low-power near-range fit instead of the power ladder |
+    | ``bearing_source`` | ``None`` | ``"sectors"`` (r-one) or ``"range_bearing"``; ``None``: sectors on the r-one, R&B elsewhere |
+    | ``bearing_noise`` | ``True`` | r-one: sector readings with the measured 63-74 degree receiver-arc spread [L Sec. 3.2.1] |
+    | ``exchange`` | ``"network"`` | bearing lists for scale-free coordinates over SwarmCom (``"network"``) or ``"ideal"`` |
+    | ``scale_free_method`` | ``"two_hop"`` | ``"two_hop"`` [L Algs. 1-4] or ``"null_space"`` [L Eq. (5.1)] (slow) |
+    | ``scale_free_k`` | 1 | hops k of the null-space method |
+    | ``physics_substeps`` | ``None`` | pymunk sub-steps per control step; ``None``: the platform's (8 Droplet, 21 e-puck, 32 r-one), at which robots overlap by at most 2 % of a diameter at the default arena size |
+
+    ## Version History
+
+    - v0: initial release (swarm_envs 0.1.0).
+    """
+    return MidAngleNavigationEnv(**locals())  # every argument above, by name
+
+
+def env(**kwargs: Any) -> AECEnv:
+    """The AEC (turn-based) view of :func:`parallel_env` (PettingZoo ``parallel_to_aec``); same keyword arguments."""
+    return parallel_to_aec(parallel_env(**kwargs))
