@@ -7,7 +7,7 @@ Importing the package registers the suite's tasks (in its registry and in Pettin
     env = swarm_envs.make("swarm_envs/Flocking-v0", platform="rone")        # same, parallel API
     vec = swarm_envs.make_vec("swarm_envs/Flocking-v0", 64)                 # 64 copies, one batched core
 
-Your own task: subclass :class:`swarm_envs.task.Task` and ``swarm_envs.register("my_lab/MyTask-v0",
+Your own task: subclass :class:`swarm_envs.Task` (``swarm_envs.task`` has its helpers) and ``swarm_envs.register("my_lab/MyTask-v0",
 MyTask)`` (or ``"my_module:MyTask"``, imported when first made); every function here then accepts the id.
 
 ``swarm_envs.make`` passes every keyword to the env unchanged (``max_cycles=-1`` raises), whereas
@@ -19,8 +19,10 @@ from __future__ import annotations
 from typing import Any
 
 from swarm_envs import env, task  # noqa: F401  (swarm_envs.env.info_group, swarm_envs.task.Task)
+from swarm_envs.env import SwarmEnv
 from swarm_envs.platforms import PLATFORMS, Platform, get_platform
 from swarm_envs.registry import ENV_IDS, EnvSpec, list_envs, make, make_vec, register, spec
+from swarm_envs.task import BatchState, Task
 
 
 def _read_version() -> str:
@@ -53,6 +55,9 @@ __all__ = [
     "PLATFORMS",
     "Platform",
     "get_platform",
+    "Task",
+    "BatchState",
+    "SwarmEnv",
 ]
 
 register("swarm_envs/Aggregation-v0", "swarm_envs.aggregation_v0:AggregationEnv")

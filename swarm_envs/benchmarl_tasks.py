@@ -1,9 +1,12 @@
 """BenchMARL: the suite's tasks as a BenchMARL task family over the batched TorchRL env.
 
-:class:`SwarmTask` is a BenchMARL ``Task`` enum (``AGGREGATION``, ``FLOCKING``, ``CENTROID_SEEKING``);
+:class:`SwarmTask` is a BenchMARL ``Task`` enum of the suite's tasks (``AGGREGATION``, ``FLOCKING``,
+``CENTROID_SEEKING``, ``SORTED_FOLLOWING``, ``PARITY_CLUSTERING``, ``MID_ANGLE_NAVIGATION``);
 ``SwarmTask.FLOCKING.get_task()`` gives a :class:`SwarmTaskClass` with that task's defaults
 (:data:`TASK_DEFAULTS`), and ``get_task(config={...})`` with any settings (every key besides
-``max_steps`` is a setting of the env, e.g. ``n_robots``, ``sensing``, ``flatten``). BenchMARL then builds
+``max_steps`` and ``env_id`` is a setting of the env, e.g. ``n_robots``, ``sensing``, ``flatten``). A task
+of your own that is registered (``swarm_envs.register``) runs under any member with ``config={"env_id":
+"my_lab/MyTask-v0", ...}``. BenchMARL then builds
 the env with :meth:`SwarmTaskClass.get_env_fun`: ``swarm_envs.make_torchrl(env_id, num_envs, ...)``, one
 batched env of ``num_envs`` copies (BenchMARL sees ``batch_size=[num_envs]`` and does not wrap it in
 ``SerialEnv``/``ParallelEnv``).
@@ -54,12 +57,19 @@ TASK_IDS = {
     "AGGREGATION": "swarm_envs/Aggregation-v0",
     "FLOCKING": "swarm_envs/Flocking-v0",
     "CENTROID_SEEKING": "swarm_envs/CentroidSeeking-v0",
+    "SORTED_FOLLOWING": "swarm_envs/SortedFollowing-v0",
+    "PARITY_CLUSTERING": "swarm_envs/ParityClustering-v0",
+    "MID_ANGLE_NAVIGATION": "swarm_envs/MidAngleNavigation-v0",
 }
 #: per-task default config: ``max_steps`` (the episode length, ``max_cycles``) and env settings
 TASK_DEFAULTS: dict[str, dict[str, Any]] = {
     "AGGREGATION": {"max_steps": 100, "n_robots": 10, "sensing": "full", "flatten": False},
     "FLOCKING": {"max_steps": 100, "n_robots": 10, "sensing": "full", "flatten": False},
     "CENTROID_SEEKING": {"max_steps": 100, "n_robots": 10, "sensing": "full", "flatten": False},
+    # the r-one behaviours with their own robot counts and platform; the seeker needs ~50 s to cross
+    "SORTED_FOLLOWING": {"max_steps": 100, "sensing": "full", "flatten": False},
+    "PARITY_CLUSTERING": {"max_steps": 100, "sensing": "full", "flatten": False},
+    "MID_ANGLE_NAVIGATION": {"max_steps": 600, "sensing": "full", "flatten": False},
 }
 
 
@@ -68,6 +78,7 @@ class SwarmTaskClass(TaskClass):
 
     def _env_settings(self) -> dict[str, Any]:
         settings = copy.deepcopy(dict(self.config))
+        settings.pop("env_id", None)
         if "max_cycles" in settings:
             raise ValueError("task config: give the episode length as max_steps (BenchMARL's name), not max_cycles")
         settings["max_cycles"] = settings.pop("max_steps", TASK_DEFAULTS[self.name]["max_steps"])
@@ -77,8 +88,14 @@ class SwarmTaskClass(TaskClass):
         """A constructor of the batched env: ``num_envs`` copies, seeded with ``seed`` (copy b: ``seed + b``)."""
         if not continuous_actions:
             raise ValueError("the swarm tasks have continuous actions only (continuous_actions=False was asked)")
-        env_id, settings = TASK_IDS[self.name], self._env_settings()
+        env_id, settings = self.env_id, self._env_settings()
         return lambda: SwarmTorchRLEnv(env_id, num_envs, device=device, group=GROUP, seed=seed, **settings)
+
+    @property
+    def env_id(self) -> str:
+        """The registered env id this task makes: the config's ``env_id`` (a task of your own), else the
+        member's (:data:`TASK_IDS`)."""
+        return str(self.config.get("env_id", TASK_IDS[self.name]))
 
     def supports_continuous_actions(self) -> bool:
         return True
@@ -146,6 +163,9 @@ class SwarmTask(Task):
     AGGREGATION = None
     FLOCKING = None
     CENTROID_SEEKING = None
+    SORTED_FOLLOWING = None
+    PARITY_CLUSTERING = None
+    MID_ANGLE_NAVIGATION = None
 
     @staticmethod
     def associated_class() -> type[SwarmTaskClass]:

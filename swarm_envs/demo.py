@@ -132,6 +132,9 @@ def load_model_policy(path: str | Path, env: Any):
         raise DemoError(f"--model needs stable-baselines3 ({err}); pip install 'swarm_envs[rl]'") from None
     from gymnasium.spaces import flatdim
 
+    from swarm_envs.torch_threads import set_torch_threads
+
+    set_torch_threads()  # 1 thread on <= 2 cores (OMP_NUM_THREADS overrides): inference beside the simulation
     try:
         model = PPO.load(path, device="cpu")
     except Exception as err:  # SB3 raises many kinds (KeyError, BadZipFile, ValueError, pickle errors)
@@ -287,7 +290,10 @@ def _parser() -> argparse.ArgumentParser:
     parser.add_argument("--task", default=None, help=f"short name {sorted(TASKS)} or a registered env id (default flocking)")
     parser.add_argument("--all", action="store_true", help="one GIF per task, <task>.gif in --out-dir (small documentation GIFs)")
     parser.add_argument("--policy", choices=["scripted", "random"], default=None, help="default: the task's scripted baseline")
-    parser.add_argument("--model", default=None, metavar="PATH", help="a trained PPO .zip (train.py's model.zip) instead of --policy")
+    parser.add_argument(
+        "--model", default=None, metavar="PATH",
+        help="a trained PPO .zip (train.py's model.zip) instead of --policy; torch runs on 1 thread on <= 2 cores (OMP_NUM_THREADS overrides)",
+    )
     parser.add_argument("--out", default=None, help="GIF path (default demo.gif); its directory must exist")
     parser.add_argument("--out-dir", default=None, help="with --all: folder for the GIFs (created; default .)")
     parser.add_argument("--platform", default=None, help="droplet, epuck or rone (default: the task's showcase)")

@@ -47,10 +47,24 @@ def test_task_family_specs(task, flatten):
     assert list(swarm_task.state_spec(env).keys()) == ["state"]
     info = swarm_task.info_spec(env)
     assert "ground_truth_position" in info[GROUP, "info"].keys() and "episode_step" in info["info"].keys()
-    assert swarm_task.action_spec(env)[GROUP, "action"].shape == (3, 2)
+    assert swarm_task.action_spec(env)[GROUP, "action"].shape == (3, base.vec.layout.action_size)
     assert swarm_task.supports_continuous_actions() and not swarm_task.supports_discrete_actions()
     with pytest.raises(ValueError, match="continuous"):
         swarm_task.get_env_fun(2, False, 0, "cpu")
+
+
+def test_every_suite_task_is_a_member_and_a_registered_id_of_your_own_runs():
+    import swarm_envs
+    from swarm_envs.benchmarl_tasks import TASK_IDS
+
+    assert set(TASK_IDS.values()) == {i for i in swarm_envs.list_envs() if i.startswith("swarm_envs/")}
+    assert set(TASK_IDS) == {t.name for t in SwarmTask} == set(TASK_DEFAULTS)
+    spec = importlib.util.spec_from_file_location("custom_task", EXAMPLE.parent / "custom_task.py")
+    spec.loader.exec_module(importlib.util.module_from_spec(spec))  # registers swarm_examples/Dispersion-v0
+    task = SwarmTask.AGGREGATION.get_task(config={"env_id": "swarm_examples/Dispersion-v0", "max_steps": 5, "n_robots": 3, "sensing": "ideal"})
+    base = task.get_env_fun(num_envs=2, continuous_actions=True, seed=0, device="cpu")()
+    assert task.env_id == "swarm_examples/Dispersion-v0" and type(base.vec.task).__name__ == "Dispersion"
+    check_env_specs(TransformedEnv(base, Compose(*task.get_env_transforms(base))))
 
 
 def test_defaults_and_yaml(tmp_path):

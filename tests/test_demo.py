@@ -115,7 +115,17 @@ def test_model_runs_and_a_mismatching_model_is_refused(tmp_path, capsys):
 
     good = saved_model(tmp_path / "good.zip")
     out = tmp_path / "ppo.gif"
-    assert main(["--task", "flocking", "--model", str(good), *SMALL, "--steps", "3", "--out", str(out)]) == 0
+    import torch
+
+    from swarm_envs.torch_threads import default_torch_threads
+
+    before = torch.get_num_threads()
+    torch.set_num_threads(default_torch_threads() + 1)
+    try:
+        assert main(["--task", "flocking", "--model", str(good), *SMALL, "--steps", "3", "--out", str(out)]) == 0
+        assert torch.get_num_threads() == default_torch_threads()  # the demo sets the thread default
+    finally:
+        torch.set_num_threads(before)
     assert "seed 0: ppo " in capsys.readouterr().out
     assert _gif_frames(out)[0] == 4
 

@@ -12,7 +12,7 @@ import pytest
 import swarm_envs
 from swarm_envs import world as world_module
 
-TASKS = ["swarm_envs/Aggregation-v0", "swarm_envs/Flocking-v0", "swarm_envs/CentroidSeeking-v0"]
+TASKS = [i for i in swarm_envs.list_envs() if i.startswith("swarm_envs/")]  # every task of the suite
 DENSE = {"epuck": 0.45, "droplet": 0.3, "rone": 0.7}  # small arenas: robots collide, so contacts are copied too
 
 
