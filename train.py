@@ -5,7 +5,12 @@
     python train.py --config configs/aggregation.yaml --eval-only CHECKPOINT [--output DIR [--force]]
 """
 
-from swarm_envs.agents.train import main
+import sys
 
 if __name__ == "__main__":
-    raise SystemExit(main())
+    try:  # Ctrl-C while the package loads is one line too
+        from swarm_envs.agents.launch import train
+    except KeyboardInterrupt:
+        print("interrupted by Ctrl-C while starting; nothing was written", file=sys.stderr)
+        raise SystemExit(130) from None
+    raise SystemExit(train())

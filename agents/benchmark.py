@@ -14,7 +14,6 @@ Cost: ~5 ms per env step with ``sensing="full"`` (10 robots), so ``--episodes 20
 
 from __future__ import annotations
 
-import argparse
 import json
 import sys
 import time
@@ -26,6 +25,7 @@ from swarm_envs.agents.evaluation import evaluate, markdown_table, random_factor
 from swarm_envs.agents.scripted import make_scripted, scripted_class
 from swarm_envs.agents.tasks import SHORT_NAMES, env_id, headline, import_modules, metric_reductions, scripted_policy
 from swarm_envs.registry import list_envs
+from swarm_envs.settings import COMMON_SETTINGS, Int, OneLineArgumentParser, cli_type
 
 __all__ = ["run_benchmark", "main"]
 
@@ -87,28 +87,30 @@ def parse_tasks(values: list[str]) -> list[str]:
 
 def main(argv: list[str] | None = None) -> int:
     """Command line of ``python -m swarm_envs.agents.benchmark``; returns the exit code."""
-    parser = argparse.ArgumentParser(description="Scripted swarm baselines vs random, with bootstrap 95% CIs")
+    parser = OneLineArgumentParser(prog="swarm-benchmark", description="Scripted swarm baselines vs random, with bootstrap 95% CIs")
     parser.add_argument("--task", action="append", default=[], metavar="TASK",
                         help=f"task to run (env id or one of {', '.join(SHORT_NAMES)}), repeatable or a comma list "
                              "(default: every task with a scripted baseline)")
     parser.add_argument("--import", dest="imports", action="append", default=[], metavar="MODULE",
                         help="module or .py file to import first (one that registers tasks of your own); repeatable")
-    parser.add_argument("--episodes", type=int, default=30, help="seeds per policy and task (default 30)")
+    episodes = Int(30, "seeds per policy and task", low=1, high=100_000)
+    parser.add_argument("--episodes", type=cli_type(episodes, "--episodes"), default=30, help="seeds per policy and task (default 30)")
     parser.add_argument("--sensing", choices=("full", "ideal"), default="full")
-    parser.add_argument("--max-cycles", type=int, default=None, help="episode length (default: the env's 500)")
-    parser.add_argument("--n-robots", type=int, default=None, help="agents per env (default: the task's)")
+    parser.add_argument("--max-cycles", type=cli_type(COMMON_SETTINGS["max_cycles"], "--max-cycles"), default=None,
+                        help="episode length (default: the env's 500)")
+    parser.add_argument("--n-robots", type=cli_type(COMMON_SETTINGS["n_robots"], "--n-robots"), default=None,
+                        help="agents per env (default: the task's)")
     parser.add_argument("--json", action="store_true", help="print the results as JSON")
     args = parser.parse_args(argv)
-    if args.episodes < 1:
-        parser.error("--episodes must be >= 1 (>= 2 for a confidence interval)")
-    if args.max_cycles is not None and args.max_cycles < 1:
-        parser.error("--max-cycles must be >= 1")
     try:
         import_modules(args.imports)
         tasks = parse_tasks(args.task)
     except (ImportError, ValueError) as err:
         parser.error(str(err))
-    results = run_benchmark(args.episodes, args.sensing, args.max_cycles, args.n_robots, tasks=tasks or None)
+    try:
+        results = run_benchmark(args.episodes, args.sensing, args.max_cycles, args.n_robots, tasks=tasks or None)
+    except (ValueError, TypeError) as err:  # settings the env refuses (e.g. robots that do not fit): one line
+        parser.error(str(err))
     if args.json:
         print(json.dumps(_json_safe(results)))
         return 0

@@ -33,6 +33,8 @@ from typing import Any
 import numpy as np
 import yaml
 
+from swarm_envs._text import shown
+
 __all__ = ["ConfigError", "DEFAULTS", "BOUNDS", "load_config", "apply_overrides", "validate", "resolve", "bounds_table"]
 
 
@@ -141,7 +143,7 @@ def _merge(base: dict, update: dict, path: str = "") -> dict:
             value = {}  # an empty section in YAML (``env:``) means "all defaults"
         if isinstance(base[key], dict) and dotted not in ("agent.scripted_kwargs",):
             if not isinstance(value, dict):
-                raise ConfigError(f"config key {dotted!r} must be a mapping, got {value!r}")
+                raise ConfigError(f"config key {dotted!r} must be a mapping, got {shown(value)}")
             out[key] = _merge(base[key], value, dotted + ".")
         else:
             out[key] = value
@@ -165,7 +167,7 @@ def validate(cfg: dict[str, Any]) -> dict[str, Any]:
 
     imports = cfg["imports"]
     if not isinstance(imports, list) or not all(isinstance(m, str) and m for m in imports):
-        raise ConfigError(f"config key 'imports' must be a list of module names or .py paths, got {imports!r:.80}")
+        raise ConfigError(f"config key 'imports' must be a list of module names or .py paths, got {shown(imports)}")
     try:
         import_modules(imports)
     except ImportError as err:
@@ -177,14 +179,14 @@ def validate(cfg: dict[str, Any]) -> dict[str, Any]:
 
     def walk(node: Any, schema: dict, path: str) -> None:
         if not isinstance(node, dict):
-            raise ConfigError(f"config key {path.rstrip('.')!r} must be a mapping (a section), got {node!r:.80}")
+            raise ConfigError(f"config key {path.rstrip('.')!r} must be a mapping (a section), got {shown(node)}")
         for key, value in node.items():
             if not isinstance(key, str):
                 raise ConfigError(f"config section {path.rstrip('.') or 'top level'!r} has a key {key!r:.80} that is not a string")
             dotted = f"{path}{key}"
             if dotted in ("env", "agent.scripted_kwargs"):
                 if not isinstance(value, dict):
-                    raise ConfigError(f"config key {dotted!r} must be a mapping, got {value!r:.80}")
+                    raise ConfigError(f"config key {dotted!r} must be a mapping, got {shown(value)}")
                 bad = [k for k in value if not isinstance(k, str)]
                 if bad:
                     raise ConfigError(f"config key {dotted!r} has a key {bad[0]!r:.80} that is not a string")
@@ -199,9 +201,9 @@ def validate(cfg: dict[str, Any]) -> dict[str, Any]:
                 continue
             example = _NULLABLE.get(dotted, default)
             if not _type_ok(value, example):
-                raise ConfigError(f"config key {dotted!r} must be of type {type(example).__name__}, got {value!r:.80}")
+                raise ConfigError(f"config key {dotted!r} must be of type {type(example).__name__}, got {shown(value)}")
             if dotted in _CHOICES and value not in _CHOICES[dotted]:
-                raise ConfigError(f"config key {dotted!r}={value!r} not allowed; allowed values: {list(_CHOICES[dotted])}")
+                raise ConfigError(f"config key {dotted!r}={shown(value)} not allowed; allowed values: {list(_CHOICES[dotted])}")
             if dotted in BOUNDS:
                 _check_bounds(dotted, value)
 
@@ -232,7 +234,7 @@ def validate(cfg: dict[str, Any]) -> dict[str, Any]:
         raise ConfigError(f"unknown env key(s) {['env.' + k for k in unknown]} for task {cfg['task']!r}; allowed: {sorted(allowed)}")
     if "flatten" in cfg["env"] or "render_mode" in cfg["env"]:
         raise ConfigError("env.flatten and env.render_mode are set by train.py; remove them from the config")
-    env = _check_env_settings(cfg["task"], cfg["env"])
+    env = _check_env_settings(cfg["task"], cfg["env"], (scripted, cfg["agent"]["scripted_kwargs"]) if scripted is not None else None)
     if cfg["train"]["n_workers"] > cfg["train"]["n_envs"]:
         raise ConfigError(f"train.n_workers ({cfg['train']['n_workers']}) must not exceed train.n_envs ({cfg['train']['n_envs']})")
     _check_batch(cfg, env)
@@ -242,14 +244,19 @@ def validate(cfg: dict[str, Any]) -> dict[str, Any]:
 def _check_bounds(dotted: str, value: Any) -> None:
     """:class:`ConfigError` unless ``value`` is finite and within :data:`BOUNDS` of ``dotted``."""
     low, high, why = BOUNDS[dotted]
-    try:
-        number = float(value)
-    except OverflowError:  # an int too large for a float
-        number = math.inf
-    above = number > low if dotted in _OPEN_LOW else number >= low
-    if not (math.isfinite(number) and above and number <= high):
+    if isinstance(value, numbers.Integral) and not isinstance(value, bool):
+        number = int(value)  # integers compared exactly (a float rounds 2**63 - 1 up)
+        ok = (number > low if dotted in _OPEN_LOW else number >= low) and number <= high
+    else:
+        try:
+            number = float(value)
+        except (OverflowError, TypeError, ValueError):  # an int too large for a float, or not a number
+            number = math.inf
+        above = number > low if dotted in _OPEN_LOW else number >= low
+        ok = math.isfinite(number) and above and number <= high
+    if not ok:
         kind = "an integer" if isinstance(value, numbers.Integral) else "a finite number"
-        raise ConfigError(f"config key {dotted!r} must be {kind} in {_span(dotted)} ({why}), got {value!r:.80}")
+        raise ConfigError(f"config key {dotted!r} must be {kind} in {_span(dotted)} ({why}), got {shown(value)}")
 
 
 def _span(dotted: str) -> str:
@@ -283,12 +290,12 @@ def _check_batch(cfg: dict[str, Any], env: dict[str, int]) -> None:
         )
 
 
-def _check_env_settings(task: str, env: dict[str, Any]) -> dict[str, int]:
+def _check_env_settings(task: str, env: dict[str, Any], scripted: tuple[str, dict[str, Any]] | None = None) -> dict[str, int]:
     """Run the env's own validator (:func:`swarm_envs.settings.validate_settings`) on the settings train.py
     would build the env with (YAML lists as tuples, ``flatten=True``), then build that env once (cheap: no
     reset) for the checks that need its arena (robots and anchors fit; the build's fit test is exact, so
-    every seed resets). Returns its sizes (``n_agents``, ``n_world``, ``obs_size``, ``act_size``); raises
-    :class:`ConfigError`."""
+    every seed resets), and the ``scripted`` (name, keyword arguments) baseline once on it. Returns its
+    sizes (``n_agents``, ``n_world``, ``obs_size``, ``act_size``); raises :class:`ConfigError`."""
     import swarm_envs
     from swarm_envs.agents.tasks import env_id
     from swarm_envs.settings import SettingsError
@@ -302,6 +309,15 @@ def _check_env_settings(task: str, env: dict[str, Any]) -> dict[str, int]:
         raise ConfigError(f"bad env settings: {err} (config key 'env.{err.key}')") from None
     except (ValueError, TypeError) as err:
         raise ConfigError(f"bad env settings: {err}") from None
+    if scripted is not None:
+        from swarm_envs.agents.scripted import make_scripted
+
+        name, kwargs = scripted
+        try:
+            make_scripted(name, env, **kwargs)
+        except Exception as err:  # a controller of your own may raise anything for a bad value
+            env.close()
+            raise ConfigError(f"config key 'agent.scripted_kwargs': scripted policy {name!r} refuses {kwargs!r:.120}: {type(err).__name__}: {err}"[:400]) from None
     agent = env.possible_agents[0]
     sizes = {
         "n_agents": env.n_agents,
@@ -313,11 +329,15 @@ def _check_env_settings(task: str, env: dict[str, Any]) -> dict[str, int]:
     return sizes
 
 
-def _parse_value(text: str) -> Any:
+def _parse_value(key: str, text: str) -> Any:
+    """``text`` as YAML (a string when it is not YAML); :class:`ConfigError` naming ``key`` for a number
+    too long to read (Python reads integers of at most 4300 digits)."""
     try:
         return yaml.safe_load(text)
     except yaml.YAMLError:
         return text
+    except ValueError as err:
+        raise ConfigError(f"config key {key!r}: the value cannot be read ({err})"[:300]) from None
 
 
 def apply_overrides(cfg: dict[str, Any], overrides: list[str]) -> dict[str, Any]:
@@ -339,7 +359,7 @@ def apply_overrides(cfg: dict[str, Any], overrides: list[str]) -> dict[str, Any]
         free = parts[0] == "env" or parts[:2] == ["agent", "scripted_kwargs"]
         if not free and last not in schema:
             raise ConfigError(f"unknown config key {key!r}; allowed keys here: {sorted(schema)}")
-        node[last] = _parse_value(text)
+        node[last] = _parse_value(key.strip(), text)
     return cfg
 
 
@@ -359,6 +379,8 @@ def load_config(path: str | Path | None, overrides: list[str] | None = None) -> 
         except yaml.YAMLError as err:
             first = " ".join(str(err).split())
             raise ConfigError(f"config file {str(path)!r} is not valid YAML: {first:.200}") from None
+        except ValueError as err:  # e.g. an integer of more than 4300 digits
+            raise ConfigError(f"config file {str(path)!r}: a value cannot be read ({err})"[:300]) from None
         raw = {} if raw is None else raw
         if not isinstance(raw, dict):
             raise ConfigError(f"config file {str(path)!r} must hold a mapping at the top level")

@@ -40,6 +40,7 @@ from swarm_envs.agents.base import Policy, wrap_angle
 from swarm_envs.env import DT
 from swarm_envs.observation import ObservationLayout
 from swarm_envs.platforms import Platform
+from swarm_envs.settings import Choice, Flag, Int, Real, Setting, SettingsError
 from swarm_envs.world import N_BUMP_SECTORS
 
 __all__ = [
@@ -571,9 +572,32 @@ def make_scripted(name: str, env, rng: np.random.Generator | None = None, **kwar
     return cls(env.platform, env.layout, rng, **kwargs)
 
 
+#: the rule of every keyword argument of the controllers above (the same rule classes as the env settings)
+KWARG_RULES: dict[str, Setting] = {
+    "t_m": Real(2.0, "random walk: forward leg", low=0.0, high=3600.0, low_open=True, unit="s"),
+    "speed": Real(1.0, "a fraction of the platform's maximum speed", low=0.0, high=1.0),
+    "leader_speed": Real(0.2, "a fraction of the platform's maximum speed", low=0.0, high=1.0),
+    "gain": Real(0.5, "turn rate per radian of heading error", low=0.0, high=100.0),
+    "stop_range": Real(0.0, "stop driving with a neighbour this close; 0 disables", high=100.0, unit="m"),
+    "avoid_range": Real(0.15, "turn away from a neighbour ahead this close", high=100.0, unit="m"),
+    "d_step": Real(0.11, "step length towards the centroid estimate", low=0.0, high=100.0, low_open=True, unit="m"),
+    "passing_angle": Real(2.5, "rad between two relays the seeker passes between", low=0.0, high=6.2832),
+    "pause_steps": Int(2, "control steps", low=0, high=1_000_000),
+    "min_scale_free": Int(3, "scale-free neighbours needed", low=1, high=1_000),
+    "memory": Int(300, "control steps", low=1, high=1_000_000),
+    "evade_steps": Int(5, "control steps", low=0, high=1_000_000),
+    "turn_away_on_bump": Flag(True),
+    "odometry": Flag(True),
+    "pick": Choice("next_lower", choices=("next_lower", "nearest")),
+}
+
+
 def check_scripted_kwargs(name: str, kwargs: dict) -> type[Policy]:
-    """The controller class of ``name``, after checking that it takes ``kwargs``: ``ValueError`` naming an
-    unknown keyword and listing the allowed ones (before any env is built)."""
+    """The controller class of ``name``, after checking ``kwargs`` (before any env is built): ``ValueError``
+    naming an unknown keyword and listing the allowed ones, or naming a keyword whose value breaks its
+    rule (:data:`KWARG_RULES`: type, finite, range). A controller of your own (``"module:Class"``) has its
+    keywords' names checked here and their values by its constructor (``train.py`` builds it once on the
+    config's env before training)."""
     cls = scripted_class(name)
     params = inspect.signature(cls.__init__).parameters
     kinds = (inspect.Parameter.POSITIONAL_OR_KEYWORD, inspect.Parameter.KEYWORD_ONLY)
@@ -582,4 +606,10 @@ def check_scripted_kwargs(name: str, kwargs: dict) -> type[Policy]:
     unknown = sorted(k for k in kwargs if k not in allowed)
     if unknown and not takes_any:
         raise ValueError(f"scripted policy {name!r} takes no keyword argument(s) {unknown}; allowed: {allowed}")
+    if cls in SCRIPTED.values():
+        for key, value in kwargs.items():
+            try:
+                KWARG_RULES[key].check(key, value)
+            except SettingsError as err:
+                raise ValueError(f"scripted policy {name!r}: {err}") from None
     return cls

@@ -581,7 +581,8 @@ def _parser() -> argparse.ArgumentParser:
     parser.add_argument("--render", action="store_true", help="write a GIF of one evaluation episode")
     parser.add_argument("--eval-only", metavar="CHECKPOINT", default=None, help="skip training; evaluate this PPO .zip")
     parser.add_argument("--force", action="store_true",
-                        help="replace the run already in the output directory (when the command ends; never before)")
+                        help="replace the run already in the output directory (when the command ends; never before, "
+                             "and never by an interrupted or failed command)")
     parser.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
                         help="override a config value (dotted key), e.g. train.total_timesteps=2000; repeatable")
     return parser
@@ -608,8 +609,24 @@ def main(argv: list[str] | None = None) -> int:
         return EXIT_BAD_INPUT
     except (KeyboardInterrupt, SystemError) as err:
         if not is_interrupt(err):
-            raise
+            return _unexpected(err, state)
         return _interrupted(state)
+    except Exception as err:  # anything else is still one line, and leaves the output as it was
+        return _unexpected(err, state)
+
+
+def _unexpected(err: BaseException, state: dict[str, Any]) -> int:
+    """One line for an error no check foresaw (the traceback with ``SWARM_ENVS_TRACEBACK=1``); the staging
+    directory goes as after any failure (a trained model in it is kept and named)."""
+    if os.environ.get("SWARM_ENVS_TRACEBACK"):
+        import traceback
+
+        traceback.print_exception(err)
+    stage = state.get("stage")
+    note = stage.abandon() if stage is not None else ""
+    hint = "" if os.environ.get("SWARM_ENVS_TRACEBACK") else " (SWARM_ENVS_TRACEBACK=1 shows the traceback)"
+    print(_one_line(f"error: unexpected {type(err).__name__} during {state['phase']}: {err}{note}{hint}"), file=sys.stderr)
+    return EXIT_BAD_INPUT
 
 
 def _interrupted(state: dict[str, Any]) -> int:
@@ -619,7 +636,9 @@ def _interrupted(state: dict[str, Any]) -> int:
              "train": "while setting up training; nothing saved",
              "eval": "during evaluation; the trained model is saved in ",
              "eval-only": f"during the evaluation of {state.get('model', '?')}; no results written"}[phase]
-    if phase == "eval" and stage is not None:
+    if phase == "eval" and stage is not None and run_entries(stage.out):  # never replace a finished run
+        where += f"{stage.path / 'model.zip'} (the run in {stage.out} is kept)"
+    elif phase == "eval" and stage is not None:
         try:
             stage.publish()
             where += str(stage.out / "model.zip")
@@ -679,6 +698,10 @@ def _run(args: argparse.Namespace, state: dict[str, Any]) -> int:
         if interrupted:
             with stage.writing(staged / "timing.json") as tmp:
                 tmp.write_text(json.dumps(timing | {"interrupted": True}, indent=1))
+            if run_entries(out):  # an interrupted command never replaces a finished run (--force or not)
+                print(f"interrupted by Ctrl-C after {model.num_timesteps} robot-steps: the run in {out} is kept; this run's "
+                      f"model and config are in {staged}", file=sys.stderr)
+                return EXIT_INTERRUPTED
             stage.publish()
             print(f"interrupted by Ctrl-C after {model.num_timesteps} robot-steps: saved the model to {out / 'model.zip'} "
                   f"and the config to {out / 'config.yaml'}", file=sys.stderr)

@@ -32,6 +32,7 @@ from swarm_envs.agents.evaluation import make_env, run_episode
 from swarm_envs.agents.tasks import SHORT_NAMES, headline, metric_reductions
 from swarm_envs.env import DT, info_group
 from swarm_envs.registry import list_envs, task_class
+from swarm_envs.settings import Int, cli_type
 
 #: short task name -> registered env id
 TASKS = dict(SHORT_NAMES)
@@ -306,9 +307,11 @@ def _parser() -> argparse.ArgumentParser:
     parser.add_argument("--overlay", type=_int_at_least(0), nargs="?", const=0, default=None, metavar="AGENT",
                         help="show where agent AGENT's (default 0) range & bearing rows put its neighbours (default: the showcase's)")
     parser.add_argument("--no-overlay", action="store_true", help="no overlay, whatever the showcase")
-    parser.add_argument("--frame-skip", type=_int_at_least(1), default=None,
+    parser.add_argument("--frame-skip", type=cli_type(Int(1, low=1, high=1_000_000), "--frame-skip"), default=None,
                         help="draw every k-th step; the GIF shows 10 frames/s, so k x real time (default 1; --all: 4)")
-    parser.add_argument("--pixels", type=_int_at_least(160), default=None, help="image size (default 480; --all: 320)")
+    # at most 4096 pixels: one frame is pixels^2 x 3 bytes (48 MB at 4096), and the GIF keeps every frame
+    parser.add_argument("--pixels", type=cli_type(Int(480, low=160, high=4096), "--pixels"), default=None,
+                        help="image size, 160-4096 (default 480; --all: 320)")
     return parser
 
 

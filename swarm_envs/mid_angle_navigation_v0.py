@@ -188,9 +188,10 @@ class MidAngleNavigationTask(Task):
         "message_bits": 4,
         "bitrate": 1160,
         "max_cycles": 600,
-        "lanes": Int(1, "corridor lanes (1: a straight corridor)", low=1, high=12),
-        "arrival_bonus": Real(1.0, "reward of a seeker's arrival at the goal", low=0.0, high=1000.0),
-        "collision_penalty": Real(0.01, "weight of a seeker's contact per step", low=0.0, high=1000.0),
+        "lanes": Int(1, "corridor lanes (1: a straight corridor)", low=1, high=12,
+                     why="each lane is 6 robot diameters wide and the default arena grows with the lanes; 12 lanes already make a 7.9 m r-one arena"),
+        "arrival_bonus": Real(1.0, "reward of a seeker's arrival at the goal", low=0.0, high=1000.0, why="a reward weight; rewards stay within +-1000 per step"),
+        "collision_penalty": Real(0.01, "weight of a seeker's contact per step", low=0.0, high=1000.0, why="a reward weight; rewards stay within +-1000 per step"),
     }
     METRICS = {"success_rate": "final", "time_to_goal": "final", "path_ratio": "final", "collision_fraction": "mean"}
     HEADLINE = ("success_rate", +1)

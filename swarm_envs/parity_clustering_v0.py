@@ -42,8 +42,10 @@ class ParityClusteringTask(Task):
         "message_bits": 1,
         "bitrate": 1160,
         "cluster_radius": Real(None, "pair distance counted by the segregation index; None: 1.5 robot diameters", low=0.0, low_open=True,
-                               high=100.0, allow_none=True, unit="m"),
-        "collision_penalty": Real(0.0, "weight of the fraction of robots bumping (Alg. 7 clusters by bumping)", low=0.0, high=1000.0),
+                               high=100.0, allow_none=True, unit="m",
+                               why="at most 100 m: a distance beyond every arena the defaults build; larger values only count more pairs"),
+        "collision_penalty": Real(0.0, "weight of the fraction of robots bumping (Alg. 7 clusters by bumping)", low=0.0, high=1000.0,
+                                  why="a reward weight; rewards stay within +-1000 per step"),
     }
     METRICS = {"segregation": "mean", "parity_cluster_fraction": "final", "n_parity_clusters": "final", "collision_fraction": "mean"}
     HEADLINE = ("segregation", +1)

@@ -27,6 +27,7 @@ from typing import Any
 
 import numpy as np
 
+from swarm_envs._text import shown
 from swarm_envs.ir.models import MODEL_CLASSES
 
 __all__ = ["Platform", "PLATFORMS", "get_platform", "model_for", "MAX_RADIUS", "MAX_SPEED", "MAX_MASS", "MAX_IR_RANGE", "MAX_CHANNELS"]
@@ -55,7 +56,7 @@ def _positive(name: str, value: Any, high: float, unit: str, why: str = "") -> f
         number = math.nan
     if not (math.isfinite(number) and 0.0 < number <= high):
         why = f" ({why})" if why else ""
-        raise ValueError(f"Platform.{name} must be a finite number of {unit} in (0, {high:g}]{why}, got {value!r:.80}")
+        raise ValueError(f"Platform.{name} must be a finite number of {unit} in (0, {high:g}]{why}, got {shown(value)}")
     return number
 
 
@@ -64,7 +65,7 @@ def _layout(name: str, value: Any, shape: tuple[int | None, ...]) -> np.ndarray:
     try:
         arr = np.array(value, dtype=float)
     except (TypeError, ValueError):
-        raise ValueError(f"Platform.{name} must be a real-valued array, got {value!r:.80}") from None
+        raise ValueError(f"Platform.{name} must be a real-valued array, got {shown(value)}") from None
     want = "(" + ", ".join("n" if d is None else str(d) for d in shape) + ("," if len(shape) == 1 else "") + ")"
     if arr.ndim != len(shape) or any(d is not None and a != d for a, d in zip(arr.shape, shape)):
         raise ValueError(f"Platform.{name} must have shape {want}, got {arr.shape}")

@@ -27,6 +27,7 @@ import argparse
 from dataclasses import dataclass, replace
 from typing import Any
 
+from swarm_envs._text import shown
 from swarm_envs.comm.bch import SUPPORTED as BCH_CODES
 from swarm_envs.comm.protocol import MAX_PAYLOAD
 from swarm_envs.platforms import PLATFORMS, Platform, get_platform
@@ -109,7 +110,7 @@ class Int(Setting):
         if value is None and self.allow_none:
             return None
         if not _is_int(value) or value < self.low or (self.high is not None and value > self.high):
-            raise SettingsError(key, f"{key} must be {self.rule()}{self.doc and ' (' + self.doc + ')'}, got {value!r}")
+            raise SettingsError(key, f"{key} must be {self.rule()}{self.doc and ' (' + self.doc + ')'}, got {shown(value)}")
         return int(value)
 
 
@@ -145,7 +146,7 @@ class Real(Setting):
             above = number > self.low if self.low_open else number >= self.low
             ok = math.isfinite(number) and above and number <= self.high
         if not ok:
-            raise SettingsError(key, f"{key} must be {self.rule()}{self.doc and ' (' + self.doc + ')'}, got {value!r}")
+            raise SettingsError(key, f"{key} must be {self.rule()}{self.doc and ' (' + self.doc + ')'}, got {shown(value)}")
         return number
 
 
@@ -171,7 +172,7 @@ class Choice(Setting):
                     return allowed
             except (TypeError, ValueError, OverflowError):  # e.g. an array or a string for a number
                 continue
-        raise SettingsError(key, f"{key}={value!r:.80} is not allowed; allowed values: {list(self.choices)}")
+        raise SettingsError(key, f"{key}={shown(value)} is not allowed; allowed values: {list(self.choices)}")
 
 
 @dataclass(frozen=True)
@@ -184,7 +185,7 @@ class Flag(Setting):
     def check(self, key: str, value: Any) -> bool:
         if isinstance(value, bool) or type(value).__name__ == "bool_":
             return bool(value)
-        raise SettingsError(key, f"{key} must be True or False, got {value!r:.80}")
+        raise SettingsError(key, f"{key} must be True or False, got {shown(value)}")
 
 
 @dataclass(frozen=True)
@@ -196,7 +197,7 @@ class _PlatformSetting(Setting):
         if isinstance(value, str) and value in PLATFORMS:
             return value
         if not isinstance(value, Platform):
-            raise SettingsError(key, f"unknown platform {value!r:.80}; allowed values: {sorted(PLATFORMS)} or a swarm_envs.Platform")
+            raise SettingsError(key, f"unknown platform {shown(value)}; allowed values: {sorted(PLATFORMS)} or a swarm_envs.Platform")
         # its fields were checked when it was made (Platform.__post_init__); here what the physics can take
         if default_substeps(value) > MAX_SUBSTEPS:
             raise SettingsError(
@@ -214,10 +215,10 @@ class _CodeSetting(Setting):
 
     def check(self, key: str, value: Any) -> tuple[int, int]:
         if not (isinstance(value, (tuple, list)) and len(value) == 2 and all(_is_int(c) for c in value)):
-            raise SettingsError(key, f"code must be a BCH (n, k) pair of integers, one of {sorted(BCH_CODES)}; got {value!r:.80}")
+            raise SettingsError(key, f"code must be a BCH (n, k) pair of integers, one of {sorted(BCH_CODES)}; got {shown(value)}")
         code = (int(value[0]), int(value[1]))
         if code not in BCH_CODES:
-            raise SettingsError(key, f"code={code!r} is not a supported BCH code; allowed values: {sorted(BCH_CODES)}")
+            raise SettingsError(key, f"code={shown(code)} is not a supported BCH code; allowed values: {sorted(BCH_CODES)}")
         return code
 
 
@@ -381,7 +382,7 @@ def cli_type(setting: Setting, what: str = "value") -> Callable[[str], Any]:
                 try:
                     value = int(text) if isinstance(setting, Int) else float(text)
                 except ValueError:
-                    raise argparse.ArgumentTypeError(f"{what} must be {setting.rule()}, got {text!r:.80}") from None
+                    raise argparse.ArgumentTypeError(f"{what} must be {setting.rule()}, got {shown(text)}") from None
         try:
             return setting.check(what, value)
         except SettingsError as err:

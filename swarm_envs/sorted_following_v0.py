@@ -40,10 +40,12 @@ class SortedFollowingTask(Task):
         "message_bits": 1,
         "bitrate": 1160,
         "follow_distance": Real(None, "predecessor distance that counts as following; None: half the message range", low=0.0,
-                                low_open=True, high=100.0, allow_none=True, unit="m"),
-        "remove_leader_at": Int(0, "control step at which the leader (id 0) is switched off; 0: never", low=0, high=10**9),
-        "speed_weight": Real(0.5, "weight of the mean speed fraction in the reward", low=0.0, high=1000.0),
-        "collision_penalty": Real(0.1, "weight of the fraction of robots bumping", low=0.0, high=1000.0),
+                                low_open=True, high=100.0, allow_none=True, unit="m",
+                                why="at most 100 m: a distance beyond every arena the defaults build; larger values only count more pairs"),
+        "remove_leader_at": Int(0, "control step at which the leader (id 0) is switched off; 0: never", low=0, high=10**9,
+                                why="a control step, bounded like max_cycles"),
+        "speed_weight": Real(0.5, "weight of the mean speed fraction in the reward", low=0.0, high=1000.0, why="a reward weight; rewards stay within +-1000 per step"),
+        "collision_penalty": Real(0.1, "weight of the fraction of robots bumping", low=0.0, high=1000.0, why="a reward weight; rewards stay within +-1000 per step"),
     }
     METRICS = {"following_fraction": "mean", "line_order": "mean", "collision_fraction": "mean", "mean_speed": "mean"}
     HEADLINE = ("following_fraction", +1)

@@ -188,7 +188,8 @@ class Task:
         try:
             check_capacity(self.n_world, platform.radius, self.arena)
         except ValueError as err:
-            raise SettingsError(self.size_key, str(err)) from None
+            who = f" ({self.n_agents} agents and {self.n_static} static robots)" if self.n_static else ""
+            raise SettingsError(self.size_key, str(err).replace(f"{self.n_world} robots", f"{self.n_world} robots{who}", 1)) from None
         self.check_layout()
 
     @property

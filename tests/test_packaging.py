@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import importlib
 import importlib.util
 import json
 import shutil
@@ -42,7 +43,9 @@ def test_pyproject_lists_every_package_and_maps_agents():
 def test_console_scripts_declared():
     assert set(SCRIPTS) == {"swarm-train", "swarm-validate", "swarm-benchmark", "swarm-demo"}
     for target in SCRIPTS.values():
-        assert target.startswith("swarm_envs.") and target.endswith(":main")
+        module, _, function = target.partition(":")
+        assert module.startswith("swarm_envs.") and function in ("main", "train")
+        assert callable(getattr(importlib.import_module(module), function))
 
 
 def test_installed_agents_is_not_a_top_level_package(tmp_path):

@@ -3,25 +3,35 @@ rules (``settings_table``) and from train.py's config bounds (``bounds_table``),
 
 from __future__ import annotations
 
+import importlib.util
+import re
 from pathlib import Path
 
 import pytest
 
 from swarm_envs.agents.config import BOUNDS, bounds_table
 from swarm_envs.registry import list_envs, task_class
-from swarm_envs.settings import COMMON_SETTINGS, Choice, Flag, settings_table
+from swarm_envs.settings import COMMON_SETTINGS, Choice, Flag, Int, Real, settings_table
 
 PAGE = Path(__file__).resolve().parents[1] / "docs" / "settings.md"
 
 
 def test_settings_page_holds_the_generated_tables():
+    spec = importlib.util.spec_from_file_location("settings_tables", PAGE.parent / "settings_tables.py")
+    generator = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(generator)
     text = PAGE.read_text(encoding="utf-8")
-    assert settings_table() in text, "regenerate the common table of docs/settings.md from settings_table()"
-    for env_id in (i for i in list_envs() if i.startswith("swarm_envs/")):  # the suite's own (tests register others)
-        own = {k: v for k, v in task_class(env_id).settings().items() if v.why}
-        if own:
-            assert settings_table(task_class(env_id).settings()) in text, f"the table of {env_id}'s settings"
-    assert bounds_table() in text, "regenerate the train.py table of docs/settings.md from bounds_table()"
+    marked = set(re.findall(r"<!-- generated: (\S+) -->", text))
+    assert marked == set(generator.tables()), "every table has its marker: add the missing ones, then run python docs/settings_tables.py"
+    assert generator.render(text) == text, "regenerate the tables: python docs/settings_tables.py"
+    assert settings_table() in text and bounds_table() in text
+
+
+def test_every_task_setting_with_bounds_states_why():
+    for env_id in (i for i in list_envs() if i.startswith("swarm_envs/")):
+        for key, rule in task_class(env_id).settings().items():
+            if isinstance(rule, (Int, Real)):
+                assert rule.why, f"{env_id}: {key}: state the reason for its bounds (why=...)"
 
 
 @pytest.mark.parametrize("key", sorted(COMMON_SETTINGS))

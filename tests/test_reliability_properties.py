@@ -286,8 +286,12 @@ import io  # noqa: E402
 import tempfile  # noqa: E402
 from pathlib import Path  # noqa: E402
 
+import signal  # noqa: E402
+
 from swarm_envs.agents import train as train_cli  # noqa: E402
 from swarm_envs.agents.config import DEFAULTS  # noqa: E402
+from swarm_envs.agents.scripted import KWARG_RULES  # noqa: E402
+from swarm_envs.agents.tasks import SHORT_NAMES  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -304,15 +308,20 @@ def _dotted(node: dict, prefix: str = "") -> list[str]:
 CONFIG_KEYS = sorted(
     set(_dotted(DEFAULTS))
     | {f"env.{k}" for k in COMMON_SETTINGS if k != "render_mode"}
-    | {"env.collision_penalty", "env.n_anchors", "agent.scripted_kwargs.speed", "agent.scripted_kwargs.bogus", "bogus", "train.bogus"}
+    | {f"env.{k}" for name in SHORT_NAMES for k in task_class(SHORT_NAMES[name]).settings()}
+    | {f"agent.scripted_kwargs.{k}" for k in KWARG_RULES}
+    | {"agent.scripted_kwargs.bogus", "bogus", "train.bogus"}
 )
+#: seconds an example may take: the config check builds the env once (no training: it is stubbed)
+CONFIG_TIME_LIMIT = 60
 YAML_TEXT = st.one_of(
     st.integers(-(2**70), 2**70).map(str),
     st.floats().map(lambda x: {math.inf: ".inf", -math.inf: "-.inf"}.get(x, ".nan" if math.isnan(x) else repr(x))),
     st.sampled_from([
         "null", "true", "false", "[]", "{}", "[1, 2]", "[15, 7]", "{a: 1}", "{1: a, foo: b}", "''", "ideal", "full", "rone", "circle",
         "flocking", "centroid_seeking", "swarm_envs/Flocking-v0", "0", "-1", "1", "3", "4294967296", "1e9", "1e400", "0.5", "1000000",
-        "!!binary aGVsbG8=", "[", ":", "2020-01-01", "[64, 64]", "relu",
+        "!!binary aGVsbG8=", "[", ":", "2020-01-01", "[64, 64]", "relu", "9" * 5000, "-" + "9" * 5000, "1" + "0" * 30,
+        "9223372036854775807", "18446744073709551616", *SHORT_NAMES,
     ]),
     st.text(max_size=8),
 )
@@ -331,8 +340,21 @@ def check_config_example(monkeypatch, overrides: list[tuple[str, str]], eval_onl
     def started(*args, **kwargs):
         raise _TrainingStarted
 
+    def hang(*args):
+        raise AssertionError(f"the config check took more than {CONFIG_TIME_LIMIT} s: {overrides}")
+
     monkeypatch.setattr(train_cli, "train", started)
     monkeypatch.setattr(train_cli, "load_checkpoint", started)
+    previous = signal.signal(signal.SIGALRM, hang)
+    signal.alarm(CONFIG_TIME_LIMIT)
+    try:
+        _check_config_example(overrides, eval_only)
+    finally:
+        signal.alarm(0)
+        signal.signal(signal.SIGALRM, previous)
+
+
+def _check_config_example(overrides: list[tuple[str, str]], eval_only: bool) -> None:
     sets = [x for key, text in overrides for x in ("--set", f"{key}={text}")]
     with tempfile.TemporaryDirectory() as tmp:
         out = Path(tmp) / "out"
@@ -374,8 +396,10 @@ def valid_text(key: str) -> st.SearchStrategy:
             return st.just("null") if rule is None else st.sampled_from(sorted(PLATFORMS))
         plain = valid_values(name, rule).map(lambda v: v.item() if isinstance(v, np.generic) else v)
         return plain.map(lambda v: json.dumps(list(v) if isinstance(v, tuple) else v, default=lambda o: o.item()))
-    if key in ("agent.scripted_kwargs.speed",):
-        return st.floats(0.0, 1.0).map(repr)
+    if key == "task":
+        return st.sampled_from(sorted(SHORT_NAMES))
+    if key.startswith("agent.scripted_kwargs.") and key.rsplit(".", 1)[1] in KWARG_RULES:
+        return st.just(json.dumps(KWARG_RULES[key.rsplit(".", 1)[1]].default))
     default = _leaf(key) if key in set(_dotted(DEFAULTS)) else None
     if isinstance(default, bool) or default is None or isinstance(default, (str, list, dict)):
         return st.just(json.dumps(default))
