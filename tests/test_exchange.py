@@ -116,7 +116,7 @@ def test_lossless_network_converges_to_ideal():
     ex = BearingExchange(n, "network", k_max=n, period=5, rng=np.random.default_rng(3))
     net = FakeNetwork(0.0, np.random.default_rng(4))
     # a neighbour's list is complete from its second round on; a robot knows a round's messages when its
-    # next round starts: all complete after 4 rounds less a step
+    # following round starts: all complete after 4 rounds less a step
     for _ in range(4 * 5):
         ex.send(net)
         kn = ex.step(rd, net.step(links))
@@ -167,7 +167,7 @@ def test_losses_remove_information_not_correctness():
 
 def test_stale_entries_expire():
     """[L Sec. 3.2.2] "When a new round begins, each robot clears all prior neighbor information": when the
-    channel goes silent, each robot keeps what it knew until its next round start and knows nothing from
+    channel goes silent, each robot keeps what it knew until its following round start and knows nothing from
     the round start after that on (entries from before the silence are at most 2 rounds old then)."""
     pos, hd, links, rd = scene(6, n=10, side=1.0)
     n = len(pos)
@@ -211,7 +211,7 @@ def test_knowledge_is_exactly_the_last_complete_rounds_messages():
         for u in range(n):
             start = t - (t - int(ex.phase[u])) % period
             expect = set()
-            for s in range(max(start - period, 0), start):  # (the round before the first start began at reset)
+            for s in range(max(start - period, 0), start):  # (the round preceding the first start began at reset)
                 expect |= {v for r, v in heard[s] if r == u}
             assert set(kn.ids[u][kn.ids[u] >= 0].tolist()) == expect, (t, u)
         if prev is not None:

@@ -60,7 +60,7 @@ def test_reading_is_measured_on_the_frame_and_named_by_its_decoded_origin():
     p = np.flatnonzero((nominal.rx == 0) & (nominal.tx == 1))[0]
     # robot 1's light started the frame but its header decoded to origin 2
     mb.step(frames([0], [2], [1]), links)
-    r = mb.fresh  # this step's measurements (the readings follow at the next round start)
+    r = mb.fresh  # this step's measurements (the readings follow at the following round start)
     assert r.rx.tolist() == [0] and r.tx.tolist() == [2]  # attributed to the decoded id, not the true sender
     assert r.bearing[0] == nominal.bearing[p] and r.heading[0] == nominal.heading[p]  # measured on robot 1's light
     assert r.age.tolist() == [0.0]
@@ -141,7 +141,7 @@ def test_copies_are_independent_and_reset_alone():
     one.step(frames([0, 1, 2, 0], [1, 2, 0, 2], [1, 2, 0, 2]), links1)
     # copy 1 gets the same frames (rows + 3) interleaved with copy 0's
     two.step(frames([0, 3, 4, 1, 5, 3], [1, 4, 5, 2, 3, 5], [1, 4, 5, 2, 3, 5]), links2)
-    for _ in range(one.period):  # to the next round start: the frames become the readings
+    for _ in range(one.period):  # to the following round start: the frames become the readings
         r1 = one.step(frames([], [], []), links1)
         r2 = two.step(frames([], [], []), links2)
     c1 = r2.rx >= 3

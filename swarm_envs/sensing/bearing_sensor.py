@@ -298,7 +298,7 @@ class MessageBearings:
     at the start of a robot's round the measurements of the round that just ended become its readings
     (:meth:`readings`, the newest per decoded sender, with its age in steps) and everything older is
     dropped; the new round's measurements are collected apart (:attr:`fresh` holds this step's) until the
-    next round starts. A neighbour is thus in a robot's readings for exactly the round after one in which
+    following round starts. A neighbour is thus in a robot's readings for exactly the round after one in which
     a frame of it was measured: losses, collisions and range reach the readings, and no reading is older
     than 2 rounds less a step.
 

@@ -18,11 +18,11 @@ thesis's random start delay) a robot's round starts and it queues one message; a
 ``network.queue_system(robots, bits, kind, lengths=...)``; the env advances the network
 (``network.step(links) -> Deliveries``) and hands the deliveries back to :meth:`BearingExchange.receive`.
 "When a new round begins, each robot clears all prior neighbor information and updates the network
-information again" [L Sec. 3.2.2]: during its round a robot fills a fresh table; when its next round starts
-that table becomes its published one (what :meth:`BearingExchange.knowledge` returns and what it
+information again" [L Sec. 3.2.2]: during its round a robot fills a fresh table; when its following round
+starts that table becomes its published one (what :meth:`BearingExchange.knowledge` returns and what it
 broadcasts) and the filling starts empty again. A robot therefore knows, and reports, exactly the
 neighbours it heard during its last complete round; a neighbour it did not hear for a whole round is
-gone at the next round start. This holds on every platform: the exchange is the thesis's round protocol
+gone at the following round start. This holds on every platform: the exchange is the thesis's round protocol
 wherever it runs.
 
 A robot's table holds the robots it *received a message from*, with the receiver's own bearing of the
@@ -74,7 +74,7 @@ MAX_PAYLOAD_BITS = 255  # the SwarmCom frame's 8-bit length field (swarm_envs.co
 NEVER = -(10**9)  # the time of an empty slot
 
 # a robot's tables: own entries (ids, own bearing, time heard) and the rows its neighbours reported (ids,
-# bearings, time received); filled during its round (_FILL) and, from the next round start, published (_PUB)
+# bearings, time received); filled during its round (_FILL) and, from the following round start, published (_PUB)
 _FILL = ("tab_ids", "tab_bear", "tab_time", "row_ids", "row_bear", "row_time")
 _PUB = ("pub_ids", "pub_bear", "pub_time", "pub_row_ids", "pub_row_bear", "pub_row_time")
 _DTYPES = (np.int64, float, np.int64, np.int64, float, np.int64)
@@ -261,7 +261,7 @@ class BearingExchange:
             self.phase = self.rng.integers(0, self.period, self.copy_of)
             w = self.k_max if self.mode == "ideal" else self.max_entries  # ideal rows are not truncated
             shapes = ((n, k), (n, k), (n, k), (n, k, w), (n, k, w), (n, k))
-            for names in (_FILL, _PUB):  # the tables filled this round and the last complete round's
+            for names in (_FILL, _PUB):  # the tables filled in the current round and the last complete round's
                 for name, shape, dtype, value in zip(names, shapes, _DTYPES, _EMPTY):
                     setattr(self, name, np.full(shape, value, dtype))
             self.stats = {"sent": 0, "received": 0, "bits_sent": 0, "rejected": 0}
@@ -308,6 +308,7 @@ class BearingExchange:
     def send(self, network: Any = None) -> int:
         """Queue this step's messages (network mode): each due robot starts a new round (:meth:`start_rounds`)
         and broadcasts the table of the round that just ended.
+
         Returns the number of messages queued.
         """
         net = network if network is not None else self.network
@@ -469,8 +470,8 @@ class BearingExchange:
         ideal: ``step(readings)`` returns the full, fresh knowledge. network: call :meth:`send` before the
         network step (it starts the due robots' rounds), then ``step(readings, deliveries)`` after it (it
         decodes into the current rounds' tables and returns the knowledge); ``readings``: the receivers'
-        bearings measured on this step's frames. ``copy``: as in :meth:`knowledge` (network mode; ideal
-        knowledge is always fresh arrays).
+        bearings to pair the senders with (on the sector source, those measured on this step's frames).
+        ``copy``: as in :meth:`knowledge` (network mode; ideal knowledge is always fresh arrays).
         """
         if self.mode == "ideal":
             k = self._ideal(readings)

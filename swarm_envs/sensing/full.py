@@ -63,7 +63,7 @@ __all__ = ["FullSensing", "BEACON_PERIOD", "SECTOR_MAX_AGE", "reading_max_age", 
 #: steps between two broadcasts of a robot (bearing beacons / exchange lists on the sector source): the
 #: thesis round 2 (1 + 5)^2 x 32.8 ms = 2.36 s [L Sec. 3.2.1] in 0.1 s control steps, rounded up
 BEACON_PERIOD = int(np.ceil(round(thesis_round_time(5) / 0.1, 9)))
-#: the oldest a sector reading gets (steps): measured in a round's first step, shown until the next round ends
+#: the oldest a sector reading gets (steps): measured in a round's first step, shown until the following round ends
 SECTOR_MAX_AGE = 2 * BEACON_PERIOD - 1
 
 
