@@ -26,6 +26,7 @@ from swarm_envs.core import DT, SwarmCore
 from swarm_envs.observation import ObservationLayout
 from swarm_envs.platforms import Platform, get_platform
 from swarm_envs.sensing.base import SensorFrame
+from swarm_envs.sensing.full import reading_max_age
 from swarm_envs.settings import COMMON_DEFAULTS, validate_settings
 from swarm_envs.task import Task
 from swarm_envs.world import World, as_real_array
@@ -55,7 +56,7 @@ def make_layout(cfg: dict[str, Any], platform: Platform, n_world: int = 1) -> Ob
         n_messages=cfg["n_messages"],
         message_bits=cfg["message_bits"],
         max_range=platform.ir_range,
-        max_age=cfg["rb_max_age"],
+        max_age=reading_max_age(cfg, platform),
         flatten=cfg["flatten"],
         observe_ids=cfg["observe_ids"],
         n_world=n_world,

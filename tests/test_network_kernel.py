@@ -11,7 +11,7 @@ from swarm_envs.ir.layer import compute_links
 
 pytestmark = pytest.mark.skipif(not HAVE_NUMBA, reason="numba not installed")
 
-FIELDS = ("receiver", "origin", "sender", "seq", "detector", "kind", "length", "slot", "corrupt", "transmitter")
+FIELDS = ("receiver", "origin", "sender", "seq", "detector", "kind", "length", "slot", "corrupt", "transmitter", "interference")
 
 
 def _scene(rng, n, density):
@@ -74,7 +74,7 @@ def test_kernel_equals_numpy_reference(seed, n, mode, code, bitrate, density, kw
         for b in ("numpy", "numba")
     }
     max_len = 40 if code != (15, 1) else 8
-    delivered = 0
+    delivered = interfered = 0
     seen_level = 0.0
     for step in range(20):
         for net in nets.values():  # the same traffic for both
@@ -88,6 +88,7 @@ def test_kernel_equals_numpy_reference(seed, n, mode, code, bitrate, density, kw
         np.testing.assert_allclose(nets["numpy"].rx_level, nets["numba"].rx_level, rtol=1e-12, atol=1e-15, err_msg=f"step {step}")
         seen_level = max(seen_level, float(nets["numba"].rx_level.max()))
         delivered += len(d_ref)
+        interfered += int((d_ref.interference != 0).sum())
     ref, k = nets["numpy"], nets["numba"]
     for name, v in ref.stats.items():
         np.testing.assert_array_equal(v, k.stats[name], err_msg=name)
@@ -105,6 +106,7 @@ def test_kernel_equals_numpy_reference(seed, n, mode, code, bitrate, density, kw
     assert ref.stats["tx_started"] > 0 and ref.stats["rx_starts"] > 0
     if n >= 25:
         assert ref.stats["collisions"] > 0 and ref.stats["rx_aborted"] > 0
+        assert interfered > 0  # delivered frames whose detectors caught other robots' light (Deliveries.interference)
 
 
 def test_dense_scenes_exercise_losses_and_corruption():

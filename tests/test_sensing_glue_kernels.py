@@ -96,44 +96,60 @@ def test_merge_readings_equals_the_numpy_reference():
         assert np.all(np.diff(got[0]) > 0)
 
 
-def test_compiled_expire_equals_the_numpy_expire():
+def test_compiled_round_start_equals_the_numpy_round_start():
+    """kernels.roll_tables = the numpy path of BearingExchange.start_rounds: the started robots' filled
+    tables become their published ones and are emptied, the other robots' tables are untouched."""
+    from swarm_envs.sensing.exchange import _FILL, _PUB
+
     rng = np.random.default_rng(9)
     for _ in range(20):
         exs = [BearingExchange(30, mode="network", k_max=6, period=3, rng=np.random.default_rng(1), n_copies=2) for _ in range(2)]
         seed = int(rng.integers(1 << 30))
-        for ex in exs:  # identical random tables: entries and rows of many ages, some slots empty
+        for ex in exs:  # identical random filled and published tables: entries and rows of many ages, some slots empty
             r = np.random.default_rng(seed)
-            ex.t[:] = r.integers(0, 30, ex.n_copies)
-            ex.tab_time[:] = np.where(r.random(ex.tab_time.shape) < 0.3, -(10**9), r.integers(-5, 30, ex.tab_time.shape))
-            ex.tab_ids[:] = np.where(ex.tab_time > -(10**9), r.integers(-1, 30, ex.tab_ids.shape), -1)
-            ex.tab_bear[:] = np.where(ex.tab_ids >= 0, r.normal(size=ex.tab_ids.shape), np.nan)
-            ex.row_time[:] = np.where(r.random(ex.row_time.shape) < 0.3, -(10**9), r.integers(-5, 30, ex.row_time.shape))
-            ex.row_ids[:] = np.where((ex.row_time > -(10**9))[:, :, None], r.integers(-1, 30, ex.row_ids.shape), -1)
-            ex.row_bear[:] = np.where(ex.row_ids >= 0, r.normal(size=ex.row_ids.shape), np.nan)
-        before = exs[0].row_time.copy()
-        exs[0]._expire()
-        exs[1]._expire_numpy()
-        for name in ("tab_ids", "tab_bear", "tab_time", "row_ids", "row_bear", "row_time"):
+            for names in (_FILL, _PUB):
+                ids, bear, time, row_ids, row_bear, row_time = (getattr(ex, name) for name in names)
+                time[:] = np.where(r.random(time.shape) < 0.3, -(10**9), r.integers(-5, 30, time.shape))
+                ids[:] = np.where(time > -(10**9), r.integers(-1, 30, ids.shape), -1)
+                bear[:] = np.where(ids >= 0, r.normal(size=ids.shape), np.nan)
+                row_time[:] = np.where(r.random(row_time.shape) < 0.3, -(10**9), r.integers(-5, 30, row_time.shape))
+                row_ids[:] = np.where((row_time > -(10**9))[:, :, None], r.integers(-1, 30, row_ids.shape), -1)
+                row_bear[:] = np.where(row_ids >= 0, r.normal(size=row_ids.shape), np.nan)
+        robots = np.sort(rng.choice(exs[0].n, int(rng.integers(1, 20)), replace=False))
+        filled = {name: getattr(exs[0], name)[robots].copy() for name in _FILL}
+        before = {name: getattr(exs[0], name).copy() for name in _FILL + _PUB}
+        exs[0].start_rounds(robots, compiled=True)
+        exs[1].start_rounds(robots, compiled=False)
+        for name in _FILL + _PUB:
             np.testing.assert_array_equal(getattr(exs[0], name), getattr(exs[1], name))
-        assert np.any(exs[0].row_time != before)  # something expired
+        others = np.setdiff1d(np.arange(exs[0].n), robots)
+        for fill, pub in zip(_FILL, _PUB):
+            np.testing.assert_array_equal(getattr(exs[0], pub)[robots], filled[fill])  # published
+            np.testing.assert_array_equal(getattr(exs[0], pub)[others], before[pub][others])
+            np.testing.assert_array_equal(getattr(exs[0], fill)[others], before[fill][others])
+        assert (exs[0].tab_ids[robots] == -1).all() and (exs[0].row_ids[robots] == -1).all()  # emptied
+        assert np.isnan(exs[0].row_bear[robots]).all() and (exs[0].row_time[robots] == -(10**9)).all()
 
 
 def test_knowledge_views_equal_copies():
     ex = BearingExchange(10, mode="network", k_max=4, rng=np.random.default_rng(0))
-    ex.tab_ids[0, 0], ex.tab_bear[0, 0], ex.tab_time[0, 0] = 3, 0.5, 0
+    ex.pub_ids[0, 0], ex.pub_bear[0, 0], ex.pub_time[0, 0] = 3, 0.5, 0
     a, b = ex.knowledge(), ex.knowledge(copy=False)
     for name in ("ids", "bearings", "row_ids", "row_bearings", "row_age"):
         np.testing.assert_array_equal(getattr(a, name), getattr(b, name))
-    assert np.shares_memory(b.ids, ex.tab_ids) and not np.shares_memory(a.ids, ex.tab_ids)
+    assert np.shares_memory(b.ids, ex.pub_ids) and not np.shares_memory(a.ids, ex.pub_ids)
 
 
-def _random_tables(ex: BearingExchange, seed: int) -> None:
+def _random_tables(ex: BearingExchange, seed: int, published: bool = False) -> None:
+    """Random own entries in the filled tables (``tab_*``), or in the published ones (``pub_*``, which the
+    messages encode)."""
     r = np.random.default_rng(seed)
-    shape = ex.tab_ids.shape
-    ex.tab_time[:] = np.where(r.random(shape) < 0.3, -(10**9), r.integers(0, 4, shape))  # many equal times: ties
-    ex.tab_ids[:] = np.where(ex.tab_time > -(10**9), ex.offset[:, None] + r.integers(0, ex.copy_size, shape), -1)
-    ex.tab_bear[:] = np.where(ex.tab_ids >= 0, r.uniform(-4, 4, shape), np.nan)
-    ex.tab_bear[r.random(shape) < 0.05] = np.nan  # an entry without a bearing is sent as sector 0
+    ids, bear, time = (ex.pub_ids, ex.pub_bear, ex.pub_time) if published else (ex.tab_ids, ex.tab_bear, ex.tab_time)
+    shape = ids.shape
+    time[:] = np.where(r.random(shape) < 0.3, -(10**9), r.integers(0, 4, shape))  # many equal times: ties
+    ids[:] = np.where(time > -(10**9), ex.offset[:, None] + r.integers(0, ex.copy_size, shape), -1)
+    bear[:] = np.where(ids >= 0, r.uniform(-4, 4, shape), np.nan)
+    bear[r.random(shape) < 0.05] = np.nan  # an entry without a bearing is sent as sector 0
 
 
 @pytest.mark.parametrize("n, k_max", [(30, 6), (1000, 20)])  # 1000 robots, 20 slots: max_entries (17) < k_max
@@ -143,7 +159,7 @@ def test_compiled_message_encoding_equals_encode_rows(n, k_max, monkeypatch):
     ex = BearingExchange(n, mode="network", k_max=k_max, rng=np.random.default_rng(0), n_copies=2)
     assert (ex.max_entries < k_max) == (n == 1000)
     for seed in range(10):
-        _random_tables(ex, seed)
+        _random_tables(ex, seed, published=True)
         robots = np.sort(np.random.default_rng(seed).choice(ex.n, 25, replace=False))
         bits, lens = ex.encode(robots, compiled=True)
         ref_bits, ref_lens = ex.encode(robots, compiled=False)

@@ -87,7 +87,7 @@ PER_ROBOT = (
     "block_errors",
 )
 #: integer columns of the kernel's delivery records
-DELIVERY_FIELDS = ("receiver", "origin", "sender", "seq", "type", "length", "detector", "slot", "corrupt", "done_slot", "transmitter")
+DELIVERY_FIELDS = ("receiver", "origin", "sender", "seq", "type", "length", "detector", "slot", "corrupt", "done_slot", "transmitter", "interference")
 
 # counter indices (compile-time constants in the kernel)
 _C_TX_STARTED, _C_TX_COMPLETED, _C_DEFERRALS = COUNTERS.index("tx_started"), COUNTERS.index("tx_completed"), COUNTERS.index("deferrals")
@@ -484,12 +484,15 @@ def slot_loop(
     state, m_max_est, thr, nbits, expect, phase, buf, best_m, best_det, last_s1, start_slot,
     gt_tx, gt_id, gt_buf, collided,
     code_n, code_k, table_msg, table_ok, header_blocks, header_bits, id_bits, with_sender, crc_bits, crc_table, valid_types,
-    n_ids, counts, per_robot, d_int, d_pay,
+    n_ids, counts, per_robot, d_int, d_pay, rx_foreign,
 ):  # fmt: skip
     """All S bit slots of one control step for all robots (module docstring). State arrays are updated in
-    place; ``frame_counter`` is a (1,) array. Deliveries are written to ``d_int`` (D, 11) with columns
+    place; ``frame_counter`` is a (1,) array. Deliveries are written to ``d_int`` (D, 12) with columns
     :data:`DELIVERY_FIELDS` and ``d_pay`` (D, >= 255) bool; returns the number written. Header ids are a
-    copy's own robot numbers, valid below ``n_ids`` (the robots per env copy).
+    copy's own robot numbers, valid below ``n_ids`` (the robots per env copy). ``rx_foreign`` (N,) int64: per
+    receiving robot, the detectors (bit d) that light of a robot other than its frame's transmitter reached
+    (``G * (ambient - m_min) > m_tr``) in a slot where that transmitter was dark; reset at a start symbol,
+    reported as the delivery's ``interference`` column.
 
     Detector response: with ``resp_kt = slot duration / c > 0`` every detector's level ``rx_v`` (N, n_det)
     follows the light through :func:`swarm_envs.comm.channel.detector_response` (same arithmetic) in every
@@ -506,6 +509,7 @@ def slot_loop(
     best_str = np.full(n, -np.inf)
     best_tx = np.full(n, -1, dtype=np.int64)
     sigcnt = np.zeros(n, dtype=np.int64)
+    fmask = np.zeros(n, dtype=np.int64)  # this slot's foreign light per receiving robot (bit d = detector d)
     check = np.zeros(n, dtype=np.bool_)
     info = np.zeros(W, dtype=np.bool_)
     tinfo = np.zeros(W, dtype=np.bool_)
@@ -545,6 +549,7 @@ def slot_loop(
             best_str[:] = -np.inf
             best_tx[:] = -1
             sigcnt[:] = 0
+            fmask[:] = 0
             dirty = False
         for t in range(n):
             if not sending[t]:
@@ -556,11 +561,14 @@ def slot_loop(
                 for li in range(tx_ptr[t], tx_ptr[t + 1]):
                     r = lrx[li]
                     st = -np.inf
+                    foreign = state[r] == _RECV and gt_tx[r] != t
                     for d in range(n_det):
                         g = G[li, d]
                         ysum[r, d] += g
                         if g > st:
                             st = g
+                        if foreign and g * (ambient[r] - m_min) > m_tr:
+                            fmask[r] |= np.int64(1) << d
                     if st > best_str[r]:
                         best_str[r] = st
                         best_tx[r] = t
@@ -614,6 +622,7 @@ def slot_loop(
                     start_slot[r] = slot
                     counts[_C_RX_STARTS] += 1
                     # ground truth: strongest transmitter emitting s1 towards r
+                    rx_foreign[r] = 0
                     gt_tx[r] = -1
                     gt_id[r] = -1
                     collided[r] = False
@@ -639,6 +648,8 @@ def slot_loop(
                     if sending[t] and cur_id[t] == gt_id[r]:
                         tb = cur_bits[t, min(cur_pos[t], F - 1)]
                 gt_buf[r, kb] = tb
+                if not (t >= 0 and sending[t] and cur_bits[t, min(cur_pos[t], F - 1)]):  # the frame's light is off
+                    rx_foreign[r] |= fmask[r]
                 if sigcnt[r] >= 2:
                     collided[r] = True
                 if nbits[r] == expect[r]:
@@ -735,6 +746,7 @@ def slot_loop(
                         d_int[nd_out, 8] = 1 if corrupt else 0
                         d_int[nd_out, 9] = slot
                         d_int[nd_out, 10] = gt_tx[r]
+                        d_int[nd_out, 11] = rx_foreign[r]
                         for i in range(length):
                             d_pay[nd_out, i] = info[header_bits + i]
                         nd_out += 1

@@ -101,6 +101,12 @@ class Deliveries:
             emitting a start symbol at the receiver when it detected the start; -1 for a noise start). Not an
             observation: a sensor may use it only to know *whose light* lit its receivers (physics), never
             to name the sender (use ``origin``).
+        interference: (D,) ground truth: bitmask of the receiver's detectors (bit d = detector d) that
+            another robot's light reached, at least ``relative_threshold`` counts of it, in a slot of the frame
+            in which the frame's transmitter was dark: the detectors whose own copy of the frame that light
+            corrupted (light adds on an on-off channel, so light in a slot where the frame's own bit is on
+            changes nothing there). Physics, like ``transmitter``: a per-receiver decoder (the r-one's, [L Sec.
+            3.2.1]) uses it to know which receivers' copies were clean; not an observation.
         stats: counters of this step (scalars) and per-robot arrays ``<name>_per_robot`` (N,).
     """
 
@@ -115,6 +121,7 @@ class Deliveries:
     slot: np.ndarray
     corrupt: np.ndarray
     transmitter: np.ndarray | None = None
+    interference: np.ndarray | None = None
     stats: dict[str, Any] = field(default_factory=dict)
 
     def __len__(self) -> int:
@@ -129,6 +136,7 @@ class Deliveries:
         return Deliveries(
             *(getattr(self, f)[m] for f in ("receiver", "origin", "sender", "seq", "detector", "kind", "length", "payload", "slot", "corrupt")),
             transmitter=None if self.transmitter is None else self.transmitter[m],
+            interference=None if self.interference is None else self.interference[m],
             stats=self.stats,
         )
 
@@ -295,6 +303,7 @@ class Network:
         self.gt_id = np.full(n, -1, dtype=np.int64)
         self.gt_buf = np.zeros((n, F), dtype=bool)
         self.collided = np.zeros(n, dtype=bool)
+        self.rx_foreign = np.zeros(n, dtype=np.int64)  # detectors hit by foreign light in dark slots (Deliveries.interference)
         self.rx_level = np.zeros((n, self.n_det))  # detector response state (channel.detector_response)
         self.seen_keys = np.zeros(0, dtype=np.int64)
         self.seen_slot = np.zeros(0, dtype=np.int64)
@@ -329,6 +338,7 @@ class Network:
             (self.q_bits, False), (self.q_slots, 0), (self.q_head, 0), (self.q_count, 0), (self.cur_bits, False),
             (self.cur_slots, 0), (self.cur_pos, 0), (self.cur_id, -1), (self.sending, False), (self.seq_next, 0),
             (self.gt_tx, -1), (self.gt_id, -1), (self.gt_buf, False), (self.collided, False), (self.rx_level, 0.0),
+            (self.rx_foreign, 0),
         ):  # fmt: skip
             arr[rows] = value
         det = self.det
@@ -573,7 +583,7 @@ class Network:
             self.gt_tx, self.gt_id, self.gt_buf, self.collided,
             c.n, c.k, c._table_msg, c._table_ok, fmt.header_blocks, fmt.header_bits, fmt.id_bits, fmt.with_sender,
             fmt.crc_bits, crc8_table(fmt.header_bits + MAX_PAYLOAD + 8), self.kinds.valid_codes(),
-            self.copy_size, counts, per_robot, d_int, d_pay,
+            self.copy_size, counts, per_robot, d_int, d_pay, self.rx_foreign,
         )  # fmt: skip
         self.frame_counter = int(fc[0])
         self.slot += S
@@ -588,7 +598,7 @@ class Network:
         cols = {f: d_int[:D, i] for i, f in enumerate(DELIVERY_FIELDS)}
         L = cols["length"]
         Lmax = int(L.max())
-        out = {k: cols[k] for k in ("receiver", "origin", "sender", "seq", "type", "length", "detector", "slot", "done_slot", "transmitter")}
+        out = {k: cols[k] for k in ("receiver", "origin", "sender", "seq", "type", "length", "detector", "slot", "done_slot", "transmitter", "interference")}
         out["corrupt"] = cols["corrupt"].astype(bool)
         out["payload"] = d_pay[:D, :Lmax].copy()
         return [out]
@@ -601,6 +611,8 @@ class Network:
         span = (self.ambient - a.m_min)[:, None]
         deliveries: list[dict[str, np.ndarray]] = []
         first_check = self.fmt.first_check_slots
+        # per link: the receiver's detectors that its light reaches with at least m_tr counts (bit d = detector d)
+        lit_bits = ((G * (self.ambient[rx] - a.m_min)[:, None] > self.m_tr).astype(np.int64) << np.arange(nd, dtype=np.int64)).sum(1) if G.size else np.zeros(0, np.int64)
         for s in range(S):
             # 1. CSMA
             pending = (self.q_count > 0) & ~self.sending
@@ -615,6 +627,7 @@ class Network:
             snd = np.flatnonzero(self.sending)
             bit = self.cur_bits[snd, self.cur_pos[snd]] if snd.size else np.zeros(0, bool)
             on = snd[bit]
+            foreign = self._foreign_light(on, tx_ptr, rx, tx, lit_bits)
             # 3. intensity (superposition over emitting transmitters)
             if self.response_kt > 0:  # detector response across slots (channel.detector_response)
                 if on.size:
@@ -657,6 +670,7 @@ class Network:
                 if self.det.buf.shape[1] > self.gt_buf.shape[1]:
                     self._ensure_frame_capacity(self.det.buf.shape[1])
                 self._truth_bits(got)
+                self._interference(got, foreign)
                 if snd.size:
                     sl = _ranges(sig_ptr[snd], sig_ptr[snd + 1])
                     if sl.size:
@@ -694,8 +708,29 @@ class Network:
             self.det.finish(recv)
         self._count("tx_started", go)
 
+    def _foreign_light(self, on: np.ndarray, tx_ptr, rx, tx, lit_bits) -> np.ndarray:
+        """(N,) per robot receiving a frame: bitmask of its detectors lit in this slot by robots ``on``
+        (emitting) other than the frame's transmitter (``gt_tx``)."""
+        out = np.zeros(self.n, dtype=np.int64)
+        if on.size:
+            li = _ranges(tx_ptr[on], tx_ptr[on + 1])
+            r = rx[li]
+            f = (self.det.state[r] == RECV) & (tx[li] != self.gt_tx[r])
+            np.bitwise_or.at(out, r[f], lit_bits[li[f]])
+        return out
+
+    def _interference(self, got: np.ndarray, foreign: np.ndarray) -> None:
+        """Deliveries.interference: foreign light of this slot counts at robots ``got`` (that stored a bit)
+        whose frame's transmitter is dark in this slot."""
+        t = self.gt_tx[got]
+        ts = np.maximum(t, 0)
+        on = (t >= 0) & self.sending[ts] & self.cur_bits[ts, np.minimum(self.cur_pos[ts], self.cur_bits.shape[1] - 1)]
+        dark = got[~on]
+        self.rx_foreign[dark] |= foreign[dark]
+
     def _truth_on_start(self, started, on, tx_ptr, tx, rx, G) -> None:
         """Ground truth: the strongest transmitter emitting s1 at each robot that just detected a start."""
+        self.rx_foreign[started] = 0
         self.gt_tx[started] = -1
         self.gt_id[started] = -1
         self.collided[started] = False
@@ -823,7 +858,7 @@ class Network:
         det, fmt, c = self.det, self.fmt, self.code
         self._score_bits(robots)
         nbits = det.nbits[robots]
-        out: dict[str, list] = {k: [] for k in ("receiver", "origin", "sender", "seq", "type", "length", "payload", "detector", "slot", "corrupt", "done_slot", "transmitter")}
+        out: dict[str, list] = {k: [] for k in ("receiver", "origin", "sender", "seq", "type", "length", "payload", "detector", "slot", "corrupt", "done_slot", "transmitter", "interference")}
         for nb in np.unique(nbits):
             R = robots[nbits == nb]
             info, ok = c.decode_stream(det.buf[R, :nb])
@@ -865,6 +900,7 @@ class Network:
             out["corrupt"].append(corrupt[g])
             out["done_slot"].append(np.full(int(g.sum()), self.slot, dtype=np.int64))
             out["transmitter"].append(self.gt_tx[R[g]])
+            out["interference"].append(self.rx_foreign[R[g]])
         det.finish(robots)
         if not out["receiver"]:
             return None
@@ -877,7 +913,7 @@ class Network:
         if parts:
             d = {k: (np.concatenate([p[k] for p in parts]) if k != "payload" else _cat_pad_list([p[k] for p in parts])) for k in parts[0]}
         else:
-            d = {k: np.zeros(0, dtype=np.int64) for k in ("receiver", "origin", "sender", "seq", "type", "length", "detector", "slot", "done_slot", "transmitter")}
+            d = {k: np.zeros(0, dtype=np.int64) for k in ("receiver", "origin", "sender", "seq", "type", "length", "detector", "slot", "done_slot", "transmitter", "interference")}
             d["corrupt"] = np.zeros(0, dtype=bool)
             d["payload"] = np.zeros((0, 0), dtype=bool)
         # canonical order: by the slot the frame was completed in, then by receiver (one per robot and slot)
@@ -920,6 +956,7 @@ class Network:
             slot=d["slot"][keep],
             corrupt=d["corrupt"][keep],
             transmitter=d["transmitter"][keep],
+            interference=d["interference"][keep],
         )
         if len(out):
             self._count("rx_delivered", out.receiver)

@@ -23,12 +23,13 @@ link p iff any emitter of the transmitter reaches it (``gains[p, i, :] > thresho
 indexed by the 8-bit mask.
 
 Message-borne readings (:class:`MessageBearings`, docs/design.md#bearing-only-sensing): on the robot, a bearing and an orientation
-exist only for a message that was received: the receivers that picked up the frame give the bearing and the
-transmitter indices encoded in it give the orientation [L Sec. 3.2.1, 3.2.3]. :class:`MessageBearings`
-measures them on the frames the SwarmCom receiver decoded (:class:`swarm_envs.comm.network.Deliveries`),
-names the neighbour by the frame's decoded header ``origin`` (never the true id), keeps the newest
-measurement per (receiver, decoded sender) with its age in steps, and forgets it after ``max_age`` steps
-without a decoded frame. :func:`link_masks` gives the lit receivers / reached transmitters of one link,
+exist only for a message that was received: the receivers whose own copy of the frame was clean give the
+bearing and the transmitter indices encoded in their copies give the orientation [L Sec. 3.2.1, 3.2.3].
+:class:`MessageBearings` measures them on the frames the SwarmCom receiver decoded
+(:class:`swarm_envs.comm.network.Deliveries`; a receiver's copy is lost where another robot's light reached
+it during the frame, ``Deliveries.interference``), names the neighbour by the frame's decoded header
+``origin`` (never the true id), and rebuilds each robot's readings every neighbour round from that round's
+frames [L Sec. 3.2.2]. :func:`link_masks` gives the lit receivers / reached transmitters of one link,
 nominal (from the IR layer's gains) or with the receiver-arc spread measured on the hardware
 (``arc_range``, [L Sec. 3.2.1, Fig. 3.9(b)]: 63 to 74 degrees over 10 trials, mean 68).
 """
@@ -201,27 +202,10 @@ def link_masks(
     """
     platform = get_platform(platform)
     rows = np.arange(len(links.rx)) if rows is None else np.asarray(rows, dtype=np.int64)
-    n_d, n_e = platform.n_detectors, platform.n_emitters
     if half_arcs is None:
-        g = np.asarray(links.gains, dtype=float).reshape(-1, n_d, n_e)[rows] > threshold
+        g = np.asarray(links.gains, dtype=float).reshape(-1, platform.n_detectors, platform.n_emitters)[rows] > threshold
     else:
-        from swarm_envs.ir.layer import IRLinks, pair_geometry
-
-        half_arcs = np.asarray(half_arcs, dtype=float).reshape(rows.size, n_d + n_e)
-        sub = IRLinks(
-            links.rx[rows], links.tx[rows], links.distance[rows], links.rel_position[rows], links.rel_heading[rows],
-            links.gains[rows], links.n_robots,
-            None if links.occluders is None else (*links.occluders[:2], links.occluders[2][rows]),
-        )
-        dist, det_ang, em_ang = pair_geometry(sub.rel_position, sub.rel_heading, platform)
-        max_range = float(getattr(platform.ir_model, "max_range", platform.ir_range))
-        g = (
-            (np.abs(det_ang) <= half_arcs[:, :n_d, None])
-            & (np.abs(em_ang) <= half_arcs[:, None, n_d:])
-            & (dist <= max_range)
-            & (sub.distance <= platform.ir_range)[:, None, None]
-            & sub.ray_clear(platform)
-        )
+        g = _link_hits(links, platform, rows, half_arcs)
     return _bits_to_mask(g.any(axis=2)), _bits_to_mask(g.any(axis=1))
 
 
@@ -259,22 +243,64 @@ def draw_half_arcs(
     return 0.5 * np.deg2rad(lo + (hi - lo) * rng.random((int(n), platform.n_detectors + platform.n_emitters)))
 
 
+_TABLE_FIELDS = ("rx", "tx", "bearing", "tx_bearing", "heading", "time")
+
+
+def _empty_table() -> dict[str, np.ndarray]:
+    return {f: np.zeros(0, np.int64 if f in ("rx", "tx", "time") else float) for f in _TABLE_FIELDS}
+
+
+def _link_hits(links, platform: Platform, rows: np.ndarray, half_arcs: np.ndarray | None) -> np.ndarray:
+    """(R, n_d, n_e) bool: detector d of the receiver hears emitter e of the transmitter on links ``rows``
+    (:func:`link_masks`)."""
+    n_d, n_e = platform.n_detectors, platform.n_emitters
+    if half_arcs is None:
+        return np.asarray(links.gains, dtype=float).reshape(-1, n_d, n_e)[rows] > 0.0
+    from swarm_envs.ir.layer import IRLinks, pair_geometry
+
+    half_arcs = np.asarray(half_arcs, dtype=float).reshape(rows.size, n_d + n_e)
+    sub = IRLinks(
+        links.rx[rows], links.tx[rows], links.distance[rows], links.rel_position[rows], links.rel_heading[rows],
+        links.gains[rows], links.n_robots,
+        None if links.occluders is None else (*links.occluders[:2], links.occluders[2][rows]),
+    )
+    dist, det_ang, em_ang = pair_geometry(sub.rel_position, sub.rel_heading, platform)
+    max_range = float(getattr(platform.ir_model, "max_range", platform.ir_range))
+    return (
+        (np.abs(det_ang) <= half_arcs[:, :n_d, None])
+        & (np.abs(em_ang) <= half_arcs[:, None, n_d:])
+        & (dist <= max_range)
+        & (sub.distance <= platform.ir_range)[:, None, None]
+        & sub.ray_clear(platform)
+    )
+
+
 class MessageBearings:
     """Message-borne sector bearings and orientations of neighbours [L Sec. 3.2.1-3.2.3; docs/design.md#bearing-only-sensing].
 
     Each decoded frame (any kind: on the r-one every message carries the transmitter's encoded orientation
     bit [L Sec. 3.2.3, Table 3.3]) is a measurement by its receiver of the robot its header names
-    (``Deliveries.origin``, the decoded id, right or wrong): the receivers lit by the light that started the
-    frame give the sector bearing, the transmitters of that robot that reached the receiver give its
-    orientation. Whose light it was is physics, ``Deliveries.transmitter`` (the robot whose start symbol
-    was detected) and this step's IR link of that robot; a frame started by noise (``transmitter = -1``),
-    whose light no longer reaches the receiver, or whose lit receivers give no direction (none or all 8)
-    measures nothing. A frame whose origin is not a robot of the receiver's env copy, or the receiver
-    itself, is dropped.
+    (``Deliveries.origin``, the decoded id, right or wrong). Whose light it was is physics,
+    ``Deliveries.transmitter`` (the robot whose start symbol was detected) and this step's IR link of that
+    robot. A frame started by noise (``transmitter = -1``), whose light no longer reaches the receiver, or
+    whose origin is not a robot of the receiver's env copy (or the receiver itself) measures nothing.
 
-    The table keeps the newest measurement per (receiver, decoded sender) and its age in steps (0 in the
-    step the frame was decoded); a neighbour without a decoded frame for more than ``max_age`` steps
-    disappears. Readings thus refresh only when a frame arrives: losses, collisions and range reach them.
+    Per-receiver copies [L Sec. 3.2.1]: the r-one decodes the frame on each of its 8 receivers separately
+    and a receiver counts only if its own copy passes the CRC, so a receiver that another robot's light
+    reached in a slot where the frame's own light was off (``Deliveries.interference``: that light turned a
+    dark bit on) drops out. The bearing comes from the lit receivers whose copies were clean, the
+    orientation from the transmitters whose light reached one of those receivers; a frame without a clean
+    lit receiver, or whose clean receivers give no direction (none or all 8), measures nothing.
+
+    Rounds [L Sec. 3.2.2]: each robot's neighbour round starts at its beacon step (every ``period`` steps
+    at its own random phase, :attr:`phase`; the env sets it to the exchange's broadcast phase when the
+    exchange is the beacon). "When a new round begins, each robot clears all prior neighbor information":
+    at the start of a robot's round the measurements of the round that just ended become its readings
+    (:meth:`readings`, the newest per decoded sender, with its age in steps) and everything older is
+    dropped; the new round's measurements are collected apart (:attr:`fresh` holds this step's) until the
+    following round starts. A neighbour is thus in a robot's readings for exactly the round after one in which
+    a frame of it was measured: losses, collisions and range reach the readings, and no reading is older
+    than 2 rounds less a step.
 
     Hardware noise (``arc_range``, default on in the env's ``bearing_noise``): for every measured frame
     each of the receiver's 8 arcs and each of the sender's 8 cones is drawn uniformly from ``arc_range``
@@ -286,17 +312,16 @@ class MessageBearings:
     assumes equal to the receivers' arc).
 
     Beacons (:meth:`send_beacons`): every robot broadcasts a header-only frame (its id, no payload) as
-    system traffic every ``period`` steps at its own random phase, for stacks whose bearing exchange does
-    not already broadcast (an exchange in ``"network"`` mode is the beacon: [L Sec. 3.2.2] one message per
-    robot per round).
+    system traffic at the start of each of its rounds, for stacks whose bearing exchange does not already
+    broadcast (an exchange in ``"network"`` mode is the beacon: [L Sec. 3.2.2] one message per robot per
+    round).
 
     Args:
         platform: the robots' platform (sector axes from its detectors / emitters).
         n_robots: robots per env copy.
-        rng: generator (or :class:`swarm_envs.copies.CopyRandom`, one per copy) for beacon phases and noise.
+        rng: generator (or :class:`swarm_envs.copies.CopyRandom`, one per copy) for round phases and noise.
         n_copies: env copies (rows copy-major).
-        max_age: steps after the last decoded frame at which a reading is dropped.
-        period: beacon period (steps).
+        period: round (beacon) period (steps).
         arc_range: (min, max) arc width (deg) for the noise model, or None (nominal gains, noiseless).
     """
 
@@ -306,13 +331,12 @@ class MessageBearings:
         n_robots: int,
         rng: np.random.Generator | CopyRandom | None = None,
         n_copies: int = 1,
-        max_age: int = 36,
         period: int = 24,
         arc_range: tuple[float, float] | None = None,
     ) -> None:
         self.platform = get_platform(platform)
-        if int(max_age) < 0 or int(period) < 1:
-            raise ValueError(f"need max_age >= 0 and period >= 1, got {max_age}, {period}")
+        if int(period) < 1:
+            raise ValueError(f"need period >= 1, got {period}")
         if arc_range is not None:
             lo, hi = (float(a) for a in arc_range)
             if not (0.0 < lo <= hi < 360.0):
@@ -324,57 +348,55 @@ class MessageBearings:
         self.n = self.copy_size * self.n_copies
         self.copy_of = np.repeat(np.arange(self.n_copies), self.copy_size)
         self.offset = self.copy_of * self.copy_size
-        self.max_age = int(max_age)
         self.period = int(period)
         rng = rng if rng is not None else np.random.default_rng()
         self.rng = rng if isinstance(rng, CopyRandom) else CopyRandom([rng] * self.n_copies)
         self.t = 0  # steps since construction: ages are differences, so copies need no own clock
-        self.clock = np.zeros(self.n_copies, np.int64)  # steps since each copy's reset (beacon schedule)
+        self.clock = np.zeros(self.n_copies, np.int64)  # steps since each copy's reset (round schedule)
         self.phase = np.zeros(self.n, np.int64)
-        self.stats = {"measured": 0, "unmeasured": 0, "rejected": 0}
-        self._clear(np.ones(0, bool))
+        self.stats = {"measured": 0, "unmeasured": 0, "rejected": 0, "interfered": 0}
+        self.fill = _empty_table()  # the current round's measurements, newest per (receiver, decoded sender)
+        self.pub = _empty_table()  # the last complete round's: the readings
+        self.fresh = NeighbourReadings()
         self.reset()
-
-    def _clear(self, keep: np.ndarray) -> None:
-        if keep.size == 0:
-            self.rx = np.zeros(0, np.int64)
-            self.tx = np.zeros(0, np.int64)
-            self.bearing = np.zeros(0)
-            self.tx_bearing = np.zeros(0)
-            self.heading = np.zeros(0)
-            self.time = np.zeros(0, np.int64)
-            return
-        for name in ("rx", "tx", "bearing", "tx_bearing", "heading", "time"):
-            setattr(self, name, getattr(self, name)[keep])
 
     def reset(self, copies: np.ndarray | None = None, rngs: list[np.random.Generator] | None = None) -> None:
         """Forget the readings of env ``copies`` (all if None), give them the generators ``rngs`` and draw
-        new beacon phases from them."""
+        new round phases from them."""
         copies = np.arange(self.n_copies) if copies is None else np.asarray(copies, dtype=np.int64).reshape(-1)
         if rngs is not None:
             for b, g in zip(copies, rngs):
                 self.rng.generators[b] = g
-        self._clear(~np.isin(self.copy_of[self.rx], copies) if self.rx.size else np.zeros(0, bool))
+        for name in ("fill", "pub"):
+            tab = getattr(self, name)
+            keep = ~np.isin(self.copy_of[tab["rx"]], copies)
+            setattr(self, name, {f: v[keep] for f, v in tab.items()})
         rows = np.flatnonzero(np.isin(self.copy_of, copies))
         self.clock[copies] = 0
         self.phase[rows] = self.rng.integers(0, self.period, self.copy_of[rows])
 
+    def round_starts(self) -> np.ndarray:
+        """(N,) bool: the robots whose round starts this step (their beacon step)."""
+        return (self.clock[self.copy_of] - self.phase) % self.period == 0
+
     # ------------------------------------------------------------------ beacons
     def send_beacons(self, network, kind: str = "bearing_beacon") -> int:
-        """Queue a header-only beacon for every robot due this step (``network.queue_system``); returns
-        the number queued. Call before ``network.step``."""
-        due = np.flatnonzero((self.clock[self.copy_of] - self.phase) % self.period == 0)
+        """Queue a header-only beacon for every robot whose round starts this step (``network.queue_system``);
+        returns the number queued. Call before ``network.step``."""
+        due = np.flatnonzero(self.round_starts())
         if due.size:
             network.queue_system(due, np.zeros((due.size, 0), bool), kind)
         return int(due.size)
 
     # ------------------------------------------------------------------ measurement
     def update(self, deliveries, links) -> int:
-        """Measure on this step's decoded frames (module docstring); returns the number of readings taken.
+        """Measure on this step's decoded frames (class docstring) into the current round's table; returns
+        the number of readings taken.
 
         Args:
             deliveries: :class:`swarm_envs.comm.network.Deliveries` of this step (``receiver``, ``origin``,
-                ``transmitter``).
+                ``transmitter``, and ``interference`` if the channel reports it; none means no receiver's
+                copy was corrupted).
             links: the :class:`swarm_envs.ir.layer.IRLinks` the network stepped with.
         """
         if deliveries is None or len(deliveries.receiver) == 0:
@@ -384,6 +406,8 @@ class MessageBearings:
         recv = np.asarray(deliveries.receiver, np.int64)
         origin = np.asarray(deliveries.origin, np.int64)
         light = np.asarray(deliveries.transmitter, np.int64)
+        interference = getattr(deliveries, "interference", None)
+        interference = np.zeros(recv.size, np.int64) if interference is None else np.asarray(interference, np.int64)
         base = self.offset[recv]
         named = (origin >= base) & (origin < base + self.copy_size) & (origin != recv)
         self.stats["rejected"] += int((~named).sum())
@@ -402,41 +426,60 @@ class MessageBearings:
             lo, hi = self.arc_range
             u = self.rng.random(self.copy_of[recv[sel]], (self.platform.n_detectors + self.platform.n_emitters,))
             half = 0.5 * np.deg2rad(lo + (hi - lo) * u)
-        rx_mask, tx_mask = link_masks(links, self.platform, rows, half)
-        r = _readings(recv[sel], origin[sel], rx_mask, tx_mask, self.platform)
+        hits = _link_hits(links, self.platform, rows, half)
+        clean = ((interference[sel][:, None] >> np.arange(self.platform.n_detectors)) & 1) == 0
+        heard = hits.any(axis=2)
+        self.stats["interfered"] += int((heard & ~clean).any(axis=1).sum())
+        hits = hits & clean[:, :, None]  # only the receivers whose own copy of the frame was clean
+        r = _readings(recv[sel], origin[sel], _bits_to_mask(hits.any(axis=2)), _bits_to_mask(hits.any(axis=1)), self.platform)
         ok = r.valid
         self.stats["measured"] += int(ok.sum())
         self.stats["unmeasured"] += int(named.sum() - ok.sum())
         if not ok.any():
             return 0
         # newest measurement per (receiver, decoded sender): old entries first, this step's in arrival order
-        rx = np.concatenate([self.rx, r.rx[ok]])
-        tx = np.concatenate([self.tx, r.tx[ok]])
+        f = self.fill
+        rx = np.concatenate([f["rx"], r.rx[ok]])
+        tx = np.concatenate([f["tx"], r.tx[ok]])
         key = rx * self.n + tx
         _, last = np.unique(key[::-1], return_index=True)
         take = key.size - 1 - last  # sorted by key, i.e. by (receiver, sender)
-        cat = lambda old, new: np.concatenate([old, new])[take]  # noqa: E731
-        self.rx, self.tx = rx[take], tx[take]
-        self.bearing = cat(self.bearing, r.bearing[ok])
-        self.tx_bearing = cat(self.tx_bearing, r.tx_bearing[ok])
-        self.heading = cat(self.heading, r.heading[ok])
-        self.time = cat(self.time, np.full(int(ok.sum()), self.t, np.int64))
+        new = {"rx": r.rx[ok], "tx": r.tx[ok], "bearing": r.bearing[ok], "tx_bearing": r.tx_bearing[ok], "heading": r.heading[ok],
+               "time": np.full(int(ok.sum()), self.t, np.int64)}  # fmt: skip
+        self.fill = {name: np.concatenate([f[name], new[name]])[take] for name in _TABLE_FIELDS}
         return int(ok.sum())
 
-    def readings(self) -> NeighbourReadings:
-        """Current readings, one per (receiver, decoded sender), sorted by both; range 0 (bearing-only)."""
+    def _roll(self, starts: np.ndarray) -> None:
+        """Start a new round for robots ``starts`` (N,) bool: their current round's measurements become their
+        readings, the older readings are dropped."""
+        if not starts.any():
+            return
+        moved = starts[self.fill["rx"]]
+        kept = ~starts[self.pub["rx"]]
+        pub = {f: np.concatenate([self.pub[f][kept], self.fill[f][moved]]) for f in _TABLE_FIELDS}
+        order = np.argsort(pub["rx"] * self.n + pub["tx"], kind="stable")
+        self.pub = {f: v[order] for f, v in pub.items()}
+        self.fill = {f: v[~moved] for f, v in self.fill.items()}
+
+    def _as_readings(self, tab: dict[str, np.ndarray]) -> NeighbourReadings:
         return NeighbourReadings(
-            self.rx.copy(), self.tx.copy(), np.zeros(self.rx.size), self.bearing.copy(), self.heading.copy(),
-            (self.t - self.time).astype(float),
+            tab["rx"].copy(), tab["tx"].copy(), np.zeros(tab["rx"].size), tab["bearing"].copy(), tab["heading"].copy(),
+            (self.t - tab["time"]).astype(float),
         )
 
+    def readings(self) -> NeighbourReadings:
+        """The readings: each robot's measurements of its last complete round, one per (receiver, decoded
+        sender), sorted by both; range 0 (bearing-only), age in steps since the frame."""
+        return self._as_readings(self.pub)
+
     def step(self, deliveries, links) -> NeighbourReadings:
-        """Measure this step's frames, drop readings older than ``max_age`` and return the table; advances
-        the clocks."""
+        """Start the rounds due this step, measure this step's frames, and return the readings (:meth:`readings`);
+        :attr:`fresh` then holds the measurements of this step's frames (age 0). Advances the clocks."""
+        self._roll(self.round_starts())
         self.update(deliveries, links)
-        if self.rx.size:
-            self._clear(self.t - self.time <= self.max_age)
         out = self.readings()
+        now = self.fill["time"] == self.t
+        self.fresh = self._as_readings({f: v[now] for f, v in self.fill.items()})
         self.t += 1
         self.clock += 1
         return out

@@ -12,21 +12,30 @@ Modes
 ``mode="ideal"``: every step, each robot's own row is its current bearing readings and it receives every
 neighbour's current row instantly and losslessly (ages 0). For ablations.
 
-``mode="network"``: the rows travel as SwarmCom *system* traffic. Every ``period`` steps (each robot with
-its own random phase, drawn from the generator passed in) a robot queues one message; all due robots at
-once with ``network.queue_system(robots, bits, kind, lengths=...)``; the env advances the network
+``mode="network"``: the rows travel as SwarmCom *system* traffic, in rounds [L Sec. 3.2.2]. Every
+``period`` steps (each robot with its own random phase, drawn from the generator passed in, like the
+thesis's random start delay) a robot's round starts and it queues one message; all due robots at once with
+``network.queue_system(robots, bits, kind, lengths=...)``; the env advances the network
 (``network.step(links) -> Deliveries``) and hands the deliveries back to :meth:`BearingExchange.receive`.
-A robot's own neighbour table holds the robots it *received a message from*, with the receiver's own
-bearing of the robot the frame *says* sent it: the header's decoded ``origin`` looked up in the receiver's
-readings (``readings.rx``/``readings.tx`` are what the receiver believes: on the sector source the
-message-borne table of :class:`swarm_envs.sensing.bearing_sensor.MessageBearings`, keyed by decoded ids,
-which has just measured this very frame). No lookup uses the true sender: a frame whose origin decodes to
-another robot's id is matched to the receiver's bearing of that other robot (if it has one). A lost
-message means a missing own bearing and a missing row. Entries and rows older than ``max_age`` steps are dropped. Losses therefore remove
-information (fewer triangles, fewer rigid robots) but never mix up whose bearing is whose. A decoded
-frame is rejected when its content is inconsistent (announced count vs payload length, an id or an origin
-outside the receiver's swarm, or a list naming the sender itself); an uncoded ([15,15]) frame whose bearing bits flipped can still slip through: that is
-the channel's corruption and it reaches the coordinates as a bearing error.
+"When a new round begins, each robot clears all prior neighbor information and updates the network
+information again" [L Sec. 3.2.2]: during its round a robot fills a fresh table; when its following round
+starts that table becomes its published one (what :meth:`BearingExchange.knowledge` returns and what it
+broadcasts) and the filling starts empty again. A robot therefore knows, and reports, exactly the
+neighbours it heard during its last complete round; a neighbour it did not hear for a whole round is
+gone at the following round start. This holds on every platform: the exchange is the thesis's round protocol
+wherever it runs.
+
+A robot's table holds the robots it *received a message from*, with the receiver's own bearing of the
+robot the frame *says* sent it: the header's decoded ``origin`` looked up in the receiver's readings
+(``readings.rx``/``readings.tx`` are what the receiver believes: on the sector source the bearings
+:class:`swarm_envs.sensing.bearing_sensor.MessageBearings` measured on this step's frames, keyed by decoded
+ids, so this very frame's bearing). No lookup uses the true sender: a frame whose origin decodes to another
+robot's id is matched to the receiver's bearing of that other robot (if it has one). A lost message means a
+missing own bearing and a missing row for that round. Losses therefore remove information (fewer
+triangles, fewer rigid robots) but never mix up whose bearing is whose. A decoded frame is rejected when
+its content is inconsistent (announced count vs payload length, an id or an origin outside the receiver's
+swarm, or a list naming the sender itself); an uncoded ([15,15]) frame whose bearing bits flipped can still
+slip through: that is the channel's corruption and it reaches the coordinates as a bearing error.
 
 Bit encoding of a message (payload, most significant bit first)::
 
@@ -40,7 +49,7 @@ Bit encoding of a message (payload, most significant bit first)::
 - ``count`` is capped at ``max_entries`` so that the payload fits the protocol's 8-bit length field
   (255 bits): ``max_entries = min(k_max, (255 - c_bits) // (id_bits + bearing_bits))``; with 1000 robots,
   id 10 bits + 4 = 14 bits per neighbour, i.e. at most 17 neighbours per message.
-- A robot reports the neighbours it currently has in its table, most recently heard first.
+- A robot reports the neighbours of its last complete round, most recently heard first.
 
 Thesis timing for comparison: ``T_round = 2 (1 + N)^2 t_msg`` with t_msg = 32.8 ms for a 3-byte message at
 1250 bps [L Sec. 3.2.1] (2.5 s for 5 neighbours); :func:`thesis_round_time` gives it.
@@ -57,11 +66,19 @@ from swarm_envs.copies import CopyRandom
 from swarm_envs.sensing.kernels import HAVE_NUMBA
 
 if HAVE_NUMBA:
-    from swarm_envs.sensing.kernels import decode_bits, encode_tables, expire_tables, store_deliveries
+    from swarm_envs.sensing.kernels import decode_bits, encode_tables, roll_tables, store_deliveries
 
 __all__ = ["BearingExchange", "NeighbourKnowledge", "encode_rows", "decode_rows", "thesis_round_time", "readings_table"]
 
 MAX_PAYLOAD_BITS = 255  # the SwarmCom frame's 8-bit length field (swarm_envs.comm.protocol)
+NEVER = -(10**9)  # the time of an empty slot
+
+# a robot's tables: own entries (ids, own bearing, time heard) and the rows its neighbours reported (ids,
+# bearings, time received); filled during its round (_FILL) and, from the following round start, published (_PUB)
+_FILL = ("tab_ids", "tab_bear", "tab_time", "row_ids", "row_bear", "row_time")
+_PUB = ("pub_ids", "pub_bear", "pub_time", "pub_row_ids", "pub_row_bear", "pub_row_time")
+_DTYPES = (np.int64, float, np.int64, np.int64, float, np.int64)
+_EMPTY = (-1, np.nan, NEVER, -1, np.nan, NEVER)
 
 
 @dataclass
@@ -190,9 +207,7 @@ class BearingExchange:
         k_max: slots per robot (neighbour table size K) and longest reported list.
         network: a :class:`swarm_envs.comm.network.Network` (network mode); may also be passed to
             :meth:`send`.
-        period: steps between two broadcasts of one robot (network mode).
-        max_age: steps after which an unrefreshed neighbour entry / row is dropped (default
-            ``3 * period``).
+        period: steps between two broadcasts of one robot, the length of its round (network mode).
         bearing_bits: bits per transmitted bearing (4 = 16 sectors of 22.5 degrees).
         kind: SwarmCom system message kind.
         rng: generator for the broadcast phases (network mode), or per-copy streams
@@ -208,7 +223,6 @@ class BearingExchange:
         k_max: int = 16,
         network: Any = None,
         period: int = 10,
-        max_age: int | None = None,
         bearing_bits: int = 4,
         kind: str = "bearing_exchange",
         rng: np.random.Generator | CopyRandom | None = None,
@@ -225,7 +239,6 @@ class BearingExchange:
         self.k_max = int(k_max)
         self.network = network
         self.period = max(1, int(period))
-        self.max_age = 3 * self.period if max_age is None else int(max_age)
         self.bearing_bits = int(bearing_bits)
         self.kind = kind
         self.id_bits = max(1, int(np.ceil(np.log2(max(self.copy_size, 2)))))
@@ -246,13 +259,11 @@ class BearingExchange:
             n, k = self.n, self.k_max
             self.t = np.zeros(self.n_copies, np.int64)
             self.phase = self.rng.integers(0, self.period, self.copy_of)
-            self.tab_ids = -np.ones((n, k), np.int64)
-            self.tab_bear = np.full((n, k), np.nan)
-            self.tab_time = np.full((n, k), -(10**9), np.int64)
             w = self.k_max if self.mode == "ideal" else self.max_entries  # ideal rows are not truncated
-            self.row_ids = -np.ones((n, k, w), np.int64)
-            self.row_bear = np.full((n, k, w), np.nan)
-            self.row_time = np.full((n, k), -(10**9), np.int64)
+            shapes = ((n, k), (n, k), (n, k), (n, k, w), (n, k, w), (n, k))
+            for names in (_FILL, _PUB):  # the tables filled in the current round and the last complete round's
+                for name, shape, dtype, value in zip(names, shapes, _DTYPES, _EMPTY):
+                    setattr(self, name, np.full(shape, value, dtype))
             self.stats = {"sent": 0, "received": 0, "bits_sent": 0, "rejected": 0}
             return
         copies = np.asarray(copies, dtype=np.int64).reshape(-1)
@@ -262,12 +273,9 @@ class BearingExchange:
         rows = np.flatnonzero(np.isin(self.copy_of, copies))
         self.t[copies] = 0
         self.phase[rows] = self.rng.integers(0, self.period, self.copy_of[rows])
-        self.tab_ids[rows] = -1
-        self.tab_bear[rows] = np.nan
-        self.tab_time[rows] = -(10**9)
-        self.row_ids[rows] = -1
-        self.row_bear[rows] = np.nan
-        self.row_time[rows] = -(10**9)
+        for names in (_FILL, _PUB):
+            for name, value in zip(names, _EMPTY):
+                getattr(self, name)[rows] = value
 
     @property
     def _now(self) -> np.ndarray:
@@ -281,23 +289,25 @@ class BearingExchange:
     # ------------------------------------------------------------------ ideal
     def _ideal(self, readings: Any) -> NeighbourKnowledge:
         ids, th = readings_table(readings.rx, readings.tx, readings.bearing, self.n, self.k_max)
-        self.tab_ids, self.tab_bear = ids, th
-        self.tab_time = np.where(ids >= 0, self._now[:, None], -(10**9))
+        self.pub_ids, self.pub_bear = ids, th
+        self.pub_time = np.where(ids >= 0, self._now[:, None], NEVER)
         safe = np.maximum(ids, 0)
         has = (ids >= 0)[:, :, None]
-        self.row_ids = np.where(has, ids[safe], -1)
-        self.row_bear = np.where(has, th[safe], np.nan)
-        self.row_time = self.tab_time.copy()
+        self.pub_row_ids = np.where(has, ids[safe], -1)
+        self.pub_row_bear = np.where(has, th[safe], np.nan)
+        self.pub_row_time = self.pub_time.copy()
         return self.knowledge()
 
     # ------------------------------------------------------------------ network
     def due(self, t: int | None = None) -> np.ndarray:
-        """Robots whose broadcast is due at step t (default: the current step)."""
+        """Robots whose broadcast is due at step t (default: the current step): the robots whose round
+        starts then."""
         t = self._now if t is None else t
         return np.nonzero((t - self.phase) % self.period == 0)[0]
 
     def send(self, network: Any = None) -> int:
-        """Queue this step's messages (network mode): each due robot sends its current table.
+        """Queue this step's messages (network mode): each due robot starts a new round (:meth:`start_rounds`)
+        and broadcasts the table of the round that just ended.
 
         Returns the number of messages queued.
         """
@@ -306,10 +316,10 @@ class BearingExchange:
             return 0
         if net is None:
             raise ValueError("network mode needs a Network (constructor or send(network))")
-        self._expire()
         robots = self.due()
         if robots.size == 0:
             return 0
+        self.start_rounds(robots)
         bits, lens = self.encode(robots)
         net.queue_system(robots, bits[:, : int(lens.max())].astype(bool), self.kind, lengths=lens)  # all lengths at once
         self.stats["sent"] += int(robots.size)
@@ -317,18 +327,18 @@ class BearingExchange:
         return int(robots.size)
 
     def encode(self, robots: np.ndarray, compiled: bool | None = None) -> tuple[np.ndarray, np.ndarray]:
-        """Message bits (R, n_bits) uint8 (zero padded) and payload lengths (R,) of ``robots``' current
-        tables: most recently heard first, at most ``max_entries``, ids in a copy's own numbering.
-        ``compiled=False`` forces the numpy reference (:func:`encode_rows`)."""
+        """Message bits (R, n_bits) uint8 (zero padded) and payload lengths (R,) of ``robots``' published
+        tables (their last complete round): most recently heard first, at most ``max_entries``, ids in a
+        copy's own numbering. ``compiled=False`` forces the numpy reference (:func:`encode_rows`)."""
         robots = np.asarray(robots, dtype=np.int64)
         if HAVE_NUMBA if compiled is None else compiled:
             return encode_tables(
-                self.tab_ids, self.tab_bear, self.tab_time, robots, self.offset.astype(np.int64), self.max_entries,
+                self.pub_ids, self.pub_bear, self.pub_time, robots, self.offset.astype(np.int64), self.max_entries,
                 self.id_bits, self.count_bits, self.bearing_bits,
             )
-        o = np.argsort(-self.tab_time[robots], axis=1, kind="stable")
-        ids = np.take_along_axis(self.tab_ids[robots], o, 1)[:, : self.max_entries]
-        th = np.take_along_axis(self.tab_bear[robots], o, 1)[:, : self.max_entries]
+        o = np.argsort(-self.pub_time[robots], axis=1, kind="stable")
+        ids = np.take_along_axis(self.pub_ids[robots], o, 1)[:, : self.max_entries]
+        th = np.take_along_axis(self.pub_bear[robots], o, 1)[:, : self.max_entries]
         local = np.where(ids >= 0, ids - self.offset[robots][:, None], -1)  # ids in a copy's own numbering
         bits = encode_rows(local, th, self.id_bits, self.count_bits, self.bearing_bits)
         lens = self.count_bits + (ids >= 0).sum(1) * (self.id_bits + self.bearing_bits)
@@ -425,43 +435,32 @@ class BearingExchange:
         self.row_bear[r, slot] = th
         self.row_time[r, slot] = self._now[r]
 
-    def _expire(self) -> None:
-        if HAVE_NUMBA:  # one pass over the (N, K) slots instead of a dozen masked numpy operations
-            expire_tables(
-                self._now, self.max_age, self.tab_ids, self.tab_bear, self.tab_time, self.row_ids, self.row_bear,
-                self.row_time, -(10**9),
-            )
+    def start_rounds(self, robots: np.ndarray, compiled: bool | None = None) -> None:
+        """Start a new round of ``robots`` [L Sec. 3.2.2]: the tables they filled during the round that ends
+        become their published ones (what :meth:`knowledge` and their broadcasts read), and the tables they
+        fill next start empty: "each robot clears all prior neighbor information". ``compiled=False`` forces
+        the numpy reference of :func:`swarm_envs.sensing.kernels.roll_tables`."""
+        robots = np.asarray(robots, dtype=np.int64).reshape(-1)
+        if HAVE_NUMBA if compiled is None else compiled:
+            roll_tables(robots, *(getattr(self, name) for name in _FILL + _PUB), NEVER)
             return
-        self._expire_numpy()
-
-    def _expire_numpy(self) -> None:
-        """Reference of the compiled :func:`swarm_envs.sensing.kernels.expire_tables` (same tables after)."""
-        now = self._now[:, None]
-        old = (now - self.tab_time > self.max_age) | (self.tab_ids < 0)
-        self.tab_ids[old] = -1
-        self.tab_bear[old] = np.nan
-        self.tab_time[old] = -(10**9)
-        rold = old | (now - self.row_time > self.max_age)
-        # a row whose time is already -1e9 is already cleared (rows are only ever written together with
-        # their time: reset, _store, here), so only the rows that expire now are touched (most slots of a
-        # sparse table are empty: the (N, K, K2) masked writes were most of this method's cost)
-        r, s = np.nonzero(rold & (self.row_time != -(10**9)))
-        self.row_ids[r, s] = -1
-        self.row_bear[r, s] = np.nan
-        self.row_time[r, s] = -(10**9)
+        for fill, pub, value in zip(_FILL, _PUB, _EMPTY):
+            getattr(self, pub)[robots] = getattr(self, fill)[robots]
+            getattr(self, fill)[robots] = value
 
     # ------------------------------------------------------------------ common
     def knowledge(self, copy: bool = True) -> NeighbourKnowledge:
-        """What each robot knows now (own row + received rows with ages). ``copy=False`` returns views of
-        the live tables (valid until the next :meth:`send` / :meth:`step`; saves copying the (N, K, K2)
-        rows when the caller consumes them at once)."""
-        age = np.where(self.row_time > -(10**9), self._now[:, None] - self.row_time, -1)
+        """What each robot knows now: the published tables of its last complete round (own entries and the
+        received rows, with the rows' ages in steps). ``copy=False`` returns views of the live tables (valid
+        until the next :meth:`send` / :meth:`step`; saves copying the (N, K, K2) rows when the caller
+        consumes them at once)."""
+        age = np.where(self.pub_row_time > NEVER, self._now[:, None] - self.pub_row_time, -1)
         c = np.copy if copy else (lambda a: a)
         return NeighbourKnowledge(
-            ids=c(self.tab_ids),
-            bearings=c(self.tab_bear),
-            row_ids=c(self.row_ids),
-            row_bearings=c(self.row_bear),
+            ids=c(self.pub_ids),
+            bearings=c(self.pub_bear),
+            row_ids=c(self.pub_row_ids),
+            row_bearings=c(self.pub_row_bear),
             row_age=age,
         )
 
@@ -469,15 +468,15 @@ class BearingExchange:
         """Advance one control step.
 
         ideal: ``step(readings)`` returns the full, fresh knowledge. network: call :meth:`send` before the
-        network step, then ``step(readings, deliveries)`` after it (it decodes, expires stale entries and
-        returns the knowledge). ``copy``: as in :meth:`knowledge` (network mode; ideal knowledge is
-        always fresh arrays).
+        network step (it starts the due robots' rounds), then ``step(readings, deliveries)`` after it (it
+        decodes into the current rounds' tables and returns the knowledge); ``readings``: the receivers'
+        bearings to pair the senders with (on the sector source, those measured on this step's frames).
+        ``copy``: as in :meth:`knowledge` (network mode; ideal knowledge is always fresh arrays).
         """
         if self.mode == "ideal":
             k = self._ideal(readings)
         else:
             self.receive(deliveries, readings)
-            self._expire()
             k = self.knowledge(copy)
         self.t += 1
         return k

@@ -14,22 +14,25 @@ Each control step, in this order (data flows one way):
    detector during the frame (a coarse bearing from the detector itself, not from ground truth).
    **Sector bearings** (``bearing_source="sectors"``, the ``rone`` default, docs/design.md#bearing-only-sensing) are measured on the
    decoded frames (:class:`swarm_envs.sensing.bearing_sensor.MessageBearings`): each decoded frame gives
-   its receiver the sector bearing and orientation of the robot its header names, refreshed only then,
-   with the age since; a reading without a decoded frame for ``max_age`` = 1.5 beacon periods disappears
-   (the r-one clears its neighbour table every round [L Sec. 3.2.2]; the half round absorbs channel-access
-   delays). Every robot broadcasts once per beacon period of ``BEACON_PERIOD`` steps, the thesis round
+   its receiver the sector bearing and orientation of the robot its header names, from the receivers whose
+   own copy of the frame no other robot's light corrupted (``Deliveries.interference``). A robot's readings
+   are its last complete round's measurements, with their ages: at the start of each of its rounds it
+   clears all prior neighbour information [L Sec. 3.2.2] and the round that just ended becomes its
+   readings. Every robot broadcasts at the start of each round, once per ``BEACON_PERIOD`` steps, the thesis round
    ``T_round = 2 (1 + N)^2 t_msg`` for its N = 5 neighbours and 3-byte 32.8 ms messages, 2.36 s
    [L Sec. 3.2.1] rounded up to whole steps: with ``exchange="network"`` its bearing-list message *is* the
    beacon ([L Sec. 3.2.3]: the announcement message carries the encoded orientation bit; [L Sec. 5.2.2]
-   step 1 "broadcast id, record bearings" and step 2 share it), otherwise a header-only beacon.
+   step 1 "broadcast id, record bearings" and step 2 share it, and the rounds of the bearings are the
+   exchange's), otherwise a header-only beacon.
    ``bearing_noise`` (default on, r-one) draws each frame's receiver arcs and transmitter cones from the
    measured 63-74 degree spread [L Sec. 3.2.1]. The ``rone`` has no range sensor: its ``range_bearing``
    rows hold these readings with range 0, in neighbour-id order.
 4. **Bearing exchange and scale-free coordinates** [L] (:class:`swarm_envs.sensing.exchange.BearingExchange`,
    :func:`swarm_envs.sensing.scale_free.coordinates_all`): bearings from ``bearing_source``
    (``"sectors"`` default on ``rone``, ``"range_bearing"`` elsewhere) travel as SwarmCom system traffic
-   (``exchange="network"``) or instantly (``exchange="ideal"``); the 2-hop algorithm turns what each
-   robot knows into neighbour coordinates up to scale.
+   (``exchange="network"``, in the same rounds: a robot's coordinates come from its last complete round)
+   or instantly (``exchange="ideal"``); the 2-hop algorithm turns what each robot knows into neighbour
+   coordinates up to scale.
 
 Channel and sensor statistics go to ``infos[agent]["sensing", name]``.
 """
@@ -55,11 +58,19 @@ from swarm_envs.sensing.exchange import BearingExchange, thesis_round_time
 from swarm_envs.sensing.range_bearing import RangeBearingSensor
 from swarm_envs.sensing.scale_free import coordinates, coordinates_all
 
-__all__ = ["FullSensing", "BEACON_PERIOD", "rb_on_worker_thread"]
+__all__ = ["FullSensing", "BEACON_PERIOD", "SECTOR_MAX_AGE", "reading_max_age", "rb_on_worker_thread"]
 
 #: steps between two broadcasts of a robot (bearing beacons / exchange lists on the sector source): the
 #: thesis round 2 (1 + 5)^2 x 32.8 ms = 2.36 s [L Sec. 3.2.1] in 0.1 s control steps, rounded up
 BEACON_PERIOD = int(np.ceil(round(thesis_round_time(5) / 0.1, 9)))
+#: the oldest a sector reading gets (steps): measured in a round's first step, shown until the following round ends
+SECTOR_MAX_AGE = 2 * BEACON_PERIOD - 1
+
+
+def reading_max_age(cfg: dict[str, Any], platform: Platform) -> int:
+    """The largest age (steps) of an observation's ``range_bearing`` row: ``rb_max_age`` on range & bearing
+    platforms, :data:`SECTOR_MAX_AGE` where the rows hold message-borne sector readings (no range model)."""
+    return int(cfg["rb_max_age"]) if hasattr(platform.ir_model, "amplitude_inverse") else SECTOR_MAX_AGE
 
 BEACON_KIND = "bearing_beacon"  # SwarmCom system kind of the header-only beacons
 
@@ -142,7 +153,6 @@ class FullSensing:
                 self.copy_size,
                 streams[3],
                 n_copies=self.n_copies,
-                max_age=BEACON_PERIOD + BEACON_PERIOD // 2,
                 period=BEACON_PERIOD,
                 arc_range=RONE_ARC_RANGE_DEG if noisy else None,
             )
@@ -169,6 +179,9 @@ class FullSensing:
         self.exchange.reset(copies=copies, rngs=[c[2] for c in children])
         if self.bearings is not None:
             self.bearings.reset(copies, [c[3] for c in children])
+            if self.exchange.mode == "network":  # the exchange's broadcast is the beacon: one round per robot
+                rows = np.flatnonzero(np.isin(self.copy_of, copies))
+                self.bearings.phase[rows] = self.exchange.phase[rows]
 
     # ------------------------------------------------------------------------------------------------
     def prepare_step(self, payloads: np.ndarray | None, sending: np.ndarray | None = None) -> PreparedStep:
@@ -248,11 +261,13 @@ class FullSensing:
     def _finish_step(self, links: Any, deliveries: Any, rb: Any, neighbours: NeighbourReadings | None) -> SensorFrame:
         """The rest of :meth:`step` after range & bearing and SwarmCom: sector bearings, messages, the bearing
         exchange and scale-free coordinates, statistics."""
-        # sector bearings measured on the decoded frames (any kind)
+        # sector bearings measured on the decoded frames (any kind): the last complete round's readings
         sectors = self.bearings.step(deliveries, links) if self.bearings is not None else None
         if not self.has_range:
             neighbours = sectors
         bearing_readings = sectors if self.bearing_source == "sectors" else neighbours
+        if self.bearing_source == "sectors" and self.exchange.mode == "network":
+            bearing_readings = self.bearings.fresh  # a received list pairs with the bearing measured on its own frame
         app = deliveries.for_kind("app")
         # an uncoded header can decode to a wrong length or an id outside the receiver's swarm: such a frame is
         # not a well-formed message

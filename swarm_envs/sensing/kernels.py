@@ -19,7 +19,7 @@ compared bit for bit in ``tests/test_sensing_glue_kernels.py`` (or the files nam
 from colliding request frames; reference :func:`swarm_envs.sensing.range_bearing.frame_words_numpy`),
 :func:`firing_sums`, :func:`adc_bits`, :func:`adc_pass`, :func:`pick_ids`, :func:`merge_readings`
 (the sensor's per-step sums, ADC reads, decode rule and reading table), :func:`encode_tables`,
-:func:`decode_bits`, :func:`expire_tables`, :func:`store_deliveries` (the exchange's messages and
+:func:`decode_bits`, :func:`roll_tables`, :func:`store_deliveries` (the exchange's messages and
 tables). Used only when numba is importable (``fast`` extra).
 """
 
@@ -37,7 +37,7 @@ except ImportError:  # pragma: no cover - exercised only without numba
 __all__ = [
     "HAVE_NUMBA", "two_hop_triangles", "two_hop_propagate", "segment_sum", "sum_last", "priority_independent_set",
     "priority_independent_set_sorted", "frame_words", "firing_sums", "adc_bits", "adc_pass", "pick_ids",
-    "merge_readings", "encode_tables", "decode_bits", "expire_tables", "store_deliveries", "slot_keys",
+    "merge_readings", "encode_tables", "decode_bits", "roll_tables", "store_deliveries", "slot_keys",
     "unit_mean_positions",
 ]
 
@@ -655,26 +655,28 @@ if HAVE_NUMBA:
         return key, fl, it
 
     @njit(cache=True, nogil=True)
-    def expire_tables(now, max_age, tab_ids, tab_bear, tab_time, row_ids, row_bear, row_time, never):  # pragma: no cover - compiled
-        """In place :meth:`swarm_envs.sensing.exchange.BearingExchange._expire` (reference
-        ``_expire_numpy``): table entries older than ``max_age`` (or without an id) and rows older than
-        ``max_age`` (or whose entry expired) are cleared; ``now`` (N,) each robot's clock, ``never`` the
-        time of an empty slot."""
-        n, k = tab_ids.shape
+    def roll_tables(robots, tab_ids, tab_bear, tab_time, row_ids, row_bear, row_time,
+                    pub_ids, pub_bear, pub_time, pub_row_ids, pub_row_bear, pub_row_time, never):  # pragma: no cover - compiled  # fmt: skip
+        """In place :meth:`swarm_envs.sensing.exchange.BearingExchange.start_rounds` (its numpy path is the
+        reference): for each of ``robots`` the tables filled during its round (``tab_*``, ``row_*``) are
+        copied to the published ones (``pub_*``) and emptied (ids -1, bearings NaN, times ``never``)."""
+        k = tab_ids.shape[1]
         w = row_ids.shape[2]
-        for u in range(n):
-            t = now[u]
+        for u in robots:
             for s in range(k):
-                old = (t - tab_time[u, s] > max_age) or tab_ids[u, s] < 0
-                if old:
-                    tab_ids[u, s] = -1
-                    tab_bear[u, s] = np.nan
-                    tab_time[u, s] = never
-                if (old or t - row_time[u, s] > max_age) and row_time[u, s] != never:
-                    for j in range(w):
-                        row_ids[u, s, j] = -1
-                        row_bear[u, s, j] = np.nan
-                    row_time[u, s] = never
+                pub_ids[u, s] = tab_ids[u, s]
+                pub_bear[u, s] = tab_bear[u, s]
+                pub_time[u, s] = tab_time[u, s]
+                pub_row_time[u, s] = row_time[u, s]
+                for j in range(w):
+                    pub_row_ids[u, s, j] = row_ids[u, s, j]
+                    pub_row_bear[u, s, j] = row_bear[u, s, j]
+                    row_ids[u, s, j] = -1
+                    row_bear[u, s, j] = np.nan
+                tab_ids[u, s] = -1
+                tab_bear[u, s] = np.nan
+                tab_time[u, s] = never
+                row_time[u, s] = never
 
     @njit(cache=True, nogil=True)
     def encode_tables(tab_ids, tab_bear, tab_time, robots, offset, max_entries, id_bits, count_bits, bearing_bits):  # pragma: no cover - compiled

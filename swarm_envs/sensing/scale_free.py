@@ -642,7 +642,7 @@ class ScaleFreeSensor:
             lowest-id neighbours are kept and the rest are ignored).
         noise_sensitivity, angle_balance: 2-hop options [L Algs. 2-4].
         **exchange_kwargs: passed to :class:`~swarm_envs.sensing.exchange.BearingExchange` (``network``,
-            ``period``, ``max_age``, ``bearing_bits``, ``rng``).
+            ``period``, ``bearing_bits``, ``rng``).
     """
 
     def __init__(
