@@ -16,7 +16,7 @@ No paper gives the spreads: they are assumptions (docs/design.md#hardware-variat
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -40,6 +40,7 @@ class Hardware:
     detector_offset: np.ndarray
     emitter_gain: np.ndarray
     emitter_offset: np.ndarray
+    _tables: tuple | None = field(default=None, init=False, repr=False, compare=False)
 
     def __len__(self) -> int:
         return int(self.detector_gain.shape[0])
@@ -57,17 +58,23 @@ class Hardware:
         return Hardware(self.detector_gain[rx], self.detector_offset[rx], self.emitter_gain[tx], self.emitter_offset[tx])
 
     def tables(self, platform: Platform | str) -> tuple[np.ndarray, np.ndarray]:
-        """The gain kernels' tables: (M, n_d, 3) and (M, n_e, 3) of (multiplier, cos, sin of the axis angle)."""
+        """The gain kernels' tables: (M, n_d, 3) and (M, n_e, 3) of (multiplier, cos, sin of the axis angle),
+        computed once until :meth:`set_rows` changes a robot (read only)."""
         platform = get_platform(platform)
-        d = platform.detector_directions[None, :] + self.detector_offset
-        e = platform.emitter_directions[None, :] + self.emitter_offset
-        return (np.stack([self.detector_gain, np.cos(d), np.sin(d)], axis=-1),
-                np.stack([self.emitter_gain, np.cos(e), np.sin(e)], axis=-1))
+        if self._tables is None or self._tables[0] is not platform:
+            d = platform.detector_directions[None, :] + self.detector_offset
+            e = platform.emitter_directions[None, :] + self.emitter_offset
+            det = np.stack([self.detector_gain, np.cos(d), np.sin(d)], axis=-1)
+            em = np.stack([self.emitter_gain, np.cos(e), np.sin(e)], axis=-1)
+            det.flags.writeable = em.flags.writeable = False
+            self._tables = (platform, det, em)
+        return self._tables[1], self._tables[2]
 
     def set_rows(self, rows: np.ndarray, other: "Hardware") -> None:
         """Overwrite robots ``rows`` with ``other``'s robots (in order)."""
         for name in ("detector_gain", "detector_offset", "emitter_gain", "emitter_offset"):
             getattr(self, name)[rows] = getattr(other, name)
+        self._tables = None
 
 
 def draw_hardware(

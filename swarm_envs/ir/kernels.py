@@ -407,7 +407,8 @@ if HAVE_NUMBA:
         for j in range(ne):
             em_self[j] = em_pos[j, 0] * ecos[j] + em_pos[j, 1] * esin[j]
             rho_e = max(rho_e, math.sqrt(em_pos[j, 0] ** 2 + em_pos[j, 1] ** 2))
-        u_rx = u_tx = 0  # the pair's robots in the hardware tables
+        gd, ge = np.ones(nd), np.ones(ne)  # the pair's channel multipliers
+        last_rx = -1  # the receiver whose detectors are loaded (pairs come sorted by receiver)
         margin = 1e-9
         prune_det = kind == 1 or (kind == 2 and prm[3] > 0.0)
         prune_em = kind == 1 or (kind == 2 and prm[4] > 0.0)
@@ -436,11 +437,13 @@ if HAVE_NUMBA:
             if math.sqrt(Rx * Rx + Ry * Ry) <= ir_range:
                 if varied:
                     u_rx, u_tx = hw_rx[p], hw_tx[p]
-                    for i in range(nd):
-                        dcos[i], dsin[i] = hw_det[u_rx, i, 1], hw_det[u_rx, i, 2]
-                        det_self[i] = det_pos[i, 0] * dcos[i] + det_pos[i, 1] * dsin[i]
+                    if u_rx != last_rx:
+                        for i in range(nd):
+                            gd[i], dcos[i], dsin[i] = hw_det[u_rx, i, 0], hw_det[u_rx, i, 1], hw_det[u_rx, i, 2]
+                            det_self[i] = det_pos[i, 0] * dcos[i] + det_pos[i, 1] * dsin[i]
+                        last_rx = u_rx
                     for j in range(ne):
-                        ecos[j], esin[j] = hw_em[u_tx, j, 1], hw_em[u_tx, j, 2]
+                        ge[j], ecos[j], esin[j] = hw_em[u_tx, j, 0], hw_em[u_tx, j, 1], hw_em[u_tx, j, 2]
                         em_self[j] = em_pos[j, 0] * ecos[j] + em_pos[j, 1] * esin[j]
                 n_em = 0
                 for j in range(ne):  # TX emitters and their axes in the RX frame
@@ -499,7 +502,7 @@ if HAVE_NUMBA:
                         if kind != 1:
                             g = _gain(kind, prm[0], prm[1], prm[2], prm[3], prm[4], prm[5], prm[6], prm[7], d, cd, ce)
                             if varied:
-                                g = g * (hw_det[u_rx, i, 0] * hw_em[u_tx, j, 0])
+                                g = g * (gd[i] * ge[j])
                             sums[row, i] += g  # rays in (detector, emitter) order: emitter order per detector
                         elif near_zero:
                             d_cm = 100.0 * d
@@ -518,7 +521,7 @@ if HAVE_NUMBA:
                                 far_L2[n_new] = L2
                                 n_new += 1
                         if kind == 1 and varied:
-                            g = g * (hw_det[u_rx, i, 0] * hw_em[u_tx, j, 0])
+                            g = g * (gd[i] * ge[j])
                         out[row, i, j] = g
                         if g > 0.0:
                             any_lit = True
