@@ -216,10 +216,16 @@ def parallel_env(
     relative_threshold: float | None = None,
     code: tuple[int, int] = (15, 15),
     comm_mode: Literal["broadcast", "flooding"] = "broadcast",
-    rb_schedule: Literal["contention", "every_step"] = "contention",
+    rb_schedule: Literal["timer", "contention", "every_step"] = "timer",
+    rb_period: float = 1.0,
+    rb_jitter: float = 0.2,
     rb_max_age: int = 10,
     rb_noise: float | None = None,
     rb_near_model: bool = False,
+    hw_variation: bool = True,
+    hw_emitter_spread: float = 0.1,
+    hw_detector_spread: float = 0.1,
+    hw_angle_spread: float = 3.0,
     bearing_source: Literal["sectors", "range_bearing"] | None = None,
     bearing_noise: bool = True,
     exchange: Literal["network", "ideal"] = "network",
@@ -311,10 +317,16 @@ def parallel_env(
     | ``relative_threshold`` | ``None`` | detector threshold m_tr (ADC counts); ``None``: 5 on e-puck and r-one [T20], 8 on the Droplet |
     | ``code`` | ``(15, 15)`` | BCH code (n, k): ``(15, 15)`` uncoded, ``(15, 11)``, ``(15, 7)``, ``(15, 5)``, ``(15, 1)`` |
     | ``comm_mode`` | ``"broadcast"`` | ``"broadcast"`` or ``"flooding"`` [T20 Sec. 5] |
-    | ``rb_schedule`` | ``"contention"`` | range & bearing firing: ``"contention"`` (no two linked robots fire in one step; random priorities) or ``"every_step"`` (idealised) |
+    | ``rb_schedule`` | ``"timer"`` | range & bearing firing: ``"timer"`` (each robot on its own timer, as the Droplet firmware: robots that see each other can collide), ``"contention"`` (oracle ablation: no two linked robots fire in one step) or ``"every_step"`` (idealised) |
+    | ``rb_period`` | 1.0 | s between a robot's range & bearing firings (``"timer"``) |
+    | ``rb_jitter`` | 0.2 | s, largest late start of a firing after its timer expires (uniform) |
     | ``rb_max_age`` | 10 | steps a range & bearing reading persists |
     | ``rb_noise`` | ``None`` | ADC noise sigma (counts); ``None``: 2 on the Droplet, sqrt(2.5) on the e-puck |
     | ``rb_near_model`` | ``False`` | Droplet only: the firmware's low-power near-range fit instead of the power ladder |
+    | ``hw_variation`` | ``True`` | droplet / epuck: each robot's emitter powers, detector gains and axis angles drawn at reset (the range & bearing estimator keeps the nominal calibration) |
+    | ``hw_emitter_spread`` | 0.1 | standard deviation of ln(emitter power multiplier) (an assumption) |
+    | ``hw_detector_spread`` | 0.1 | standard deviation of ln(detector gain multiplier) (an assumption) |
+    | ``hw_angle_spread`` | 3.0 | degrees, standard deviation of each emitter's and detector's axis angle (an assumption) |
     | ``bearing_source`` | ``None`` | ``"sectors"`` (r-one) or ``"range_bearing"``; ``None``: sectors on the r-one, R&B elsewhere |
     | ``bearing_noise`` | ``True`` | r-one: sector readings with the measured 63-74 degree receiver-arc spread [L Sec. 3.2.1] |
     | ``exchange`` | ``"network"`` | bearing lists for scale-free coordinates over SwarmCom (``"network"``) or ``"ideal"`` |

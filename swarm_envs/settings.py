@@ -270,7 +270,21 @@ COMMON_SETTINGS: dict[str, Setting] = {
     "code": _CodeSetting((15, 15), why="the BCH codes SwarmCom implements [T20 Sec. 4.3]"),
     "comm_mode": Choice("broadcast", choices=("broadcast", "flooding")),
     # range & bearing [F14]
-    "rb_schedule": Choice("contention", choices=("contention", "every_step")),
+    "rb_schedule": Choice(
+        "timer", choices=("timer", "contention", "every_step"),
+        why="timer: each robot fires on its own timer, as the Droplet firmware; contention: an oracle that never lets two "
+        "linked robots fire together (ablation); every_step: every robot every step, each measured alone (idealised)",
+    ),
+    "rb_period": Real(
+        1.0, low=0.1, high=3600.0, unit="of seconds",
+        why="1 s: the Droplet example application's R&B timer; at least one 0.1 s control step (a robot fires at most "
+        "once per step); an hour is far beyond any firmware timer",
+    ),
+    "rb_jitter": Real(
+        0.2, low=0.0, high=3600.0, unit="of seconds",
+        why="largest late start of a firing after its timer expires (uniform), ~0.19 s: an R&B measurement blocks the "
+        "Droplet's main loop that polls the timer (an assumption); at most an hour, like the period",
+    ),
     "rb_max_age": Int(
         10, "steps a reading persists", low=1, high=100_000,
         why="100,000 steps are 2.8 h of simulated time, far longer than a reading of a moving robot means anything",
@@ -281,6 +295,23 @@ COMMON_SETTINGS: dict[str, Setting] = {
         "ADC range (255) and a quarter of the e-puck's, so every reading is noise",
     ),
     "rb_near_model": Flag(False),
+    # per-robot hardware variation of the IR channels (docs/design.md#hardware-variation); no paper gives the spreads
+    "hw_variation": Flag(True, why="each robot's emitters and detectors differ from the nominal platform [F14 Sec. VI]; droplet and epuck"),
+    "hw_emitter_spread": Real(
+        0.1, "standard deviation of ln(emitter power multiplier)", low=0.0, high=1.0,
+        why="standard deviation of each emitter's log power multiplier (an assumption); at 1.0 two sigmas span a "
+        "factor e^4 = 55, beyond any working LED",
+    ),
+    "hw_detector_spread": Real(
+        0.1, "standard deviation of ln(detector gain multiplier)", low=0.0, high=1.0,
+        why="standard deviation of each detector's log gain multiplier (an assumption); at 1.0 two sigmas span a "
+        "factor e^4 = 55, beyond any working detector",
+    ),
+    "hw_angle_spread": Real(
+        3.0, "standard deviation of each axis angle", low=0.0, high=30.0, unit="of degrees",
+        why="standard deviation of each emitter's and detector's axis angle (an assumption); 30 degrees is half the "
+        "Droplet's 60-degree channel spacing, where neighbouring channels would swap",
+    ),
     # bearing-only sensing and scale-free coordinates [L]
     "bearing_source": Choice(None, choices=(None, "sectors", "range_bearing")),
     "bearing_noise": Flag(True),

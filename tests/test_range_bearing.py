@@ -155,7 +155,7 @@ def test_contention_never_two_linked_robots_fire_and_is_maximal():
     rng = np.random.default_rng(8)
     pos, hd = _scene(40, rng)
     links = compute_links(pos, hd, "droplet")
-    sensor = RangeBearingSensor("droplet", 40, np.random.default_rng(1))
+    sensor = RangeBearingSensor("droplet", 40, np.random.default_rng(1), schedule="contention")
     total = 0
     for _ in range(20):
         sensor.step(links)
@@ -180,7 +180,7 @@ def test_readings_age_and_drop_after_max_age():
     rng = np.random.default_rng(9)
     pos, hd = _scene(30, rng)
     links = compute_links(pos, hd, "droplet")
-    sensor = RangeBearingSensor("droplet", 30, np.random.default_rng(2), max_age=3)
+    sensor = RangeBearingSensor("droplet", 30, np.random.default_rng(2), max_age=3, schedule="contention")
     r = sensor.step(links)
     assert len(r) > 0 and np.all(r.age == 0)
     empty = IRLinks(links.rx[:0], links.tx[:0], links.distance[:0], links.rel_position[:0],

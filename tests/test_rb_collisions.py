@@ -131,8 +131,8 @@ def test_single_firing_is_unchanged_bit_for_bit():
     hd = rng.uniform(-np.pi, np.pi, n)
     links = compute_links(pos, hd, "droplet")
     assert len(links) == n * (n - 1)
-    a = RangeBearingSensor("droplet", n, np.random.default_rng(7))
-    b = RangeBearingSensor("droplet", n, np.random.default_rng(7), collisions=False)
+    a = RangeBearingSensor("droplet", n, np.random.default_rng(7), schedule="contention")
+    b = RangeBearingSensor("droplet", n, np.random.default_rng(7), collisions=False, schedule="contention")
     for _ in range(30):
         ra, rb = a.step(links), b.step(links)
         np.testing.assert_array_equal(a.last_fired, b.last_fired)
@@ -140,7 +140,8 @@ def test_single_firing_is_unchanged_bit_for_bit():
             np.testing.assert_array_equal(getattr(ra, f), getattr(rb, f), err_msg=f)
     assert len(ra) == n * (n - 1) and np.all(ra.n_overlap == 1) and np.all(ra.tx == ra.true_tx)
     # and a forced single firing equals read() of that link with the same stream (the sensor's matrix noise
-    # is the second of three child streams of its generator: priorities, matrix noise, id noise)
+    # is the second of five child streams of its generator: priorities, matrix noise, id noise, timer
+    # phases, late starts)
     s = RangeBearingSensor("droplet", n, np.random.default_rng(11))
     fired = np.zeros(n, bool)
     fired[2] = True

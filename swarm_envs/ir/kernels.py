@@ -135,7 +135,17 @@ if HAVE_NUMBA:
                     acc += out[row, i, j]
                 sums[row, i] = acc
 
-    @njit(cache=True, error_model="numpy", nogil=True)
+    def _hardware_args(hardware: tuple | None, nd: int, ne: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """The kernels' per-robot channel tables: ``hardware`` = (rx (P,), tx (P,), detector table (M, n_d, 3),
+        emitter table (M, n_e, 3)) as :meth:`swarm_envs.ir.hardware.Hardware.tables` gives them, or None
+        (nominal channels: empty index arrays)."""
+        if hardware is None:
+            empty = np.zeros(0, dtype=np.int64)
+            return empty, empty, np.zeros((1, nd, 3)), np.zeros((1, ne, 3))
+        rx, tx, det, em = hardware
+        return (np.ascontiguousarray(rx, dtype=np.int64), np.ascontiguousarray(tx, dtype=np.int64),
+                np.ascontiguousarray(det, dtype=np.float64), np.ascontiguousarray(em, dtype=np.float64))
+
     def gains_kernel(
         rel_position: np.ndarray,
         rel_cos_sin: np.ndarray,
@@ -150,6 +160,7 @@ if HAVE_NUMBA:
         occ_xy: np.ndarray,
         occ_radius: float,
         compact: bool = False,
+        hardware: tuple | None = None,
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Gains of P pairs; same geometry as ``pair_cosines`` (docs/design.md#infrared-physical-layer), same models. ``rel_position`` (P, 2):
         transmitter centre in the receiver frame (m); ``rel_cos_sin`` (P, 2): cos and sin of the transmitter's
@@ -174,14 +185,46 @@ if HAVE_NUMBA:
         (or an emitter whose bound is above 1e-9 m) has only rays with cos <= 0, which the model leaves
         dark. The margin is far above rounding (~1e-16 m), so exactly the same rays are lit as without
         the bound.
+
+        Hardware variation (docs/design.md#hardware-variation): with ``hardware`` = (rx, tx, detector table,
+        emitter table), pair p's receiver is robot ``rx[p]`` and its transmitter ``tx[p]`` of the tables
+        ((M, n_d, 3) and (M, n_e, 3): gain multiplier, cos and sin of the channel's axis angle); the axes of
+        pair p's detectors and emitters are those robots' (offset) axes and ray (i, j) is multiplied by
+        ``detector gain[rx[p], i] * emitter gain[tx[p], j]``. None: the nominal axes, no multiplier.
         """
+        return _gains_serial(
+            rel_position, rel_cos_sin, det_pos, det_dir, em_pos, em_dir, kind, params, ir_range, occ_offsets, occ_xy,
+            occ_radius, compact, *_hardware_args(hardware, det_pos.shape[0], em_pos.shape[0]),
+        )
+
+    @njit(cache=True, error_model="numpy", nogil=True)
+    def _gains_serial(
+        rel_position: np.ndarray,
+        rel_cos_sin: np.ndarray,
+        det_pos: np.ndarray,
+        det_dir: np.ndarray,
+        em_pos: np.ndarray,
+        em_dir: np.ndarray,
+        kind: int,
+        params: np.ndarray,
+        ir_range: float,
+        occ_offsets: np.ndarray,
+        occ_xy: np.ndarray,
+        occ_radius: float,
+        compact: bool,
+        hw_rx: np.ndarray,
+        hw_tx: np.ndarray,
+        hw_det: np.ndarray,
+        hw_em: np.ndarray,
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """:func:`gains_kernel` with its channel tables (:func:`_hardware_args`), compiled."""
         P, nd, ne = rel_position.shape[0], det_pos.shape[0], em_pos.shape[0]
         out = np.empty((P, nd, ne))  # each row is zeroed just before it is filled (one pass over memory)
         sums = np.empty((P, nd))
         lit = np.empty(P, dtype=np.int64)
         n_lit = _gains_chunk(
             0, P, out, sums, lit, rel_position, rel_cos_sin, det_pos, det_dir, em_pos, em_dir, kind, params,
-            ir_range, occ_offsets, occ_xy, occ_radius, compact,
+            ir_range, occ_offsets, occ_xy, occ_radius, compact, hw_rx, hw_tx, hw_det, hw_em,
         )
         if compact:
             return out[:n_lit], lit[:n_lit].copy(), sums[:n_lit]
@@ -202,6 +245,7 @@ if HAVE_NUMBA:
         occ_radius: float,
         n_chunks: int,
         deferred: bool = False,
+        hardware: tuple | None = None,
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray] | tuple[np.ndarray, np.ndarray, np.ndarray, ChunkRows]:
         """:func:`gains_kernel` with ``compact=True`` on ``n_chunks`` threads (this one and the helper threads
         of :func:`swarm_envs._worker.run_chunks`): the pairs are cut into contiguous chunks, each filled (and
@@ -211,8 +255,10 @@ if HAVE_NUMBA:
 
         ``deferred=True``: ``lit`` and ``sums`` are gathered before returning, the gain rows are not; returns
         ``(gains, lit, sums, rows)`` with ``rows`` a :class:`ChunkRows`, and ``gains`` holds its values once
-        ``rows.gather()`` has run (for a caller whose work reads only ``lit``, ``sums`` and some rows)."""
+        ``rows.gather()`` has run (for a caller whose work reads only ``lit``, ``sums`` and some rows).
+        ``hardware``: as in :func:`gains_kernel`."""
         P, nd, ne = rel_position.shape[0], det_pos.shape[0], em_pos.shape[0]
+        hw = _hardware_args(hardware, nd, ne)
         out = np.empty((P, nd, ne))
         sums = np.empty((P, nd))
         lit = np.empty(P, dtype=np.int64)
@@ -222,7 +268,7 @@ if HAVE_NUMBA:
         def chunk(k: int) -> int:
             return _gains_chunk(
                 bounds[k], bounds[k + 1], out, sums, lit, rel_position, rel_cos_sin, det_pos, det_dir, em_pos,
-                em_dir, kind, params, ir_range, occ_offsets, occ_xy, occ_radius, True,
+                em_dir, kind, params, ir_range, occ_offsets, occ_xy, occ_radius, True, *hw,
             )
 
         counts = np.asarray(run_chunks(chunk, n_chunks), dtype=np.int64)
@@ -307,6 +353,10 @@ if HAVE_NUMBA:
         occ_xy: np.ndarray,
         occ_radius: float,
         compact: bool,
+        hw_rx: np.ndarray,
+        hw_tx: np.ndarray,
+        hw_det: np.ndarray,
+        hw_em: np.ndarray,
     ) -> int:
         """Gain rows of pairs ``start:stop`` (:func:`gains_kernel`) into ``out``/``sums`` rows from ``start``
         on: row ``p`` each, or with ``compact`` the lit pairs' rows one after the other, their pair indices
@@ -329,7 +379,11 @@ if HAVE_NUMBA:
         factor is > 1e-124 (nd, ne >= 1e-12 m) and the power >= 0.4 (L2 < 1.2 m^2), so the ray is lit
         exactly when the factor is > 0. Droplet and r-one rays: :func:`_gain`, summed as they come.
 
-        **Occlusion** (docs/design.md#infrared-physical-layer): a ray is blocked when :func:`_hits_disc` finds an occluder's disc on it."""
+        **Occlusion** (docs/design.md#infrared-physical-layer): a ray is blocked when :func:`_hits_disc` finds an occluder's disc on it.
+
+        **Hardware variation** (``hw_rx`` non-empty; :func:`gains_kernel`): each pair loads its receiver's
+        detector axes and its transmitter's emitter axes (and the front-only bounds' constants) from the
+        tables, and multiplies each ray's gain by the two channels' multipliers."""
         nd, ne = det_pos.shape[0], em_pos.shape[0]
         r2 = occ_radius * occ_radius
         r2_hi, r2_lo = r2 * (1.0 + _DISC_TOL), r2 * (1.0 - _DISC_TOL)
@@ -338,7 +392,9 @@ if HAVE_NUMBA:
         k_m, o_m, d_sat_cm = prm[0], prm[1], prm[2]  # e-puck
         d_sat2 = (d_sat_cm / 100.0) ** 2
         scale = o_m * 100.0**k_m
-        # axes and the per-element constants of the front-only bounds (gains_kernel docstring)
+        # axes and the per-element constants of the front-only bounds (gains_kernel docstring); with hardware
+        # variation each pair overwrites them with its two robots' axes
+        varied = hw_rx.shape[0] > 0
         dcos, dsin = np.cos(det_dir), np.sin(det_dir)
         ecos, esin = np.cos(em_dir), np.sin(em_dir)
         det_self = np.empty(nd)  # d_i . u_i
@@ -351,6 +407,8 @@ if HAVE_NUMBA:
         for j in range(ne):
             em_self[j] = em_pos[j, 0] * ecos[j] + em_pos[j, 1] * esin[j]
             rho_e = max(rho_e, math.sqrt(em_pos[j, 0] ** 2 + em_pos[j, 1] ** 2))
+        gd, ge = np.ones(nd), np.ones(ne)  # the pair's channel multipliers
+        last_rx = -1  # the receiver whose detectors are loaded (pairs come sorted by receiver)
         margin = 1e-9
         prune_det = kind == 1 or (kind == 2 and prm[3] > 0.0)
         prune_em = kind == 1 or (kind == 2 and prm[4] > 0.0)
@@ -377,6 +435,16 @@ if HAVE_NUMBA:
             any_lit = False
             n_new = n_far  # far rays queued by this pair start here (dropped if it stays dark)
             if math.sqrt(Rx * Rx + Ry * Ry) <= ir_range:
+                if varied:
+                    u_rx, u_tx = hw_rx[p], hw_tx[p]
+                    if u_rx != last_rx:
+                        for i in range(nd):
+                            gd[i], dcos[i], dsin[i] = hw_det[u_rx, i, 0], hw_det[u_rx, i, 1], hw_det[u_rx, i, 2]
+                            det_self[i] = det_pos[i, 0] * dcos[i] + det_pos[i, 1] * dsin[i]
+                        last_rx = u_rx
+                    for j in range(ne):
+                        ge[j], ecos[j], esin[j] = hw_em[u_tx, j, 0], hw_em[u_tx, j, 1], hw_em[u_tx, j, 2]
+                        em_self[j] = em_pos[j, 0] * ecos[j] + em_pos[j, 1] * esin[j]
                 n_em = 0
                 for j in range(ne):  # TX emitters and their axes in the RX frame
                     ex[j] = Rx + c * em_pos[j, 0] - s * em_pos[j, 1]
@@ -433,6 +501,8 @@ if HAVE_NUMBA:
                             continue
                         if kind != 1:
                             g = _gain(kind, prm[0], prm[1], prm[2], prm[3], prm[4], prm[5], prm[6], prm[7], d, cd, ce)
+                            if varied:
+                                g = g * (gd[i] * ge[j])
                             sums[row, i] += g  # rays in (detector, emitter) order: emitter order per detector
                         elif near_zero:
                             d_cm = 100.0 * d
@@ -450,6 +520,8 @@ if HAVE_NUMBA:
                                 far_at[n_new] = (row * nd + i) * ne + j
                                 far_L2[n_new] = L2
                                 n_new += 1
+                        if kind == 1 and varied:
+                            g = g * (gd[i] * ge[j])
                         out[row, i, j] = g
                         if g > 0.0:
                             any_lit = True

@@ -39,6 +39,7 @@ from scipy.spatial import cKDTree
 
 from swarm_envs.geometry import wrap_angle
 from swarm_envs.ir import kernels
+from swarm_envs.ir.hardware import Hardware
 from swarm_envs.platforms import Platform, get_platform
 
 __all__ = [
@@ -153,13 +154,14 @@ def pair_geometry(
 
 
 def pair_cosines(
-    rel_position: np.ndarray, rel_heading: np.ndarray, platform: Platform | str
+    rel_position: np.ndarray, rel_heading: np.ndarray, platform: Platform | str, hardware: Hardware | None = None
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The same geometry as :func:`pair_geometry` as (distance, cos detector angle, cos emitter angle).
 
     Every IR model is symmetric in its angles ([F14 Eqs. (19),(20)], [T20 Eqs. (24),(27)]), so gains need only the cosines, which come from
     dot products with the unit detector-emitter vectors: no arctan2 and no angle wrapping on the
-    (P, n_d, n_e) hot path.
+    (P, n_d, n_e) hot path. ``hardware`` (P rows, :meth:`Hardware.pairs`): the axes of pair p's detectors
+    and emitters are offset by its rows' angles (docs/design.md#hardware-variation).
     """
     platform = get_platform(platform)
     R = np.asarray(rel_position, dtype=float).reshape(-1, 2)
@@ -168,7 +170,9 @@ def pair_cosines(
     ex, ey = platform.emitter_positions[:, 0][None, :], platform.emitter_positions[:, 1][None, :]
     emx = R[:, 0:1] + c * ex - s * ey  # emitter positions in the receiver frame (P, n_e)
     emy = R[:, 1:2] + s * ex + c * ey
-    eca, esa = np.cos(platform.emitter_directions)[None, :], np.sin(platform.emitter_directions)[None, :]
+    e_dir = platform.emitter_directions[None, :] + (0.0 if hardware is None else hardware.emitter_offset)
+    d_dir = platform.detector_directions[None, :] + (0.0 if hardware is None else hardware.detector_offset)
+    eca, esa = np.cos(e_dir), np.sin(e_dir)
     eax = (c * eca - s * esa)[:, None, :]  # emitter axes in the receiver frame (P, 1, n_e)
     eay = (s * eca + c * esa)[:, None, :]
     dx = emx[:, None, :] - platform.detector_positions[None, :, 0, None]
@@ -176,8 +180,8 @@ def pair_cosines(
     distance = np.hypot(dx, dy)
     inv = 1.0 / np.maximum(distance, 1e-12)
     ux, uy = dx * inv, dy * inv  # unit vector detector -> emitter
-    dax = np.cos(platform.detector_directions)[None, :, None]
-    day = np.sin(platform.detector_directions)[None, :, None]
+    dax = np.cos(d_dir)[:, :, None]
+    day = np.sin(d_dir)[:, :, None]
     cos_detector = ux * dax + uy * day
     cos_emitter = -(ux * eax + uy * eay)
     return distance, cos_detector, cos_emitter
@@ -189,6 +193,7 @@ def pair_gains(
     platform: Platform | str,
     model: object | None = None,
     occluders: tuple[np.ndarray, np.ndarray] | None = None,
+    hardware: Hardware | None = None,
 ) -> np.ndarray:
     """Noiseless gains (P, n_detectors, n_emitters) of the platform's IR model for P pairs.
 
@@ -204,6 +209,8 @@ def pair_gains(
             ``offsets[p]:offsets[p + 1]`` (from :func:`pair_occluders`). A ray, the segment from emitter j
             of the transmitter to detector i of the receiver, that crosses one of them gets zero gain
             (per-ray line of sight, docs/design.md#infrared-physical-layer). Default: no occluders (line of sight assumed).
+        hardware: optional per-pair channel deviations (P rows: pair p's receiver detectors and transmitter
+            emitters, :meth:`Hardware.pairs`; docs/design.md#hardware-variation). Default: the nominal platform.
     """
     platform = get_platform(platform)
     model = platform.ir_model if model is None else model
@@ -216,7 +223,13 @@ def pair_gains(
         xy = np.ascontiguousarray(occluders[1], dtype=float).reshape(-1, 2)
         if offsets.shape[0] != R.shape[0] + 1 or offsets[0] != 0 or offsets[-1] != xy.shape[0] or np.any(np.diff(offsets) < 0):
             raise ValueError(f"occluders: offsets must be non-decreasing, length P + 1 = {R.shape[0] + 1}, from 0 to len(centres)")
-    return _gains(R, psi, platform, model, offsets, xy, compact=False)[0]
+    hw = None
+    if hardware is not None:
+        if len(hardware) != R.shape[0]:
+            raise ValueError(f"hardware must have one row per pair ({R.shape[0]}), got {len(hardware)}")
+        rows = np.arange(R.shape[0])
+        hw = (rows, rows, hardware)
+    return _gains(R, psi, platform, model, offsets, xy, compact=False, hardware=hw)[0]
 
 
 def _gains(
@@ -230,6 +243,7 @@ def _gains(
     cos_sin: np.ndarray | None = None,
     threads: int = 1,
     deferred: bool = False,
+    hardware: tuple[np.ndarray, np.ndarray, Hardware] | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, kernels.ChunkRows | None]:
     """(gains, lit, sums) of :func:`pair_gains` with checked inputs: ``lit`` the pairs with a nonzero gain,
     ``gains`` every pair's rows, or with ``compact`` only the ``lit`` rows (compiled kernel, or numpy), and
@@ -238,8 +252,11 @@ def _gains(
     from ``psi``). ``threads`` > 1 (with ``compact``): the compiled kernel splits the pairs over that many
     threads (:func:`gain_threads`; same result bit for bit). ``deferred`` (with threads): the gain rows are
     not gathered; the fourth result is then their :class:`kernels.ChunkRows` (else None), and ``gains``
-    holds its values once its ``gather()`` has run (:func:`kernels.gains_kernel_threaded`)."""
+    holds its values once its ``gather()`` has run (:func:`kernels.gains_kernel_threaded`). ``hardware``:
+    optional (rx (P,), tx (P,), :class:`Hardware` of the robots they index): per-robot channel deviations
+    (docs/design.md#hardware-variation)."""
     if kernels.HAVE_NUMBA and type(model).__name__ in kernels.MODEL_IDS:
+        hw = None if hardware is None else (hardware[0], hardware[1], *hardware[2].tables(platform))
         kind, params = kernels.model_params(model)
         if cos_sin is None:
             cos_sin = np.stack([np.cos(psi), np.sin(psi)], axis=-1)
@@ -250,10 +267,10 @@ def _gains(
         )
         if compact and threads > 1:
             if deferred:
-                return kernels.gains_kernel_threaded(*args, int(threads), True)
-            return (*kernels.gains_kernel_threaded(*args, int(threads)), None)
-        return (*kernels.gains_kernel(*args, compact), None)
-    g = _pair_gains_numpy(R, psi, platform, model)
+                return kernels.gains_kernel_threaded(*args, int(threads), True, hw)
+            return (*kernels.gains_kernel_threaded(*args, int(threads), False, hw), None)
+        return (*kernels.gains_kernel(*args, compact, hw), None)
+    g = _pair_gains_numpy(R, psi, platform, model, None if hardware is None else hardware[2].pairs(hardware[0], hardware[1]))
     if xy.shape[0]:
         g = g * _clear_rays_numpy(R, psi, platform, offsets, xy)
     lit = np.flatnonzero(g.reshape(g.shape[0], -1).max(axis=1, initial=0.0) > 0)
@@ -270,10 +287,13 @@ def _emitter_sums(gains: np.ndarray) -> np.ndarray:
     return acc
 
 
-def _pair_gains_numpy(R: np.ndarray, psi: np.ndarray, platform: Platform, model: object) -> np.ndarray:
-    """The numpy reference of :func:`pair_gains` without occluders (used without numba, and to test the kernel)."""
-    distance, cos_det, cos_em = pair_cosines(R, psi, platform)
+def _pair_gains_numpy(R: np.ndarray, psi: np.ndarray, platform: Platform, model: object, hardware: Hardware | None = None) -> np.ndarray:
+    """The numpy reference of :func:`pair_gains` without occluders (used without numba, and to test the kernel);
+    ``hardware``: per-pair channel deviations (:meth:`Hardware.pairs`)."""
+    distance, cos_det, cos_em = pair_cosines(R, psi, platform, hardware)
     g = np.asarray(model.gain_from_cos(distance, cos_det, cos_em), dtype=float)
+    if hardware is not None:
+        g = g * (hardware.detector_gain[:, :, None] * hardware.emitter_gain[:, None, :])
     return g * (np.hypot(R[:, 0], R[:, 1]) <= platform.ir_range)[:, None, None]
 
 
@@ -461,6 +481,7 @@ def compute_links(
     copy: np.ndarray | None = None,
     obstacles: np.ndarray | None = None,
     silent: np.ndarray | None = None,
+    hardware: Hardware | None = None,
 ) -> IRLinks:
     """All directed IR links of a scene (docs/design.md#infrared-physical-layer), vectorised.
 
@@ -481,11 +502,13 @@ def compute_links(
         obstacles: (S, 2, 2) static obstacle segments, world frame (m), the same in every copy: they block
             light per ray (:func:`block_links`). None or empty: no obstacles.
         silent: (N,) bool switched-off robots: no light from or to them (their bodies still occlude).
+        hardware: (N rows) each robot's channel deviations (docs/design.md#hardware-variation): the links'
+            gains (and emitter sums) are those of the robots' own channels. None: the nominal platform.
 
     Returns:
         :class:`IRLinks` with both directions (u, w) and (w, u) of every candidate pair, sorted by (rx, tx).
     """
-    return _compute_links(positions, headings, platform, max_range, drop_zero, occlusion, copy, obstacles=obstacles, silent=silent)[0]
+    return _compute_links(positions, headings, platform, max_range, drop_zero, occlusion, copy, obstacles=obstacles, silent=silent, hardware=hardware)[0]
 
 
 def _compute_links(
@@ -499,6 +522,7 @@ def _compute_links(
     deferred: bool = False,
     obstacles: np.ndarray | None = None,
     silent: np.ndarray | None = None,
+    hardware: Hardware | None = None,
 ) -> tuple[IRLinks, kernels.ChunkRows | None]:
     """:func:`compute_links`, and with ``deferred`` (for :class:`swarm_envs.sensing.full.FullSensing`), when
     the scene uses threads (:func:`gain_threads`; else None), the gain rows as the kernel's chunks left them
@@ -536,7 +560,10 @@ def _compute_links(
         offsets, xy = np.zeros(rx.shape[0] + 1, dtype=np.int64), np.zeros((0, 2))
     else:
         offsets, xy = occluders
-    gains, lit, sums, rows_pending = _gains(rel, rel_heading, platform, platform.ir_model, offsets, xy, drop_zero, rel_cs, threads, deferred)
+    if hardware is not None and len(hardware) != N:
+        raise ValueError(f"hardware must have one row per robot ({N}), got {len(hardware)}")
+    hw = None if hardware is None else (rx, tx, hardware)
+    gains, lit, sums, rows_pending = _gains(rel, rel_heading, platform, platform.ir_model, offsets, xy, drop_zero, rel_cs, threads, deferred, hw)
     rows = np.arange(rx.shape[0])
     if drop_zero and lit.shape[0] < rx.shape[0]:
         rows = lit

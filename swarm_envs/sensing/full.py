@@ -3,10 +3,14 @@
 Each control step, in this order (data flows one way):
 
 1. **IR layer** (:func:`swarm_envs.ir.layer.compute_links`): candidate pairs (KD-tree), line of sight,
-   emitter-detector gains of every visible pair, once for everything below.
+   emitter-detector gains of every visible pair, once for everything below. On the ``droplet`` and
+   ``epuck`` (``hw_variation=True``) the gains are those of each robot's own channels: emitter powers,
+   detector gains and axis angles drawn per robot at reset (:mod:`swarm_envs.ir.hardware`,
+   docs/design.md#hardware-variation), so range & bearing and SwarmCom see them and the estimator's
+   nominal calibration does not match them.
 2. **Range & bearing** [F14] (:class:`swarm_envs.sensing.range_bearing.RangeBearingSensor`) on the
-   ``droplet`` and ``epuck``: contention-scheduled firing, noisy brightness matrices, the estimator,
-   readings that persist with an age.
+   ``droplet`` and ``epuck``: firing on each robot's own timer (``rb_schedule="timer"``), noisy
+   brightness matrices, the estimator, readings that persist with an age.
 3. **SwarmCom** [T20] (:class:`swarm_envs.comm.network.Network`): bit-slot simulation of the channel.
    With ``message_bits > 0`` each robot queues its current action payload whenever its transmit queue
    is empty (so the newest payload goes out as soon as the radio is free). Decoded application frames
@@ -48,6 +52,7 @@ from swarm_envs._worker import worker
 from swarm_envs.comm.channel import recommended_relative_threshold
 from swarm_envs.comm.network import Network, PreparedStep
 from swarm_envs.copies import CopyRandom
+from swarm_envs.ir.hardware import Hardware, draw_hardware
 from swarm_envs.ir.layer import _compute_links, gain_threads
 from swarm_envs.ir.models import RoneIR
 from swarm_envs.observation import nearest_slots, pack_nearest, range_bearing_rows
@@ -121,6 +126,12 @@ class FullSensing:
         self.large_scene = False
         # one stack for all copies; each module keeps one generator per copy (placeholders until reset)
         streams = [CopyRandom([np.random.default_rng(0) for _ in range(self.n_copies)]) for _ in range(4)]
+        #: each robot's channel deviations (:mod:`swarm_envs.ir.hardware`; rows drawn at reset), or None:
+        #: the nominal platform (``hw_variation=False``, or a platform without range & bearing)
+        self.hardware: Hardware | None = None
+        if self.has_range and config["hw_variation"]:
+            self.hardware = Hardware.nominal(self.n, platform)
+            self._spreads = (float(config["hw_emitter_spread"]), float(config["hw_detector_spread"]), float(config["hw_angle_spread"]))
         self.rb: RangeBearingSensor | None = None
         if self.has_range:
             self.rb = RangeBearingSensor(
@@ -131,6 +142,9 @@ class FullSensing:
                 schedule=config["rb_schedule"],
                 max_age=config["rb_max_age"],
                 near_model=config["rb_near_model"],
+                period=config["rb_period"],
+                jitter=config["rb_jitter"],
+                hardware=self.hardware,
             )
         threshold = config["relative_threshold"]
         self.network = Network(
@@ -169,10 +183,14 @@ class FullSensing:
 
     def reset(self, copies: np.ndarray, rngs: list[np.random.Generator]) -> None:
         """Fresh sensor, channel and exchange state of env ``copies``, from independent child streams
-        (range & bearing, channel, exchange, sector bearings) of each copy's generator ``rngs[k]``; other
-        copies untouched."""
+        (range & bearing, channel, exchange, sector bearings, hardware variation) of each copy's generator
+        ``rngs[k]``; other copies untouched."""
         copies = np.asarray(copies, dtype=np.int64).reshape(-1)
-        children = [g.spawn(4) for g in rngs]
+        children = [g.spawn(5) for g in rngs]
+        if self.hardware is not None:  # each robot's channels, from the copy's own child stream
+            for b, c in zip(copies, children):
+                rows = np.arange(int(b) * self.copy_size, (int(b) + 1) * self.copy_size)
+                self.hardware.set_rows(rows, draw_hardware(c[4], self.copy_size, self.platform, *self._spreads))
         if self.rb is not None:
             self.rb.reset(copies, [c[0] for c in children])
         self.network.reset_copies(copies, [c[1] for c in children])
@@ -225,7 +243,8 @@ class FullSensing:
         # (swarm_envs.ir.kernels.ChunkRows): range & bearing reads the rows it needs from there, SwarmCom
         # reads only the emitter sums, and nothing here reads links.gains before gain_rows.gather()
         links, gain_rows = _compute_links(
-            positions, headings, self.platform, copy=self.copy_of if self.n_copies > 1 else None, deferred=True, obstacles=self.obstacles, silent=silent
+            positions, headings, self.platform, copy=self.copy_of if self.n_copies > 1 else None, deferred=True, obstacles=self.obstacles,
+            silent=silent, hardware=self.hardware,
         )
         take = None if gain_rows is None else gain_rows.take
 

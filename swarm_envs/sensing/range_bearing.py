@@ -23,19 +23,21 @@ bearing error a few degrees, heading error larger and 60-degree periodic). The s
 sigma = 0, 1, 4, 8 counts so the sensitivity to this choice is visible. For the e-puck the ADC noise of
 [T20] (variance 2.5 counts^2) is used.
 
-Hardware bearing error. [F14 Sec. V] finds its bearing error "uniformly below 0" and attributes it to
-an asymmetry of the real sensors (Fig. 4a) that its model does not include; it gives no magnitude, and
-its conclusion notes that sensors and emitters differ from robot to robot (also without numbers). With no
-measured asymmetry to cite, we add no bias or per-robot gain spread: the brightness noise above *is*
-the hardware error model (see the README for what it gives beside Figs. 6-7).
+Hardware error. [F14 Sec. V] finds its bearing error "uniformly below 0" and attributes it to an
+asymmetry of the real sensors (Fig. 4a) that its model does not include, and its conclusion (Sec. VI)
+notes that sensors and emitters differ from robot to robot; neither gives a magnitude. In the env each
+robot's emitter powers, detector gains and axis angles are drawn at reset with assumed spreads
+(:mod:`swarm_envs.ir.hardware`, docs/design.md#hardware-variation) and enter the links' gains, so the
+matrices measured here are those of the robots' own channels while :func:`estimate` keeps the nominal
+calibration; the brightness noise above comes on top.
 
 Collisions and the decoded transmitter (docs/design.md#range-and-bearing). A measurement starts with a message: [F14 Sec. II]
 "RX ... requests R&B information from a specific robot TX"; in the Droplet firmware the TX broadcasts an
 ``rnb_r`` command (a UART frame on the 38 kHz carrier whose header holds the 16-bit sender id and a
 CRC-16) and, a fixed delay after it, lights emitter 0..5 in turn for fixed times; a receiver that decodes
 the command samples its 6 sensors in the same fixed slots [F14 Sec. II: "predetermined duration and
-sequence"]. Two transmitters that fire in the same control step (hidden from each other, so contention
-does not stop them) are modelled with *aligned slots*: the step is one slot of the schedule, both
+sequence"]. Two transmitters that fire in the same control step (any two robots whose timers expire
+in that step, docs/design.md#range-and-bearing) are modelled with *aligned slots*: the step is one slot of the schedule, both
 commands start at its beginning, so bit k of both frames coincide and emitter j of both lands in column j
 of the receiver's matrix. Light adds. So, at a receiver u:
 
@@ -75,6 +77,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from swarm_envs.copies import CopyRandom, CopyStream
+from swarm_envs.ir.hardware import Hardware
 from swarm_envs.ir.layer import IRLinks, pair_gains, wrap_angle
 from swarm_envs.platforms import Platform, get_platform
 from swarm_envs.sensing.kernels import _PAIRWISE_INIT, HAVE_NUMBA, segment_sum, sum_last
@@ -104,6 +107,9 @@ __all__ = [
     "decode_ids",
     "NOT_HEARD",
     "CONFLICT",
+    "SCHEDULES",
+    "TIMER_PERIOD",
+    "TIMER_JITTER",
     "RangeBearingReadings",
     "RangeBearingSensor",
 ]
@@ -113,6 +119,17 @@ __all__ = [
 #: power, so 1/256 is needed to stay below 255 (the Droplet sets LED current with a 7-bit digital
 #: potentiometer [F14 Sec. III], so a ~1/100 dynamic range is plausible).
 POWER_LADDER: tuple[float, ...] = tuple(2.0**-k for k in range(9))
+
+#: Firing schedules of :class:`RangeBearingSensor` (docs/design.md#range-and-bearing).
+SCHEDULES = ("timer", "contention", "every_step")
+#: Period (s) of each robot's R&B timer: the Droplet example application's ``if (get_time() - lastBroadcast
+#: > 1000) { lastBroadcast = get_time(); broadcast_rnb_data(); }`` (cu-droplet ``user_template.c``).
+TIMER_PERIOD = 1.0
+#: Largest late start (s) of a firing after its timer expires (uniform): the application polls its timer
+#: in ``loop()``, which an R&B measurement of a neighbour blocks for ~0.19 s (cu-droplet ``range_algs.h``:
+#: 30 ms after the command, 2 ms to set the powers, 6 x (16 + 10) ms of emitter slots). An assumption.
+TIMER_JITTER = 0.2
+_N_CHILDREN = 5  # child streams per copy: priorities, matrix noise, id noise, timer phases, late starts
 
 #: Bits of a robot id in the ``rnb_r`` command header (the Droplet firmware's ``uint16_t`` sender id).
 ID_BITS = 16
@@ -570,12 +587,19 @@ class RangeBearingSensor:
     - power control: a saturated matrix is re-measured on the power ladder (docs/design.md#range-and-bearing), or with
       ``near_model=True`` (Droplet) once at the firmware's low power and inverted with its own amplitude
       fit (:class:`swarm_envs.ir.models.DropletLowPowerIR`).
-    - ``schedule="contention"``: every robot draws a random priority; a robot *fires* (sends the request
-      and its R&B sequence) iff no robot it shares an IR link with and of higher priority fires. This is
-      the greedy maximal independent set in priority order, computed with vectorised Luby rounds over the
-      link pairs. Neighbours are the robots it shares a link with this step (in range, in line of
-      sight), so two robots hidden from each other by a third may fire together (hidden terminals): at a
-      receiver that sees both their frames and light superpose (module docstring).
+    - ``schedule="timer"`` (default; the Droplet firmware, docs/design.md#range-and-bearing): each robot
+      *fires* (sends the request and its R&B sequence) when its own timer expires, every ``period``
+      seconds plus a late start drawn uniform in [0, ``jitter``] s at each firing, from a phase drawn
+      uniform in [0, ``period``) at reset. The firmware sends the high-priority ``rnb_r`` command
+      without listening first (``hpIrTargetedCmd`` defers only to another R&B in progress) and nothing
+      else coordinates the robots, so the schedule reads no link: robots that see each other can fire in
+      the same step, and their frames and light superpose at every receiver that sees more than one
+      (module docstring). A robot that fires does not measure in that step (its R&B blocks its
+      receivers: ``hp_ir_block_bm``).
+    - ``schedule="contention"`` (an oracle, for ablation): every robot draws a random priority; a robot
+      fires iff no robot it shares an IR link with and of higher priority fires: the greedy maximal
+      independent set in priority order over the *true* link graph of the step (vectorised Luby rounds),
+      which no robot knows. Only robots hidden from each other by a third may fire together.
       ``schedule="every_step"``: every robot fires every step, measured one at a time as on the paper's
       gantry (idealised: no superposition).
     - every robot with a link to a firing TX decodes the request id (:func:`decode_ids`) and, when that
@@ -588,7 +612,11 @@ class RangeBearingSensor:
     ``collisions=False`` measures every firing as if alone and attributes it to the true TX (no
     superposition; a baseline for validation). ``id_check=False``: the sender id is not CRC-checked.
     Nothing here reads ground truth except through the links' gains (the brightness matrices); the
-    true transmitter goes only to the ground-truth fields of the readings.
+    true transmitter goes only to the ground-truth fields of the readings. ``hardware``
+    (:class:`swarm_envs.ir.hardware.Hardware`, one row per robot, or None): the robots' channel
+    deviations, for the matrices this sensor computes itself (the near model's low-power light); the
+    links' gains carry them already when the IR layer was given them. The estimator keeps the nominal
+    calibration.
     """
 
     def __init__(
@@ -597,20 +625,26 @@ class RangeBearingSensor:
         n_robots: int,
         rng: np.random.Generator | CopyRandom,
         noise_sigma: float | None = None,
-        schedule: str = "contention",
+        schedule: str = "timer",
         max_age: int = 10,
         ladder: tuple[float, ...] = POWER_LADDER,
         near_model: bool = False,
         collisions: bool = True,
         id_check: bool = True,
+        period: float = TIMER_PERIOD,
+        jitter: float = TIMER_JITTER,
+        dt: float = 0.1,
+        hardware: Hardware | None = None,
     ) -> None:
         self.platform = get_platform(platform)
         _model(self.platform)
         if near_model and self.platform.name != "droplet":
             raise ValueError(f"near_model=True is the Droplet firmware's low-power fit; platform {self.platform.name!r} has none")
         self.near_model = bool(near_model)
-        if schedule not in ("contention", "every_step"):
-            raise ValueError(f"schedule must be 'contention' or 'every_step', got {schedule!r}")
+        if schedule not in SCHEDULES:
+            raise ValueError(f"schedule must be one of {SCHEDULES}, got {schedule!r}")
+        if not (dt > 0 and period >= dt and jitter >= 0):
+            raise ValueError(f"need dt > 0, period >= dt and jitter >= 0 (s), got dt={dt}, period={period}, jitter={jitter}")
         self.rng = rng if isinstance(rng, CopyRandom) else CopyRandom([rng])
         self.copy_size = int(n_robots)
         if collisions and self.copy_size > 2**ID_BITS:
@@ -619,23 +653,34 @@ class RangeBearingSensor:
         self.copy_of = np.repeat(np.arange(self.rng.n_copies), self.copy_size)
         self.noise_sigma = float(self.platform.ir_model.default_noise_sigma if noise_sigma is None else noise_sigma)
         self.schedule = schedule
+        self.period, self.jitter, self.dt = float(period), float(jitter), float(dt)
+        self.hardware = hardware
         self.max_age = int(max_age)
         self.ladder = tuple(ladder)
         self.collisions = bool(collisions)
         self.id_check = bool(id_check)
         self._frames = id_frames(np.arange(self.copy_size)) if self.collisions else None
-        # three buffered child streams of each copy's generator (one Generator call per copy every few
-        # steps instead of several per step): priorities, matrix noise, id-decoding noise (its own stream,
-        # so the matrix noise draws are as without ids)
-        kids = [g.spawn(3) for g in self.rng.generators]
+        # child streams of each copy's generator: buffered ones (one Generator call per copy every few steps
+        # instead of several per step) for priorities, matrix noise, id-decoding noise (its own stream, so
+        # the matrix noise draws are as without ids) and the timers' late starts; the timer phases are
+        # drawn from the fourth child at reset
+        kids = [g.spawn(_N_CHILDREN) for g in self.rng.generators]
         self.prio_rng = CopyStream([k[0] for k in kids], "uniform", chunk=max(64, 16 * self.copy_size))
         self.noise_rng = CopyStream([k[1] for k in kids], "normal")
         self.id_rng = CopyStream([k[2] for k in kids], "normal")
+        self.jitter_rng = CopyStream([k[4] for k in kids], "uniform", chunk=max(64, 16 * self.copy_size))
+        #: (N,) s from the start of the next step until each robot's timer expires (``schedule="timer"``)
+        self.countdown = np.concatenate([self._phases(k[3]) for k in kids])
         self.last_fired = np.zeros(self.n_robots, dtype=bool)
         self.reset()
 
+    def _phases(self, g: np.random.Generator) -> np.ndarray:
+        """One copy's timer phases: uniform in [0, period) s (the robots were switched on at unrelated times)."""
+        return g.random(self.copy_size) * self.period
+
     def reset(self, copies: np.ndarray | None = None, rngs: list[np.random.Generator] | None = None) -> None:
-        """Forget all readings (of ``copies`` only, given; their streams become ``rngs`` if given)."""
+        """Forget all readings (of ``copies`` only, given; their streams become ``rngs`` if given, and their
+        timers get new phases)."""
         if copies is None:
             self._key = np.zeros(0, dtype=np.int64)
             self._range = np.zeros(0)
@@ -650,8 +695,11 @@ class RangeBearingSensor:
         if rngs is not None:
             for b, g in zip(copies, rngs):
                 self.rng.generators[b] = g
-                for stream, kid in zip((self.prio_rng, self.noise_rng, self.id_rng), g.spawn(3)):
-                    stream.set_generator(int(b), kid)
+                kids = g.spawn(_N_CHILDREN)
+                for stream, kid in zip((self.prio_rng, self.noise_rng, self.id_rng, None, self.jitter_rng), kids):
+                    if stream is not None:
+                        stream.set_generator(int(b), kid)
+                self.countdown[int(b) * self.copy_size : (int(b) + 1) * self.copy_size] = self._phases(kids[3])
         keep = ~np.isin((self._key // self.n_robots) // self.copy_size, copies)
         self._key, self._range, self._bearing = self._key[keep], self._range[keep], self._bearing[keep]
         self._heading, self._age = self._heading[keep], self._age[keep]
@@ -660,10 +708,17 @@ class RangeBearingSensor:
 
     # -- scheduling ------------------------------------------------------------------------------------
     def fire_mask(self, links: IRLinks) -> np.ndarray:
-        """(N,) bool: robots that fire this step (consumes the generator for priorities)."""
+        """(N,) bool: robots that fire this step. ``"timer"``: the robots whose timer expires within this step
+        (reads no link; draws a late start for every robot and advances the timers); ``"contention"``:
+        draws priorities and reads the links."""
         N = self.n_robots
         if self.schedule == "every_step":
             return np.ones(N, dtype=bool)
+        if self.schedule == "timer":
+            fire = self.countdown < self.dt
+            late = self.jitter_rng.draw(self.copy_of)  # every robot, every step: a fixed count per step
+            self.countdown = self.countdown - self.dt + np.where(fire, self.period + self.jitter * late, 0.0)
+            return fire
         prio = self.prio_rng.draw(self.copy_of)
         if HAVE_NUMBA:
             rx, tx = np.asarray(links.rx, np.int64), np.asarray(links.tx, np.int64)
@@ -690,8 +745,10 @@ class RangeBearingSensor:
                 raise ValueError(f"fired must have shape ({N},), got {fired.shape}")
         self.last_fired = fired
         sel = np.nonzero(fired[links.tx])[0]  # links from firing TXs, sorted by (rx, tx)
+        if self.schedule == "timer":  # a robot that fires does not measure in the same step
+            sel = sel[~fired[links.rx[sel]]]
         rx_sel = links.rx[sel]
-        superpose = self.collisions and self.schedule == "contention"
+        superpose = self.collisions and self.schedule != "every_step"
         if superpose and sel.size:
             starts = np.flatnonzero(np.r_[True, rx_sel[1:] != rx_sel[:-1]])
         else:
@@ -735,7 +792,8 @@ class RangeBearingSensor:
             if self.near_model:
                 from swarm_envs.ir.models import DropletLowPowerIR
 
-                low_l = pair_gains(links.rel_position[sel], links.rel_heading[sel], self.platform, model=DropletLowPowerIR(self.platform))
+                hw = None if self.hardware is None else self.hardware.pairs(links.rx[sel], links.tx[sel])
+                low_l = pair_gains(links.rel_position[sel], links.rel_heading[sel], self.platform, model=DropletLowPowerIR(self.platform), hardware=hw)
                 low_l = low_l * (gains > 0)  # rays occluded at full power stay dark
                 low = (segment_sum(low_l, starts) if starts.size < sel.size else low_l)[g]
             single = starts.size == sel.size

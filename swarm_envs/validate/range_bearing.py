@@ -19,14 +19,16 @@ The sweep compares each estimate with the brightness model the estimator itself 
 checks the estimator and the noise model, not how well the model matches real Droplets, which differ from
 each other and from their calibration [F14 Sec. VI]. So the same sweep is also run in the env
 (:func:`env_sweep`: static pairs placed with reset options, the env's own firing schedule, noise and
-collisions), with the env's default settings and, with ``--variation KEY=VALUE``, with further env settings
-such as the spreads of per-robot hardware variation drawn at reset; a setting this version of the package
-does not have skips that run with a message.
+collisions), with the env's default settings (each robot's channels drawn at reset,
+docs/design.md#hardware-variation), with ``hw_variation=False`` (the nominal channels the estimator
+inverts), and, with ``--variation KEY=VALUE``, with further env settings such as other spreads; a setting
+this version of the package does not have skips that run with a message.
 
 Then the collision rows (:func:`collisions`): fractions of clean, corrupted, misattributed and
 lost readings (i) for two transmitters hidden from each other firing in the same step at a receiver that
-sees both, and (ii) in a dense random swarm under the contention schedule, each beside the model without
-collisions (every firing measured alone and attributed to the true transmitter).
+sees both, and (ii) in a dense random swarm under the default timer schedule and under the contention
+oracle, each beside the model without collisions (every firing measured alone and attributed to the true
+transmitter).
 """
 
 from __future__ import annotations
@@ -239,10 +241,10 @@ def _hidden_pairs(platform, trials, sigma, seed, collisions, id_check, swarm=10)
     return _classify(r, links, 2 * T), T
 
 
-def _dense_swarm(platform, n, side, scenes, steps, sigma, seed, collisions, id_check):
-    """Contention-scheduled steps in random static scenes of ``n`` robots in a ``side`` x ``side`` square
-    (per-ray occlusion). Expected readings per step: links from firing robots whose noiseless brightest
-    entry reaches the no-reading floor."""
+def _dense_swarm(platform, n, side, scenes, steps, sigma, seed, collisions, id_check, schedule="timer"):
+    """Steps of ``schedule`` in random static scenes of ``n`` robots in a ``side`` x ``side`` square
+    (per-ray occlusion). Expected readings per step: links from firing robots to robots that do not fire
+    (a firing robot measures nothing) whose noiseless brightest entry reaches the no-reading floor."""
     rng = np.random.default_rng(seed)
     floor = platform.ir_model.no_reading_floor
     totals = np.zeros(4)
@@ -258,10 +260,10 @@ def _dense_swarm(platform, n, side, scenes, steps, sigma, seed, collisions, id_c
         links = compute_links(np.array(pos), hd, platform)
         lit = links.gains.reshape(len(links), -1).max(axis=1) >= floor
         sensor = RangeBearingSensor(platform, n, np.random.default_rng([seed, k]), noise_sigma=sigma,
-                                    collisions=collisions, id_check=id_check)
+                                    collisions=collisions, id_check=id_check, schedule=schedule)
         for _ in range(steps):
             r = sensor.step(links)
-            expected = int((lit & sensor.last_fired[links.tx]).sum())
+            expected = int((lit & sensor.last_fired[links.tx] & ~sensor.last_fired[links.rx]).sum())
             totals += _classify(r, links, expected) * max(expected, 1)
             n_expected += expected
             overlap.append(r.n_overlap[r.age == 0])
@@ -270,16 +272,19 @@ def _dense_swarm(platform, n, side, scenes, steps, sigma, seed, collisions, id_c
 
 
 def collisions(platform_name="droplet", sigma=None, seed=0, trials=2000, n=50, side=0.45, scenes=4, steps=20):
-    """Collision rows: hidden pair and dense swarm, with collisions (CRC on / off) beside the baseline."""
+    """Collision rows: hidden pair and dense swarm, with collisions (CRC on / off) beside the baseline, the
+    dense swarm under the timer schedule (default) and the contention oracle."""
     platform = get_platform(platform_name)
     sigma = float(platform.ir_model.default_noise_sigma if sigma is None else sigma)
     scale = platform.diameter / (DROPLET_DIAMETER_CM / 100.0)
     rows = []
-    for label, col, chk in (("no collisions (each firing alone)", False, True), ("collisions, CRC id check", True, True),
-                            ("collisions, id unchecked", True, False)):
+    for label, col, chk, schedule in (("no collisions (each firing alone)", False, True, "timer"),
+                                      ("collisions, CRC id check", True, True, "timer"),
+                                      ("collisions, id unchecked", True, False, "timer"),
+                                      ("collisions, CRC, contention oracle", True, True, "contention")):
         hp, T = _hidden_pairs(platform, trials, sigma, seed, col, chk)
-        ds, per_robot, ov = _dense_swarm(platform, n, side * scale, scenes, steps, sigma, seed + 1, col, chk)
-        rows.append({"model": label, "hidden_pair": dict(zip(("clean", "corrupted", "misattributed", "lost"), hp.tolist())),
+        ds, per_robot, ov = _dense_swarm(platform, n, side * scale, scenes, steps, sigma, seed + 1, col, chk, schedule)
+        rows.append({"model": label, "schedule": schedule, "hidden_pair": dict(zip(("clean", "corrupted", "misattributed", "lost"), hp.tolist())),
                      "dense": dict(zip(("clean", "corrupted", "misattributed", "lost"), ds.tolist())),
                      "dense_expected_per_robot_step": per_robot, "dense_fresh_overlapped": ov, "hidden_trials": T})
     return {"platform": platform.name, "sigma_counts": sigma, "dense_n": n, "dense_side_m": side * scale, "rows": rows}
@@ -287,6 +292,12 @@ def collisions(platform_name="droplet", sigma=None, seed=0, trials=2000, n=50, s
 
 # ------------------------------------------------------------------------------- through the env's stack
 ENV_TASK = "swarm_envs/Aggregation-v0"
+#: the in-env runs: result key and label
+ENV_RUNS = (
+    ("env", "in the env, its default settings (each robot's channels drawn at reset)"),
+    ("env_nominal", "in the env, hw_variation=False (the nominal channels the estimator inverts)"),
+    ("env_variation", "in the env, default settings + the --variation settings"),
+)
 PAIR_SPACING = 1.0  # m between the pairs of one env copy: beyond the Droplet's and e-puck's IR range
 
 
@@ -299,7 +310,7 @@ def unknown_settings(settings: dict[str, Any], task: str = ENV_TASK) -> list[str
     return sorted(k for k in settings if k not in known)
 
 
-def env_sweep(platform_name: str = "droplet", settings: dict[str, Any] | None = None, seed: int = 0, steps: int = 8,
+def env_sweep(platform_name: str = "droplet", settings: dict[str, Any] | None = None, seed: int = 0, steps: int = 24,
               pairs_per_distance: int = 144, pairs_per_copy: int = 16) -> dict[str, Any]:
     """The gantry sweep [F14 Sec. V] run in the env: pairs of static robots (RX at the pair's origin facing +x,
     TX at centre distance R, bearing b, relative heading h; ``pairs_per_distance`` pairs at each of the
@@ -395,7 +406,7 @@ def rows(res: dict[str, Any]) -> list[Row]:
         Row("[F14 Figs. 6, 7]", "bearing / heading error std", f"{res['bearing_std']:.1f} / {res['heading_std']:.1f} deg",
             "a few degrees / larger", gantry, sweep),
     ]
-    for key, label in (("env", "in the env, its default settings"), ("env_variation", "in the env, default settings + the --variation settings")):
+    for key, label in ENV_RUNS:
         e = res.get(key)
         if e is None:
             continue
@@ -470,7 +481,8 @@ def main(argv: list[str]) -> int:
     ap.add_argument("--variation", action="append", default=[], metavar="KEY=VALUE",
                     help="env setting for the in-env run with per-robot hardware variation (repeat for several); "
                          "a setting this swarm_envs does not have skips that run with a message")
-    ap.add_argument("--env-steps", type=cli_type(Int(8, low=1, high=1_000_000)), default=8, help="control steps of the in-env runs (default 8)")
+    ap.add_argument("--env-steps", type=cli_type(Int(24, low=1, high=1_000_000)), default=24,
+                    help="control steps of the in-env runs (default 24: a robot fires about once per 11 steps)")
     ap.add_argument("--no-env", action="store_true", help="skip the in-env runs")
     args = ap.parse_args(argv)
     if args.near_model and args.platform != "droplet":
@@ -489,6 +501,7 @@ def main(argv: list[str]) -> int:
     if not args.no_env:
         base = {"rb_noise": args.noise, "rb_near_model": args.near_model}
         res["env"] = env_sweep(args.platform, base, args.seed + 3, args.env_steps)
+        res["env_nominal"] = env_sweep(args.platform, {**base, "hw_variation": False}, args.seed + 3, args.env_steps)
         unknown = unknown_settings(variation)
         if not variation:
             res["env_variation"] = {"skipped": "no --variation KEY=VALUE settings given"}
@@ -533,7 +546,7 @@ def main(argv: list[str]) -> int:
     col = res["collisions"]
     print(f"\ncollisions: fractions of the readings a receiver would get if every firing were alone;"
           f"\n  hidden pair: 2 TXs hidden from each other fire in one step, RX sees both ({col['rows'][0]['hidden_trials']} trials);"
-          f"\n  dense swarm: N={col['dense_n']} in a {100 * col['dense_side_m']:.0f} cm square, contention schedule;"
+          f"\n  dense swarm: N={col['dense_n']} in a {100 * col['dense_side_m']:.0f} cm square, timer schedule (last row: contention oracle);"
           f"\n  corrupted = right id but |range err| > 25% of range or |bearing err| > 15 deg; lost = rejected or below floor"
           f"\n  (fractions of the readings expected from lit links: noise can add a reading of a link below the floor, so a"
           f"\n  row may sum past 100%; without collisions the dense swarm's corrupted readings come from per-ray partial occlusion)")
@@ -542,9 +555,9 @@ def main(argv: list[str]) -> int:
         for scene, key in (("hidden pair", "hidden_pair"), ("dense swarm", "dense")):
             f = r[key]
             extra = f"   ({100 * r['dense_fresh_overlapped']:.0f}%)" if key == "dense" else ""
-            print(f"  {r['model']:28s} {scene:12s} {100 * f['clean']:5.1f}%    {100 * f['corrupted']:5.1f}%        "
+            print(f"  {r['model']:36s} {scene:12s} {100 * f['clean']:5.1f}%    {100 * f['corrupted']:5.1f}%        "
                   f"{100 * f['misattributed']:5.2f}%   {100 * f['lost']:5.1f}%{extra}")
-    for key, label in (("env", "in the env, its default settings"), ("env_variation", "in the env, default settings + the --variation settings")):
+    for key, label in ENV_RUNS:
         e = res.get(key)
         if e is None:
             continue
@@ -560,8 +573,8 @@ def main(argv: list[str]) -> int:
         print("\nplots: " + ", ".join(res["plots"]))
     print("\nThe model sweep compares the estimate with the brightness model the estimator inverts, plus ADC noise: it")
     print("checks the estimator and the noise, not how well the model matches real Droplets (which differ from each")
-    print("other and from the calibration). The in-env rows add the env's own firing schedule and collisions, and with")
-    print("--variation KEY=VALUE the env settings given (e.g. the spreads of per-robot hardware variation drawn at reset);")
-    print("each row lists the settings it ran with.")
+    print("other and from the calibration). The in-env rows add the env's own firing schedule and collisions, with each")
+    print("robot's channels drawn at reset (default) and without (hw_variation=False), and with --variation KEY=VALUE the env")
+    print("settings given (e.g. other spreads of the hardware variation); each row lists the settings it ran with.")
     print_rows("Range & bearing [F14]", rows(res))
     return 0
