@@ -148,7 +148,7 @@ class SwarmCore:
         large = getattr(self.sensing, "large_scene", False)
         prepared = worker().submit(self.sensing.prepare_step, payloads, sending) if large else None
         linear, angular = act[row_moving, 0] * p.max_speed, act[row_moving, 1] * p.max_angular_speed
-        if self._motion is not None:  # two draws per robot of every moving copy, whatever its command
+        if self._motion is not None and moving.any():  # two draws per robot of every moving copy, whatever its command
             draws = self._motion.draw(self.copy_of_robot[row_moving], (2,))
             linear, angular = motion_error(p, linear, angular, self.wheel_gains[row_moving], draws)
         try:
