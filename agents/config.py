@@ -340,9 +340,9 @@ def apply_overrides(cfg: dict[str, Any], overrides: list[str]) -> dict[str, Any]
         if not free and last not in schema:
             raise ConfigError(f"unknown config key {key!r}; allowed keys here: {sorted(schema)}")
         value = _parse_value(text)
-        if not free and isinstance(node.get(last), dict) and (value is None or isinstance(value, dict)):
+        if not free and isinstance(node.get(last), dict) and isinstance(value, dict):
             # a section given as a mapping updates it, as a section of a config file does: its other keys keep their values
-            value = _merge(node[last], value or {}, key.strip() + ".")
+            value = _merge(node[last], value, key.strip() + ".")
         node[last] = value
     return cfg
 

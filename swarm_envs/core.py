@@ -103,8 +103,8 @@ class SwarmCore:
             spawn_rng, sensing_rng, motion_rng = (np.random.default_rng(s) for s in streams)
             if self._motion is not None:
                 self._motion.set_generator(int(b), motion_rng)
-                rows = slice(int(b) * self.n_world, (int(b) + 1) * self.n_world)
-                self.wheel_gains[rows] = wheel_gains(self.platform, self._motion.draw(np.full(self.n_world, b), (2,)))
+                own = slice(int(b) * self.n_world, (int(b) + 1) * self.n_world)
+                self.wheel_gains[own] = wheel_gains(self.platform, self._motion.draw(np.full(self.n_world, b), (2,)))
             if given_positions is None:
                 positions, headings = self.task.spawn(spawn_rng)
             else:
@@ -127,7 +127,7 @@ class SwarmCore:
 
         Copies started since the last step do not move: this step senses their initial state (their reset
         observation). The others apply ``actions`` (n_total, action_size), already checked and clipped to
-        [-1, 1] (rows of static robots are ignored).
+        [-1, 1] (rows of static robots are ignored), through the platform's motion error (``motion_noise``).
         """
         starting = self._starting.copy()
         moving = ~starting
@@ -142,15 +142,15 @@ class SwarmCore:
             # static robots send what their firmware says (Task.static_messages), by default nothing
             payloads = np.where(self.static[:, None], self._static_payloads, act[:, 2:] > 0)
         sending = row_moving & ~off if payloads is not None else None
+        linear, angular = act[row_moving, 0] * p.max_speed, act[row_moving, 1] * p.max_angular_speed
+        if self._motion is not None and moving.any():  # two draws per robot of every moving copy, whatever its command
+            draws = self._motion.draw(self.copy_of_robot[row_moving], (2,))
+            linear, angular = motion_error(p, linear, angular, self.wheel_gains[row_moving], draws)
         # a large single scene (the sensing's last step said so): the part of the sensing step that reads
         # nothing the physics changes (queueing the messages, drawing the channel's random numbers) on the
         # worker thread while the physics runs here (chipmunk and the kernels release the GIL; same result)
         large = getattr(self.sensing, "large_scene", False)
         prepared = worker().submit(self.sensing.prepare_step, payloads, sending) if large else None
-        linear, angular = act[row_moving, 0] * p.max_speed, act[row_moving, 1] * p.max_angular_speed
-        if self._motion is not None and moving.any():  # two draws per robot of every moving copy, whatever its command
-            draws = self._motion.draw(self.copy_of_robot[row_moving], (2,))
-            linear, angular = motion_error(p, linear, angular, self.wheel_gains[row_moving], draws)
         try:
             step_worlds([self.worlds[b] for b in np.flatnonzero(moving)], linear, angular, DT)
         finally:  # never leave the worker running on the sensing's state
