@@ -359,7 +359,11 @@ def apply_overrides(cfg: dict[str, Any], overrides: list[str]) -> dict[str, Any]
         free = parts[0] == "env" or parts[:2] == ["agent", "scripted_kwargs"]
         if not free and last not in schema:
             raise ConfigError(f"unknown config key {key!r}; allowed keys here: {sorted(schema)}")
-        node[last] = _parse_value(key.strip(), text)
+        value = _parse_value(key.strip(), text)
+        if not free and isinstance(node.get(last), dict) and isinstance(value, dict):
+            # a section given as a mapping updates it, as a section of a config file does: its other keys keep their values
+            value = _merge(node[last], value, key.strip() + ".")
+        node[last] = value
     return cfg
 
 

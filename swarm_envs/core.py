@@ -1,7 +1,8 @@
 """The batched simulation core: ``B`` independent copies of one task stepped as one array program.
 
 Every per-step array covers all ``B x n_world`` robots (robot ``b * n_world + i`` is robot ``i`` of copy
-``b``). Data flows one way each control step (``DT`` = 0.1 s): physics (one pymunk ``Space`` per copy,
+``b``). Data flows one way each control step (``DT`` = 0.1 s): the commands through the platform's motion error
+(:func:`swarm_envs.world.motion_error`, ``motion_noise``) -> physics (one pymunk ``Space`` per copy,
 :func:`swarm_envs.world.step_worlds`) -> sensing stack over all robots at once (IR links, range & bearing, SwarmCom,
 bearing exchange, scale-free coordinates; no link, message or random draw crosses copies) -> observation
 arrays -> rewards (the task, on ``(B, ...)`` views).
@@ -24,10 +25,11 @@ from typing import Any
 import numpy as np
 
 from swarm_envs._worker import worker
+from swarm_envs.copies import CopyStream
 from swarm_envs.observation import ObservationLayout, id_rows, nearest_slots, own_id_rows, pack_nearest, range_bearing_rows
 from swarm_envs.sensing.base import SensorFrame
 from swarm_envs.task import BatchState, Task
-from swarm_envs.world import N_BUMP_SECTORS, World, step_worlds
+from swarm_envs.world import N_BUMP_SECTORS, World, motion_error, step_worlds, wheel_gains
 
 __all__ = ["SwarmCore", "DT"]
 
@@ -55,6 +57,11 @@ class SwarmCore:
         self.worlds = [World(self.platform, self.n_world, task.arena, substeps=cfg["physics_substeps"], obstacles=obstacles) for _ in range(self.B)]
         self.sensing = _make_sensing(cfg, self.platform, self.n_world, self.B, obstacles)
         self.generators = [np.random.default_rng() for _ in range(self.B)]
+        #: the motion error (``motion_noise``): each copy's stream of standard normal draws (its robots' wheel
+        #: gains at the episode start, then two draws per robot every step it moves) and the gains (n_total, 2)
+        self.motion_noise = bool(cfg["motion_noise"])
+        self._motion = CopyStream([np.random.default_rng() for _ in range(self.B)], "normal", chunk=max(2048, 64 * self.n_world)) if self.motion_noise else None
+        self.wheel_gains = np.ones((self.n_total, 2))
         self.static = (np.arange(self.n_total) % self.n_world) < task.n_static
         self.last_actions = np.zeros((self.n_total, layout.action_size))
         self.num_cycles = np.zeros(self.B, dtype=np.int64)
@@ -91,9 +98,13 @@ class SwarmCore:
         poses = list(poses) if poses is not None else [(None, None)] * len(copies)
         sensing_rngs = []
         for b, (given_positions, given_headings) in zip(copies, poses):
-            # independent child streams: spawn, and sensing (which splits it into noise, channel and MAC)
-            streams = np.random.SeedSequence(int(self.generators[b].integers(2**63))).spawn(2)
-            spawn_rng, sensing_rng = (np.random.default_rng(s) for s in streams)
+            # independent child streams: spawn, sensing (which splits it into noise, channel and MAC), motion error
+            streams = np.random.SeedSequence(int(self.generators[b].integers(2**63))).spawn(3)
+            spawn_rng, sensing_rng, motion_rng = (np.random.default_rng(s) for s in streams)
+            if self._motion is not None:
+                self._motion.set_generator(int(b), motion_rng)
+                own = slice(int(b) * self.n_world, (int(b) + 1) * self.n_world)
+                self.wheel_gains[own] = wheel_gains(self.platform, self._motion.draw(np.full(self.n_world, b), (2,)))
             if given_positions is None:
                 positions, headings = self.task.spawn(spawn_rng)
             else:
@@ -116,7 +127,7 @@ class SwarmCore:
 
         Copies started since the last step do not move: this step senses their initial state (their reset
         observation). The others apply ``actions`` (n_total, action_size), already checked and clipped to
-        [-1, 1] (rows of static robots are ignored).
+        [-1, 1] (rows of static robots are ignored), through the platform's motion error (``motion_noise``).
         """
         starting = self._starting.copy()
         moving = ~starting
@@ -131,13 +142,17 @@ class SwarmCore:
             # static robots send what their firmware says (Task.static_messages), by default nothing
             payloads = np.where(self.static[:, None], self._static_payloads, act[:, 2:] > 0)
         sending = row_moving & ~off if payloads is not None else None
+        linear, angular = act[row_moving, 0] * p.max_speed, act[row_moving, 1] * p.max_angular_speed
+        if self._motion is not None and moving.any():  # two draws per robot of every moving copy, whatever its command
+            draws = self._motion.draw(self.copy_of_robot[row_moving], (2,))
+            linear, angular = motion_error(p, linear, angular, self.wheel_gains[row_moving], draws)
         # a large single scene (the sensing's last step said so): the part of the sensing step that reads
         # nothing the physics changes (queueing the messages, drawing the channel's random numbers) on the
         # worker thread while the physics runs here (chipmunk and the kernels release the GIL; same result)
         large = getattr(self.sensing, "large_scene", False)
         prepared = worker().submit(self.sensing.prepare_step, payloads, sending) if large else None
         try:
-            step_worlds([self.worlds[b] for b in np.flatnonzero(moving)], act[row_moving, 0] * p.max_speed, act[row_moving, 1] * p.max_angular_speed, DT)
+            step_worlds([self.worlds[b] for b in np.flatnonzero(moving)], linear, angular, DT)
         finally:  # never leave the worker running on the sensing's state
             if prepared is not None:
                 prepared.exception()  # waits

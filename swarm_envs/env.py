@@ -117,7 +117,8 @@ class SwarmEnv(ParallelEnv):
 
     Actions are ``Box(-1, 1, (2 + message_bits,))``: (linear, angular) velocity as fractions of the
     platform maxima, then the message bits (entries > 0 are 1-bits). Finite values outside [-1, 1] are
-    clipped; NaN/inf, wrong shapes and unknown agents raise. Zero actions keep a robot still.
+    clipped; NaN/inf, wrong shapes and unknown agents raise. The wheels deliver the commands with the
+    platform's motion error (``motion_noise``); zero actions keep a robot still all the same.
 
     Envs can be copied (``copy.deepcopy``) and pickled, before a reset or mid-episode: the copy continues
     bit for bit like the original under the same actions.

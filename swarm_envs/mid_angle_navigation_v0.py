@@ -396,6 +396,7 @@ def parallel_env(
     exchange: Literal["network", "ideal"] = "network",
     scale_free_method: Literal["two_hop", "null_space"] = "two_hop",
     scale_free_k: int = 1,
+    motion_noise: bool = True,
     physics_substeps: int | None = None,
 ) -> MidAngleNavigationEnv:
     """Create the mid-angle navigation environment (a native PettingZoo ``ParallelEnv``).
@@ -413,10 +414,11 @@ def parallel_env(
 
     Per agent ``Box(-1, 1, (2 + message_bits,), float32)``: linear and angular velocity as fractions of
     the platform's maxima (``Platform.max_speed`` m/s and ``Platform.max_angular_speed`` rad/s; the
-    wheel speeds are then limited to ``max_speed``), followed by ``message_bits`` payload bits (each
-    entry above 0 is a 1-bit), broadcast over SwarmCom whenever the robot's transmit queue is empty.
+    wheel speeds are then limited to ``max_speed`` and carry the platform's motion error, ``motion_noise``),
+    followed by ``message_bits`` payload bits (each entry above 0 is a 1-bit),
+    broadcast over SwarmCom whenever the robot's transmit queue is empty.
     Finite values outside [-1, 1] are clipped; NaN/inf, wrong shapes and actions for unknown or missing
-    agents raise. Zero actions keep a robot still.
+    agents raise. Zero actions keep a robot still (also with the motion error).
 
     ## Observation Space
 
@@ -503,6 +505,7 @@ def parallel_env(
     | ``exchange`` | ``"network"`` | bearing lists for scale-free coordinates over SwarmCom (``"network"``) or ``"ideal"`` |
     | ``scale_free_method`` | ``"two_hop"`` | ``"two_hop"`` [L Algs. 1-4] or ``"null_space"`` [L Eq. (5.1)] (slow) |
     | ``scale_free_k`` | 1 | hops k of the null-space method |
+    | ``motion_noise`` | ``True`` | the platform's motion error: per-wheel speed gains drawn per episode, per-step wheel-speed noise, the r-one's 15 mm/s dead zone [L Sec. 3.1] (``docs/design.md#motion-error``); ``False``: exact differential-drive kinematics |
     | ``physics_substeps`` | ``None`` | pymunk sub-steps per control step; ``None``: the platform's (8 Droplet, 21 e-puck, 32 r-one), at which robots overlap by at most 2 % of a diameter at the default arena size |
 
     ## Version History

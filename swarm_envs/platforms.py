@@ -7,11 +7,15 @@ platform lives in :mod:`swarm_envs.ir.models`; :attr:`Platform.ir_model` (or :fu
 Sources:
 - ``droplet``: Farrow et al., ICRA 2014 [F14 Sec. III]: 4.4 cm diameter, 6 emitters and 6 sensors
   co-located at radius 2.0 cm, channel k at 30 + 60 k degrees. Max speed 2 cm/s is assumed.
+  Motion error: an 8 % wheel-gain spread from the calibrated Droplets' square walks of Klingner et al.
+  [K14 Sec. V-B] (``docs/design.md#motion-error``); the 10 % per-step noise is assumed.
 - ``epuck``: Trenkwalder et al. 2020 [T20 Sec. 2, Eqs. (1),(2)]: 7.0 cm diameter, 8 proximity
   sensors; each has an emitter and a detector 0.127 cm either side of the sensor point, both facing
-  the sensor's direction. Layout from the public Webots e-puck model.
+  the sensor's direction. Layout from the public Webots e-puck model. Motion error (stepper motors: open
+  loop at the commanded step rate): 1 % wheel-gain spread and 2 % per-step noise, assumed.
 - ``rone``: Lynch thesis [L Sec. 3.2]: 11 cm diameter, 8 IR receivers at 22.5 + 45 k degrees with
-  68-degree arcs, 8 transmitters at 45 k degrees.
+  68-degree arcs, 8 transmitters at 45 k degrees. Motion error: no wheel turns below the minimum
+  controllable speed of 15 mm/s [L Sec. 3.1]; 2 % wheel-gain spread and 2 % per-step noise, assumed.
 
 A custom robot is a :class:`Platform` of its own (``dataclasses.replace(get_platform("epuck"), mass=0.2)``);
 every field is checked when it is made (:meth:`Platform.__post_init__`), so a bad value fails there with a
@@ -30,7 +34,10 @@ import numpy as np
 from swarm_envs._text import shown
 from swarm_envs.ir.models import MODEL_CLASSES
 
-__all__ = ["Platform", "PLATFORMS", "get_platform", "model_for", "MAX_RADIUS", "MAX_SPEED", "MAX_MASS", "MAX_IR_RANGE", "MAX_CHANNELS"]
+__all__ = [
+    "Platform", "PLATFORMS", "get_platform", "model_for", "MAX_RADIUS", "MAX_SPEED", "MAX_MASS", "MAX_IR_RANGE", "MAX_CHANNELS",
+    "MAX_WHEEL_ERROR",
+]
 
 #: m: the largest body radius; the arena, spawn and IR geometry are sized for robots of centimetres to decimetres
 MAX_RADIUS = 1.0
@@ -45,6 +52,9 @@ MAX_MASS = 1000.0
 MAX_IR_RANGE = 10.0
 #: emitters or detectors per robot at most (the presets have 6-8; the IR layer's work grows with their product)
 MAX_CHANNELS = 64
+#: the largest relative spread of a wheel's speed (``wheel_gain_std``, ``wheel_noise_std``): a spread of the
+#: whole commanded speed; a wheel's factor is clipped at zero, so noise never turns a wheel backwards
+MAX_WHEEL_ERROR = 1.0
 
 
 def _positive(name: str, value: Any, high: float, unit: str, why: str = "") -> float:
@@ -57,6 +67,18 @@ def _positive(name: str, value: Any, high: float, unit: str, why: str = "") -> f
     if not (math.isfinite(number) and 0.0 < number <= high):
         why = f" ({why})" if why else ""
         raise ValueError(f"Platform.{name} must be a finite number of {unit} in (0, {high:g}]{why}, got {shown(value)}")
+    return number
+
+
+def _at_least_zero(name: str, value: Any, high: float, unit: str, why: str) -> float:
+    """``value`` as a float in [0, high]; ``ValueError`` naming the field otherwise."""
+    ok = isinstance(value, numbers.Real) and not isinstance(value, bool)
+    try:
+        number = float(value) if ok else math.nan
+    except (OverflowError, ValueError):
+        number = math.nan
+    if not (math.isfinite(number) and 0.0 <= number <= high):
+        raise ValueError(f"Platform.{name} must be a finite number of {unit} in [0, {high:g}] ({why}), got {value!r:.80}")
     return number
 
 
@@ -93,6 +115,13 @@ class Platform:
         detector_positions: (n_detectors, 2) detector positions in the body frame (m).
         detector_directions: (n_detectors,) detector axis angles in the body frame (rad).
         sensor_arc: full angular width (rad) of a receiver's field of view (r-one), or None.
+        extras: further data (e.g. ``"ir_model"``, the IR model class of a custom platform).
+        wheel_gain_std: relative std of each wheel's speed gain, drawn per robot and episode (calibration
+            error: wheel diameters, motor constants); the motion error of ``motion_noise``.
+        wheel_noise_std: relative std of each wheel's speed, drawn per wheel and control step (slip,
+            speed-control jitter); the motion error of ``motion_noise``.
+        min_wheel_speed: wheel speed (m/s) below which a commanded wheel does not turn (gear-train
+            friction; a dead zone); the motion error of ``motion_noise``.
     """
 
     name: str
@@ -107,6 +136,9 @@ class Platform:
     detector_directions: np.ndarray
     sensor_arc: float | None = None
     extras: dict[str, Any] = field(default_factory=dict)
+    wheel_gain_std: float = 0.0
+    wheel_noise_std: float = 0.0
+    min_wheel_speed: float = 0.0
 
     def __post_init__(self) -> None:
         """Check every field; ``ValueError`` naming the field. Numbers become floats and the layouts
@@ -130,6 +162,12 @@ class Platform:
                 raise ValueError(f"Platform.{kind}_positions must lie on the body (at most radius = {radius:g} m from the centre)")
         if self.sensor_arc is not None:
             values["sensor_arc"] = _positive("sensor_arc", self.sensor_arc, 2 * math.pi, "radians", "or None")
+        spread = "a spread of the whole commanded speed; a wheel's factor is clipped at zero"
+        values["wheel_gain_std"] = _at_least_zero("wheel_gain_std", self.wheel_gain_std, MAX_WHEEL_ERROR, "relative std", spread)
+        values["wheel_noise_std"] = _at_least_zero("wheel_noise_std", self.wheel_noise_std, MAX_WHEEL_ERROR, "relative std", spread)
+        values["min_wheel_speed"] = _at_least_zero(
+            "min_wheel_speed", self.min_wheel_speed, values["max_speed"], "metres per second", "at most max_speed: some speed must turn the wheels"
+        )
         if not isinstance(self.extras, dict):
             raise ValueError(f"Platform.extras must be a dict, got {type(self.extras).__name__}")
         for key, value in values.items():
@@ -180,6 +218,8 @@ def _droplet() -> Platform:
         emitter_directions=ang,
         detector_positions=pos.copy(),
         detector_directions=ang.copy(),
+        wheel_gain_std=0.08,  # calibrated Droplets' square walks [K14 Sec. V-B] (docs/design.md#motion-error)
+        wheel_noise_std=0.10,  # assumed: stick-slip steps of vibration motors
     )
 
 
@@ -207,6 +247,8 @@ def _epuck() -> Platform:
         emitter_directions=facing.copy(),
         detector_positions=point - offset * perp_left,
         detector_directions=facing.copy(),
+        wheel_gain_std=0.01,  # assumed: stepper motors run open loop at the commanded step rate
+        wheel_noise_std=0.02,  # assumed: slip
     )
 
 
@@ -225,7 +267,9 @@ def _rone() -> Platform:
         detector_positions=rx_pos,
         detector_directions=rx_ang,
         sensor_arc=np.deg2rad(68.0),
-        extras={"min_speed": 0.015},
+        wheel_gain_std=0.02,  # assumed
+        wheel_noise_std=0.02,  # assumed
+        min_wheel_speed=0.015,  # "internal friction in the gear-train limits the minimum controllable speed" [L Sec. 3.1]
     )
 
 

@@ -318,6 +318,8 @@ COMMON_SETTINGS: dict[str, Setting] = {
     "exchange": Choice("network", choices=("network", "ideal")),
     "scale_free_method": Choice("two_hop", choices=("two_hop", "null_space")),
     "scale_free_k": Int(1, "hops of the null-space method", low=1, high=4, why="a robot's k-hop neighbourhood, and the null-space method's work, grow with degree^k"),
+    # the platform's motion error (per-wheel gains, per-step noise, dead zone; docs/design.md#motion-error)
+    "motion_noise": Flag(True),
     "physics_substeps": Int(
         None, "pymunk sub-steps per control step", low=1, high=MAX_SUBSTEPS, allow_none=True,
         why="None: the platform's default (8 Droplet, 21 e-puck, 32 r-one; swarm_envs.world.default_substeps), at "

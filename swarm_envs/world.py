@@ -29,6 +29,11 @@ act from the second on), so the control velocities are set to ``(D - h u) / (dt 
 ``(w dt - h omega) / (dt - h)`` (h the sub-step, u / omega the body's velocity at the step start): a free
 robot then ends every control step exactly on its differential-drive arc.
 
+Motion error: :func:`motion_error` turns commanded velocities into the ones a platform's wheels deliver
+(per-wheel gains, per-step noise, a dead zone; ``docs/design.md#motion-error``). The batched core applies it
+before :func:`step_worlds`, so a world steps, and logs for its exact copies, the delivered velocities; a
+world stepped directly moves exactly as commanded.
+
 :func:`step_worlds` steps several worlds (e.g. the copies of the batched core) at once: the control
 arithmetic runs as one numpy program over all their robots, and each space is written and read with one
 ``pymunk.batch`` call (no Python loop over bodies), and its contacts are read with one C call per sub-step
@@ -54,7 +59,7 @@ from swarm_envs.platforms import Platform
 __all__ = [
     "Arena", "World", "step_worlds", "spawn_positions", "check_capacity", "lattice_lower_bound", "as_real_array", "wrap_angle",
     "N_BUMP_SECTORS", "CONTROL_STEP", "default_substeps", "min_substeps", "motor_limits", "fit_count", "lattice_positions",
-    "check_obstacles", "obstacle_points", "distance_to_segments",
+    "check_obstacles", "obstacle_points", "distance_to_segments", "wheel_gains", "motion_error",
 ]
 
 #: bytes of commands a world keeps per episode for exact copies (16 per robot and step; 64 MB = 400,000
@@ -217,6 +222,35 @@ def motor_limits(platform: Platform, substeps: int) -> tuple[float, float]:
     force = MOTOR_MARGIN * platform.mass * reach * platform.max_speed / h
     torque = MOTOR_MARGIN * moment * reach * platform.max_angular_speed / h
     return force, torque
+
+
+def wheel_gains(platform: Platform, draws: np.ndarray) -> np.ndarray:
+    """(..., 2) per-wheel speed gains (left, right) of robots for an episode, ``max(1 + wheel_gain_std z, 0)``
+    from standard normal ``draws`` z (..., 2): the calibration error of the motion-error model
+    (:func:`motion_error`)."""
+    return np.maximum(1.0 + platform.wheel_gain_std * np.asarray(draws, dtype=float), 0.0)
+
+
+def motion_error(platform: Platform, linear: np.ndarray, angular: np.ndarray, gains: np.ndarray, draws: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The linear (m/s) and angular (rad/s) velocities (n,) the wheels deliver for the commanded ``linear``
+    and ``angular`` (n,) under the platform's motion error (``docs/design.md#motion-error``).
+
+    Each wheel's commanded speed u (``v -+ w b / 2``, limited to ``max_speed``) does not turn the wheel
+    below ``min_wheel_speed`` (gear-train friction, a dead zone [L Sec. 3.1]); otherwise the wheel turns at
+    ``u g max(1 + wheel_noise_std z, 0)``, limited to ``max_speed``, with ``gains`` g (n, 2) the robot's
+    per-wheel gains of the episode (:func:`wheel_gains`) and ``draws`` z (n, 2) standard normal draws of this
+    control step (left, right). Unequal gains make a robot told to drive straight drive an arc (heading
+    drift); the noise is slip and speed jitter. A wheel commanded to stand still stands still."""
+    half = 0.5 * platform.wheel_base
+    vmax = platform.max_speed
+    wheels = np.stack([linear - angular * half, linear + angular * half], axis=-1)
+    np.clip(wheels, -vmax, vmax, out=wheels)
+    if platform.min_wheel_speed > 0:
+        wheels[np.abs(wheels) < platform.min_wheel_speed] = 0.0
+    wheels *= gains * np.maximum(1.0 + platform.wheel_noise_std * draws, 0.0)
+    np.clip(wheels, -vmax, vmax, out=wheels)
+    left, right = wheels[:, 0], wheels[:, 1]
+    return 0.5 * (left + right), (right - left) / (2 * half)
 
 
 #: the gap (fraction of the radius) random placement keeps between robots and from the walls

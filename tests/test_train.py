@@ -78,6 +78,12 @@ def test_overrides():
         apply_overrides(DEFAULTS, ["train.total_timesteps"])
     with pytest.raises(ConfigError, match="sensing"):
         load_config(None, ["env.sensing=perfect"])
+    # a section given as a mapping updates it like a config file's section; an empty one changes nothing
+    cfg = load_config(ROOT / "configs" / "aggregation.yaml", ["train={}", "agent={n_epochs: 3}"])
+    base = load_config(ROOT / "configs" / "aggregation.yaml")
+    assert cfg["train"] == base["train"] and cfg["agent"] == {**base["agent"], "n_epochs": 3}
+    with pytest.raises(ConfigError, match="unknown config key 'train.steps'"):
+        apply_overrides(DEFAULTS, ["train={steps: 3}"])
 
 
 def test_cli_reports_config_errors(tmp_path, capsys):

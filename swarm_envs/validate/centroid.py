@@ -12,7 +12,9 @@ the seeker is inside the polygon ("errors outside the polygon are not included")
 full sensing stack (physics, message-borne sector bearings with the measured 63-74 degree arc spread, the
 bearing exchange over SwarmCom, 2-hop coordinates), one batched copy per trial, the seeker driven by
 :class:`PauseStepSeeker`: pause one beacon / exchange round (``--pause-rounds``), read the centroid of its
-``scale_free`` observation rows, turn in place, drive 11 cm.
+``scale_free`` observation rows, turn in place, drive 11 cm. The seeker's drive carries the r-one's motion
+error (``motion_noise``, the env's default: per-wheel gains, per-step speed noise, the 15 mm/s dead zone;
+``docs/design.md#motion-error``); ``--no-motion-noise`` runs it with exact differential-drive kinematics.
 
 **Kinematic** (:func:`experiment`, no physics, exact turns and steps). Each round:
 
@@ -340,6 +342,7 @@ def experiment_env(
         "fallback_rounds": seekers.plans["bearing_fallback"],
         "waited_rounds": seekers.plans["waited"],
         "pause_steps": pause_steps,
+        "motion_noise": bool(core.motion_noise),
         "control_steps": steps,
         "anchors_max_displacement_m": anchors_moved,
         "_inside": inside_d,
@@ -356,8 +359,9 @@ def rows(summary: dict[str, Any]) -> list[Row]:
     runs = []
     if "env" in summary:
         e = summary["env"]
-        runs.append((e, f"in the env (physics, message-borne bearings, SwarmCom exchange), pause {e['pause_steps']} steps per round, "
-                        f"{e['trials_complete']} of {e['trials']} trials x {summary['rounds']} rounds"))
+        drive = "the r-one's motion error" if e.get("motion_noise", True) else "exact drive (motion_noise=False)"
+        runs.append((e, f"in the env (physics with {drive}, message-borne bearings, SwarmCom exchange), pause {e['pause_steps']} steps per "
+                        f"round, {e['trials_complete']} of {e['trials']} trials x {summary['rounds']} rounds"))
     runs.append((summary["sector_bearings_hardware_noise"], "kinematic (exact turns and steps), IR-layer sector bearings with the 63-74 deg arcs, ideal exchange"))
     runs.append((summary["sector_bearings"], "kinematic, nominal 68-degree arcs, ideal exchange"))
     for r, how in runs:
@@ -386,6 +390,8 @@ def main(argv: list[str]) -> int:
     ap.add_argument("--pause-rounds", type=cli_type(Real(1.0, low=0.0, low_open=True, high=1000.0)), default=1.0,
                     help=f"env run: the seeker's pause before each step, in beacon / exchange rounds of {BEACON_PERIOD} control steps (default 1)")
     ap.add_argument("--no-env", action="store_true", help="skip the run in the env")
+    ap.add_argument("--no-motion-noise", action="store_true",
+                    help="env run: exact differential-drive kinematics instead of the r-one's motion error (motion_noise=False)")
     ap.add_argument("--seed", type=cli_type(Int(0, low=0, high=2**63 - 1)), default=0)
     ap.add_argument("--out", default="validation_output")
     ap.add_argument("--no-plots", action="store_true")
@@ -402,7 +408,8 @@ def main(argv: list[str]) -> int:
     noi = experiment(args.seed, args.polygons, args.starts, args.rounds, False, rr, hn, sn, bearing_noise=True)
     exa = experiment(args.seed, args.polygons, args.starts, args.rounds, True, rr, hn, sn)
     t1 = time.perf_counter()
-    env = None if args.no_env else experiment_env(args.seed, args.polygons, args.starts, args.rounds, rr, pause_steps)
+    env = None if args.no_env else experiment_env(args.seed, args.polygons, args.starts, args.rounds, rr, pause_steps,
+                                                  motion_noise=not args.no_motion_noise)
     t2 = time.perf_counter()
     public = lambda d: {k: v for k, v in d.items() if not k.startswith("_")}  # noqa: E731
     summary = {
@@ -455,7 +462,8 @@ def main(argv: list[str]) -> int:
     print(f"arcs, '+ hw noise' arcs and cones drawn from 63-74 deg per reading [L Sec. 3.2.1]; motion noise: heading "
           f"{args.heading_noise_deg} deg, step {args.step_noise * 100:.0f}%")
     if env is not None:
-        print(f"in the env: swarm_envs/CentroidSeeking-v0, r-one, full sensing; the seeker pauses {pause_steps} control steps "
+        print(f"in the env: swarm_envs/CentroidSeeking-v0, r-one, full sensing, motion error {'on' if env['motion_noise'] else 'off'}; "
+              f"the seeker pauses {pause_steps} control steps "
               f"({args.pause_rounds:g} beacon round(s)), turns, drives 11 cm ({env['control_steps']} steps; anchors pushed up to "
               f"{100 * env['anchors_max_displacement_m']:.1f} cm, distances to their current centroid)")
     cols = ([("in the env", env)] if env is not None else []) + [("sectors", sec), ("+ hw noise", noi), ("exact", exa)]
