@@ -106,7 +106,7 @@ def parallel_env(
     rb_schedule: Literal["timer", "contention", "every_step"] = "timer",
     rb_period: float = 1.0,
     rb_jitter: float = 0.2,
-    rb_max_age: int = 10,
+    rb_max_age: int | None = None,
     rb_noise: float | None = None,
     rb_near_model: bool = False,
     hw_variation: bool = True,
@@ -207,7 +207,7 @@ def parallel_env(
     | ``rb_schedule`` | ``"timer"`` | range & bearing firing: ``"timer"`` (each robot on its own timer, as the Droplet firmware: robots that see each other can collide), ``"contention"`` (oracle ablation: no two linked robots fire in one step) or ``"every_step"`` (idealised) |
     | ``rb_period`` | 1.0 | s between a robot's range & bearing firings (``"timer"``) |
     | ``rb_jitter`` | 0.2 | s, largest late start of a firing after its timer expires (uniform) |
-    | ``rb_max_age`` | 10 | steps a range & bearing reading persists |
+    | ``rb_max_age`` | ``None`` | steps a range & bearing reading persists; ``None``: until the neighbour's next timer firing is due (13 at the defaults) |
     | ``rb_noise`` | ``None`` | ADC noise sigma (counts); ``None``: 2 on the Droplet, sqrt(2.5) on the e-puck |
     | ``rb_near_model`` | ``False`` | Droplet only: the firmware's low-power near-range fit instead of the power ladder |
     | ``hw_variation`` | ``True`` | droplet / epuck: each robot's emitter powers, detector gains and axis angles drawn at reset (the range & bearing estimator keeps the nominal calibration) |

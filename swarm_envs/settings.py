@@ -286,8 +286,10 @@ COMMON_SETTINGS: dict[str, Setting] = {
         "Droplet's main loop that polls the timer (an assumption); at most an hour, like the period",
     ),
     "rb_max_age": Int(
-        10, "steps a reading persists", low=1, high=100_000,
-        why="100,000 steps are 2.8 h of simulated time, far longer than a reading of a moving robot means anything",
+        None, "steps a reading persists", low=1, high=100_000, allow_none=True,
+        why="None: until the neighbour's next firing is due at its latest (ceil((rb_period + rb_jitter) / 0.1 s) + 1 "
+        "steps under the timer schedule, 13 at the defaults; 10 under the others); 100,000 steps are 2.8 h of "
+        "simulated time, far longer than a reading of a moving robot means anything",
     ),
     "rb_noise": Real(
         None, low=0.0, high=1000.0, allow_none=True, unit="of ADC counts",

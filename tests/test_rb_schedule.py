@@ -6,6 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+import swarm_envs
 from swarm_envs.copies import CopyRandom
 from swarm_envs.ir.layer import IRLinks, compute_links
 from swarm_envs.sensing.range_bearing import TIMER_JITTER, TIMER_PERIOD, RangeBearingSensor
@@ -131,3 +132,15 @@ def test_copies_draw_their_own_timers_and_equal_single_sensors():
     assert not np.array_equal(vec.countdown[:n], vec.countdown[n:])
     for _ in range(30):
         np.testing.assert_array_equal(vec.fire_mask(links), np.concatenate([s.fire_mask(links) for s in singles]))
+
+
+def test_readings_persist_until_the_next_timer_firing_by_default():
+    from swarm_envs.sensing.full import RB_MAX_AGE, rb_max_age
+
+    cfg = {"rb_max_age": None, "rb_schedule": "timer", "rb_period": 1.0, "rb_jitter": 0.2}
+    assert rb_max_age(cfg) == 13  # 12 steps until the latest next firing, plus the step it lands in
+    assert rb_max_age({**cfg, "rb_period": 3.0, "rb_jitter": 0.0}) == 31
+    assert rb_max_age({**cfg, "rb_schedule": "contention"}) == rb_max_age({**cfg, "rb_schedule": "every_step"}) == RB_MAX_AGE
+    assert rb_max_age({**cfg, "rb_max_age": 4}) == 4
+    env = swarm_envs.make("swarm_envs/Aggregation-v0", n_robots=2, platform="droplet", rb_period=2.0)
+    assert env.layout.max_age == 23 and env.core.sensing.rb.max_age == 23

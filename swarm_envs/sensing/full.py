@@ -63,7 +63,7 @@ from swarm_envs.sensing.exchange import BearingExchange, thesis_round_time
 from swarm_envs.sensing.range_bearing import RangeBearingSensor
 from swarm_envs.sensing.scale_free import coordinates, coordinates_all
 
-__all__ = ["FullSensing", "BEACON_PERIOD", "SECTOR_MAX_AGE", "reading_max_age", "rb_on_worker_thread"]
+__all__ = ["FullSensing", "BEACON_PERIOD", "SECTOR_MAX_AGE", "RB_MAX_AGE", "rb_max_age", "reading_max_age", "rb_on_worker_thread"]
 
 #: steps between two broadcasts of a robot (bearing beacons / exchange lists on the sector source): the
 #: thesis round 2 (1 + 5)^2 x 32.8 ms = 2.36 s [L Sec. 3.2.1] in 0.1 s control steps, rounded up
@@ -72,10 +72,27 @@ BEACON_PERIOD = int(np.ceil(round(thesis_round_time(5) / 0.1, 9)))
 SECTOR_MAX_AGE = 2 * BEACON_PERIOD - 1
 
 
+#: steps a range & bearing reading persists under the schedules that fire every few steps ("contention",
+#: "every_step"): one second
+RB_MAX_AGE = 10
+
+
+def rb_max_age(cfg: dict[str, Any]) -> int:
+    """Steps a range & bearing reading persists: ``rb_max_age``, or when it is None, until the neighbour's
+    next firing is due at its latest: ``ceil((rb_period + rb_jitter) / 0.1 s) + 1`` steps under the
+    ``"timer"`` schedule (13 at the defaults), :data:`RB_MAX_AGE` under the others."""
+    if cfg["rb_max_age"] is not None:
+        return int(cfg["rb_max_age"])
+    if cfg["rb_schedule"] == "timer":
+        return int(np.ceil(round((cfg["rb_period"] + cfg["rb_jitter"]) / 0.1, 9))) + 1
+    return RB_MAX_AGE
+
+
 def reading_max_age(cfg: dict[str, Any], platform: Platform) -> int:
-    """The largest age (steps) of an observation's ``range_bearing`` row: ``rb_max_age`` on range & bearing
-    platforms, :data:`SECTOR_MAX_AGE` where the rows hold message-borne sector readings (no range model)."""
-    return int(cfg["rb_max_age"]) if hasattr(platform.ir_model, "amplitude_inverse") else SECTOR_MAX_AGE
+    """The largest age (steps) of an observation's ``range_bearing`` row: :func:`rb_max_age` on range &
+    bearing platforms, :data:`SECTOR_MAX_AGE` where the rows hold message-borne sector readings (no range
+    model)."""
+    return rb_max_age(cfg) if hasattr(platform.ir_model, "amplitude_inverse") else SECTOR_MAX_AGE
 
 BEACON_KIND = "bearing_beacon"  # SwarmCom system kind of the header-only beacons
 
@@ -140,7 +157,7 @@ class FullSensing:
                 streams[0],
                 noise_sigma=config["rb_noise"],
                 schedule=config["rb_schedule"],
-                max_age=config["rb_max_age"],
+                max_age=rb_max_age(config),
                 near_model=config["rb_near_model"],
                 period=config["rb_period"],
                 jitter=config["rb_jitter"],
