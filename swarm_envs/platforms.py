@@ -13,6 +13,10 @@ Sources:
 - ``rone``: Lynch thesis [L Sec. 3.2]: 11 cm diameter, 8 IR receivers at 22.5 + 45 k degrees with
   68-degree arcs, 8 transmitters at 45 k degrees.
 
+Message frames (``frame_crc_bits``, docs/design.md#swarmcom-messaging): the r-one's IR messages carry a
+16-bit CRC [L Sec. 3.2.1, Table 3.3], the Droplet firmware's a CRC-16 of the same polynomial (cu-droplet
+``ir_comm.c``), the e-puck's SwarmCom frames none [T20 Sec. 4.3].
+
 A custom robot is a :class:`Platform` of its own (``dataclasses.replace(get_platform("epuck"), mass=0.2)``);
 every field is checked when it is made (:meth:`Platform.__post_init__`), so a bad value fails there with a
 ``ValueError`` naming the field, never inside the physics engine or the IR layer.
@@ -27,6 +31,7 @@ from typing import Any
 
 import numpy as np
 
+from swarm_envs.comm.protocol import CRC_WIDTHS
 from swarm_envs.ir.models import MODEL_CLASSES
 
 __all__ = ["Platform", "PLATFORMS", "get_platform", "model_for", "MAX_RADIUS", "MAX_SPEED", "MAX_MASS", "MAX_IR_RANGE", "MAX_CHANNELS"]
@@ -92,6 +97,10 @@ class Platform:
         detector_positions: (n_detectors, 2) detector positions in the body frame (m).
         detector_directions: (n_detectors,) detector axis angles in the body frame (rad).
         sensor_arc: full angular width (rad) of a receiver's field of view (r-one), or None.
+        extras: free-form extras (e.g. ``min_speed``, ``ir_model``).
+        frame_crc_bits: width of the CRC the robot's messaging firmware appends to every SwarmCom frame
+            (0, 8 or 16; :func:`swarm_envs.comm.protocol.crc`): 16 on the r-one and the Droplet, 0 on the
+            e-puck (module docstring).
     """
 
     name: str
@@ -106,6 +115,7 @@ class Platform:
     detector_directions: np.ndarray
     sensor_arc: float | None = None
     extras: dict[str, Any] = field(default_factory=dict)
+    frame_crc_bits: int = 0
 
     def __post_init__(self) -> None:
         """Check every field; ``ValueError`` naming the field. Numbers become floats and the layouts
@@ -131,6 +141,10 @@ class Platform:
             values["sensor_arc"] = _positive("sensor_arc", self.sensor_arc, 2 * math.pi, "radians", "or None")
         if not isinstance(self.extras, dict):
             raise ValueError(f"Platform.extras must be a dict, got {type(self.extras).__name__}")
+        crc_ok = isinstance(self.frame_crc_bits, numbers.Integral) and not isinstance(self.frame_crc_bits, bool)
+        if not (crc_ok and int(self.frame_crc_bits) in CRC_WIDTHS):
+            raise ValueError(f"Platform.frame_crc_bits must be one of {CRC_WIDTHS} (CRC widths SwarmCom frames can carry), got {self.frame_crc_bits!r:.80}")
+        values["frame_crc_bits"] = int(self.frame_crc_bits)
         for key, value in values.items():
             object.__setattr__(self, key, value)
 
@@ -179,6 +193,7 @@ def _droplet() -> Platform:
         emitter_directions=ang,
         detector_positions=pos.copy(),
         detector_directions=ang.copy(),
+        frame_crc_bits=16,  # cu-droplet ir_comm.c: CRC-16 (avr-libc _crc16_update) over header and data
     )
 
 
@@ -225,6 +240,7 @@ def _rone() -> Platform:
         detector_directions=rx_ang,
         sensor_arc=np.deg2rad(68.0),
         extras={"min_speed": 0.015},
+        frame_crc_bits=16,  # "A 16-bit cyclic redundancy check (CRC)" on every message [L Sec. 3.2.1, Table 3.3]
     )
 
 
