@@ -32,7 +32,9 @@ def test_frame_crc_per_platform():
     plain = Network("rone", 4, rng, crc_bits=0)
     checked = Network("rone", 4, rng)
     # [15,15]: the CRC costs its 16 bits on air, rounded up to whole 15-bit blocks
-    assert checked.frame_slots(24) - plain.frame_slots(24) == 15 * (-(-(checked.fmt.header_bits + 24 + 16) // 15) - -(-(plain.fmt.header_bits + 24) // 15))
+    blocks = lambda bits: -(-bits // 15)  # noqa: E731
+    h = plain.fmt.header_bits
+    assert checked.frame_slots(24) - plain.frame_slots(24) == 15 * (blocks(h + 24 + 16) - blocks(h + 24))
     assert Network("epuck", 4, rng, crc_bits=16).crc_bits == 16
     with pytest.raises(ValueError, match="frame_crc_bits"):
         dataclasses.replace(get_platform("rone"), frame_crc_bits=12)
