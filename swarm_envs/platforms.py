@@ -17,6 +17,10 @@ Sources:
   68-degree arcs, 8 transmitters at 45 k degrees. Motion error: no wheel turns below the minimum
   controllable speed of 15 mm/s [L Sec. 3.1]; 2 % wheel-gain spread and 2 % per-step noise, assumed.
 
+Message frames (``frame_crc_bits``, docs/design.md#swarmcom-messaging): the r-one's IR messages carry a
+16-bit CRC [L Sec. 3.2.1, Table 3.3], the Droplet firmware's a CRC-16 of the same polynomial (cu-droplet
+``ir_comm.c``), the e-puck's SwarmCom frames none [T20 Sec. 4.3].
+
 A custom robot is a :class:`Platform` of its own (``dataclasses.replace(get_platform("epuck"), mass=0.2)``);
 every field is checked when it is made (:meth:`Platform.__post_init__`), so a bad value fails there with a
 ``ValueError`` naming the field, never inside the physics engine or the IR layer.
@@ -32,6 +36,7 @@ from typing import Any
 import numpy as np
 
 from swarm_envs._text import shown
+from swarm_envs.comm.protocol import CRC_WIDTHS
 from swarm_envs.ir.models import MODEL_CLASSES
 
 __all__ = [
@@ -122,6 +127,9 @@ class Platform:
             speed-control jitter); the motion error of ``motion_noise``.
         min_wheel_speed: wheel speed (m/s) below which a commanded wheel does not turn (gear-train
             friction; a dead zone); the motion error of ``motion_noise``.
+        frame_crc_bits: width of the CRC the robot's messaging firmware appends to every SwarmCom frame
+            (0, 8 or 16; :func:`swarm_envs.comm.protocol.crc`): 16 on the r-one and the Droplet, 0 on the
+            e-puck (module docstring).
     """
 
     name: str
@@ -139,6 +147,7 @@ class Platform:
     wheel_gain_std: float = 0.0
     wheel_noise_std: float = 0.0
     min_wheel_speed: float = 0.0
+    frame_crc_bits: int = 0
 
     def __post_init__(self) -> None:
         """Check every field; ``ValueError`` naming the field. Numbers become floats and the layouts
@@ -170,6 +179,10 @@ class Platform:
         )
         if not isinstance(self.extras, dict):
             raise ValueError(f"Platform.extras must be a dict, got {type(self.extras).__name__}")
+        crc_ok = isinstance(self.frame_crc_bits, numbers.Integral) and not isinstance(self.frame_crc_bits, bool)
+        if not (crc_ok and int(self.frame_crc_bits) in CRC_WIDTHS):
+            raise ValueError(f"Platform.frame_crc_bits must be one of {CRC_WIDTHS} (CRC widths SwarmCom frames can carry), got {shown(self.frame_crc_bits)}")
+        values["frame_crc_bits"] = int(self.frame_crc_bits)
         for key, value in values.items():
             object.__setattr__(self, key, value)
 
@@ -220,6 +233,7 @@ def _droplet() -> Platform:
         detector_directions=ang.copy(),
         wheel_gain_std=0.08,  # calibrated Droplets' square walks [K14 Sec. V-B] (docs/design.md#motion-error)
         wheel_noise_std=0.10,  # assumed: stick-slip steps of vibration motors
+        frame_crc_bits=16,  # cu-droplet ir_comm.c: CRC-16 (avr-libc _crc16_update) over header and data
     )
 
 
@@ -270,6 +284,7 @@ def _rone() -> Platform:
         wheel_gain_std=0.02,  # assumed
         wheel_noise_std=0.02,  # assumed
         min_wheel_speed=0.015,  # "internal friction in the gear-train limits the minimum controllable speed" [L Sec. 3.1]
+        frame_crc_bits=16,  # "A 16-bit cyclic redundancy check (CRC)" on every message [L Sec. 3.2.1, Table 3.3]
     )
 
 

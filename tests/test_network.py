@@ -218,32 +218,58 @@ def test_copied_network_continues_identically(how):
     assert net.rng.generators[0].bit_generator.state == twin.rng.generators[0].bit_generator.state
 
 
-def test_crc8_reference_and_frame_check():
-    from swarm_envs.comm.protocol import crc8
+@pytest.mark.parametrize("width,poly,check", [(8, 0x07, 0xF4), (16, 0x8005, 0xFEE8)])
+def test_crc_reference_and_frame_check(width, poly, check):
+    from swarm_envs.comm.protocol import crc
 
-    def ref(bits):  # bitwise CRC-8, polynomial 0x07, zero init
-        c = 0
+    def ref(bits):  # bitwise CRC, zero init, most significant bit first, no final XOR
+        c, top = 0, 1 << (width - 1)
         for b in bits:
-            fb = ((c >> 7) & 1) ^ int(b)
-            c = (c << 1) & 0xFF
+            fb = bool(c & top) ^ bool(b)
+            c = (c << 1) & ((1 << width) - 1)
             if fb:
-                c ^= 0x07
+                c ^= poly
         return c
 
     rng = np.random.default_rng(9)
     B = rng.integers(0, 2, (30, 50)).astype(bool)
     L = rng.integers(0, 51, 30)
-    assert crc8(B, L).tolist() == [ref(B[i, : L[i]]) for i in range(30)]
+    assert crc(B, L, width).tolist() == [ref(B[i, : L[i]]) for i in range(30)]
     msg = np.unpackbits(np.frombuffer(b"123456789", np.uint8)).astype(bool)[None]
-    assert crc8(msg, [72])[0] == 0xF4  # CRC-8/ATM check value
-    fmt = FrameFormat.for_swarm(10, (15, 15), crc_bits=8)
+    assert crc(msg, [72], width)[0] == check  # CRC-8/ATM and CRC-16/UMTS check values
+    fmt = FrameFormat.for_swarm(10, (15, 15), crc_bits=width)
     bits, slots = fmt.build(np.array([1, 1]), np.array([1, 2]), np.array([3, 4]), np.array([3, 4]), B[:2, :16], np.array([16, 5]))
+    assert (slots == 1 + 15 * -(-(fmt.header_bits + np.array([16, 5]) + width) // 15)).all()  # whole blocks
     info = bits[:, 1:]
     h = fmt.parse_header(info)
     assert fmt.crc_ok(info, h["length"]).all()
-    bad = info.copy()
-    bad[:, fmt.header_bits + 2] ^= True  # flip one payload bit
-    assert not fmt.crc_ok(bad, h["length"]).any()
+    for pos in (2, fmt.header_bits - 1, fmt.header_bits + 2):  # a type, an origin and a payload bit
+        bad = info.copy()
+        bad[:, pos] ^= True
+        assert not fmt.crc_ok(bad, h["length"]).any()
+
+
+def test_crc16_is_the_firmwares_crc16_in_air_order():
+    """The r-one's and the Droplet's CRC-16: a reflected table CRC (0xA001, zero init; avr-libc
+    ``_crc16_update``) over bytes sent least significant bit first, its register sent least significant bit
+    first. Read in air order that is our CRC-16 (x^16 + x^15 + x^2 + 1, most significant bit first)."""
+    from swarm_envs.comm.protocol import crc
+
+    def firmware(data):
+        c = 0
+        for byte in data:
+            c ^= byte
+            for _ in range(8):
+                c = (c >> 1) ^ 0xA001 if c & 1 else c >> 1
+        return c
+
+    assert firmware(b"123456789") == 0xBB3D  # CRC-16/ARC check value
+    rng = np.random.default_rng(4)
+    for n_bytes in (1, 3, 5, 12):
+        data = bytes(rng.integers(0, 256, n_bytes).tolist())
+        air = np.array([[(b >> i) & 1 for b in data for i in range(8)]], bool)  # each byte LSB first
+        register_on_air = [(firmware(data) >> i) & 1 for i in range(16)]  # sent LSB first
+        assert crc(air, [8 * n_bytes], 16)[0] == int("".join(map(str, register_on_air)), 2)
 
 
 def test_flooding_network_drops_corrupted_frames_with_crc(rng):

@@ -57,6 +57,8 @@ CASES = [
     (7, 30, "broadcast", (15, 15), 310, 150.0, {"intensity_sigma": 0.02}),
     (8, 50, "flooding", (15, 15), 310, 300.0, {"crc_bits": 0}),
     (9, 20, "broadcast", (15, 11), 310, 100.0, {"crc_bits": 8, "relative_threshold": 2}),
+    (12, 30, "broadcast", (15, 15), 310, 150.0, {"crc_bits": 16, "relative_threshold": 2}),
+    (13, 25, "flooding", (15, 11), 1800, 200.0, {"crc_bits": 16}),
     # detector response (channel.detector_response): the e-puck default at high bit rates is in every case
     # above; these make it dominate (slow circuit, intensity noise clipped at 0) or switch it off
     (10, 30, "broadcast", (15, 15), 1670, 150.0, {"adc_model": ADCModel(response_c=4e-5), "intensity_sigma": 0.01}),
@@ -255,12 +257,12 @@ def test_ir_emitter_sums_give_the_same_network(backend):
 
 
 @pytest.mark.parametrize("code", [(15, 15), (15, 11), (15, 5), (15, 1)])
-@pytest.mark.parametrize("with_sender,crc_bits", [(False, 0), (True, 8), (False, 8)])
+@pytest.mark.parametrize("with_sender,crc_bits", [(False, 0), (True, 8), (False, 8), (False, 16), (True, 16)])
 def test_compiled_frame_builder_equals_reference(code, with_sender, crc_bits):
     """kernels.build_frames gives FrameFormat.build's frames bit for bit (same array shape), for mixed
     lengths including 0 and the maximum."""
     from swarm_envs.comm.kernels import build_frames
-    from swarm_envs.comm.protocol import MAX_PAYLOAD, FrameFormat, crc8_table
+    from swarm_envs.comm.protocol import MAX_PAYLOAD, FrameFormat, crc_table
 
     rng = np.random.default_rng(hash((code, with_sender, crc_bits)) % 2**32)
     for n_robots, M, lmax in ((12, 7, 40), (1000, 30, MAX_PAYLOAD), (300, 1, 0)):
@@ -272,7 +274,7 @@ def test_compiled_frame_builder_equals_reference(code, with_sender, crc_bits):
         args = (rng.integers(1, 8, M), rng.integers(0, 300, M), rng.integers(0, n_robots, M), rng.integers(0, n_robots, M))
         ref_bits, ref_slots = fmt.build(*args, payload, length)
         bits, slots = build_frames(*args, payload, length, fmt.header_bits, fmt.id_bits, fmt.with_sender, fmt.crc_bits,
-                                   crc8_table(fmt.header_bits + MAX_PAYLOAD + 8), c.n, c.k, c._codewords)
+                                   crc_table(crc_bits or 8, fmt.header_bits + MAX_PAYLOAD + crc_bits), c.n, c.k, c._codewords)
         np.testing.assert_array_equal(slots, ref_slots)
         assert bits.shape == ref_bits.shape and bits.dtype == ref_bits.dtype
         np.testing.assert_array_equal(bits, ref_bits)

@@ -15,7 +15,7 @@
    ambient adaptation on idle s0 samples [Sec. 4.5], half duplex;
 5. frame check points: marker/type check, header decode (BCH by table look-up: the code's decoding
    table over all 2^15 received words, the same table :class:`swarm_envs.comm.bch.BCHCode` uses), abort,
-   completion with the optional CRC-8 and delivery;
+   completion with the optional CRC (8 or 16 bits) and delivery;
 6. ground truth for statistics only (strongest s1 transmitter at a start, the bits it really sent,
    collisions, bit / block errors, corrupt deliveries).
 
@@ -63,10 +63,11 @@ COUNTERS = (
     "rx_false_starts",  # ... with no transmitter emitting s1 towards the robot (ground truth)
     "rx_aborted",  # frames abandoned: bad marker/type, undecodable or impossible header
     "rx_decode_failed",  # complete frames with an undecodable block or a failed CRC
-    "rx_crc_failed",  # ... of which the CRC failed (crc_bits = 8)
+    "rx_crc_failed",  # ... of which the CRC failed (crc_bits > 0)
     "rx_decoded",  # complete frames whose blocks all decode and header is valid
     "rx_delivered",  # ... passed to the application (after flooding dedupe)
     "rx_duplicates",  # flooding duplicates suppressed
+    "rx_self_named",  # decoded frames naming the receiver itself as origin or sender: not delivered
     "rx_corrupt_delivered",  # delivered but header/payload differ from what was sent (ground truth)
     "rx_lost",  # aligned frames from a real transmitter that were aborted or failed to decode
     "collisions",  # received frames during which >= 2 transmitters were significant at the receiver
@@ -322,12 +323,13 @@ def build_frames(type_code, seq, origin, sender, payload, length, header_bits, i
     """Compiled :meth:`swarm_envs.comm.protocol.FrameFormat.build` (the reference; same bits, same array
     shape): M frames from (M,) type codes, sequence numbers (mod 128), origins, senders (flooding), lengths and
     the payload bits (M, >= max length), each the start symbol then the BCH-encoded blocks of header,
-    payload and optional CRC-8, zero beyond the frame. Returns (bits (M, 1 + B n) bool, slots (M,))."""
+    payload and optional CRC of ``crc_bits`` bits (``crc_table``: :func:`swarm_envs.comm.protocol.crc_table` of
+    that width), zero beyond the frame. Returns (bits (M, 1 + B n) bool, slots (M,))."""
     M = type_code.shape[0]
     lmax = 0
     for i in range(M):
         lmax = max(lmax, length[i])
-    cols = header_bits + lmax + (8 if crc_bits > 0 else 0)  # information columns of the reference
+    cols = header_bits + lmax + crc_bits  # information columns of the reference
     nb = max(1, (cols + code_k - 1) // code_k)
     bits = np.zeros((M, 1 + nb * code_n), dtype=np.bool_)
     slots = np.empty(M, dtype=np.int64)
@@ -354,9 +356,9 @@ def build_frames(type_code, seq, origin, sender, payload, length, header_bits, i
             info[o + j] = payload[i, j]
         end = header_bits + L
         if crc_bits > 0:
-            c = _crc8(info, end, crc_table)
-            for j in range(8):
-                info[end + j] = (c >> (7 - j)) & 1 == 1
+            c = _crc(info, end, crc_table)
+            for j in range(crc_bits):
+                info[end + j] = (c >> (crc_bits - 1 - j)) & 1 == 1
         nblk = (end + crc_bits + code_k - 1) // code_k
         slots[i] = 1 + nblk * code_n
         bits[i, 0] = True
@@ -407,8 +409,9 @@ def decode_words(words, n, k, table_msg, table_ok):
 
 
 @_jit
-def _crc8(info, end, crc_table):
-    """CRC-8 of the first ``end`` bits (as ``protocol.crc8``: XOR of x^(j+8) mod g over set bits)."""
+def _crc(info, end, crc_table):
+    """CRC of the first ``end`` bits (as ``protocol.crc``: XOR of ``crc_table[j]`` = x^(j+w) mod g over the set
+    bits, j bits before the end)."""
     c = 0
     for i in range(end):
         if info[i]:
@@ -722,9 +725,9 @@ def slot_loop(
                     if crc_bits > 0 and ok:
                         end = header_bits + length
                         got = 0
-                        for i in range(8):
+                        for i in range(crc_bits):
                             got = (got << 1) | (1 if info[min(end + i, width - 1)] else 0)
-                        if got != _crc8(info, end, crc_table):
+                        if got != _crc(info, end, crc_table):
                             counts[_C_CRC_FAILED] += 1
                             ok = False
                     if not ok:

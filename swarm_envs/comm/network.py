@@ -35,9 +35,14 @@ errors are counted on frames whose start coincided with the true start symbol ("
 Modes [T20 Sec. 6]: ``"broadcast"`` (local broadcast: a frame reaches the robots that decode it) and
 ``"flooding"`` (each robot re-sends every new ``"app"`` message once, deduplicated by (origin, seq)
 within ``dedupe_window`` seconds; the header then also carries the last-hop id). System kinds queued by
-:meth:`Network.queue_system` are always local broadcast. Flooding frames carry a CRC-8 by default
-(``crc_bits``), our addition: without error detection every corrupted copy has a "new" (origin, seq) or
-payload and is re-flooded by everyone (validation (c) shows the resulting storm).
+:meth:`Network.queue_system` are always local broadcast.
+
+Integrity (docs/design.md#swarmcom-messaging): frames carry the platform's CRC (``crc_bits``; the r-one's
+and the Droplet's CRC-16 [L Sec. 3.2.1, Table 3.3], none on the e-puck [T20]) and a frame whose CRC fails
+is dropped (``rx_crc_failed``). Flooding frames carry at least a CRC-8, our addition: without error
+detection every corrupted copy has a "new" (origin, seq) or payload and is re-flooded by everyone
+(validation (c) shows the resulting storm). In every mode a frame whose decoded origin or sender is the
+receiver itself is not delivered (``rx_self_named``), as the Droplet firmware rejects its own sender id.
 
 Queues: each robot holds up to ``queue_capacity`` frames (originals, relays, system traffic, FIFO); a new
 frame for a full queue drops the oldest waiting one (``queue_dropped``). An env whose agents send every
@@ -66,7 +71,7 @@ from swarm_envs.comm.protocol import (
     FrameFormat,
     KindRegistry,
     bits_to_uint,
-    crc8_table,
+    crc_table,
 )
 from swarm_envs.platforms import Platform, get_platform
 
@@ -187,10 +192,13 @@ class Network:
         dedupe_window: seconds a flooded (origin, seq) is remembered.
         intensity_sigma: std of the intensity noise n_j [Eq. (11)] (0: all noise is ADC noise n_m).
         adc_model: override the platform's ADC model.
-        crc_bits: 0 or 8 (CRC-8 over header + payload, ours; frames failing it are dropped). Default None:
-            0 in broadcast mode (as the paper), 8 in flooding mode: without error detection a corrupted copy
-            (e.g. from a collision) has a new (origin, seq) or payload and is re-flooded by everyone as a new
-            message, a broadcast storm that the paper does not report (validation (c) shows both).
+        crc_bits: 0, 8 or 16: width of the CRC over header + payload (:func:`swarm_envs.comm.protocol.crc`;
+            frames failing it are dropped). Default None: the platform's own
+            (:attr:`~swarm_envs.platforms.Platform.frame_crc_bits`: CRC-16 on the r-one [L Table 3.3] and the
+            Droplet, none on the e-puck as [T20]), at least 8 in flooding mode (our CRC-8 on the e-puck):
+            without error detection a corrupted copy (e.g. from a collision) has a new (origin, seq) or payload
+            and is re-flooded by everyone as a new message, a broadcast storm that the paper does not report
+            (validation (c) shows both).
         backend: ``"numba"`` (default when numba imports): the compiled slot loop of
             :mod:`swarm_envs.comm.kernels`; ``"numpy"``: the vectorised reference. Both consume the same
             pre-drawn random numbers (:func:`swarm_envs.comm.kernels.draw_copies`) and give the same results.
@@ -262,8 +270,8 @@ class Network:
         self.intensity_sigma = float(intensity_sigma)
         # detector response: slot duration / charge constant (0 = instantaneous detector)
         self.response_kt = (1.0 / self.bitrate) / self.adc_model.response_c if self.adc_model.response_c > 0 else 0.0
-        if crc_bits is None:
-            crc_bits = 8 if comm_mode == "flooding" else 0
+        if crc_bits is None:  # the platform's own frame CRC; flooding needs at least our CRC-8
+            crc_bits = max(self.platform.frame_crc_bits, 8 if comm_mode == "flooding" else 0)
         self.crc_bits = int(crc_bits)
         self.fmt = FrameFormat.for_swarm(self.copy_size, self.code, with_sender=(comm_mode == "flooding"), crc_bits=self.crc_bits)
         self.kinds = KindRegistry()
@@ -440,8 +448,13 @@ class Network:
         as_int = lambda v: np.ascontiguousarray(np.asarray(v, dtype=np.int64).reshape(M))  # noqa: E731
         return build_frames(
             as_int(type_code), as_int(seq), as_int(origin), as_int(sender), payload, length, fmt.header_bits, fmt.id_bits,
-            fmt.with_sender, fmt.crc_bits, crc8_table(fmt.header_bits + MAX_PAYLOAD + 8), c.n, c.k, c._codewords,
+            fmt.with_sender, fmt.crc_bits, self._crc_table(), c.n, c.k, c._codewords,
         )  # fmt: skip
+
+    def _crc_table(self) -> np.ndarray:
+        """The CRC table of this network's frames for the compiled kernels (CRC-8's when frames carry none)."""
+        fmt = self.fmt
+        return crc_table(fmt.crc_bits or 8, fmt.header_bits + MAX_PAYLOAD + fmt.crc_bits + 1)
 
     def queue_system(self, robot: int | np.ndarray, bits: np.ndarray, kind: str, lengths: np.ndarray | None = None) -> np.ndarray:
         """Queue system traffic (any kind name other than ``"app"``, at most 255 bits, local broadcast)
@@ -582,7 +595,7 @@ class Network:
             det.last_s1, det.start_slot,
             self.gt_tx, self.gt_id, self.gt_buf, self.collided,
             c.n, c.k, c._table_msg, c._table_ok, fmt.header_blocks, fmt.header_bits, fmt.id_bits, fmt.with_sender,
-            fmt.crc_bits, crc8_table(fmt.header_bits + MAX_PAYLOAD + 8), self.kinds.valid_codes(),
+            fmt.crc_bits, self._crc_table(), self.kinds.valid_codes(),
             self.copy_size, counts, per_robot, d_int, d_pay, self.rx_foreign,
         )  # fmt: skip
         self.frame_counter = int(fc[0])
@@ -923,23 +936,27 @@ class Network:
         base = self.offset[d["receiver"]]
         d["origin"], d["sender"] = d["origin"] + base, d["sender"] + base
         d["slot"] = d["slot"] - self.slot0[self.copy_of[d["receiver"]]]
-        keep = np.ones(d["receiver"].size, dtype=bool)
+        # a frame whose header names the receiver itself as origin or last hop is not delivered (a robot never
+        # receives its own frames, half duplex: such a header is corrupt or a flooded echo of its own message)
+        keep = (d["origin"] != d["receiver"]) & (d["sender"] != d["receiver"])
+        if not keep.all():
+            self._count("rx_self_named", values=int((~keep).sum()))
         if self.comm_mode == "flooding" and keep.size:
-            flood = d["type"] == self.kinds.code("app")
-            own = flood & (d["origin"] == d["receiver"])
+            flood = keep & (d["type"] == self.kinds.code("app"))
             key = (d["receiver"] * self.n + d["origin"]) * (1 << SEQ_BITS) + d["seq"]
             # forget old entries
             fresh = self.seen_slot > self.slot - self.dedupe_slots
             self.seen_keys, self.seen_slot = self.seen_keys[fresh], self.seen_slot[fresh]
             seen_before = np.isin(key, self.seen_keys)
             first = np.zeros(keep.size, dtype=bool)
-            _, idx = np.unique(key, return_index=True)
-            first[idx] = True
-            new = flood & ~own & ~seen_before & first
+            rows = np.flatnonzero(flood)
+            _, idx = np.unique(key[rows], return_index=True)
+            first[rows[idx]] = True
+            new = flood & ~seen_before & first
             dup = flood & ~new
             keep &= ~dup
             if dup.any():
-                self._count("rx_duplicates", values=int((dup & ~own).sum()))
+                self._count("rx_duplicates", values=int(dup.sum()))
             if new.any():
                 self.seen_keys = np.concatenate([self.seen_keys, key[new]])
                 self.seen_slot = np.concatenate([self.seen_slot, np.full(int(new.sum()), self.slot)])

@@ -9,7 +9,7 @@ On-off keying, one ADC sample per bit slot. A frame is one start symbol s1 follo
 bits, each block a codeword of the configured BCH code [15, k] (:mod:`swarm_envs.comm.bch`). The
 information bits (``B * k``, zero padded) are, most significant bit first::
 
-    marker(1) = 1 | type(3) | length(8) | seq(7) | origin(id_bits) | [sender(id_bits)] | payload(length)
+    marker(1) = 1 | type(3) | length(8) | seq(7) | origin(id_bits) | [sender(id_bits)] | payload(length) | [crc(crc_bits)]
 
 - ``marker``: always 1. A noise-triggered false start (the receiver sees s1 in noise, then mostly s0)
   produces marker = 0 and is aborted early (see :class:`DetectorBank`).
@@ -21,6 +21,11 @@ information bits (``B * k``, zero padded) are, most significant bit first::
   the firmware's 6-bit source field for swarms of up to 64 robots, wider for bigger swarms.
 - ``sender``: id of the last hop; only present in flooding mode (where it may differ from origin).
 - ``payload``: the message.
+- ``crc``: optional CRC over all the bits before it (:func:`crc`), most significant bit first; a frame whose
+  CRC does not match is dropped. Per platform (:attr:`swarm_envs.platforms.Platform.frame_crc_bits`): the
+  r-one's messages carry a 16-bit CRC [L Sec. 3.2.1, Table 3.3], so do the Droplet firmware's; [T20]
+  gives the e-puck none (its frames are protected only by the BCH code of every block, the header
+  included), and flooding adds our CRC-8 there.
 
 Compared with the reference firmware (5 codewords [15,11] = 55 bits: id 7, source 6, destination 6,
 type 4, data 32) we drop the destination (all traffic is broadcast or flooded), add the marker and an
@@ -67,8 +72,9 @@ __all__ = [
     "RECV",
     "bits_to_uint",
     "uint_to_bits",
-    "crc8",
-    "crc8_table",
+    "crc",
+    "crc_table",
+    "CRC_POLYS",
 ]
 
 IDLE = 0
@@ -95,36 +101,46 @@ def bits_to_uint(bits: np.ndarray) -> np.ndarray:
     return bits.astype(np.int64) @ (np.int64(1) << np.arange(w - 1, -1, -1, dtype=np.int64))
 
 
-_CRC8_POLY = 0x107  # x^8 + x^2 + x + 1 (CRC-8/ATM), zero initial value
-_CRC8_TABLE: np.ndarray | None = None
+#: CRC generator polynomials by width: CRC-8 x^8 + x^2 + x + 1 (CRC-8/ATM; ours, for flooding) and CRC-16
+#: x^16 + x^15 + x^2 + 1, the polynomial of the r-one's and the Droplet's message CRCs (module docstring)
+CRC_POLYS = {8: 0x107, 16: 0x18005}
+#: allowed ``crc_bits`` of a frame (0: no CRC)
+CRC_WIDTHS = (0, 8, 16)
+_CRC_TABLES: dict[int, np.ndarray] = {}
 
 
-def crc8_table(size: int = 512) -> np.ndarray:
-    """(>= size,) int64: entry j is x^(j+8) mod g, the CRC-8 of a set bit followed by j bits (cached)."""
-    global _CRC8_TABLE
-    if _CRC8_TABLE is None or _CRC8_TABLE.size < size:
+def crc_table(width: int = 8, size: int = 512) -> np.ndarray:
+    """(>= size,) int64: entry j is x^(j+width) mod g, the CRC of a set bit followed by j bits (cached per
+    width; ``g`` = :data:`CRC_POLYS` [width])."""
+    if width not in CRC_POLYS:
+        raise ValueError(f"CRC width must be one of {sorted(CRC_POLYS)}, got {width}")
+    t = _CRC_TABLES.get(width)
+    if t is None or t.size < size:
+        poly, top = CRC_POLYS[width], 1 << width
         n = max(size, 512)
         t = np.zeros(n, dtype=np.int64)
-        r = 1 << 8 ^ _CRC8_POLY  # x^8 mod g
-        for j in range(n):  # t[j] = x^(j+8) mod g
+        r = top ^ poly  # x^width mod g
+        for j in range(n):  # t[j] = x^(j+width) mod g
             t[j] = r
             r <<= 1
-            if r & 0x100:
-                r ^= _CRC8_POLY
-        _CRC8_TABLE = t
-    return _CRC8_TABLE
+            if r & top:
+                r ^= poly
+        _CRC_TABLES[width] = t
+    return t
 
 
-def crc8(bits: np.ndarray, length: np.ndarray) -> np.ndarray:
-    """CRC-8 (polynomial x^8 + x^2 + x + 1, zero init, no reflection) of the first ``length[i]`` bits of
-    each row of ``bits (M, W)``, vectorised: the CRC is linear, so it is the XOR of the CRCs of the set
-    bits, and a set bit followed by j bits contributes ``x^(j+8) mod g``.
+def crc(bits: np.ndarray, length: np.ndarray, width: int = 8) -> np.ndarray:
+    """CRC (:data:`CRC_POLYS` [width], zero init, bits taken in order, no final XOR) of the first ``length[i]``
+    bits of each row of ``bits (M, W)``, vectorised: the CRC is linear, so it is the XOR of the CRCs of
+    the set bits, and a set bit followed by j bits contributes ``x^(j+width) mod g``.
 
-    Ours, not in [T20]: optional error detection so that corrupted frames (e.g. collisions) are dropped
-    instead of being delivered or re-flooded as new messages (``Network(crc_bits=8)``)."""
+    ``width=16``: the CRC-16 of the r-one [L Sec. 3.2.1, Table 3.3] and the Droplet firmware (the reflected
+    table CRC with 0xA001 over bytes sent least significant bit first gives the same register, bit-reversed;
+    docs/design.md#swarmcom-messaging). ``width=8``: ours, optional error detection for flooding on the
+    e-puck, so that corrupted frames are dropped instead of re-flooded as new messages."""
     bits = np.asarray(bits, dtype=bool)
     M, W = bits.shape
-    table = crc8_table(W + 1)
+    table = crc_table(width, W + 1)
     length = np.asarray(length, dtype=np.int64).reshape(M)
     j = length[:, None] - 1 - np.arange(W)[None, :]
     use = bits & (j >= 0)
@@ -167,8 +183,8 @@ class FrameFormat:
         code: BCH code of every block.
         id_bits: width of the origin / sender fields.
         with_sender: True in flooding mode (header carries the last-hop id).
-        crc_bits: 0 (none, as the paper) or 8: CRC-8 over header + payload appended to the information
-            bits (ours, see :func:`crc8`).
+        crc_bits: width of the CRC over header + payload appended to the information bits (:func:`crc`):
+            0 (none, as [T20]), 8 (CRC-8, ours) or 16 (the CRC-16 of the r-one [L Table 3.3] and the Droplet).
     """
 
     code: BCHCode
@@ -186,8 +202,8 @@ class FrameFormat:
     ) -> "FrameFormat":
         c = code if isinstance(code, BCHCode) else bch_code(*code)
         id_bits = max(6, int(np.ceil(np.log2(max(2, n_robots)))))
-        if crc_bits not in (0, 8):
-            raise ValueError(f"crc_bits must be 0 or 8, got {crc_bits}")
+        if crc_bits not in CRC_WIDTHS:
+            raise ValueError(f"crc_bits must be one of {CRC_WIDTHS}, got {crc_bits}")
         return cls(c, id_bits, with_sender, int(crc_bits))
 
     @property
@@ -242,11 +258,12 @@ class FrameFormat:
         Lmax = int(length.max()) if M else 0
         pay = payload[:, :Lmax] & (np.arange(Lmax)[None, :] < length[:, None])
         info = np.concatenate([header, pay], axis=1)
-        if self.crc_bits:
-            crc = uint_to_bits(crc8(info, self.header_bits + length), 8)
-            info = np.concatenate([info, np.zeros((M, 8), dtype=bool)], axis=1)
-            pos = (self.header_bits + length)[:, None] + np.arange(8)[None, :]
-            info[np.arange(M)[:, None], pos] = crc
+        w = self.crc_bits
+        if w:
+            check = uint_to_bits(crc(info, self.header_bits + length, w), w)
+            info = np.concatenate([info, np.zeros((M, w), dtype=bool)], axis=1)
+            pos = (self.header_bits + length)[:, None] + np.arange(w)[None, :]
+            info[np.arange(M)[:, None], pos] = check
         coded = self.code.encode_stream(info)  # (M, Bmax*n), blocks beyond a frame's own length unused
         slots = self.frame_slots(length)
         bits = np.concatenate([np.ones((M, 1), dtype=bool), coded], axis=1)
@@ -257,12 +274,13 @@ class FrameFormat:
         """(M,) True where the CRC field after the payload matches (always True without CRC)."""
         info = np.asarray(info, dtype=bool)
         M = info.shape[0]
-        if not self.crc_bits:
+        w = self.crc_bits
+        if not w:
             return np.ones(M, dtype=bool)
         end = self.header_bits + np.asarray(length, dtype=np.int64)
-        pos = np.minimum(end[:, None] + np.arange(8)[None, :], info.shape[1] - 1)
+        pos = np.minimum(end[:, None] + np.arange(w)[None, :], info.shape[1] - 1)
         got = bits_to_uint(info[np.arange(M)[:, None], pos])
-        return got == crc8(info, end)
+        return got == crc(info, end, w)
 
     def parse_header(self, info: np.ndarray) -> dict[str, np.ndarray]:
         """Header fields of decoded information bits ``(M, >= header_bits)``."""
