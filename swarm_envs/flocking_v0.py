@@ -99,7 +99,7 @@ def parallel_env(
     n_messages: int = 8,
     message_bits: int = 0,
     observe_ids: bool = False,
-    bitrate: Literal[310, 650, 1080, 1160, 1670, 1800] = 310,
+    bitrate: Literal[310, 650, 1080, 1160, 1250, 1670, 1800] | None = None,
     relative_threshold: float | None = None,
     code: tuple[int, int] = (15, 15),
     comm_mode: Literal["broadcast", "flooding"] = "broadcast",
@@ -200,7 +200,7 @@ def parallel_env(
     | ``n_messages`` | 8 | rows M of ``messages`` |
     | ``message_bits`` | 0 | payload bits b an agent sends through its action (0: no message action) |
     | ``observe_ids`` | ``False`` | add the robot's own id and the neighbour and sender ids its sensing decoded (``own_id``, ``*_ids`` parts) |
-    | ``bitrate`` | 310 | SwarmCom bit rate (bps): 310, 650, 1080, 1160, 1670 or 1800 [T20] |
+    | ``bitrate`` | ``None`` | SwarmCom bit rate (bps): ``None`` the platform's (e-puck 310 [T20], r-one 1250 [L Sec. 3.2.1], Droplet 310), or 310, 650, 1080, 1160, 1250, 1670, 1800 |
     | ``relative_threshold`` | ``None`` | detector threshold m_tr (ADC counts); ``None``: 5 on e-puck and r-one [T20], 8 on the Droplet |
     | ``code`` | ``(15, 15)`` | BCH code (n, k): ``(15, 15)`` uncoded, ``(15, 11)``, ``(15, 7)``, ``(15, 5)``, ``(15, 1)`` |
     | ``comm_mode`` | ``"broadcast"`` | ``"broadcast"`` or ``"flooding"`` [T20 Sec. 5] |

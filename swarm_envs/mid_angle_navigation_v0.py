@@ -53,7 +53,7 @@ from swarm_envs.task import (
 
 __all__ = ["MidAngleNavigationTask", "MidAngleNavigationEnv", "Corridor", "HOP_MEMORY_STEPS", "raw_env", "parallel_env", "env"]
 
-#: steps a static robot keeps the hop count it last confirmed for a static neighbour (5 s: at 1160 bps it
+#: steps a static robot keeps the hop count it last confirmed for a static neighbour (5 s: at 1250 bps it
 #: decodes each neighbour every second or two; a newer confirmed value replaces it)
 HOP_MEMORY_STEPS = 50
 #: a seeker arrives within this many robot radii of the goal's centre
@@ -186,7 +186,6 @@ class MidAngleNavigationTask(Task):
         "platform": "rone",
         "observe_ids": True,
         "message_bits": 4,
-        "bitrate": 1160,
         "max_cycles": 600,
         "lanes": Int(1, "corridor lanes (1: a straight corridor)", low=1, high=12,
                      why="each lane is 6 robot diameters wide and the default arena grows with the lanes; 12 lanes already make a 7.9 m r-one arena"),
@@ -377,7 +376,7 @@ def parallel_env(
     n_messages: int = 8,
     message_bits: int = 4,
     observe_ids: bool = True,
-    bitrate: Literal[310, 650, 1080, 1160, 1670, 1800] = 1160,
+    bitrate: Literal[310, 650, 1080, 1160, 1250, 1670, 1800] | None = None,
     relative_threshold: float | None = None,
     code: tuple[int, int] = (15, 15),
     comm_mode: Literal["broadcast", "flooding"] = "broadcast",
@@ -486,7 +485,7 @@ def parallel_env(
     | ``n_messages`` | 8 | rows M of ``messages`` |
     | ``message_bits`` | 4 | payload bits b of every robot's messages: the static robots' hop counts (at least 1); a seeker sends its action's bits |
     | ``observe_ids`` | ``True`` | the robot's own id and the neighbour and sender ids its sensing decoded (``own_id``, ``*_ids`` parts) |
-    | ``bitrate`` | 1160 | SwarmCom bit rate (bps): 310, 650, 1080, 1160, 1670 or 1800 [T20]; 1160 is the rate nearest the r-one's 1250 bps [L Sec. 3.2.1] (on the e-puck 310 reaches farther, 61 cm [T20 Sec. 7]) |
+    | ``bitrate`` | ``None`` | SwarmCom bit rate (bps): ``None`` the platform's (e-puck 310 [T20], r-one 1250 [L Sec. 3.2.1], Droplet 310), or 310, 650, 1080, 1160, 1250, 1670, 1800 |
     | ``relative_threshold`` | ``None`` | detector threshold m_tr (ADC counts); ``None``: 5 on e-puck and r-one [T20], 8 on the Droplet |
     | ``code`` | ``(15, 15)`` | BCH code (n, k): ``(15, 15)`` uncoded, ``(15, 11)``, ``(15, 7)``, ``(15, 5)``, ``(15, 1)`` |
     | ``comm_mode`` | ``"broadcast"`` | ``"broadcast"`` or ``"flooding"`` [T20 Sec. 5] |

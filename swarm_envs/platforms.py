@@ -17,6 +17,9 @@ Sources:
   68-degree arcs, 8 transmitters at 45 k degrees. Motion error: no wheel turns below the minimum
   controllable speed of 15 mm/s [L Sec. 3.1]; 2 % wheel-gain spread and 2 % per-step noise, assumed.
 
+Messaging bit rate (``ir_bitrate``, the default of the ``bitrate`` setting): e-puck 310 bps, the rate of
+[T20]'s experiments; r-one 1250 bps, its receivers' rate [L Sec. 3.2.1]; Droplet 310 bps (assumed).
+
 Message frames (``frame_crc_bits``, docs/design.md#swarmcom-messaging): the r-one's IR messages carry a
 16-bit CRC [L Sec. 3.2.1, Table 3.3], the Droplet firmware's a CRC-16 of the same polynomial (cu-droplet
 ``ir_comm.c``), the e-puck's SwarmCom frames none [T20 Sec. 4.3].
@@ -41,8 +44,11 @@ from swarm_envs.ir.models import MODEL_CLASSES
 
 __all__ = [
     "Platform", "PLATFORMS", "get_platform", "model_for", "MAX_RADIUS", "MAX_SPEED", "MAX_MASS", "MAX_IR_RANGE", "MAX_CHANNELS",
-    "MAX_WHEEL_ERROR",
+    "MAX_WHEEL_ERROR", "MAX_BITRATE",
 ]
+
+#: bps: the fastest messaging rate a platform may declare (ten times the e-puck's fastest measured rate)
+MAX_BITRATE = 20_000
 
 #: m: the largest body radius; the arena, spawn and IR geometry are sized for robots of centimetres to decimetres
 MAX_RADIUS = 1.0
@@ -127,6 +133,8 @@ class Platform:
             speed-control jitter); the motion error of ``motion_noise``.
         min_wheel_speed: wheel speed (m/s) below which a commanded wheel does not turn (gear-train
             friction; a dead zone); the motion error of ``motion_noise``.
+        ir_bitrate: bits per second of the robot's infrared messaging (the default of the ``bitrate``
+            setting); a whole number of bit slots per 0.1 s control step.
         frame_crc_bits: width of the CRC the robot's messaging firmware appends to every SwarmCom frame
             (0, 8 or 16; :func:`swarm_envs.comm.protocol.crc`): 16 on the r-one and the Droplet, 0 on the
             e-puck (module docstring).
@@ -148,6 +156,7 @@ class Platform:
     wheel_noise_std: float = 0.0
     min_wheel_speed: float = 0.0
     frame_crc_bits: int = 0
+    ir_bitrate: int = 310
 
     def __post_init__(self) -> None:
         """Check every field; ``ValueError`` naming the field. Numbers become floats and the layouts
@@ -183,6 +192,13 @@ class Platform:
         if not (crc_ok and int(self.frame_crc_bits) in CRC_WIDTHS):
             raise ValueError(f"Platform.frame_crc_bits must be one of {CRC_WIDTHS} (CRC widths SwarmCom frames can carry), got {shown(self.frame_crc_bits)}")
         values["frame_crc_bits"] = int(self.frame_crc_bits)
+        rate_ok = isinstance(self.ir_bitrate, numbers.Integral) and not isinstance(self.ir_bitrate, bool)
+        if not (rate_ok and 0 < int(self.ir_bitrate) <= MAX_BITRATE and int(self.ir_bitrate) % 10 == 0):
+            raise ValueError(
+                f"Platform.ir_bitrate must be a multiple of 10 bps in (0, {MAX_BITRATE}] (whole bit slots per 0.1 s step), "
+                f"got {shown(self.ir_bitrate)}"
+            )
+        values["ir_bitrate"] = int(self.ir_bitrate)
         for key, value in values.items():
             object.__setattr__(self, key, value)
 
@@ -285,6 +301,7 @@ def _rone() -> Platform:
         wheel_noise_std=0.02,  # assumed
         min_wheel_speed=0.015,  # "internal friction in the gear-train limits the minimum controllable speed" [L Sec. 3.1]
         frame_crc_bits=16,  # "A 16-bit cyclic redundancy check (CRC)" on every message [L Sec. 3.2.1, Table 3.3]
+        ir_bitrate=1250,  # the receivers' rate: 32.8 ms for a 3-byte message [L Sec. 3.2.1]
     )
 
 

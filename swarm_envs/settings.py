@@ -260,7 +260,11 @@ COMMON_SETTINGS: dict[str, Setting] = {
     # the robot's own id and the neighbour / sender ids its sensing decoded (swarm_envs.observation)
     "observe_ids": Flag(False),
     # SwarmCom messaging [T20]
-    "bitrate": Choice(310, choices=(310, 650, 1080, 1160, 1670, 1800), why="the bit rates measured in [T20]"),
+    "bitrate": Choice(
+        None, choices=(None, 310, 650, 1080, 1160, 1250, 1670, 1800),
+        why="None: the platform's rate (e-puck 310, r-one 1250, Droplet 310; Platform.ir_bitrate); the rates measured "
+        "in [T20] and the r-one's 1250 bps [L Sec. 3.2.1]",
+    ),
     # m_tr (ADC counts); None = the platform's: 5 e-puck/r-one [T20], 8 droplet.
     "relative_threshold": Real(
         None, low=0.0, low_open=True, high=3930.0, allow_none=True, unit="of ADC counts (m_tr)",

@@ -38,7 +38,6 @@ class SortedFollowingTask(Task):
         "platform": "rone",
         "observe_ids": True,
         "message_bits": 1,
-        "bitrate": 1160,
         "follow_distance": Real(None, "predecessor distance that counts as following; None: half the message range", low=0.0,
                                 low_open=True, high=100.0, allow_none=True, unit="m",
                                 why="at most 100 m: a distance beyond every arena the defaults build; larger values only count more pairs"),
@@ -162,7 +161,7 @@ def parallel_env(
     n_messages: int = 8,
     message_bits: int = 1,
     observe_ids: bool = True,
-    bitrate: Literal[310, 650, 1080, 1160, 1670, 1800] = 1160,
+    bitrate: Literal[310, 650, 1080, 1160, 1250, 1670, 1800] | None = None,
     relative_threshold: float | None = None,
     code: tuple[int, int] = (15, 15),
     comm_mode: Literal["broadcast", "flooding"] = "broadcast",
@@ -271,7 +270,7 @@ def parallel_env(
     | ``n_messages`` | 8 | rows M of ``messages`` |
     | ``message_bits`` | 1 | payload bits b an agent sends through its action: with b > 0 every robot broadcasts continuously, and each decoded frame refreshes its neighbours' bearing of it (0: only the 2.4 s bearing beacons) |
     | ``observe_ids`` | ``True`` | the robot's own id and the neighbour and sender ids its sensing decoded (``own_id``, ``*_ids`` parts) |
-    | ``bitrate`` | 1160 | SwarmCom bit rate (bps): 310, 650, 1080, 1160, 1670 or 1800 [T20]; 1160 is the rate nearest the r-one's 1250 bps [L Sec. 3.2.1] (on the e-puck 310 reaches farther, 61 cm [T20 Sec. 7]) |
+    | ``bitrate`` | ``None`` | SwarmCom bit rate (bps): ``None`` the platform's (e-puck 310 [T20], r-one 1250 [L Sec. 3.2.1], Droplet 310), or 310, 650, 1080, 1160, 1250, 1670, 1800 |
     | ``relative_threshold`` | ``None`` | detector threshold m_tr (ADC counts); ``None``: 5 on e-puck and r-one [T20], 8 on the Droplet |
     | ``code`` | ``(15, 15)`` | BCH code (n, k): ``(15, 15)`` uncoded, ``(15, 11)``, ``(15, 7)``, ``(15, 5)``, ``(15, 1)`` |
     | ``comm_mode`` | ``"broadcast"`` | ``"broadcast"`` or ``"flooding"`` [T20 Sec. 5] |

@@ -177,9 +177,10 @@ class Network:
         n_robots: swarm size N.
         rng: random generator (start-up ambient samples at reset, then :func:`~swarm_envs.comm.kernels.draw_copies`
             once per step).
-        bitrate: bits per second (e-puck: 310 default, 650, 1080, 1160, 1670, 1800 [T20 Sec. 5]); with the
-            e-puck's detector response (:func:`swarm_envs.comm.channel.detector_response`) the reliable
-            range shrinks as the rate grows (~60 cm at 310 bps, 14 cm at 1800 bps [T20 Sec. 7]).
+        bitrate: bits per second (e-puck: 310 default, 650, 1080, 1160, 1670, 1800 [T20 Sec. 5]; r-one 1250
+            [L Sec. 3.2.1]); with the e-puck's detector response
+            (:func:`swarm_envs.comm.channel.detector_response`) the reliable range shrinks as the rate grows
+            (~60 cm at 310 bps, 14 cm at 1800 bps [T20 Sec. 7]).
         relative_threshold: m_tr (counts) [T20 Eq. (33)], default 5.
         code: BCH code (n, k): (15, 15) default, (15, 11), (15, 7), (15, 5), (15, 1).
         comm_mode: ``"broadcast"`` or ``"flooding"``.

@@ -168,7 +168,7 @@ class FullSensing:
             platform,
             self.copy_size,
             streams[1],
-            bitrate=config["bitrate"],
+            bitrate=platform.ir_bitrate if config["bitrate"] is None else config["bitrate"],
             relative_threshold=recommended_relative_threshold(platform) if threshold is None else threshold,
             code=tuple(config["code"]),
             comm_mode=config["comm_mode"],
