@@ -346,3 +346,18 @@ def test_a_prepared_step_is_for_one_step_only():
     net.step(links)
     with pytest.raises(ValueError, match="another step"):
         net.step(links, prepared)
+
+
+@pytest.mark.parametrize("platform, rate", [("epuck", 310), ("rone", 1250), ("droplet", 310)])
+def test_the_default_bitrate_is_the_platforms(platform, rate):
+    import dataclasses
+
+    import swarm_envs
+    from swarm_envs.platforms import get_platform
+
+    env = swarm_envs.make("swarm_envs/Flocking-v0", n_robots=3, platform=platform)
+    assert env.core.sensing.network.bitrate == rate == get_platform(platform).ir_bitrate
+    assert swarm_envs.make("swarm_envs/Flocking-v0", n_robots=3, platform=platform, bitrate=650).core.sensing.network.bitrate == 650
+    for bad in (0, 15, 1e3, True, 10**6):
+        with pytest.raises(ValueError, match="Platform.ir_bitrate"):
+            dataclasses.replace(get_platform(platform), ir_bitrate=bad)
