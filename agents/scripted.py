@@ -256,22 +256,30 @@ class BearingAggregation(_Stateful):
 class CentroidSeeker(_Stateful):
     """[L] Sec. 6.2.2 centroid controller, one step of ``d_step`` per sensing round.
 
-    Cycle per robot: pause ``pause_steps`` control steps (the thesis pauses for each neighbour round) ->
-    read the centroid of the valid ``scale_free`` neighbour coordinates (the robot's own frame, scaled so
+    Cycle per robot: pause (the thesis's robot pauses for each neighbour round) -> read the centroid of the valid ``scale_free`` neighbour coordinates (the robot's own frame, scaled so
     the mean neighbour distance is 1; only the direction is used) -> turn in place to its bearing ->
     drive ``d_step`` metres (11 cm in the thesis) at ``speed`` -> repeat. Without (complete, rigid) scale-free
     coordinates the direction is the mean neighbour bearing of ``range_bearing`` (see :meth:`centroid_bearing`;
     with ``sensing="full"`` this fallback halves the error: 0.14 m vs 0.22 m over 8 seeds, 200 steps);
     without neighbours, a random walk.
     The robot "has no notion of exact distance to the centroid" so it keeps circling within ~d_step.
+
+    The pause: ``pause_steps`` control steps, or with ``pause_steps=None`` (default) until every
+    ``range_bearing`` reading is younger than the pause (measured after the robot stopped), at most
+    :attr:`MAX_PAUSE` steps: a few steps on range & bearing platforms, up to two rounds (~48 steps) on the
+    r-one, whose readings are those of its last complete round [L Sec. 3.2.2].
     """
+
+    #: the longest pause (control steps) of ``pause_steps=None``
+    MAX_PAUSE = 60
 
     name = "centroid_seeker"
 
     def __init__(self, platform: Platform, layout: ObservationLayout, rng: np.random.Generator | None = None,
-                 d_step: float = 0.11, speed: float = 1.0, pause_steps: int = 2, min_scale_free: int = 3,
+                 d_step: float = 0.11, speed: float = 1.0, pause_steps: int | None = None, min_scale_free: int = 3,
                  t_m: float = 2.0) -> None:
-        self.d_step, self.speed, self.pause_steps = float(d_step), float(speed), int(pause_steps)
+        self.d_step, self.speed = float(d_step), float(speed)
+        self.pause_steps = None if pause_steps is None else int(pause_steps)
         self.min_scale_free = int(min_scale_free)
         super().__init__(platform, layout, rng, t_m)
 
@@ -307,10 +315,17 @@ class CentroidSeeker(_Stateful):
         step_turn = self.platform.max_angular_speed * DT
         lin, ang = np.zeros(n), np.zeros(n)
         bearing, has = self.centroid_bearing(obs)
-        # phase 0: pause until the timer runs out, then measure and plan the turn
+        # phase 0: pause until the timer runs out (or the readings are fresh), then measure and plan the turn
         pausing = self._phase == 0
         self._timer[pausing] -= 1
-        plan = pausing & (self._timer <= 0) & has
+        if self.pause_steps is None:  # the timer counts the pause up from -1: fresh = every reading younger
+            rb = obs["range_bearing"]
+            oldest = np.where(rb[..., 0] > 0.5, rb[..., 6], 0.0).max(axis=1)
+            paused = -self._timer
+            ready = (oldest < paused) | (paused >= self.MAX_PAUSE)
+        else:
+            ready = self._timer <= 0
+        plan = pausing & ready & has
         self._turn[plan] = bearing[plan]
         self._phase[plan] = 1
         # phase 1: in-place turn (open loop, as the robot does not re-measure while moving)
@@ -328,7 +343,7 @@ class CentroidSeeker(_Stateful):
         self._timer[driving] -= 1
         finished = driving & (self._timer <= 0)
         self._phase[finished] = 0
-        self._timer[finished] = self.pause_steps
+        self._timer[finished] = 0 if self.pause_steps is None else self.pause_steps
         # nobody to seek: random walk
         lost = pausing & ~has
         rw_lin, rw_ang = self._random_walk(lost)
@@ -582,7 +597,7 @@ KWARG_RULES: dict[str, Setting] = {
     "avoid_range": Real(0.15, "turn away from a neighbour ahead this close", high=100.0, unit="m"),
     "d_step": Real(0.11, "step length towards the centroid estimate", low=0.0, high=100.0, low_open=True, unit="m"),
     "passing_angle": Real(2.5, "rad between two relays the seeker passes between", low=0.0, high=6.2832),
-    "pause_steps": Int(2, "control steps", low=0, high=1_000_000),
+    "pause_steps": Int(None, "control steps; None: until the readings are fresh", low=0, high=1_000_000, allow_none=True),
     "min_scale_free": Int(3, "scale-free neighbours needed", low=1, high=1_000),
     "memory": Int(300, "control steps", low=1, high=1_000_000),
     "evade_steps": Int(5, "control steps", low=0, high=1_000_000),

@@ -190,7 +190,7 @@ def run_demo(
     if overlay_agent is not None and not 0 <= overlay_agent < env.n_agents:
         env.close()
         raise ValueError(f"overlay_agent must be in [0, {env.n_agents}), got {overlay_agent}")
-    renderer = Renderer(env.arena, env.platform, pixels=pixels, fps=env.metadata["render_fps"])
+    renderer = Renderer(env.arena, env.platform, pixels=pixels, fps=env.metadata["render_fps"], obstacles=env.task.obstacle_segments)
     title = (
         f"{resolve_task(task)[1].split('/')[-1]} | {env.platform.name} x {env.n_agents}, {env.config['sensing']} sensing"
         f"\n{getattr(policy, 'name', 'policy')}"

@@ -57,6 +57,10 @@ class ParityClusteringTask(Task):
         self.cluster_radius = CLUSTER_LINK_DIAMETERS * platform.diameter if given is None else float(given)
         self.parity = np.arange(self.n_world)[self.n_static :] % 2  # agent ids' parities
 
+    def robot_groups(self) -> tuple[np.ndarray, tuple[str, str]]:
+        """Even ids in one colour, odd ids in the other (drawing only)."""
+        return np.arange(self.n_world) % 2, ("even id", "odd id")
+
     def rewards(self, state: BatchState, first: np.ndarray):
         B, A = self.n_copies, self.n_agents
         pos = self.agents_of(state.positions)

@@ -38,6 +38,7 @@ __all__ = [
 _BACKGROUND = (245, 245, 240)
 _WALL = (60, 60, 60)
 _ROBOT = (40, 110, 200)
+_ROBOT_B = (20, 140, 140)  # robots of a task's second group (Task.robot_groups)
 _STATIC = (225, 120, 20)
 _HEADING = (255, 255, 255)
 _LINK = (110, 190, 110)
@@ -51,7 +52,7 @@ _FOCUS = (20, 20, 20)
 #: every colour the renderer draws (shapes and text are not antialiased), so a GIF with this palette shows the
 #: frames exactly (:func:`swarm_envs.demo.write_gif`)
 PALETTE: tuple[tuple[int, int, int], ...] = (
-    _BACKGROUND, _WALL, _ROBOT, _STATIC, _HEADING, _LINK, _MESSAGE, _MARKER, _TEXT, _ESTIMATE, _ERROR, _FOCUS,
+    _BACKGROUND, _WALL, _ROBOT, _ROBOT_B, _STATIC, _HEADING, _LINK, _MESSAGE, _MARKER, _TEXT, _ESTIMATE, _ERROR, _FOCUS,
 )
 
 
@@ -202,10 +203,15 @@ class Renderer:
             lines.append(line)
         return lines
 
-    def _legend_items(self, links: bool, messages: bool, static: bool, markers: list[str], overlay: bool) -> list[tuple[str, tuple, str]]:
-        items = [("robot", _ROBOT, "robot, heading")]
+    def _legend_items(
+        self, links: bool, messages: bool, static: bool, markers: list[str], overlay: bool, group_labels: tuple[str, ...] | None = None
+    ) -> list[tuple[str, tuple, str]]:
+        if group_labels:
+            items = [("robot", colour, label) for colour, label in zip((_ROBOT, _ROBOT_B), group_labels)]
+        else:
+            items = [("robot", _ROBOT, "robot, heading")]
         if static:
-            items.append(("robot", _STATIC, "anchor"))
+            items.append(("robot", _STATIC, "static robot"))
         if links:
             items.append(("line", _LINK, "IR reading this step"))
         if messages:
@@ -257,6 +263,7 @@ class Renderer:
         overlay: NeighbourOverlay | None = None,
         caption: str | None = None,
         legend: bool = False,
+        groups: tuple[np.ndarray, tuple[str, str]] | None = None,
     ) -> np.ndarray | None:
         """Draw a frame; returns an (H, W, 3) uint8 array (``rgb_array``) or None (``human``).
 
@@ -269,6 +276,8 @@ class Renderer:
             overlay: one robot's neighbour estimates next to the truth (:class:`NeighbourOverlay`).
             caption: text above the arena (wrapped to the width; ``\\n`` starts a line).
             legend: draw a legend of what is shown below the arena.
+            groups: ((n,) group 0 or 1 of each robot, the two groups' legend labels): group 1 is drawn in a
+                second colour (:meth:`swarm_envs.task.Task.robot_groups`, e.g. odd ids).
         """
         pg = self.pygame
         surf = self.surface
@@ -277,7 +286,12 @@ class Renderer:
         line_height = self._text("Ag").get_height()
         caption_lines = self._wrap(caption, self.pixels - 12) if caption else []
         legend_rows = (
-            self._legend_rows(self._legend_items(links is not None, messages is not None, bool(static.any()), sorted(markers or {}), overlay is not None))
+            self._legend_rows(
+                self._legend_items(
+                    links is not None, messages is not None, bool(static.any()), sorted(markers or {}), overlay is not None,
+                    None if groups is None else groups[1],
+                )
+            )
             if legend
             else []
         )
@@ -308,8 +322,9 @@ class Renderer:
         radius_px = max(2, int(round(self.platform.radius * self.scale)))
         nose = self._px(positions + self.platform.radius * np.stack([np.cos(headings), np.sin(headings)], -1))
         tick = max(2, radius_px // 3)
-        for c, n, s in zip(centres, nose, static):
-            pg.draw.circle(surf, _STATIC if s else _ROBOT, c, radius_px)
+        second = np.zeros(len(positions), bool) if groups is None else np.asarray(groups[0]) == 1
+        for c, n, s, g in zip(centres, nose, static, second):
+            pg.draw.circle(surf, _STATIC if s else (_ROBOT_B if g else _ROBOT), c, radius_px)
             pg.draw.line(surf, _HEADING, c, n, tick)
         for point in (markers or {}).values():
             c = self._px(point)
@@ -374,4 +389,5 @@ def render_env(env: Any, renderer: Renderer, caption: str | None = None, overlay
         overlay=overlay,
         caption=caption,
         legend=legend,
+        groups=env.task.robot_groups(),
     )

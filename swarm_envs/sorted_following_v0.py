@@ -98,6 +98,10 @@ class SortedFollowingTask(Task):
         ahead = delta[..., 0] * np.cos(headings) + delta[..., 1] * np.sin(headings) > 0
         return has & (dist <= self.follow_distance) & ahead, has
 
+    def robot_groups(self) -> tuple[np.ndarray, tuple[str, str]]:
+        """The lowest id (the first leader) in the second colour (drawing only)."""
+        return (np.arange(self.n_world) == 0).astype(int), ("follower", "lowest id (leads)")
+
     def rewards(self, state: BatchState, first: np.ndarray):
         B, A = self.n_copies, self.n_agents
         pos, head = self.agents_of(state.positions), self.agents_of(state.headings)

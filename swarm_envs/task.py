@@ -130,7 +130,8 @@ class Task:
       or None.
 
     Override :meth:`rewards` (required) and, if needed, :meth:`n_static_robots`, :meth:`check_layout`,
-    :meth:`default_arena_size`, :meth:`spawn`, :meth:`markers`, :meth:`obstacles` (walls inside the
+    :meth:`default_arena_size`, :meth:`spawn`, :meth:`markers`, :meth:`robot_groups` (two colours in
+    drawings), :meth:`obstacles` (walls inside the
     arena), :meth:`static_messages` (what the static robots broadcast) and :meth:`switched_off` (robots
     taken out mid-episode). The constructor gets the resolved
     settings (``self.config``: every common setting, see :data:`swarm_envs.settings.COMMON_SETTINGS`,
@@ -260,6 +261,11 @@ class Task:
         can be restarted there. Return the same term and metric names every step.
         """
         raise NotImplementedError(f"{type(self).__name__} must implement rewards(state, first)")
+
+    def robot_groups(self) -> tuple[np.ndarray, tuple[str, str]] | None:
+        """For drawing only: ((n_world,) group 0 or 1 of each robot, the two groups' legend labels), e.g.
+        even and odd ids; the renderer draws group 1 in a second colour. Default None: one group."""
+        return None
 
     def markers(self, positions: np.ndarray) -> dict[str, np.ndarray]:
         """Task markers of one copy (name -> world point (2,) m) from its positions (n_world, 2): drawn by

@@ -6,6 +6,8 @@ import numpy as np
 import pytest
 from scipy import stats
 
+import swarm_envs
+
 from swarm_envs.agents.base import RandomPolicy
 from swarm_envs.agents.evaluation import confidence_interval, evaluate, make_env, random_factory, run_episode
 from swarm_envs.agents.scripted import SCRIPTED, bump_direction, circular_mean, make_scripted, scripted_class
@@ -218,3 +220,36 @@ def test_evaluate_rejects_bad_arguments():
         evaluate("aggregation", {}, random_factory, [0], max_copies=0)
     with pytest.raises(ValueError, match="at least one seed"):
         evaluate("aggregation", {}, random_factory, [])
+
+
+def test_centroid_seeker_pauses_until_its_readings_are_younger_than_the_pause():
+    """pause_steps=None: after a step the seeker turns only once every range & bearing reading was measured
+    after it stopped (ages below the pause so far), or after MAX_PAUSE steps."""
+    env = swarm_envs.make("swarm_envs/CentroidSeeking-v0", sensing="ideal")
+    seeker = make_scripted("centroid_seeker", env)
+    seeker.reset(1)
+    obs, _ = env.reset(seed=0)
+    batch = {k: v[None].copy() for k, v in obs[env.agents[0]].items()}
+    batch["rigid"][:] = 0.0  # steer by the mean bearing of the rows
+    batch["range_bearing"][0, :, :] = 0.0
+    batch["range_bearing"][0, 0, [0, 3, 6]] = 1.0, 1.0, 7.0  # one reading to the left, 7 steps old
+    for paused in range(1, 8):  # the readings stay 7 steps old: not fresh until 8 steps of pause
+        assert seeker.act_batch(batch)[0, 1] == 0.0 and seeker._phase[0] == 0, paused
+    assert seeker.act_batch(batch) is not None and seeker._phase[0] == 1  # the 8th step: 7 < 8, plan the turn
+    seeker.reset(1)
+    batch["range_bearing"][0, 0, 6] = 1000.0  # never fresh: the pause ends after MAX_PAUSE steps
+    phases = [seeker.act_batch(batch) is not None and int(seeker._phase[0]) for _ in range(seeker.MAX_PAUSE)]
+    assert phases[-2] == 0 and phases[-1] == 1
+
+
+def test_task_robot_groups_are_drawn_in_two_colours():
+    from swarm_envs.render import _ROBOT, _ROBOT_B
+
+    env = swarm_envs.make("swarm_envs/ParityClustering-v0", sensing="ideal", render_mode="rgb_array")
+    env.reset(seed=0)
+    env.step({a: np.zeros(env.action_space(a).shape) for a in env.agents})
+    frame = env.render()
+    colours = {tuple(c) for c in frame.reshape(-1, 3)}
+    assert _ROBOT in colours and _ROBOT_B in colours
+    groups, labels = env.task.robot_groups()
+    assert labels == ("even id", "odd id") and groups.tolist() == [i % 2 for i in range(env.n_world)]
