@@ -15,17 +15,14 @@ change. Only one background process runs per cache directory (a lock file), and 
 
 ``SWARM_ENVS_BACKGROUND_COMPILE=0`` turns the background process off (the notice stays).
 
-``python -m swarm_envs._first_run --record`` re-records the manifest: every scenario of
-:data:`RECORD_SCENARIOS` runs one episode in a fresh process with an empty cache, and the kernels it
-compiles from Python (with the argument types and the process time each took) are written to
-``swarm_envs/_kernel_manifest.py``. A manifest that no longer matches a kernel costs only time: a
-signature that does not compile is skipped, a kernel it misses is compiled where it is first called.
+``python -m swarm_envs._kernel_record`` re-records the manifest (:mod:`swarm_envs._kernel_record`). A
+manifest that no longer matches a kernel costs only time: a signature that does not compile is skipped,
+a kernel it misses is compiled where it is first called.
 """
 
 from __future__ import annotations
 
 import importlib
-import json
 import os
 import re
 import subprocess
@@ -46,19 +43,6 @@ BACKGROUND_VARIABLE = "SWARM_ENVS_BACKGROUND_COMPILE"
 LOCK_NAME = "swarm_envs_first_run.lock"
 #: a lock older than this (s) is stale (its process died without removing it)
 LOCK_STALE_S = 600.0
-
-#: (env id, platform) of each recorded scenario (modelled sensing): aggregation on every platform, each
-#: other task on its default platform; another pairing uses the recording of its platform
-RECORD_SCENARIOS = (
-    ("swarm_envs/Aggregation-v0", "epuck"),
-    ("swarm_envs/Aggregation-v0", "droplet"),
-    ("swarm_envs/Aggregation-v0", "rone"),
-    ("swarm_envs/Flocking-v0", "epuck"),
-    ("swarm_envs/CentroidSeeking-v0", "epuck"),
-    ("swarm_envs/SortedFollowing-v0", "rone"),
-    ("swarm_envs/ParityClustering-v0", "rone"),
-    ("swarm_envs/MidAngleNavigation-v0", "rone"),
-)
 
 _noticed = False
 _prepared: set[tuple[str, str]] = set()
@@ -112,7 +96,7 @@ def scenario_kernels(task: str, platform: str) -> list[tuple[str, str, tuple[str
     compile seconds). ``task`` is the task class name; a pairing not recorded takes the first recording on
     its platform (the platform decides most of the sensing stack), else the task's on another platform (a
     custom platform). Empty when unknown."""
-    from swarm_envs import _kernel_manifest as manifest
+    import swarm_envs._kernel_manifest as manifest
 
     rows = manifest.SCENARIOS.get((task, platform))
     if rows is None:
@@ -320,102 +304,15 @@ def compile_in_background(task: str, platform: str) -> int:
         _release(lock)
 
 
-# ----------------------------------------------------------------------------------------- recording
-def _record_one(env_id: str, platform: str, steps: int) -> list[tuple[str, str, tuple[str, ...], float]]:
-    """Run one episode of ``env_id`` on ``platform`` in this process (its cache must be empty) and return
-    the kernels compiled from Python, in order: (module, function, argument types, process seconds)."""
-    from numba.core import event
-
-    import swarm_envs
-
-    calls: list[tuple[str, str, tuple[str, ...], float]] = []
-    stack: list[tuple[bool, float]] = []
-
-    class Listener(event.Listener):
-        def on_start(self, ev: Any) -> None:
-            stack.append((ev.data["dispatcher"].py_func.__module__.startswith("swarm_envs."), time.process_time()))
-
-        def on_end(self, ev: Any) -> None:
-            ours, t0 = stack.pop()
-            if ours and not any(o for o, _ in stack):  # compiled from Python, not as a callee of another kernel
-                func = ev.data["dispatcher"].py_func
-                encoded = tuple(encode_type(t) for t in ev.data["args"])
-                if None not in encoded:
-                    calls.append((func.__module__, func.__qualname__, encoded, time.process_time() - t0))
-
-    event.register("numba:compile", Listener())
-    env = swarm_envs.make(env_id, platform=platform)
-    env.reset(seed=0)
-    for i, agent in enumerate(env.possible_agents):
-        env.action_space(agent).seed(i)
-    for _ in range(steps):
-        if not env.agents:
-            break
-        env.step({a: env.action_space(a).sample() for a in env.agents})
-    env.close()
-    return calls
-
-
-def record(path: Path, scenarios: Sequence[tuple[str, str]] = RECORD_SCENARIOS, steps: int = 500) -> None:
-    """Record every scenario in a fresh process with an empty cache and write the manifest module at
-    ``path`` after each (so an interrupted recording keeps what it has)."""
-    import tempfile
-
-    kernels: list[tuple[str, str, tuple[str, ...]]] = []
-    table: dict[tuple[str, str], list[tuple[int, float]]] = {}
-    for env_id, platform in scenarios:
-        with tempfile.TemporaryDirectory() as cache:
-            env = {**os.environ, "NUMBA_CACHE_DIR": cache, BACKGROUND_VARIABLE: "0"}
-            code = f"import json, swarm_envs._first_run as f; print(json.dumps(f._record_one({env_id!r}, {platform!r}, {steps})))"
-            out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True).stdout
-        calls = json.loads(out.strip().splitlines()[-1])
-        from swarm_envs.registry import task_class
-
-        task = task_class(env_id).__name__
-        rows = []
-        for module, name, encoded, seconds in calls:
-            entry = (module, name, tuple(encoded))
-            if entry not in kernels:
-                kernels.append(entry)
-            rows.append((kernels.index(entry), round(seconds, 2)))
-        table[(task, platform)] = rows
-        print(f"{env_id} {platform}: {len(rows)} kernels, {sum(s for _, s in rows):.1f} s", flush=True)
-        _write_manifest(path, kernels, table)
-
-
-def _write_manifest(path: Path, kernels: list, table: dict) -> None:
-    import numba
-
-    lines = [
-        '"""The numba kernels each scenario compiles, in order of first use (:mod:`swarm_envs._first_run`).',
-        "",
-        "Written by ``python -m swarm_envs._first_run --record``; do not edit. ``KERNELS``: (module, function,",
-        "argument types) of kernels called from Python; ``SCENARIOS``: (task class, platform) -> (index into",
-        'KERNELS, process seconds its compile took on the recording machine) in order of first use."""',
-        "",
-        f"NUMBA_VERSION = {numba.__version__!r}",
-        "",
-        "KERNELS = [",
-        *(f"    {entry!r}," for entry in kernels),
-        "]",
-        "",
-        "SCENARIOS = {",
-        *(f"    {key!r}: {tuple(rows)!r}," for key, rows in table.items()),
-        "}",
-        "",
-    ]
-    path.write_text("\n".join(lines), encoding="utf-8")
-
-
 def main(argv: Sequence[str] | None = None) -> int:
     args = list(sys.argv[1:] if argv is None else argv)
-    if args[:1] == ["--record"]:
-        record(Path(__file__).with_name("_kernel_manifest.py"))
-        return 0
     if len(args) != 2:
-        print("usage: python -m swarm_envs._first_run TASK PLATFORM | --record", file=sys.stderr)
+        print("usage: python -m swarm_envs._first_run TASK PLATFORM", file=sys.stderr)
         return 2
-    compile_in_background(*args)
+    try:
+        compile_in_background(*args)
+    except Exception:  # an unknown scenario, no disk cache: nothing to do in the background
+        return 1
     return 0
 
 

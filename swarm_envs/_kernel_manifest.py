@@ -1,6 +1,6 @@
 """The numba kernels each scenario compiles, in order of first use (:mod:`swarm_envs._first_run`).
 
-Written by ``python -m swarm_envs._first_run --record``; do not edit. ``KERNELS``: (module, function,
+Written by ``python -m swarm_envs._kernel_record``; do not edit. ``KERNELS``: (module, function,
 argument types) of kernels called from Python; ``SCENARIOS``: (task class, platform) -> (index into
 KERNELS, process seconds its compile took on the recording machine) in order of first use."""
 

@@ -129,7 +129,7 @@ def test_notice_once_and_only_above_a_few_seconds(monkeypatch, capsys):
 def test_manifest_names_existing_kernels_and_scenarios():
     """Every recorded kernel resolves to a cached dispatcher of the package and its argument types decode
     (a renamed kernel or a changed type module fails here: re-record with ``python -m
-    swarm_envs._first_run --record``); every scenario is a registered task on a known platform."""
+    swarm_envs._kernel_record``); every scenario is a registered task on a known platform."""
     assert _kernel_manifest.KERNELS and _kernel_manifest.SCENARIOS
     for module, name, types in _kernel_manifest.KERNELS:
         dispatcher = _first_run._dispatcher(module, name)
