@@ -6,14 +6,17 @@ and the first ``env.reset()`` with the modelled sensing compiles the few dozen k
 half a minute on one core. :func:`prepare`, called when an env's sensing is built, looks up the kernels
 its scenario (task class and platform) calls, in order of first use, recorded in
 :mod:`swarm_envs._kernel_manifest` with their compile times. When those not on disk yet would take more
-than :data:`NOTICE_SECONDS` to compile, it prints one line to stderr, once per process, and starts one
-background process (``python -m swarm_envs._first_run TASK PLATFORM``) that compiles them into the same
-cache in *reverse* order of first use, while this process compiles in order of use as it runs; each
-process loads from the disk cache what the other has finished, so they meet in the middle. The machine
-code is the same whichever process compiles a kernel (same source, flags and CPU): results do not
-change. Only one background process runs per cache directory (a lock file), and none on one core.
+than :data:`NOTICE_SECONDS` to compile, it prints one line to stderr, once per process, and, when a core
+is idle, starts one background process (``python -m swarm_envs._first_run TASK PLATFORM``, at low
+priority) that compiles them into the same cache in *reverse* order of first use, while this process
+compiles in order of use as it runs; each process loads from the disk cache what the other has
+finished, so they meet in the middle. The machine code is the same whichever process compiles a kernel
+(same source, flags and CPU): results do not change. Only one background process runs per cache
+directory (a lock file), and none on one core.
 
-``SWARM_ENVS_BACKGROUND_COMPILE=0`` turns the background process off (the notice stays).
+``SWARM_ENVS_BACKGROUND_COMPILE``: ``0`` never starts the background process (the notice stays), ``1``
+starts it even when no core looks idle; unset, it starts when the 1-minute load average is below the
+number of cores minus a half.
 
 ``python -m swarm_envs._kernel_record`` re-records the manifest (:mod:`swarm_envs._kernel_record`). A
 manifest that no longer matches a kernel costs only time: a signature that does not compile is skipped,
@@ -43,6 +46,8 @@ BACKGROUND_VARIABLE = "SWARM_ENVS_BACKGROUND_COMPILE"
 LOCK_NAME = "swarm_envs_first_run.lock"
 #: a lock older than this (s) is stale (its process died without removing it)
 LOCK_STALE_S = 600.0
+#: niceness of the background process (POSIX): it uses idle cores, and yields to the env and other work
+NICE = 10
 
 _noticed = False
 _prepared: set[tuple[str, str]] = set()
@@ -180,9 +185,25 @@ def _cores() -> int:
         return os.cpu_count() or 1
 
 
+def _background_wanted() -> bool:
+    """Whether to compile in a background process: ``SWARM_ENVS_BACKGROUND_COMPILE`` ``0`` never, ``1``
+    always (with two cores or more), unset when a core is idle: the 1-minute load average is below the
+    cores minus a half (on a busy machine a second compiling process only competes with this one)."""
+    value = os.environ.get(BACKGROUND_VARIABLE, "").strip().lower()
+    cores = _cores()
+    if value in ("0", "false", "no", "off") or cores < 2:
+        return False
+    if value in ("1", "true", "yes", "on"):
+        return True
+    try:
+        return os.getloadavg()[0] < cores - 0.5
+    except (AttributeError, OSError):  # no load average (Windows)
+        return True
+
+
 def _start_helper(task: str, platform: str, cold: Sequence[tuple[Any, tuple, float]]) -> bool:
     """Start the background compile process for the scenario; whether it was started."""
-    if os.environ.get(BACKGROUND_VARIABLE, "1").strip() in ("0", "false", "no", "off") or _cores() < 2:
+    if not _background_wanted():
         return False
     if not sys.executable or not cold:
         return False
@@ -276,7 +297,13 @@ def compile_in_background(task: str, platform: str) -> int:
     """The background process: compile the scenario's cold kernels in reverse order of first use, each
     unless the disk cache has it by then (compiled by the main process). A function recorded with more
     than one signature is left to the main process (two processes saving different signatures of one
-    function at once could both name their data file alike). Returns the number compiled."""
+    function at once could both name their data file alike). Runs at low priority (nice 10): it takes
+    a core that is idle, not one the env or other work needs. Returns the number compiled."""
+    if hasattr(os, "nice"):
+        try:
+            os.nice(NICE)
+        except OSError:
+            pass
     lock = _lock_path(task, platform)
     try:
         owner = int(lock.read_text().strip() or 0)

@@ -58,7 +58,7 @@ SCRIPT = textwrap.dedent(
 
 def _run(cache: Path, steps: int, background: bool = True) -> subprocess.CompletedProcess:
     env = {**os.environ, "NUMBA_CACHE_DIR": str(cache), "PYTHONPATH": os.pathsep.join(filter(None, [str(ROOT), os.environ.get("PYTHONPATH")]))}
-    env["SWARM_ENVS_BACKGROUND_COMPILE"] = "1" if background else "0"
+    env["SWARM_ENVS_BACKGROUND_COMPILE"] = "1" if background else "0"  # 1: whatever the machine's load
     proc = subprocess.run([sys.executable, "-c", SCRIPT.replace("STEPS", str(steps))], cwd=ROOT, env=env, capture_output=True, text=True, timeout=900)
     assert proc.returncode == 0, proc.stderr
     return proc
@@ -251,3 +251,22 @@ def test_first_run_benchmark_reads_the_readme_snippet():
     snippet = bench.readme_snippet()
     assert 'pettingzoo.make("parallel", "swarm_envs/Aggregation-v0"' in snippet and "env.reset(seed=0)" in snippet
     assert bench.LOCK_NAME == _first_run.LOCK_NAME and bench.NOTICE in NOTICE
+
+
+def test_background_process_only_with_an_idle_core(monkeypatch):
+    """Unset, the background process starts only when the load average leaves a core idle (on a busy
+    machine a second compiling process competes with the env's); 0 and 1 decide regardless."""
+    monkeypatch.setattr(_first_run, "_cores", lambda: 2)
+    monkeypatch.delenv("SWARM_ENVS_BACKGROUND_COMPILE", raising=False)
+    monkeypatch.setattr(_first_run.os, "getloadavg", lambda: (0.4, 0.3, 0.2))
+    assert _first_run._background_wanted()
+    monkeypatch.setattr(_first_run.os, "getloadavg", lambda: (3.9, 4.1, 4.0))
+    assert not _first_run._background_wanted()
+    monkeypatch.setenv("SWARM_ENVS_BACKGROUND_COMPILE", "1")
+    assert _first_run._background_wanted()
+    monkeypatch.setenv("SWARM_ENVS_BACKGROUND_COMPILE", "0")
+    monkeypatch.setattr(_first_run.os, "getloadavg", lambda: (0.0, 0.0, 0.0))
+    assert not _first_run._background_wanted()
+    monkeypatch.setattr(_first_run, "_cores", lambda: 1)
+    monkeypatch.setenv("SWARM_ENVS_BACKGROUND_COMPILE", "1")
+    assert not _first_run._background_wanted()
