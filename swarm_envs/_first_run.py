@@ -166,12 +166,14 @@ def prepare(task: str, platform: str, sensing: str) -> None:
     if seconds < NOTICE_SECONDS:
         return
     helper = _start_helper(task, platform, cold)
-    expected = seconds / 2.0 if helper else seconds  # the two processes meet in the middle
+    # the two processes meet in the middle; the background one starts ~1.5 s later and both compile the
+    # library functions their kernels call
+    expected = seconds / 2.0 + 2.0 if helper else seconds
     if not _noticed:
         _noticed = True
         how = " on two cores" if helper else ""
         print(
-            f"swarm_envs: compiling the numba kernels for the first run (about {max(5, 5 * round(expected / 5))} s{how};"
+            f"swarm_envs: compiling the numba kernels for the first run (about {max(5, 5 * int(expected / 5 + 0.5))} s{how};"
             " cached afterwards)",
             file=sys.stderr,
             flush=True,
