@@ -40,7 +40,7 @@ __all__ = ["prepare", "NOTICE_SECONDS", "encode_type", "decode_type", "scenario_
 
 #: expected compile time (s of one core) above which :func:`prepare` prints the notice
 NOTICE_SECONDS = 5.0
-#: environment variable that turns the background compile process off (``0``)
+#: environment variable: ``0`` no background compile process, ``1`` one whatever the load, unset one when a core is idle
 BACKGROUND_VARIABLE = "SWARM_ENVS_BACKGROUND_COMPILE"
 #: the lock file of the background process, in the numba cache directory of the kernels
 LOCK_NAME = "swarm_envs_first_run.lock"
