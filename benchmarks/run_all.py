@@ -8,10 +8,11 @@ Each benchmark is its own script (``bench_*.py``) and can be run alone with its 
 ``--markdown`` (default PATH ``docs/performance.md``) measures the batched core's rollout throughput
 (``bench_vec.py --json``, one fresh process per swarm size, so a large scene is not measured in a process
 that has just stepped thousands of robots), VMAS's flocking in the same run when ``vmas`` is installed,
+the first run of the README's first snippet on an empty numba cache (``bench_first_run.py --json``),
 and the training rate of the default PPO config (``train.py --config configs/aggregation.yaml``, when
 stable-baselines3 and torch are installed), and writes the page: the machine, the tables and the
-commands that reproduce them. ``--sizes`` and ``--no-training`` make a shorter run; the page says which
-sizes were measured.
+commands that reproduce them. ``--sizes``, ``--no-first-run`` and ``--no-training`` make a shorter run;
+the page says what was measured.
 """
 
 from __future__ import annotations
@@ -42,10 +43,12 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--sizes", type=int, nargs="+", default=list(SIZES), choices=SIZES,
                         help="with --markdown: swarm sizes to measure (default all)")
     parser.add_argument("--no-training", action="store_true", help="with --markdown: skip the training-rate run")
+    parser.add_argument("--no-first-run", action="store_true", help="with --markdown: skip the first-run (cold numba cache) runs")
     parser.add_argument("--no-vmas", action="store_true", help="with --markdown: do not time VMAS even if installed")
     args = parser.parse_args(argv)
     if args.markdown:
-        return write_page(Path(args.markdown), args.sizes, training=not args.no_training, vmas=not args.no_vmas)
+        return write_page(Path(args.markdown), args.sizes, training=not args.no_training, vmas=not args.no_vmas,
+                          first_run=not args.no_first_run)
     status = 0
     for script in sorted(HERE.glob("bench_*.py")):
         name = script.stem.removeprefix("bench_")
@@ -64,6 +67,14 @@ def _env() -> dict[str, str]:
 def measure_vec(n: int, with_vmas: bool) -> dict:
     """bench_vec.py's rows for swarm size ``n`` (full and ideal sensing), in a fresh process."""
     cmd = [sys.executable, str(HERE / "bench_vec.py"), "--n", str(n), "--json"] + ([] if with_vmas else ["--no-vmas"])
+    print("running:", " ".join(cmd[1:]), flush=True)
+    out = subprocess.run(cmd, capture_output=True, text=True, env=_env(), cwd=ROOT, check=True).stdout
+    return json.loads(out.strip().splitlines()[-1])
+
+
+def measure_first_run(runs: int = 3) -> dict:
+    """bench_first_run.py's result: the README snippet on an empty numba cache, ``runs`` times, and warm."""
+    cmd = [sys.executable, str(HERE / "bench_first_run.py"), "--runs", str(runs), "--json"]
     print("running:", " ".join(cmd[1:]), flush=True)
     out = subprocess.run(cmd, capture_output=True, text=True, env=_env(), cwd=ROOT, check=True).stdout
     return json.loads(out.strip().splitlines()[-1])
@@ -107,16 +118,17 @@ def machine() -> dict[str, str]:
 
 
 # --------------------------------------------------------------------------------------------- writing
-def write_page(path: Path, sizes: list[int], training: bool, vmas: bool) -> int:
+def write_page(path: Path, sizes: list[int], training: bool, vmas: bool, first_run: bool = True) -> int:
     """Measure and write the performance page to ``path``."""
     started = datetime.datetime.now(datetime.timezone.utc)
     load_before = os.getloadavg()
     info = machine()
     runs = [measure_vec(n, with_vmas=vmas and i == 0) for i, n in enumerate(sorted(sizes))]
+    first = measure_first_run() if first_run else None
     train = measure_training() if training else "not measured (`--no-training`)"
     load_after = os.getloadavg()
     minutes = (datetime.datetime.now(datetime.timezone.utc) - started).total_seconds() / 60
-    page = render(info, runs, train, sorted(sizes), started, minutes, load_before, load_after)
+    page = render(info, runs, train, sorted(sizes), started, minutes, load_before, load_after, first)
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text(page, encoding="utf-8")
     print(f"wrote {path} ({minutes:.1f} min of measurements)")
@@ -128,7 +140,8 @@ def _load(values: tuple[float, float, float]) -> str:
 
 
 def render(info: dict[str, str], runs: list[dict], train: dict | str, sizes: list[int],
-           started: datetime.datetime, minutes: float, load_before: tuple, load_after: tuple) -> str:
+           started: datetime.datetime, minutes: float, load_before: tuple, load_after: tuple,
+           first_run: dict | None = None) -> str:
     """The performance page as markdown."""
     vmas = next((r["vmas"] for r in runs if r.get("vmas")), None)
     rows = [row for r in runs for row in r["rows"]]
@@ -195,6 +208,24 @@ def render(info: dict[str, str], runs: list[dict], train: dict | str, sizes: lis
     if sizes != list(SIZES):
         lines += ["", f"Reduced run: only N = {', '.join(map(str, sizes))} were measured (`--sizes`); the full run "
                   f"adds N = {', '.join(str(n) for n in SIZES if n not in sizes)}."]
+    lines += ["", "## First run", ""]
+    if first_run:
+        lines += [
+            "The README's first snippet (`pettingzoo.make` of `swarm_envs/Aggregation-v0` with 10 e-puck robots,",
+            "`reset`, one 500-step episode of random actions) run as a fresh `python` process on an empty numba",
+            "cache (`NUMBA_CACHE_DIR` a new directory), timed from start to exit: the first run of the package on",
+            f"a machine. **{first_run['cold_median_s']:.1f} s** (median of {first_run['runs']} runs: "
+            f"{', '.join(f'{s:.1f}' for s in first_run['cold_s'])} s), of which all but the warm time is numba",
+            f"compiling the kernels the snippet uses; run again on the filled cache: {first_run['warm_median_s']:.1f} s.",
+            "The first run prints one line saying it compiles; when a core is idle, a background process compiles",
+            "the kernels in reverse order of use while the snippet compiles them in order of use (it ran in",
+            f"{sum(first_run.get('background_started', []))} of these {first_run['runs']} runs; it starts when the 1-minute load average is",
+            "below the cores minus a half).",
+            f"Load averages {_load(first_run['load_before'])} before the runs, {_load(first_run['load_after'])} after",
+            "(`python benchmarks/bench_first_run.py`).",
+        ]
+    else:
+        lines.append("The first run on an empty numba cache was not measured (`--no-first-run`).")
     lines += ["", "## Training rate", ""]
     if isinstance(train, dict):
         lines += [
@@ -215,11 +246,12 @@ def render(info: dict[str, str], runs: list[dict], train: dict | str, sizes: lis
         "python benchmarks/bench_vec.py --n 1000 --copies 1 --sensing full --no-vmas   # one row",
         "python benchmarks/bench_vec.py --interleave 5         # VMAS and N = 10 ideal alternated: ratios under the same load",
         "python benchmarks/bench_stages.py                     # one vector step split into physics, sensing, observations, rewards",
+        "python benchmarks/bench_first_run.py                  # the README snippet on an empty numba cache, 3 runs, and warm",
         "python benchmarks/run_all.py                          # every component benchmark (IR layer, SwarmCom, range & bearing, scale-free)",
         "```",
         "",
         "`NUMBA_NUM_THREADS=1` keeps a process on one core. The first run on a machine also compiles the",
-        "numba kernels (cached on disk afterwards); the figures above exclude that compilation.",
+        "numba kernels (cached on disk afterwards; see *First run*); the throughput figures exclude that.",
         "",
     ]
     return "\n".join(lines)

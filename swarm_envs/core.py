@@ -55,6 +55,9 @@ class SwarmCore:
         self.copy_of_robot = np.repeat(np.arange(self.B), self.n_world)
         obstacles = task.obstacle_segments
         self.worlds = [World(self.platform, self.n_world, task.arena, substeps=cfg["physics_substeps"], obstacles=obstacles) for _ in range(self.B)]
+        from swarm_envs._first_run import prepare  # (not at import: ``python -m swarm_envs._first_run`` runs it)
+
+        prepare(type(task).__name__, self.platform.name, cfg["sensing"])  # a cold numba cache: the notice, a second core
         self.sensing = _make_sensing(cfg, self.platform, self.n_world, self.B, obstacles)
         self.generators = [np.random.default_rng() for _ in range(self.B)]
         #: the motion error (``motion_noise``): each copy's stream of standard normal draws (its robots' wheel

@@ -226,7 +226,8 @@ if _HAVE_NUMBA:
             for c in range(k):
                 if order[r, c] < 0:
                     break
-                packed[r, c, :] = values[order[r, c]]
+                for f in range(F):
+                    packed[r, c, f] = values[order[r, c], f]
         return packed, order
 
     @njit(cache=True)

@@ -201,7 +201,11 @@ def test_performance_page_is_rendered_from_the_measurements():
     info = {"cpu": "Test CPU", "cores": "2", "os": "Linux", "Python": "3.11", "numpy": "2"}
     train = {"robot_steps": 202240, "train_s": 30.0, "total_s": 40.0, "robot_steps_per_s": 6741.3}
     when = datetime.datetime(2030, 1, 2, 3, 4, tzinfo=datetime.timezone.utc)
-    page = run_all.render(info, runs, train, [10], when, 5.0, (0.5, 0.4, 0.3), (0.6, 0.5, 0.4))
+    first = {"runs": 3, "background_started": [True, True, False], "cold_s": [11.2, 12.4, 11.9], "warm_s": [2.0, 2.2, 2.1], "cold_median_s": 11.9,
+             "warm_median_s": 2.1, "load_before": [0.5, 0.4, 0.3], "load_after": [0.7, 0.5, 0.4]}
+    page = run_all.render(info, runs, train, [10], when, 5.0, (0.5, 0.4, 0.3), (0.6, 0.5, 0.4), first)
+    assert "**11.9 s** (median of 3 runs: 11.2, 12.4, 11.9 s)" in page and "filled cache: 2.1 s" in page
+    assert "it ran in\n2 of these 3 runs" in page
     assert "| 10 | 256 | full | 80.0 | 80.0 | 12.5 | 32,000 | 0.62x |" in page
     assert "| 10 | 256 | ideal | 40.0 | 40.0 | 25.0 | 64,000 | 1.25x |" in page
     assert "51,200 agent-steps/s" in page and "6,741 robot-steps/s" in page and "Test CPU, 2 cores" in page
@@ -209,4 +213,5 @@ def test_performance_page_is_rendered_from_the_measurements():
     without = run_all.render(info, [dict(runs[0], vmas=None)], "not measured (`--no-training`)", list(run_all.SIZES),
                              when, 5.0, (0.5, 0.4, 0.3), (0.6, 0.5, 0.4))
     assert "VMAS was not installed" in without and "| - |" in without and "Reduced run" not in without
+    assert "was not measured (`--no-first-run`)" in without
     assert not any(re.search(p, without, re.IGNORECASE) for p in HISTORY_PATTERNS)

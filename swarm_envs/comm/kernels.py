@@ -37,7 +37,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 try:  # numba is optional: an accelerator, not a requirement
-    from numba import njit
+    from swarm_envs._numba import njit
 
     from swarm_envs._vecmath import exp_moderate
 
@@ -133,7 +133,12 @@ class GeneratorList:
 
     def __init__(self, generators: list[np.random.Generator]) -> None:
         self._py: list[np.random.Generator] = list(generators)
-        self._list = _typed_list(self._py) if HAVE_NUMBA else list(self._py)
+        if HAVE_NUMBA and self._py:  # built by cached kernels (numba.typed.List's own methods compile in every process)
+            self._list = _generator_list(self._py[0])
+            for g in self._py[1:]:
+                _append_generator(self._list, g)
+        else:
+            self._list = _typed_list(self._py) if HAVE_NUMBA else list(self._py)
 
     def sync(self, generators: list[np.random.Generator]) -> "Any":
         """The list for ``generators`` (same length as at construction; replaced entries are swapped in)."""
@@ -143,7 +148,10 @@ class GeneratorList:
         for b, g in enumerate(generators):
             if self._py[b] is not g:
                 self._py[b] = g
-                self._list[b] = g
+                if HAVE_NUMBA:
+                    _set_generator(self._list, b, g)
+                else:
+                    self._list[b] = g
         return self._list
 
 
@@ -172,8 +180,10 @@ def _draw_buffers(B, n, S, n_det, noise_sigma, intensity_sigma):
 def _store_integers(k, backoff, access, o, n, S):
     """Copy rows ``o .. o + n``: the first n S integers of ``k`` are the backoff draws (robot-major), the last
     n the access delays."""
-    backoff[o : o + n, :] = k[: n * S].reshape((n, S))
-    access[o : o + n] = k[n * S :]
+    for r in range(n):  # element loops: a slice assignment from an array compiles numba's shape-error text
+        for s in range(S):
+            backoff[o + r, s] = k[r * S + s]
+        access[o + r] = k[n * S + r]
 
 
 def _draw_copies_py(gens, S, n, n_det, noise_sigma, intensity_sigma, window):
@@ -193,6 +203,21 @@ def _draw_copies_py(gens, S, n, n_det, noise_sigma, intensity_sigma, window):
 
 if HAVE_NUMBA:
     from numba.typed import List as _typed_list
+
+    @njit(cache=True)
+    def _generator_list(g):
+        """A typed list holding the generator ``g``."""
+        out = _typed_list()
+        out.append(g)
+        return out
+
+    @njit(cache=True)
+    def _append_generator(gens, g):
+        gens.append(g)
+
+    @njit(cache=True)
+    def _set_generator(gens, b, g):
+        gens[b] = g
 
 try:  # NumPy's float32 ziggurat, compiled inline (numba's bindings of the bit generator and NumPy's tables)
     from numba.np.random._constants import fi_float, ki_float, wi_float, ziggurat_nor_inv_r_f, ziggurat_nor_r_f
@@ -245,7 +270,11 @@ if _FAST_NORMAL:
                         for d in range(n_det):
                             noise[s, r, d] = _normal_f(bg, ki, wi, fi, zr, zir) * sg
             if intensity_sigma > 0:
-                inoise[:, o : o + n, :] = g.normal(0.0, intensity_sigma, size=(S, n, n_det))
+                draws = g.normal(0.0, intensity_sigma, size=(S, n, n_det))
+                for s in range(S):
+                    for r in range(n):
+                        for d in range(n_det):
+                            inoise[s, o + r, d] = draws[s, r, d]
             _store_integers(g.integers(0, window, size=n * S + n), backoff, access, o, n, S)
         return noise, inoise, backoff, access
 

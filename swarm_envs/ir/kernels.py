@@ -388,7 +388,8 @@ if HAVE_NUMBA:
         r2 = occ_radius * occ_radius
         r2_hi, r2_lo = r2 * (1.0 + _DISC_TOL), r2 * (1.0 - _DISC_TOL)
         prm = np.zeros(8)
-        prm[: params.shape[0]] = params
+        for i in range(params.shape[0]):  # element copy (a slice assignment from an array compiles numba's shape-error text)
+            prm[i] = params[i]
         k_m, o_m, d_sat_cm = prm[0], prm[1], prm[2]  # e-puck
         d_sat2 = (d_sat_cm / 100.0) ** 2
         scale = o_m * 100.0**k_m
@@ -716,7 +717,8 @@ if HAVE_NUMBA:
         for k in range(n_chunks):
             first = (P * k) // n_chunks
             n = offsets[(P * (k + 1)) // n_chunks] - offsets[first]
-            out[offsets[first] : offsets[first] + n] = idx[base[k] : base[k] + n]
+            for q in range(n):  # element copy (a slice assignment from an array compiles numba's shape-error text)
+                out[offsets[first] + q] = idx[base[k] + q]
         return offsets, out
 
     @njit(cache=True, error_model="numpy", nogil=True)
@@ -827,7 +829,8 @@ if HAVE_NUMBA:
                 fill[b] += 1
                 by_tx_rx[q] = a
                 by_tx_u[q] = u
-        fill[:] = start[:N]
+        for i in range(N):  # element copy: a slice assignment from an array compiles numba's shape-error text
+            fill[i] = start[i]
         rx = np.empty(P, dtype=np.intp)
         tx = np.empty(P, dtype=np.intp)
         pair_of = np.empty(P, dtype=np.int64)

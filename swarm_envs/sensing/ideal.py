@@ -205,7 +205,9 @@ if _HAVE_NUMBA:
                 if cnt == 0:
                     continue
                 if cnt > 64:
-                    buf[:cnt] = np.sort(buf[:cnt])
+                    part = np.sort(buf[:cnt])
+                    for q in range(cnt):
+                        buf[q] = part[q]
                 else:  # insertion sort of the few partners
                     for q in range(1, cnt):
                         v = buf[q]
@@ -216,7 +218,8 @@ if _HAVE_NUMBA:
                         buf[w + 1] = v
                 if p + cnt > out.shape[0]:
                     grown = np.empty((2 * out.shape[0] + cnt, 2), np.int64)
-                    grown[:p] = out[:p]
+                    for q in range(p):
+                        grown[q, 0], grown[q, 1] = out[q, 0], out[q, 1]
                     out = grown
                 for q in range(cnt):
                     out[p, 0] = o + a

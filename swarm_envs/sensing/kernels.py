@@ -29,10 +29,13 @@ import numpy as np
 
 try:  # numba is optional: an accelerator, not a requirement
     from swarm_envs._numba import njit  # numba.njit whose cache recovers from corrupted files
+    from swarm_envs._sort import argsort_quick  # np.argsort as numba compiles it, quicker to compile
 
     HAVE_NUMBA = True
 except ImportError:  # pragma: no cover - exercised only without numba
     HAVE_NUMBA = False
+
+_INT64_MAX = int(np.iinfo(np.int64).max)  # a constant in the kernels (np.iinfo compiles its own helpers)
 
 __all__ = [
     "HAVE_NUMBA", "two_hop_triangles", "two_hop_propagate", "segment_sum", "sum_last", "priority_independent_set",
@@ -163,7 +166,7 @@ if HAVE_NUMBA:
         disc = np.empty(k, np.int64)
         new = np.zeros(k, np.bool_)
         parent = np.zeros(k, np.int64)
-        BIG = np.iinfo(np.int64).max
+        BIG = _INT64_MAX
         for u in range(n):
             for a in range(k):
                 for b in range(k):
@@ -366,7 +369,7 @@ def sum_last(a: np.ndarray) -> np.ndarray:
         return np.zeros(a.shape[:-1])
     if not HAVE_NUMBA:
         return sum_last_numpy(a)
-    flat = a.reshape(-1, a.shape[-1])
+    flat = np.ascontiguousarray(a.reshape(-1, a.shape[-1]))  # one compiled layout (a single row can come as a column view)
     return _sum_last(flat).reshape(a.shape[:-1])
 
 
@@ -412,7 +415,7 @@ if HAVE_NUMBA:
             fill[u[e]] += 1
             adj[fill[v[e]]] = u[e]
             fill[v[e]] += 1
-        order = np.argsort(-prio)
+        order = argsort_quick(-prio)
         fired = np.zeros(n, np.bool_)
         blocked = np.zeros(n, np.bool_)
         for k in range(n):
@@ -903,7 +906,7 @@ if HAVE_NUMBA:
             start[u[e] + 1] += 1
         for i in range(n):
             start[i + 1] += start[i]
-        order = np.argsort(-prio)
+        order = argsort_quick(-prio)
         fired = np.zeros(n, np.bool_)
         blocked = np.zeros(n, np.bool_)
         for k in range(n):

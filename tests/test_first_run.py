@@ -1,0 +1,272 @@
+"""The first run on a cold numba cache (swarm_envs._first_run, swarm_envs._numba, swarm_envs._sort): the
+"compiling" line on an empty cache and none on a warm one, the background compile process filling the
+cache with the same results, one set of compiler flags for every kernel, no per-constant
+specialisations, a cache entry of another signature rejected, and numba's argsort written out."""
+
+from __future__ import annotations
+
+import importlib
+import os
+import pkgutil
+import subprocess
+import sys
+import textwrap
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+numba = pytest.importorskip("numba")
+
+import swarm_envs  # noqa: E402
+from swarm_envs import _first_run, _kernel_manifest  # noqa: E402
+from swarm_envs._numba import njit  # noqa: E402
+from swarm_envs._sort import argsort_quick  # noqa: E402
+
+ROOT = Path(__file__).resolve().parents[1]
+NOTICE = "swarm_envs: compiling the numba kernels for the first run"
+
+# a short episode of the README's scenario; prints a checksum of what it observed
+SCRIPT = textwrap.dedent(
+    """
+    import sys
+    import numpy as np
+    from numba.core import event
+    compiled = []
+    class Count(event.Listener):
+        def on_start(self, ev):
+            if ev.data["dispatcher"].py_func.__module__.startswith("swarm_envs."):
+                compiled.append(ev.data["dispatcher"].py_func.__qualname__)
+        def on_end(self, ev):
+            pass
+    event.register("numba:compile", Count())
+    import swarm_envs
+    env = swarm_envs.make("swarm_envs/Aggregation-v0", n_robots=10, platform="epuck")
+    obs, _ = env.reset(seed=3)
+    total = sum(float(np.sum(v)) for o in obs.values() for v in o.values())
+    for i, agent in enumerate(env.possible_agents):
+        env.action_space(agent).seed(i)
+    for _ in range(STEPS):
+        obs, *_ = env.step({a: env.action_space(a).sample() for a in env.agents})
+        total += sum(float(np.sum(v)) for o in obs.values() for v in o.values())
+    print(repr(total))
+    print("compiled", len(compiled), file=sys.stderr)
+    """
+)
+
+
+def _run(cache: Path, steps: int, background: bool = True) -> subprocess.CompletedProcess:
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(cache), "PYTHONPATH": os.pathsep.join(filter(None, [str(ROOT), os.environ.get("PYTHONPATH")]))}
+    env["SWARM_ENVS_BACKGROUND_COMPILE"] = "1" if background else "0"  # 1: whatever the machine's load
+    proc = subprocess.run([sys.executable, "-c", SCRIPT.replace("STEPS", str(steps))], cwd=ROOT, env=env, capture_output=True, text=True, timeout=900)
+    assert proc.returncode == 0, proc.stderr
+    return proc
+
+
+def _checksum_here(steps: int) -> float:
+    env = swarm_envs.make("swarm_envs/Aggregation-v0", n_robots=10, platform="epuck")
+    obs, _ = env.reset(seed=3)
+    total = sum(float(np.sum(v)) for o in obs.values() for v in o.values())
+    for i, agent in enumerate(env.possible_agents):
+        env.action_space(agent).seed(i)
+    for _ in range(steps):
+        obs, *_ = env.step({a: env.action_space(a).sample() for a in env.agents})
+        total += sum(float(np.sum(v)) for o in obs.values() for v in o.values())
+    return total
+
+
+def test_compiling_line_on_an_empty_cache_only_and_background_compile_fills_it(tmp_path):
+    """An empty cache: one "compiling" line, and the background process compiles the rest of the
+    scenario's kernels; once it is done, a second run prints nothing and compiles nothing; both runs
+    observe exactly what this process (its own compiled kernels) observes."""
+    cache = tmp_path / "cache"
+    first = _run(cache, steps=20)
+    assert first.stderr.count(NOTICE) == 1, first.stderr
+    assert "cached afterwards" in first.stderr and "on two cores" in first.stderr
+    deadline = time.time() + 600
+    time.sleep(1.0)
+    while any(cache.rglob(_first_run.LOCK_NAME)) and time.time() < deadline:  # the background process is still compiling
+        time.sleep(1.0)
+    assert not any(cache.rglob(_first_run.LOCK_NAME)), "the background compile process did not finish"
+    second = _run(cache, steps=20)
+    assert NOTICE not in second.stderr, second.stderr
+    assert "compiled 0" in second.stderr, second.stderr  # every kernel came from the cache
+    assert float(first.stdout) == float(second.stdout) == _checksum_here(20)
+
+
+def test_compiling_line_without_the_background_process(monkeypatch, capsys):
+    """``SWARM_ENVS_BACKGROUND_COMPILE=0``: the line still says what happens, without "two cores", once,
+    and no background process starts."""
+    monkeypatch.setattr(_first_run, "_prepared", set())
+    monkeypatch.setattr(_first_run, "_noticed", False)
+    monkeypatch.setenv("SWARM_ENVS_BACKGROUND_COMPILE", "0")
+    started = []
+    monkeypatch.setattr(_first_run.subprocess, "Popen", lambda *a, **k: started.append(a))
+    monkeypatch.setattr(_first_run, "cold_kernels", lambda task, platform: [(None, (), 20.0)])
+    _first_run.prepare("AggregationTask", "epuck", "full")
+    _first_run.prepare("FlockingTask", "epuck", "full")  # once per process
+    _first_run.prepare("FlockingTask", "droplet", "ideal")
+    assert not started
+    err = capsys.readouterr().err
+    assert err.count(NOTICE) == 1 and "about 20 s;" in err and "two cores" not in err
+
+
+def test_notice_once_and_only_above_a_few_seconds(monkeypatch, capsys):
+    monkeypatch.setattr(_first_run, "_prepared", set())
+    monkeypatch.setattr(_first_run, "_noticed", False)
+    monkeypatch.setattr(_first_run, "_start_helper", lambda *a: False)
+    monkeypatch.setattr(_first_run, "cold_kernels", lambda task, platform: [(None, (), 0.5)] * 4)  # 2 s: no line
+    _first_run.prepare("AggregationTask", "epuck", "full")
+    assert capsys.readouterr().err == ""
+    monkeypatch.setattr(_first_run, "cold_kernels", lambda task, platform: [(None, (), 6.0)] * 4)
+    _first_run.prepare("FlockingTask", "epuck", "full")
+    _first_run.prepare("FlockingTask", "rone", "full")
+    err = capsys.readouterr().err
+    assert err.count(NOTICE) == 1 and "about 25 s;" in err and "two cores" not in err
+
+
+def test_manifest_names_existing_kernels_and_scenarios():
+    """Every recorded kernel resolves to a cached dispatcher of the package and its argument types decode
+    (a renamed kernel or a changed type module fails here: re-record with ``python -m
+    swarm_envs._kernel_record``); every scenario is a registered task on a known platform."""
+    assert _kernel_manifest.KERNELS and _kernel_manifest.SCENARIOS
+    for module, name, types in _kernel_manifest.KERNELS:
+        dispatcher = _first_run._dispatcher(module, name)
+        assert getattr(dispatcher._cache, "_swarm_guarded", False), (module, name)
+        decoded = tuple(_first_run.decode_type(s) for s in types)
+        assert tuple(_first_run.encode_type(t) for t in decoded) == tuple(types)
+    from swarm_envs.registry import task_class
+
+    tasks = {task_class(env_id).__name__ for env_id in swarm_envs.list_envs()}
+    for (task, platform), rows in _kernel_manifest.SCENARIOS.items():
+        assert task in tasks and platform in ("droplet", "epuck", "rone")
+        assert rows and all(0 <= i < len(_kernel_manifest.KERNELS) and s >= 0 for i, s in rows)
+    assert ("AggregationTask", "epuck") in _kernel_manifest.SCENARIOS  # the README's scenario
+
+
+def _package_dispatchers():
+    from numba.core.registry import CPUDispatcher
+
+    found = {}
+    for info in pkgutil.walk_packages(swarm_envs.__path__, "swarm_envs."):
+        if info.name.endswith("__main__"):
+            continue
+        try:
+            module = importlib.import_module(info.name)
+        except ImportError:  # an optional dependency (benchmarl, ...) is not installed
+            continue
+        for value in vars(module).values():
+            if isinstance(value, CPUDispatcher) and value.py_func.__module__.startswith("swarm_envs."):
+                found[(value.py_func.__module__, value.py_func.__qualname__)] = value
+    return found
+
+
+def test_every_kernel_has_the_shared_flags_and_a_guarded_cache():
+    """One set of compiler flags for all kernels (numba compiles the library functions a kernel calls once
+    per set), calls between kernels without per-constant specialisations, caches that recover."""
+    dispatchers = _package_dispatchers()
+    assert len(dispatchers) > 60
+    for key, d in dispatchers.items():
+        assert d.targetoptions.get("nogil") is True and d.targetoptions.get("error_model") == "numpy", key
+        assert getattr(d._cache, "_swarm_guarded", False), key
+        assert getattr(d, "_swarm_unliteral", False), key
+
+
+def test_constant_arguments_compile_one_specialisation():
+    @njit
+    def add(x, k):
+        return x + k
+
+    @njit
+    def caller(x):
+        return add(x, 0) + add(x, 1) + add(x, 7)
+
+    assert caller(1.0) == 11.0
+    assert len(add.signatures) == 1 and "Literal" not in str(add.signatures[0])
+
+
+def test_a_cache_entry_of_another_signature_is_recompiled(tmp_path):
+    """Two processes saving two signatures of one function at once can give both the same data file; the
+    guard then sees code of the other signature, warns and recompiles instead of running it."""
+    (tmp_path / "kern.py").write_text(
+        textwrap.dedent(
+            """
+            from swarm_envs._numba import njit
+
+            @njit(cache=True)
+            def half(x):
+                return x / 2
+            """
+        )
+    )
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "cache"), "PYTHONPATH": f"{tmp_path}{os.pathsep}{ROOT}"}
+    code = "import warnings, numpy as np; warnings.simplefilter('always'); import kern; print(kern.half(np.int64(3)), kern.half(3.0))"
+    run = lambda: subprocess.run([sys.executable, "-c", code], cwd=tmp_path, env=env, capture_output=True, text=True, timeout=600)  # noqa: E731
+    first = run()
+    assert first.returncode == 0 and first.stdout.split() == ["1.5", "1.5"], first.stderr
+    data = sorted((tmp_path / "cache").rglob("*.nbc"))
+    assert len(data) == 2
+    a, b = (f.read_bytes() for f in data)
+    data[0].write_bytes(b)  # both index entries now name code compiled for one signature
+    data[1].write_bytes(a)
+    second = run()
+    assert second.returncode == 0 and second.stdout.split() == ["1.5", "1.5"], second.stderr
+    assert "NumbaCacheWarning" in second.stderr and "another signature" in second.stderr
+
+
+def test_argsort_quick_is_numbas_argsort():
+    """The same permutation as ``np.argsort`` compiled by numba, ties, NaN and signed zeros included."""
+
+    @numba.njit
+    def reference(a):
+        return np.argsort(a)
+
+    rng = np.random.default_rng(7)
+    for trial in range(600):
+        n = int(rng.integers(0, 300 if trial % 10 else 3000))
+        kind = trial % 5
+        if kind == 0:
+            a = rng.random(n)
+        elif kind == 1:
+            a = rng.integers(0, 4, n).astype(float)  # many ties
+        elif kind == 2:
+            a = np.sort(rng.random(n))
+        elif kind == 3:
+            a = np.sort(rng.random(n))[::-1].copy()
+        else:
+            a = rng.normal(size=n)
+            a[rng.random(n) < 0.2] = np.nan
+            a[rng.random(n) < 0.1] = -0.0
+            a[rng.random(n) < 0.1] = 0.0
+        np.testing.assert_array_equal(argsort_quick(a), reference(a))
+
+
+def test_first_run_benchmark_reads_the_readme_snippet():
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("bench_first_run", ROOT / "benchmarks" / "bench_first_run.py")
+    bench = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(bench)
+    snippet = bench.readme_snippet()
+    assert 'pettingzoo.make("parallel", "swarm_envs/Aggregation-v0"' in snippet and "env.reset(seed=0)" in snippet
+    assert bench.LOCK_NAME == _first_run.LOCK_NAME and bench.NOTICE in NOTICE
+
+
+def test_background_process_only_with_an_idle_core(monkeypatch):
+    """Unset, the background process starts only when the load average leaves a core idle (on a busy
+    machine a second compiling process competes with the env's); 0 and 1 decide regardless."""
+    monkeypatch.setattr(_first_run, "_cores", lambda: 2)
+    monkeypatch.delenv("SWARM_ENVS_BACKGROUND_COMPILE", raising=False)
+    monkeypatch.setattr(_first_run.os, "getloadavg", lambda: (0.4, 0.3, 0.2))
+    assert _first_run._background_wanted()
+    monkeypatch.setattr(_first_run.os, "getloadavg", lambda: (3.9, 4.1, 4.0))
+    assert not _first_run._background_wanted()
+    monkeypatch.setenv("SWARM_ENVS_BACKGROUND_COMPILE", "1")
+    assert _first_run._background_wanted()
+    monkeypatch.setenv("SWARM_ENVS_BACKGROUND_COMPILE", "0")
+    monkeypatch.setattr(_first_run.os, "getloadavg", lambda: (0.0, 0.0, 0.0))
+    assert not _first_run._background_wanted()
+    monkeypatch.setattr(_first_run, "_cores", lambda: 1)
+    monkeypatch.setenv("SWARM_ENVS_BACKGROUND_COMPILE", "1")
+    assert not _first_run._background_wanted()
