@@ -17,6 +17,7 @@ second) over the rounds and the median of the per-round ratios to ``make_vec``.
 from __future__ import annotations
 
 import argparse
+import json
 import os
 import statistics
 import time
@@ -56,6 +57,7 @@ def main(argv: list[str] | None = None) -> dict[str, float]:
     parser.add_argument("--steps", type=int, default=50, help="steps per round and method")
     parser.add_argument("--rounds", type=int, default=5)
     parser.add_argument("--no-pettingzoo", action="store_true", help="skip the single-env PettingZooWrapper row")
+    parser.add_argument("--json", action="store_true", help="also print the medians as one JSON line (for run_all.py)")
     args = parser.parse_args(argv)
 
     kwargs = dict(n_robots=args.n, sensing=args.sensing, max_cycles=10**6)
@@ -103,6 +105,8 @@ def main(argv: list[str] | None = None) -> dict[str, float]:
         print(f"{name:<36}{rate:>24,.0f}{ratio:>30.3f}")
         out[name] = rate
         out[f"{name} ratio"] = ratio
+    if args.json:
+        print(json.dumps({"n": args.n, "copies": args.copies, "sensing": args.sensing, "rounds": args.rounds, **out}))
     return out
 
 

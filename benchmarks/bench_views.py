@@ -14,6 +14,7 @@ ratio, and the load average before and after.
 from __future__ import annotations
 
 import argparse
+import json
 import os
 import statistics
 import sys
@@ -59,6 +60,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--sensing", choices=("full", "ideal"), default="full")
     parser.add_argument("--steps", type=int, default=20, help="timed steps per view and round")
     parser.add_argument("--rounds", type=int, default=5)
+    parser.add_argument("--json", action="store_true", help="also print the medians as one JSON line (for run_all.py)")
     args = parser.parse_args(argv)
     if args.n < 1 or args.steps < 1 or args.rounds < 1:
         parser.error("--n, --steps and --rounds must be >= 1")
@@ -78,16 +80,22 @@ def main(argv: list[str] | None = None) -> int:
     print(f"{args.env}, N = {args.n}, {args.sensing} sensing, {args.steps} steps per view and round; load {load0[0]:.2f}")
     print("| round | ParallelEnv (env steps/s) | make_vec(1) (env steps/s) | ratio |")
     print("|---|---|---|---|")
-    ratios = []
+    ratios, par_rates, arr_rates = [], [], []
     for r in range(args.rounds):
         arrays = rng.uniform(-1, 1, (args.steps + 2, 1, vec.n_agents, size))
         dicts = [{a: arrays[t, 0, i] for i, a in enumerate(env.possible_agents)} for t in range(args.steps + 2)]
         par = time_parallel(env, dicts, args.steps)
         arr = time_vector(vec, arrays, args.steps)
         ratios.append(par / arr)
+        par_rates.append(par)
+        arr_rates.append(arr)
         print(f"| {r + 1} | {par:.2f} | {arr:.2f} | {par / arr:.3f} |", flush=True)
     load1 = os.getloadavg()
     print(f"\nmedian ratio ParallelEnv / make_vec(1): {statistics.median(ratios):.3f}; load {load0[0]:.2f} -> {load1[0]:.2f}")
+    if args.json:
+        print(json.dumps({"env": args.env, "n": args.n, "sensing": args.sensing, "rounds": args.rounds,
+                          "parallel_env_steps_per_s": statistics.median(par_rates),
+                          "make_vec_steps_per_s": statistics.median(arr_rates), "ratio": statistics.median(ratios)}))
     return 0
 
 

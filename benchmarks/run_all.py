@@ -8,7 +8,8 @@ Each benchmark is its own script (``bench_*.py``) and can be run alone with its 
 ``--markdown`` (default PATH ``docs/performance.md``) measures the batched core's rollout throughput
 (``bench_vec.py --json``, one fresh process per swarm size, so a large scene is not measured in a process
 that has just stepped thousands of robots), VMAS's flocking in the same run when ``vmas`` is installed,
-the first run of the README's first snippet on an empty numba cache (``bench_first_run.py --json``),
+the first run of the README's first snippet on an empty numba cache (``bench_first_run.py --json``), the
+ParallelEnv and TorchRL views against ``make_vec`` (``bench_views.py --json``, ``bench_torchrl.py --json``),
 and the training rate of the default PPO config (``train.py --config configs/aggregation.yaml``, when
 stable-baselines3 and torch are installed), and writes the page: the machine, the tables and the
 commands that reproduce them. ``--sizes``, ``--no-first-run`` and ``--no-training`` make a shorter run;
@@ -45,10 +46,11 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--no-training", action="store_true", help="with --markdown: skip the training-rate run")
     parser.add_argument("--no-first-run", action="store_true", help="with --markdown: skip the first-run (cold numba cache) runs")
     parser.add_argument("--no-vmas", action="store_true", help="with --markdown: do not time VMAS even if installed")
+    parser.add_argument("--no-adapters", action="store_true", help="with --markdown: skip the ParallelEnv and TorchRL ratios")
     args = parser.parse_args(argv)
     if args.markdown:
         return write_page(Path(args.markdown), args.sizes, training=not args.no_training, vmas=not args.no_vmas,
-                          first_run=not args.no_first_run)
+                          first_run=not args.no_first_run, adapters=not args.no_adapters)
     status = 0
     for script in sorted(HERE.glob("bench_*.py")):
         name = script.stem.removeprefix("bench_")
@@ -75,6 +77,27 @@ def measure_vec(n: int, with_vmas: bool) -> dict:
 def measure_first_run(runs: int = 3) -> dict:
     """bench_first_run.py's result: the README snippet on an empty numba cache, ``runs`` times, and warm."""
     cmd = [sys.executable, str(HERE / "bench_first_run.py"), "--runs", str(runs), "--json"]
+    print("running:", " ".join(cmd[1:]), flush=True)
+    out = subprocess.run(cmd, capture_output=True, text=True, env=_env(), cwd=ROOT, check=True).stdout
+    return json.loads(out.strip().splitlines()[-1])
+
+
+def measure_views() -> dict:
+    """bench_views.py's medians: the ParallelEnv against make_vec(..., 1), N = 1000, full sensing."""
+    cmd = [sys.executable, str(HERE / "bench_views.py"), "--json"]
+    print("running:", " ".join(cmd[1:]), flush=True)
+    out = subprocess.run(cmd, capture_output=True, text=True, env=_env(), cwd=ROOT, check=True).stdout
+    return json.loads(out.strip().splitlines()[-1])
+
+
+def measure_torchrl() -> dict | str:
+    """bench_torchrl.py's medians (make_torchrl and the single-env PettingZooWrapper against make_vec, N = 10,
+    64 copies, full sensing), or why it was not run."""
+    try:
+        import torchrl  # noqa: F401
+    except ImportError:
+        return "not measured: torchrl is not installed (`pip install -e \".[torchrl]\"`)"
+    cmd = [sys.executable, str(HERE / "bench_torchrl.py"), "--json"]
     print("running:", " ".join(cmd[1:]), flush=True)
     out = subprocess.run(cmd, capture_output=True, text=True, env=_env(), cwd=ROOT, check=True).stdout
     return json.loads(out.strip().splitlines()[-1])
@@ -118,17 +141,19 @@ def machine() -> dict[str, str]:
 
 
 # --------------------------------------------------------------------------------------------- writing
-def write_page(path: Path, sizes: list[int], training: bool, vmas: bool, first_run: bool = True) -> int:
+def write_page(path: Path, sizes: list[int], training: bool, vmas: bool, first_run: bool = True, adapters: bool = True) -> int:
     """Measure and write the performance page to ``path``."""
     started = datetime.datetime.now(datetime.timezone.utc)
     load_before = os.getloadavg()
     info = machine()
     runs = [measure_vec(n, with_vmas=vmas and i == 0) for i, n in enumerate(sorted(sizes))]
     first = measure_first_run() if first_run else None
+    views = measure_views() if adapters else None
+    torchrl = measure_torchrl() if adapters else None
     train = measure_training() if training else "not measured (`--no-training`)"
     load_after = os.getloadavg()
     minutes = (datetime.datetime.now(datetime.timezone.utc) - started).total_seconds() / 60
-    page = render(info, runs, train, sorted(sizes), started, minutes, load_before, load_after, first)
+    page = render(info, runs, train, sorted(sizes), started, minutes, load_before, load_after, first, views, torchrl)
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text(page, encoding="utf-8")
     print(f"wrote {path} ({minutes:.1f} min of measurements)")
@@ -141,7 +166,7 @@ def _load(values: tuple[float, float, float]) -> str:
 
 def render(info: dict[str, str], runs: list[dict], train: dict | str, sizes: list[int],
            started: datetime.datetime, minutes: float, load_before: tuple, load_after: tuple,
-           first_run: dict | None = None) -> str:
+           first_run: dict | None = None, views: dict | None = None, torchrl: dict | str | None = None) -> str:
     """The performance page as markdown."""
     vmas = next((r["vmas"] for r in runs if r.get("vmas")), None)
     rows = [row for r in runs for row in r["rows"]]
@@ -226,7 +251,33 @@ def render(info: dict[str, str], runs: list[dict], train: dict | str, sizes: lis
         ]
     else:
         lines.append("The first run on an empty numba cache was not measured (`--no-first-run`).")
-    lines += ["", "## Training rate", ""]
+    lines += ["", "## Views and adapters", ""]
+    if views is not None:
+        lines += [
+            f"**PettingZoo `ParallelEnv` against `make_vec(..., 1)`** over the same batched core, N = {views['n']}",
+            f"robots, {views['sensing']} sensing ({views['env']}), {views['rounds']} alternated rounds: "
+            f"{views['parallel_env_steps_per_s']:.1f} against {views['make_vec_steps_per_s']:.1f} env steps/s,",
+            f"**ratio {views['ratio']:.2f}** (median of the rounds' ratios; `python benchmarks/bench_views.py`). The",
+            "ParallelEnv builds its per-agent dicts column by column over all agents and its infos lazily.",
+            "",
+        ]
+    if isinstance(torchrl, dict):
+        single = torchrl.get("PettingZooWrapper rollout (B = 1) ratio")
+        lines += [
+            f"**TorchRL**: `swarm_envs.make_torchrl(..., {torchrl['copies']})` rollouts against `make_vec` with the same",
+            f"{torchrl['copies']} copies of {torchrl['n']} e-pucks, {torchrl['sensing']} sensing, {torchrl['rounds']} alternated rounds:",
+            f"{torchrl['make_torchrl rollout']:,.0f} against {torchrl['make_vec']:,.0f} agent-steps/s, **ratio "
+            f"{torchrl['make_torchrl rollout ratio']:.2f}**"
+            + (f"; TorchRL's `PettingZooWrapper` on one env: {torchrl['PettingZooWrapper rollout (B = 1)']:,.0f} agent-steps/s "
+               f"(ratio {single:.3f})" if single is not None else "")
+            + " (`python benchmarks/bench_torchrl.py`).",
+            "",
+        ]
+    elif torchrl is not None:
+        lines += [f"TorchRL: {torchrl}.", ""]
+    if views is None and torchrl is None:
+        lines += ["Not measured (`--no-adapters`).", ""]
+    lines += ["## Training rate", ""]
     if isinstance(train, dict):
         lines += [
             f"`python train.py --config {TRAIN_CONFIG}` (PPO from stable-baselines3, one policy shared by all",
@@ -247,6 +298,8 @@ def render(info: dict[str, str], runs: list[dict], train: dict | str, sizes: lis
         "python benchmarks/bench_vec.py --interleave 5         # VMAS and N = 10 ideal alternated: ratios under the same load",
         "python benchmarks/bench_stages.py                     # one vector step split into physics, sensing, observations, rewards",
         "python benchmarks/bench_first_run.py                  # the README snippet on an empty numba cache, 3 runs, and warm",
+        "python benchmarks/bench_views.py                      # the ParallelEnv against make_vec(..., 1), N = 1000",
+        "python benchmarks/bench_torchrl.py                    # make_torchrl and PettingZooWrapper against make_vec",
         "python benchmarks/run_all.py                          # every component benchmark (IR layer, SwarmCom, range & bearing, scale-free)",
         "```",
         "",

@@ -203,7 +203,14 @@ def test_performance_page_is_rendered_from_the_measurements():
     when = datetime.datetime(2030, 1, 2, 3, 4, tzinfo=datetime.timezone.utc)
     first = {"runs": 3, "background_started": [True, True, False], "cold_s": [11.2, 12.4, 11.9], "warm_s": [2.0, 2.2, 2.1], "cold_median_s": 11.9,
              "warm_median_s": 2.1, "load_before": [0.5, 0.4, 0.3], "load_after": [0.7, 0.5, 0.4]}
-    page = run_all.render(info, runs, train, [10], when, 5.0, (0.5, 0.4, 0.3), (0.6, 0.5, 0.4), first)
+    views = {"env": "swarm_envs/Aggregation-v0", "n": 1000, "sensing": "full", "rounds": 5, "parallel_env_steps_per_s": 21.0,
+             "make_vec_steps_per_s": 23.5, "ratio": 0.894}
+    torchrl = {"n": 10, "copies": 64, "sensing": "full", "rounds": 5, "make_vec": 25686.0, "make_vec ratio": 1.0,
+               "make_torchrl rollout": 20711.0, "make_torchrl rollout ratio": 0.78, "PettingZooWrapper rollout (B = 1)": 720.0,
+               "PettingZooWrapper rollout (B = 1) ratio": 0.028}
+    page = run_all.render(info, runs, train, [10], when, 5.0, (0.5, 0.4, 0.3), (0.6, 0.5, 0.4), first, views, torchrl)
+    assert "21.0 against 23.5 env steps/s" in page and "**ratio 0.89**" in page
+    assert "20,711 against 25,686 agent-steps/s, **ratio 0.78**" in page and "(ratio 0.028)" in page
     assert "**11.9 s** (median of 3 runs: 11.2, 12.4, 11.9 s)" in page and "filled cache: 2.1 s" in page
     assert "it ran in\n2 of these 3 runs" in page
     assert "| 10 | 256 | full | 80.0 | 80.0 | 12.5 | 32,000 | 0.62x |" in page
@@ -213,5 +220,5 @@ def test_performance_page_is_rendered_from_the_measurements():
     without = run_all.render(info, [dict(runs[0], vmas=None)], "not measured (`--no-training`)", list(run_all.SIZES),
                              when, 5.0, (0.5, 0.4, 0.3), (0.6, 0.5, 0.4))
     assert "VMAS was not installed" in without and "| - |" in without and "Reduced run" not in without
-    assert "was not measured (`--no-first-run`)" in without
+    assert "was not measured (`--no-first-run`)" in without and "Not measured (`--no-adapters`)" in without
     assert not any(re.search(p, without, re.IGNORECASE) for p in HISTORY_PATTERNS)
