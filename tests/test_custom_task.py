@@ -145,10 +145,12 @@ def test_register_string_entry_point_is_imported_lazily_and_errors_name_it():
     swarm_envs.register("tests/Lazy-v0", "tests_missing_module_xyz:Task")  # not imported yet: no error
     with pytest.raises(ImportError, match="tests/Lazy-v0: cannot import the entry point's module 'tests_missing_module_xyz'"):
         swarm_envs.make("tests/Lazy-v0")
-    swarm_envs.register("tests/Lazy-v0", "swarm_envs.flocking_v0:NoSuchClass")
+    with pytest.warns(UserWarning, match="re-registering 'tests/Lazy-v0'"):
+        swarm_envs.register("tests/Lazy-v0", "swarm_envs.flocking_v0:NoSuchClass")
     with pytest.raises(ImportError, match="has no 'NoSuchClass'"):
         swarm_envs.make("tests/Lazy-v0")
-    swarm_envs.register("tests/Lazy-v0", "swarm_envs.flocking_v0:FlockingTask", kwargs={"n_robots": 3})
+    with pytest.warns(UserWarning, match="re-registering 'tests/Lazy-v0'"):
+        swarm_envs.register("tests/Lazy-v0", "swarm_envs.flocking_v0:FlockingTask", kwargs={"n_robots": 3})
     env = swarm_envs.make("tests/Lazy-v0", sensing="ideal")
     assert env.n_agents == 3 and env.config["collision_penalty"] == 0.1  # the id's defaults, then the caller's
 
