@@ -9,8 +9,10 @@ its scenario (task class and platform) calls, in order of first use, recorded in
 than :data:`NOTICE_SECONDS` to compile, it prints one line to stderr, once per process, and, when a core
 is idle, starts one background process (``python -m swarm_envs._first_run TASK PLATFORM``, at low
 priority) that compiles them into the same cache in *reverse* order of first use, while this process
-compiles in order of use as it runs; each process loads from the disk cache what the other has
-finished, so they meet in the middle. The machine code is the same whichever process compiles a kernel
+compiles them in order of use (:func:`compile_in_order`) before the env is built. Each process claims a
+kernel (a claim file beside its cache) before compiling it and skips the kernels the other has claimed,
+so no kernel is compiled twice and the two meet in the middle; this process then waits for the kernels
+the other is still compiling and loads them from the disk cache. The machine code is the same whichever process compiles a kernel
 (same source, flags and CPU): results do not change. Only one background process runs per cache
 directory (a lock file), and none on one core.
 
@@ -36,7 +38,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-__all__ = ["prepare", "NOTICE_SECONDS", "encode_type", "decode_type", "scenario_kernels", "cold_kernels"]
+__all__ = ["prepare", "compile_in_order", "NOTICE_SECONDS", "encode_type", "decode_type", "scenario_kernels", "cold_kernels"]
 
 #: expected compile time (s of one core) above which :func:`prepare` prints the notice
 NOTICE_SECONDS = 5.0
@@ -44,6 +46,8 @@ NOTICE_SECONDS = 5.0
 BACKGROUND_VARIABLE = "SWARM_ENVS_BACKGROUND_COMPILE"
 #: the lock file of the background process, in the numba cache directory of the kernels
 LOCK_NAME = "swarm_envs_first_run.lock"
+#: the claim file of one kernel, beside its cache files: the process compiling it (``.format(function, manifest index)``)
+CLAIM_NAME = "swarm_envs_first_run.{}.{}.claim"
 #: a lock older than this (s) is stale (its process died without removing it)
 LOCK_STALE_S = 600.0
 #: niceness of the background process (POSIX): it uses idle cores, and yields to the env and other work
@@ -103,12 +107,19 @@ def scenario_kernels(task: str, platform: str) -> list[tuple[str, str, tuple[str
     custom platform). Empty when unknown."""
     import swarm_envs._kernel_manifest as manifest
 
+    return [(*manifest.KERNELS[i], seconds) for i, seconds in _scenario_rows(task, platform)]
+
+
+def _scenario_rows(task: str, platform: str) -> tuple[tuple[int, float], ...]:
+    """(index into the manifest's KERNELS, compile seconds) of the scenario (see :func:`scenario_kernels`)."""
+    import swarm_envs._kernel_manifest as manifest
+
     rows = manifest.SCENARIOS.get((task, platform))
     if rows is None:
         rows = next((v for (_, p), v in manifest.SCENARIOS.items() if p == platform), None)
     if rows is None:
         rows = next((v for (t, _), v in manifest.SCENARIOS.items() if t == task), ())
-    return [(*manifest.KERNELS[i], seconds) for i, seconds in rows]
+    return rows
 
 
 def _dispatcher(module: str, name: str) -> Any:
@@ -127,19 +138,45 @@ def _cached(dispatcher: Any, argtypes: tuple) -> bool:
     return key in cache._cache_file._load_index()
 
 
-def cold_kernels(task: str, platform: str) -> list[tuple[Any, tuple, float]]:
-    """(dispatcher, argument types, compile seconds) of the scenario's kernels that are neither loaded nor
-    in the disk cache, in order of first use. Entries that no longer resolve are left out."""
+def cold_kernels(task: str, platform: str) -> list[tuple[Any, tuple, float, int]]:
+    """(dispatcher, argument types, compile seconds, manifest index) of the scenario's kernels that are
+    neither loaded nor in the disk cache, in order of first use. Entries that no longer resolve are left out."""
+    import swarm_envs._kernel_manifest as manifest
+
     out = []
-    for module, name, encoded, seconds in scenario_kernels(task, platform):
+    for index, seconds in _scenario_rows(task, platform):
         try:
+            module, name, encoded = manifest.KERNELS[index]
             dispatcher = _dispatcher(module, name)
             argtypes = tuple(decode_type(s) for s in encoded)
             if not _cached(dispatcher, argtypes):
-                out.append((dispatcher, argtypes, seconds))
+                out.append((dispatcher, argtypes, seconds, index))
         except Exception:  # a renamed kernel, a changed type, a cache it cannot read: not this module's business
             continue
     return out
+
+
+def _claim_path(dispatcher: Any, index: int) -> Path:
+    """The claim file of manifest kernel ``index`` (``dispatcher``), in the directory of its cache files."""
+    return Path(dispatcher._cache.cache_path) / CLAIM_NAME.format(dispatcher.py_func.__name__, index)
+
+
+def _compile_claimed(dispatcher: Any, argtypes: tuple, index: int) -> bool:
+    """Compile one kernel unless it is cached or another process has claimed it; whether this process compiled it."""
+    if _cached(dispatcher, argtypes):
+        return False
+    claim = _claim_path(dispatcher, index)
+    if not _acquire(claim):
+        return False
+    try:
+        if _cached(dispatcher, argtypes):  # finished by the other process between the two checks
+            return False
+        dispatcher.compile(argtypes)  # saves it to the disk cache
+        return True
+    except Exception:  # a stale manifest entry: compiled where it is really called
+        return False
+    finally:
+        _release(claim)
 
 
 # ----------------------------------------------------------------------------------------- the main process
@@ -162,7 +199,7 @@ def prepare(task: str, platform: str, sensing: str) -> None:
         cold = cold_kernels(task, platform)
     except Exception:  # no manifest entry, an unreadable manifest: compile as usual, without notice
         return
-    seconds = sum(s for _, _, s in cold)
+    seconds = sum(row[2] for row in cold)
     if seconds < NOTICE_SECONDS:
         return
     helper = _start_helper(task, platform, cold)
@@ -178,6 +215,27 @@ def prepare(task: str, platform: str, sensing: str) -> None:
             file=sys.stderr,
             flush=True,
         )
+    if helper:
+        compile_in_order(task, platform)
+
+
+def compile_in_order(task: str, platform: str) -> int:
+    """This process's share of a first run with the background process: the scenario's cold kernels in order
+    of first use, each compiled unless the background process (working from the other end) has claimed
+    it; then wait until the kernels it is compiling are in the disk cache, so that none is compiled twice.
+    The wait ends early when nobody holds the claim of a missing kernel (it is then compiled where it is
+    called), and after twice the recorded compile time of the missing kernels plus 10 s (a background
+    process starved on a busy machine). Returns the number of kernels compiled here."""
+    cold = cold_kernels(task, platform)
+    done = sum(_compile_claimed(dispatcher, argtypes, index) for dispatcher, argtypes, _, index in cold)
+    missing = [row for row in cold if not _cached(row[0], row[1])]
+    deadline = time.monotonic() + 10.0 + 2.0 * sum(row[2] for row in missing)
+    while missing and time.monotonic() < deadline:
+        if not any(_lock_holder(_claim_path(d, i)) is not None for d, _, _, i in missing):
+            break  # nobody is compiling them (yet): the env compiles what it calls
+        time.sleep(0.02)
+        missing = [row for row in missing if not _cached(row[0], row[1])]
+    return done
 
 
 def _cores() -> int:
@@ -297,10 +355,11 @@ def _acquire(path: Path) -> bool:
 
 def compile_in_background(task: str, platform: str) -> int:
     """The background process: compile the scenario's cold kernels in reverse order of first use, each
-    unless the disk cache has it by then (compiled by the main process). A function recorded with more
-    than one signature is left to the main process (two processes saving different signatures of one
-    function at once could both name their data file alike). Runs at low priority (nice 10): it takes
-    a core that is idle, not one the env or other work needs. Returns the number compiled."""
+    unless the disk cache has it by then or the main process has claimed it (:func:`compile_in_order`). A
+    function recorded with more than one signature is left to the main process (two processes saving
+    different signatures of one function at once could both name their data file alike). Runs at low
+    priority (nice 10): it takes a core that is idle, not one the env or other work needs. Returns the
+    number compiled."""
     if hasattr(os, "nice"):
         try:
             os.nice(NICE)
@@ -317,18 +376,13 @@ def compile_in_background(task: str, platform: str) -> int:
     try:
         cold = cold_kernels(task, platform)
         signatures: dict[int, int] = {}
-        for dispatcher, _, _ in cold:
+        for dispatcher, _, _, _ in cold:
             signatures[id(dispatcher)] = signatures.get(id(dispatcher), 0) + 1
-        done = 0
-        for dispatcher, argtypes, _ in reversed(cold):
-            if signatures[id(dispatcher)] > 1 or _cached(dispatcher, argtypes):
-                continue
-            try:
-                dispatcher.compile(argtypes)
-                done += 1
-            except Exception:  # a stale manifest entry: the main process compiles what it really calls
-                continue
-        return done
+        return sum(
+            _compile_claimed(dispatcher, argtypes, index)
+            for dispatcher, argtypes, _, index in reversed(cold)
+            if signatures[id(dispatcher)] == 1
+        )
     finally:
         _release(lock)
 

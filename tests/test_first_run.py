@@ -11,6 +11,7 @@ import pkgutil
 import subprocess
 import sys
 import textwrap
+import threading
 import time
 from pathlib import Path
 
@@ -213,6 +214,63 @@ def test_a_cache_entry_of_another_signature_is_recompiled(tmp_path):
     second = run()
     assert second.returncode == 0 and second.stdout.split() == ["1.5", "1.5"], second.stderr
     assert "NumbaCacheWarning" in second.stderr and "another signature" in second.stderr
+
+
+def _kernel_in(tmp_path: Path, monkeypatch, name: str):
+    """A fresh cached kernel ``double(float64)`` in module ``name`` under ``tmp_path`` (its own disk cache)."""
+    (tmp_path / f"{name}.py").write_text("from swarm_envs._numba import njit\n\n@njit(cache=True)\ndef double(x):\n    return 2 * x\n")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    monkeypatch.setattr(numba.config, "CACHE_DIR", str(tmp_path / "cache"), raising=False)
+    module = importlib.import_module(name)
+    return module.double, (numba.core.types.float64,)
+
+
+def _holder(seconds: float) -> subprocess.Popen:
+    """A process that lives ``seconds``, reaped when it exits (as prepare() reaps the background process:
+    an unreaped child would still answer os.kill(pid, 0))."""
+    proc = subprocess.Popen([sys.executable, "-c", f"import time; time.sleep({seconds})"])
+    threading.Thread(target=proc.wait, daemon=True).start()
+    return proc
+
+
+def test_a_kernel_claimed_by_another_process_is_not_compiled_twice(tmp_path, monkeypatch):
+    """While another live process holds a kernel's claim, this one neither compiles it nor claims it; once
+    the claim is free it compiles it, saves it and removes its own claim."""
+    double, argtypes = _kernel_in(tmp_path, monkeypatch, "kern_claimed")
+    claim = _first_run._claim_path(double, 0)
+    holder = _holder(60)
+    try:
+        claim.write_text(str(holder.pid))
+        assert not _first_run._compile_claimed(double, argtypes, 0)
+        assert not _first_run._cached(double, argtypes) and claim.read_text() == str(holder.pid)
+    finally:
+        holder.kill()
+        holder.wait()
+    assert _first_run._compile_claimed(double, argtypes, 0)  # the holder is gone: its claim is stale
+    assert _first_run._cached(double, argtypes) and not claim.exists()
+    assert not _first_run._compile_claimed(double, argtypes, 0)  # cached now: nothing to do
+
+
+def test_compile_in_order_waits_only_while_someone_compiles(tmp_path, monkeypatch):
+    """The main process waits for a kernel the background process has claimed, and stops waiting as soon
+    as nobody holds the claim (then the env compiles the kernel where it calls it)."""
+    double, argtypes = _kernel_in(tmp_path, monkeypatch, "kern_waited")
+    monkeypatch.setattr(_first_run, "cold_kernels", lambda task, platform: [(double, argtypes, 100.0, 0)])
+    claim = _first_run._claim_path(double, 0)
+    holder = _holder(1.5)
+    try:
+        claim.write_text(str(holder.pid))
+        t0 = time.monotonic()
+        assert _first_run.compile_in_order("AggregationTask", "epuck") == 0
+        waited = time.monotonic() - t0
+    finally:
+        holder.kill()
+        holder.wait()
+    assert 1.0 < waited < 30.0, waited  # the holder's life, not the 210 s deadline
+    assert not _first_run._cached(double, argtypes)
+    claim.unlink()
+    assert _first_run.compile_in_order("AggregationTask", "epuck") == 1  # unclaimed: compiled here
+    assert _first_run._cached(double, argtypes)
 
 
 def test_argsort_quick_is_numbas_argsort():
