@@ -12,9 +12,9 @@ priority) that compiles them into the same cache in *reverse* order of first use
 compiles them in order of use (:func:`compile_in_order`) before the env is built. Each process claims a
 kernel (a claim file beside its cache) before compiling it and skips the kernels the other has claimed,
 so no kernel is compiled twice and the two meet in the middle; this process then waits for the kernels
-the other is still compiling and loads them from the disk cache. The machine code is the same whichever process compiles a kernel
-(same source, flags and CPU): results do not change. Only one background process runs per cache
-directory (a lock file), and none on one core.
+the other is still compiling and loads them from the disk cache. The machine code is the same whichever
+process compiles a kernel (same source, flags and CPU): results do not change. Only one background
+process runs per cache directory (a lock file), and none on one core.
 
 ``SWARM_ENVS_BACKGROUND_COMPILE``: ``0`` never starts the background process (the notice stays), ``1``
 starts it even when no core looks idle; unset, it starts when the 1-minute load average is below the
@@ -225,16 +225,22 @@ def compile_in_order(task: str, platform: str) -> int:
     it; then wait until the kernels it is compiling are in the disk cache, so that none is compiled twice.
     The wait ends early when nobody holds the claim of a missing kernel (it is then compiled where it is
     called), and after twice the recorded compile time of the missing kernels plus 10 s (a background
-    process starved on a busy machine). Returns the number of kernels compiled here."""
-    cold = cold_kernels(task, platform)
-    done = sum(_compile_claimed(dispatcher, argtypes, index) for dispatcher, argtypes, _, index in cold)
-    missing = [row for row in cold if not _cached(row[0], row[1])]
-    deadline = time.monotonic() + 10.0 + 2.0 * sum(row[2] for row in missing)
-    while missing and time.monotonic() < deadline:
-        if not any(_lock_holder(_claim_path(d, i)) is not None for d, _, _, i in missing):
-            break  # nobody is compiling them (yet): the env compiles what it calls
-        time.sleep(0.02)
-        missing = [row for row in missing if not _cached(row[0], row[1])]
+    process starved on a busy machine). Any failure here (a cache it cannot read) leaves the kernels to
+    be compiled where they are called. Returns the number of kernels compiled here."""
+    done = 0
+    try:
+        cold = cold_kernels(task, platform)
+        for dispatcher, argtypes, _, index in cold:
+            done += _compile_claimed(dispatcher, argtypes, index)
+        missing = [row for row in cold if not _cached(row[0], row[1])]
+        deadline = time.monotonic() + 10.0 + 2.0 * sum(row[2] for row in missing)
+        while missing and time.monotonic() < deadline:
+            if not any(_lock_holder(_claim_path(d, i)) is not None for d, _, _, i in missing):
+                break  # nobody is compiling them (yet): the env compiles what it calls
+            time.sleep(0.02)
+            missing = [row for row in missing if not _cached(row[0], row[1])]
+    except Exception:
+        pass
     return done
 
 
