@@ -182,6 +182,46 @@ def _sigint_ignored() -> Iterator[None]:
         signal.signal(signal.SIGINT, previous)
 
 
+class _CtrlC:
+    """Ctrl-C during training. The first one asks training to stop at the next env step (a callback that
+    returns False ends SB3's ``learn``), so the request is never lost: raised as a ``KeyboardInterrupt``
+    wherever the signal lands, it can land in a cffi finalizer (pymunk's bodies), where CPython prints it
+    and drops it. A second Ctrl-C raises ``KeyboardInterrupt`` at once. After an interrupted training,
+    Ctrl-C stays ignored so the save that follows is never cut short."""
+
+    def __init__(self) -> None:
+        self.requested = False
+
+    def _handler(self, signum: int, frame: Any) -> None:
+        if self.requested:
+            raise KeyboardInterrupt
+        self.requested = True
+
+    @contextlib.contextmanager
+    def installed(self) -> Iterator[None]:
+        """The handler inside the block (main thread only; not where Ctrl-C is ignored already)."""
+        if threading.current_thread() is not threading.main_thread() or signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
+            yield
+            return
+        previous = signal.signal(signal.SIGINT, self._handler)
+        try:
+            yield
+        finally:
+            signal.signal(signal.SIGINT, signal.SIG_IGN if self.requested else previous)
+
+    def callback(self) -> Any:
+        """An SB3 callback that ends training once Ctrl-C was pressed."""
+        from stable_baselines3.common.callbacks import BaseCallback
+
+        ctrl_c = self
+
+        class StopOnCtrlC(BaseCallback):
+            def _on_step(self) -> bool:
+                return not ctrl_c.requested
+
+        return StopOnCtrlC()
+
+
 @contextlib.contextmanager
 def _naming(path: Path) -> Iterator[None]:
     """Turn an ``OSError`` inside the block (a full disk) into a :class:`TrainError` naming ``path``."""
@@ -367,16 +407,18 @@ def train(cfg: dict[str, Any], stage: Staging) -> tuple[Any, float, bool]:
     logger = make_logger(out, total, progress_lines=True)
     model.set_logger(logger)
     callbacks = make_callbacks(cfg, out, venv.num_envs, total)
-    interrupted = False
+    ctrl_c = _CtrlC()
+    callbacks.callbacks.append(ctrl_c.callback())
     t0 = time.perf_counter()
     try:
-        model.learn(budget, callback=callbacks)  # SB3 dumps a row per iteration, before that iteration's update
-    except (KeyboardInterrupt, SystemError) as err:
+        with ctrl_c.installed():
+            model.learn(budget, callback=callbacks)  # SB3 dumps a row per iteration, before that iteration's update
+    except (KeyboardInterrupt, SystemError) as err:  # a second Ctrl-C, or one outside the main thread's handler
         if not is_interrupt(err):
             raise
-        interrupted = True
+        ctrl_c.requested = True
         if threading.current_thread() is threading.main_thread():
-            signal.signal(signal.SIGINT, signal.SIG_IGN)  # a second Ctrl-C must not cut the save short
+            signal.signal(signal.SIGINT, signal.SIG_IGN)  # a further Ctrl-C must not cut the save short
     except OSError as err:  # the logger or a checkpoint could not write (a full disk)
         venv.close()
         where = stage.final(Path(err.filename)) if getattr(err, "filename", None) else stage.out
@@ -393,7 +435,7 @@ def train(cfg: dict[str, Any], stage: Staging) -> tuple[Any, float, bool]:
             model.save(tmp)
     finally:
         venv.close()
-    return model, seconds, interrupted
+    return model, seconds, ctrl_c.requested
 
 
 def _read_progress(path: Path) -> dict[str, np.ndarray]:

@@ -148,3 +148,32 @@ def test_ctrl_c_surfacing_as_a_systemerror_is_an_interrupt(monkeypatch, capsys):
     assert train.main(["--config", str(ROOT / "configs" / "aggregation.yaml")]) == 2
     err = capsys.readouterr().err
     assert len(err.strip().splitlines()) == 1 and "unexpected SystemError during setup: a real bug" in err
+
+
+@pytest.mark.skipif(sys.platform == "win32", reason="SIGINT to this process is POSIX")
+def test_the_first_ctrl_c_stops_training_and_is_never_dropped():
+    """The first Ctrl-C only asks training to stop (the callback then ends SB3's learn), so it is not lost
+    when it lands in a finalizer, where a KeyboardInterrupt is printed and dropped (pymunk frees its bodies
+    in cffi finalizers); a second Ctrl-C raises; afterwards Ctrl-C is ignored until the save is done."""
+    pytest.importorskip("stable_baselines3")
+    from swarm_envs.agents.train import _CtrlC
+
+    class SignalInFinalizer:
+        def __del__(self) -> None:
+            os.kill(os.getpid(), signal.SIGINT)
+            for _ in range(10_000):  # Python runs the handler between these bytecodes, inside __del__
+                pass
+
+    ctrl_c = _CtrlC()
+    stop = ctrl_c.callback()
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        with ctrl_c.installed():
+            SignalInFinalizer()  # dropped at once: the signal arrives in its finalizer
+            assert ctrl_c.requested and stop._on_step() is False
+            with pytest.raises(KeyboardInterrupt):
+                os.kill(os.getpid(), signal.SIGINT)
+                time.sleep(1.0)
+        assert signal.getsignal(signal.SIGINT) is signal.SIG_IGN
+    finally:
+        signal.signal(signal.SIGINT, previous)
