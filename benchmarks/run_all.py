@@ -243,7 +243,7 @@ def render(info: dict[str, str], runs: list[dict], train: dict | str, sizes: lis
             f"{', '.join(f'{s:.1f}' for s in first_run['cold_s'])} s), of which all but the warm time is numba",
             f"compiling the kernels the snippet uses; run again on the filled cache: {first_run['warm_median_s']:.1f} s.",
             "The first run prints one line saying it compiles; when a core is idle, a background process compiles",
-            "the kernels in reverse order of use while the snippet compiles them in order of use (it ran in",
+            "the kernels together with the snippet, both taking the longest first (it ran in",
             f"{sum(first_run.get('background_started', []))} of these {first_run['runs']} runs; it starts when the 1-minute load average is",
             "below the cores minus a half).",
             f"Load averages {_load(first_run['load_before'])} before the runs, {_load(first_run['load_after'])} after",

@@ -3,18 +3,18 @@
 With ``cache=True`` numba compiles a kernel the first time it is called and keeps the machine code on
 disk; a fresh install (or a new numba version, or an edited kernel module) starts from an empty cache,
 and the first ``env.reset()`` with the modelled sensing compiles the few dozen kernels of its stack,
-half a minute on one core. :func:`prepare`, called when an env's sensing is built, looks up the kernels
-its scenario (task class and platform) calls, in order of first use, recorded in
-:mod:`swarm_envs._kernel_manifest` with their compile times. When those not on disk yet would take more
-than :data:`NOTICE_SECONDS` to compile, it prints one line to stderr, once per process, and, when a core
-is idle, starts one background process (``python -m swarm_envs._first_run TASK PLATFORM``, at low
-priority) that compiles them into the same cache in *reverse* order of first use, while this process
-compiles them in order of use (:func:`compile_in_order`) before the env is built. Each process claims a
-kernel (a claim file beside its cache) before compiling it and skips the kernels the other has claimed,
-so no kernel is compiled twice and the two meet in the middle; this process then waits for the kernels
-the other is still compiling and loads them from the disk cache. The machine code is the same whichever
-process compiles a kernel (same source, flags and CPU): results do not change. Only one background
-process runs per cache directory (a lock file), and none on one core.
+about twenty seconds on one core. :func:`prepare`, called when an env's sensing is built, looks up the
+kernels its scenario (task class and platform) calls, recorded in :mod:`swarm_envs._kernel_manifest`
+with their compile times. When those not on disk yet would take more than :data:`NOTICE_SECONDS` to
+compile, it prints one line to stderr, once per process, and, when a core is idle, starts one background
+process (``python -m swarm_envs._first_run TASK PLATFORM``, at low priority) that compiles them into the
+same cache while this process compiles them too (:func:`compile_in_order`) before the env is built. Both
+processes take the kernels longest first (by recorded compile time); each claims a kernel (a claim file
+beside its cache) before compiling it and skips the kernels the other has claimed, so no kernel is
+compiled twice, and the two finish within about one short kernel of each other; this process then waits
+for the kernels the other is still compiling and loads them from the disk cache. The machine code is the
+same whichever process compiles a kernel (same source, flags and CPU): results do not change. Only one
+background process runs per cache directory (a lock file), and none on one core.
 
 ``SWARM_ENVS_BACKGROUND_COMPILE``: ``0`` never starts the background process (the notice stays), ``1``
 starts it even when no core looks idle; unset, it starts when the 1-minute load average is below the
@@ -38,7 +38,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-__all__ = ["prepare", "compile_in_order", "NOTICE_SECONDS", "encode_type", "decode_type", "scenario_kernels", "cold_kernels"]
+__all__ = ["prepare", "compile_in_order", "longest_first", "NOTICE_SECONDS", "encode_type", "decode_type", "scenario_kernels", "cold_kernels"]
 
 #: expected compile time (s of one core) above which :func:`prepare` prints the notice
 NOTICE_SECONDS = 5.0
@@ -63,7 +63,7 @@ _ARRAY = re.compile(r"^(\w+)\[(\d+)([CFA])(,ro)?\]$")
 
 
 def encode_type(t: Any) -> str | None:
-    """A numba argument type as a short string (``float64[2C]``, ``int64``, ``list[generator]``), or None
+    """A numba argument type as a short string (``float64[2C]``, ``int64``, ``generator``, ``list[generator]``), or None
     for a type the manifest does not record."""
     from numba.core import types
 
@@ -71,6 +71,8 @@ def encode_type(t: Any) -> str | None:
         return f"{t.dtype}[{t.ndim}{t.layout}{'' if t.mutable else ',ro'}]"
     if isinstance(t, (types.Integer, types.Float, types.Boolean)) and not isinstance(t, types.Literal):
         return str(t)
+    if type(t).__name__ == "NumPyRandomGeneratorType":
+        return "generator"
     if isinstance(t, types.ListType) and type(t.item_type).__name__ == "NumPyRandomGeneratorType":
         return "list[generator]"
     return None
@@ -82,6 +84,8 @@ def decode_type(s: str) -> Any:
     from numba import typeof
     from numba.core import types
 
+    if s == "generator":
+        return typeof(np.random.default_rng(0))
     if s == "list[generator]":
         return types.ListType(typeof(np.random.default_rng(0)))
     m = _ARRAY.match(s)
@@ -203,8 +207,8 @@ def prepare(task: str, platform: str, sensing: str) -> None:
     if seconds < NOTICE_SECONDS:
         return
     helper = _start_helper(task, platform, cold)
-    # the two processes meet in the middle; the background one starts ~1.5 s later and both compile the
-    # library functions their kernels call
+    # the two processes share the work; the background one starts ~1 s later and both compile the library
+    # functions their kernels call
     expected = seconds / 2.0 + 2.0 if helper else seconds
     if not _noticed:
         _noticed = True
@@ -219,17 +223,24 @@ def prepare(task: str, platform: str, sensing: str) -> None:
         compile_in_order(task, platform)
 
 
+def longest_first(cold: Sequence[tuple[Any, tuple, float, int]]) -> list[tuple[Any, tuple, float, int]]:
+    """:func:`cold_kernels` rows in the order both processes compile them: longest recorded compile time
+    first (ties in order of first use). Two processes taking the next unclaimed kernel from this list finish
+    within about the last kernel's time of each other (longest-processing-time-first scheduling)."""
+    return sorted(cold, key=lambda row: -row[2])
+
+
 def compile_in_order(task: str, platform: str) -> int:
-    """This process's share of a first run with the background process: the scenario's cold kernels in order
-    of first use, each compiled unless the background process (working from the other end) has claimed
-    it; then wait until the kernels it is compiling are in the disk cache, so that none is compiled twice.
+    """This process's share of a first run with the background process: the scenario's cold kernels longest
+    first (:func:`longest_first`), each compiled unless the background process has claimed it; then wait
+    until the kernels it is compiling are in the disk cache, so that none is compiled twice.
     The wait ends early when nobody holds the claim of a missing kernel (it is then compiled where it is
     called), and after twice the recorded compile time of the missing kernels plus 10 s (a background
     process starved on a busy machine). Any failure here (a cache it cannot read) leaves the kernels to
     be compiled where they are called. Returns the number of kernels compiled here."""
     done = 0
     try:
-        cold = cold_kernels(task, platform)
+        cold = longest_first(cold_kernels(task, platform))
         for dispatcher, argtypes, _, index in cold:
             done += _compile_claimed(dispatcher, argtypes, index)
         missing = [row for row in cold if not _cached(row[0], row[1])]
@@ -360,8 +371,8 @@ def _acquire(path: Path) -> bool:
 
 
 def compile_in_background(task: str, platform: str) -> int:
-    """The background process: compile the scenario's cold kernels in reverse order of first use, each
-    unless the disk cache has it by then or the main process has claimed it (:func:`compile_in_order`). A
+    """The background process: compile the scenario's cold kernels longest first (:func:`longest_first`),
+    each unless the disk cache has it by then or the main process has claimed it (:func:`compile_in_order`). A
     function recorded with more than one signature is left to the main process (two processes saving
     different signatures of one function at once could both name their data file alike). Runs at low
     priority (nice 10): it takes a core that is idle, not one the env or other work needs. Returns the
@@ -386,7 +397,7 @@ def compile_in_background(task: str, platform: str) -> int:
             signatures[id(dispatcher)] = signatures.get(id(dispatcher), 0) + 1
         return sum(
             _compile_claimed(dispatcher, argtypes, index)
-            for dispatcher, argtypes, _, index in reversed(cold)
+            for dispatcher, argtypes, _, index in longest_first(cold)
             if signatures[id(dispatcher)] == 1
         )
     finally:

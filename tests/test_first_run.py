@@ -174,6 +174,29 @@ def test_every_kernel_has_the_shared_flags_and_a_guarded_cache():
         assert getattr(d, "_swarm_unliteral", False), key
 
 
+def test_kernels_allocate_with_np_empty_and_a_positional_dtype():
+    """Kernels allocate only with ``np.empty(shape, dtype)`` (swarm_envs._numba docstring): every
+    ``np.zeros``/``np.ones``/``np.full`` or dtype left to its default or given by keyword is one more library
+    function numba compiles on the first run."""
+    import ast
+    import inspect
+
+    allowed = {"np.float64", "np.float32", "np.int64", "np.int8", "np.uint8", "np.uint32", "np.bool_"}
+    bad = []
+    for key, d in _package_dispatchers().items():
+        tree = ast.parse(textwrap.dedent(inspect.getsource(d.py_func)))
+        for node in ast.walk(tree):
+            if not (isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute)):
+                continue
+            if getattr(node.func.value, "id", "") != "np" or node.func.attr not in ("empty", "zeros", "ones", "full"):
+                continue
+            form_ok = node.func.attr == "empty" and len(node.args) == 2 and not node.keywords
+            dtype = ast.unparse(node.args[1]) if len(node.args) == 2 else ""
+            if not form_ok or (dtype not in allowed and not dtype.endswith(".dtype")):
+                bad.append(f"{key[0]}.{key[1]}: {ast.unparse(node)}")
+    assert not bad, "\n".join(bad)
+
+
 def test_constant_arguments_compile_one_specialisation():
     @njit
     def add(x, k):
@@ -271,6 +294,22 @@ def test_compile_in_order_waits_only_while_someone_compiles(tmp_path, monkeypatc
     claim.unlink()
     assert _first_run.compile_in_order("AggregationTask", "epuck") == 1  # unclaimed: compiled here
     assert _first_run._cached(double, argtypes)
+
+
+def test_both_processes_compile_the_longest_kernels_first(monkeypatch):
+    """The main and the background process take the scenario's cold kernels longest first (ties in order
+    of first use), so the two finish within about one short kernel of each other; the README scenario's
+    generator list kernel is in the manifest (its argument, a Generator, is recorded)."""
+    rows = [("a", (), 0.3, 0), ("b", (), 2.0, 1), ("c", (), 0.3, 2), ("d", (), 1.1, 3)]
+    assert [r[0] for r in _first_run.longest_first(rows)] == ["b", "d", "a", "c"]
+    order = []
+    monkeypatch.setattr(_first_run, "cold_kernels", lambda task, platform: rows)
+    monkeypatch.setattr(_first_run, "_compile_claimed", lambda d, argtypes, index: order.append(d) or True)
+    monkeypatch.setattr(_first_run, "_cached", lambda d, argtypes: True)
+    assert _first_run.compile_in_order("AggregationTask", "epuck") == 4
+    assert order == ["b", "d", "a", "c"]
+    names = {_kernel_manifest.KERNELS[i][1] for i, _ in _kernel_manifest.SCENARIOS[("AggregationTask", "epuck")]}
+    assert "_generator_list" in names
 
 
 def test_argsort_quick_is_numbas_argsort():
