@@ -12,8 +12,13 @@ module with compiled kernels::
 
 It also keeps the first run's compile time down (:mod:`swarm_envs._first_run`): every kernel gets the
 same flags (``nogil=True``, ``error_model="numpy"`` unless given), so the library functions kernels call
-(``np.empty``, ``np.zeros``, ...) compile once per session instead of once per set of flags, and a kernel
-called from another with constant arguments compiles once, not once per constant value.
+(``np.empty``, ...) compile once per session instead of once per set of flags, and a kernel called from
+another with constant arguments compiles once, not once per constant value.
+
+Kernels allocate with ``np.empty(shape, dtype)``, the dtype given and positional, and fill the array in
+place (``x[:] = 0``) instead of calling ``np.zeros``, ``np.ones`` or ``np.full``: numba compiles each of
+those library functions once per shape and dtype and process, about 30 ms each on the first run, and
+``np.zeros`` compiles ``np.empty`` and a fill function besides (``tests/test_first_run.py`` checks the form).
 
 Raises ``ImportError`` when numba is not installed (as ``from numba import njit`` would), so modules can
 keep their numpy fallback.

@@ -34,8 +34,10 @@ def argsort_quick(A: np.ndarray) -> np.ndarray:
     R = np.arange(n)
     if n < 2:
         return R
-    stack_lo = np.zeros(_MAX_STACK, np.int64)
-    stack_hi = np.zeros(_MAX_STACK, np.int64)
+    stack_lo = np.empty(_MAX_STACK, np.int64)
+    stack_lo[:] = 0
+    stack_hi = np.empty(_MAX_STACK, np.int64)
+    stack_hi[:] = 0
     stack_hi[0] = n - 1
     top = 1
     while top > 0:

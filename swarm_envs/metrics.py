@@ -69,7 +69,8 @@ if _HAVE_NUMBA:
         """:func:`neighbourhood_sums`: pairs in (i, j) order reach row r first from pairs (i, r), i < r
         increasing, then from pairs (r, j), j increasing."""
         sums = values.copy()
-        counts = np.ones(values.shape[0], np.int64)
+        counts = np.empty(values.shape[0], np.int64)
+        counts[:] = 1
         for p in range(pairs.shape[0]):
             i, j = pairs[p, 0], pairs[p, 1]
             for f in range(values.shape[1]):
@@ -97,14 +98,17 @@ if _HAVE_NUMBA:
                 parent[b] = a
             elif b < a:
                 parent[a] = b
-        size = np.zeros(n, np.int64)
+        size = np.empty(n, np.int64)
+        size[:] = 0
         for i in range(n):
             r = i
             while parent[r] != r:
                 r = parent[r]
             size[r] += 1
-        largest = np.zeros(B)
-        count = np.zeros(B, np.int64)
+        largest = np.empty(B, np.float64)
+        largest[:] = 0
+        count = np.empty(B, np.int64)
+        count[:] = 0
         for i in range(n):
             if size[i] > 0:
                 c = i // N

@@ -221,7 +221,8 @@ if _HAVE_NUMBA:
         """:func:`pack_nearest`: the slots of :func:`_nearest_slots_kernel`, then the values copied in."""
         F = values.shape[1]
         order = _nearest_slots_kernel(n_rows, row, key, k)
-        packed = np.zeros((n_rows, k, F))
+        packed = np.empty((n_rows, k, F), np.float64)
+        packed[:] = 0
         for r in range(n_rows):
             for c in range(k):
                 if order[r, c] < 0:
@@ -235,9 +236,11 @@ if _HAVE_NUMBA:
         """:func:`nearest_slots` in one pass over the links: each row keeps its k first links in
         :func:`_before` order by insertion (links arrive in index order, so ties keep link order)."""
         P = len(row)
-        order = np.full((n_rows, k), -1, dtype=np.int64)
-        best = np.empty((n_rows, k))
-        count = np.zeros(n_rows, dtype=np.int64)
+        order = np.empty((n_rows, k), np.int64)
+        order[:] = -1
+        best = np.empty((n_rows, k), np.float64)
+        count = np.empty(n_rows, np.int64)
+        count[:] = 0
         for p in range(P):
             r, kp = row[p], key[p]
             c = count[r]
@@ -260,7 +263,8 @@ if _HAVE_NUMBA:
         """Rows [1, range, cos, sin bearing, cos, sin heading, age] of the kept links as float32; zero rows
         for empty slots."""
         n, k = order.shape
-        out = np.zeros((n, k, 7), np.float32)
+        out = np.empty((n, k, 7), np.float32)
+        out[:] = 0
         for r in range(n):
             for c in range(k):
                 o = order[r, c]
@@ -299,7 +303,7 @@ if _HAVE_NUMBA:
     @njit(cache=True)
     def _wrapped_difference_kernel(a: np.ndarray, b: np.ndarray) -> np.ndarray:
         """:func:`wrap_difference_scalar` elementwise."""
-        out = np.empty(len(a))
+        out = np.empty(len(a), np.float64)
         for i in range(len(a)):
             out[i] = wrap_difference_scalar(a[i], b[i])
         return out

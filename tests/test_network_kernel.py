@@ -169,7 +169,7 @@ def test_draw_step_shapes():
 
 @pytest.mark.parametrize("B,n,intensity_sigma", [(3, 7, 0.0), (2, 5, 0.01), (1, 40, 0.0)])
 def test_compiled_draws_equal_numpy_generator_calls(B, n, intensity_sigma):
-    """The compiled drawer (NumPy's float32 ziggurat inlined, numba's integers/normal) gives bit for bit what
+    """The compiled drawer (NumPy's float32 ziggurat inlined, numba's bounded integers and normal) gives bit for bit what
     NumPy's own Generator methods give in plain Python, and leaves every generator in the same state; 2000
     slots so the ziggurat's rare paths (wedges, tail) are exercised."""
     S = 2000
@@ -183,6 +183,28 @@ def test_compiled_draws_equal_numpy_generator_calls(B, n, intensity_sigma):
     assert all(x.bit_generator.state == y.bit_generator.state for x, y in zip(g1, g2))
     z = a.noise / np.float32(1.58)
     assert abs(float(z.mean())) < 0.01 and abs(float(z.std()) - 1.0) < 0.01 and float(np.abs(z).max()) > 4.5
+
+
+@pytest.mark.parametrize("window", [1, 2, 3, 32, 1000, 3 * 2**29, 2**31 - 1])
+def test_compiled_integers_equal_numpy_integers(window):
+    """The compiled backoff/access draws are NumPy's ``integers(0, window)`` bit for bit for windows from 1
+    (no draw) to 2**31 - 1; 3 * 2**29 rejects about a quarter of the 32-bit words (Lemire's rejection path)."""
+    g1 = [np.random.default_rng([seed, 3]) for seed in range(2)]
+    g2 = [np.random.default_rng([seed, 3]) for seed in range(2)]
+    a = draw_copies(GeneratorList(g1).sync(g1), 50, 6, 8, 0.0, 0.0, window)
+    _, _, backoff, access = _draw_copies_py(g2, 50, 6, 8, 0.0, 0.0, window)
+    np.testing.assert_array_equal(a.backoff, backoff)
+    np.testing.assert_array_equal(a.access, access)
+    assert all(x.bit_generator.state == y.bit_generator.state for x, y in zip(g1, g2))
+    assert a.backoff.min() >= 0 and a.backoff.max() < window
+
+
+@pytest.mark.parametrize("window", [0, -1, 2**31])
+def test_csma_window_out_of_range_is_refused(window):
+    from swarm_envs.comm.protocol import CSMA
+
+    with pytest.raises(ValueError, match="backoff window"):
+        CSMA(4, window)
 
 
 def test_compiled_normals_follow_numpy_wedge_test():

@@ -171,9 +171,12 @@ def _draw_buffers(B, n, S, n_det, noise_sigma, intensity_sigma):
     backoff (B n, S) and access (B n,) int64."""
     N = B * n
     ni = S if intensity_sigma > 0 else 0
-    noise = np.empty((S, N, n_det), dtype=np.float32) if noise_sigma > 0 else np.zeros((S, N, n_det), dtype=np.float32)
-    inoise = np.zeros((ni, N if ni else 0, n_det if ni else 0))
-    return noise, inoise, np.empty((N, S), dtype=np.int64), np.empty(N, dtype=np.int64)
+    noise = np.empty((S, N, n_det), np.float32)
+    if noise_sigma <= 0:
+        noise[:] = 0
+    inoise = np.empty((ni, N if ni else 0, n_det if ni else 0), np.float64)
+    inoise[:] = 0
+    return noise, inoise, np.empty((N, S), np.int64), np.empty(N, np.int64)
 
 
 @_jit
@@ -219,9 +222,11 @@ if HAVE_NUMBA:
     def _set_generator(gens, b, g):
         gens[b] = g
 
-try:  # NumPy's float32 ziggurat, compiled inline (numba's bindings of the bit generator and NumPy's tables)
+try:  # NumPy's float32 ziggurat, compiled inline (numba's bindings of the bit generator and NumPy's tables),
+    # and numba's copy of NumPy's bounded-integer sampler
     from numba.np.random._constants import fi_float, ki_float, wi_float, ziggurat_nor_inv_r_f, ziggurat_nor_r_f
     from numba.np.random.generator_core import next_float, next_uint32
+    from numba.np.random.random_methods import buffered_bounded_lemire_uint32
 
     _FAST_NORMAL = HAVE_NUMBA
 except ImportError:  # pragma: no cover - other numba versions: numba's Generator.standard_normal (same stream)
@@ -256,30 +261,62 @@ if _FAST_NORMAL:
                 return x
 
     @njit(cache=True, nogil=True)
-    def _draw_copies_nb(gens, S, n, n_det, noise_sigma, intensity_sigma, window, ki, wi, fi, zr, zir):
-        """:func:`_draw_copies_py` compiled, with the ADC noise from :func:`_normal_f` (same numbers)."""
+    def _copy_noise(bg, noise, o, n, S, n_det, noise_sigma, ki, wi, fi, zr, zir):
+        """Rows ``o .. o + n`` of the ADC noise (S, N, n_det): :func:`_normal_f` times ``noise_sigma``, in C
+        order, as ``standard_normal(size=(S, n, n_det), dtype=float32) * noise_sigma``; nothing when 0."""
+        if noise_sigma > 0:
+            sg = np.float32(noise_sigma)
+            for s in range(S):
+                for r in range(o, o + n):
+                    for d in range(n_det):
+                        noise[s, r, d] = _normal_f(bg, ki, wi, fi, zr, zir) * sg
+
+    @njit(cache=True, nogil=True)
+    def _copy_integers(bg, window, backoff, access, o, n, S):
+        """Rows ``o .. o + n`` of the backoff and access draws: ``integers(0, window, size=n * S + n)`` bit for
+        bit (the first n S robot-major into ``backoff``, the last n into ``access``). NumPy draws an int64 range
+        below 2**32 - 1 with Lemire's method on 32-bit words (``random_bounded_uint64_fill``), here numba's copy
+        of it (``buffered_bounded_lemire_uint32``); a window of 1 draws nothing (all 0), as NumPy. The window is
+        below 2**31 (:class:`swarm_envs.comm.protocol.CSMA`)."""
+        rng = window - 1
+        for r in range(n):
+            for s in range(S):
+                backoff[o + r, s] = np.int64(buffered_bounded_lemire_uint32(bg, rng)) if rng > 0 else 0
+        for r in range(n):
+            access[o + r] = np.int64(buffered_bounded_lemire_uint32(bg, rng)) if rng > 0 else 0
+
+    @njit(cache=True, nogil=True)
+    def _draw_copies_nb(gens, S, n, n_det, noise_sigma, window, ki, wi, fi, zr, zir):
+        """:func:`_draw_copies_py` compiled, without intensity noise (the default): each copy's ADC noise
+        (:func:`_copy_noise`) then its integers (:func:`_copy_integers`), the same numbers as NumPy's calls."""
+        noise, inoise, backoff, access = _draw_buffers(len(gens), n, S, n_det, noise_sigma, 0.0)
+        for b in range(len(gens)):
+            bg = gens[b].bit_generator
+            _copy_noise(bg, noise, b * n, n, S, n_det, noise_sigma, ki, wi, fi, zr, zir)
+            _copy_integers(bg, window, backoff, access, b * n, n, S)
+        return noise, inoise, backoff, access
+
+    @njit(cache=True, nogil=True)
+    def _draw_copies_intensity_nb(gens, S, n, n_det, noise_sigma, intensity_sigma, window, ki, wi, fi, zr, zir):
+        """:func:`_draw_copies_nb` with intensity noise (``intensity_sigma > 0``): numba's ``Generator.normal``
+        between each copy's ADC noise and integers (a kernel of its own: only this scenario compiles it)."""
         noise, inoise, backoff, access = _draw_buffers(len(gens), n, S, n_det, noise_sigma, intensity_sigma)
-        sg = np.float32(noise_sigma)
         for b in range(len(gens)):
             g = gens[b]
             o = b * n
-            if noise_sigma > 0:
-                bg = g.bit_generator
-                for s in range(S):
-                    for r in range(o, o + n):
-                        for d in range(n_det):
-                            noise[s, r, d] = _normal_f(bg, ki, wi, fi, zr, zir) * sg
-            if intensity_sigma > 0:
-                draws = g.normal(0.0, intensity_sigma, size=(S, n, n_det))
-                for s in range(S):
-                    for r in range(n):
-                        for d in range(n_det):
-                            inoise[s, o + r, d] = draws[s, r, d]
-            _store_integers(g.integers(0, window, size=n * S + n), backoff, access, o, n, S)
+            _copy_noise(g.bit_generator, noise, o, n, S, n_det, noise_sigma, ki, wi, fi, zr, zir)
+            draws = g.normal(0.0, intensity_sigma, size=(S, n, n_det))
+            for s in range(S):
+                for r in range(n):
+                    for d in range(n_det):
+                        inoise[s, o + r, d] = draws[s, r, d]
+            _copy_integers(g.bit_generator, window, backoff, access, o, n, S)
         return noise, inoise, backoff, access
 
     def _draw_copies(gens, S, n, n_det, noise_sigma, intensity_sigma, window):
-        return _draw_copies_nb(gens, S, n, n_det, noise_sigma, intensity_sigma, window, *_ZIG)
+        if intensity_sigma > 0:
+            return _draw_copies_intensity_nb(gens, S, n, n_det, noise_sigma, intensity_sigma, window, *_ZIG)
+        return _draw_copies_nb(gens, S, n, n_det, noise_sigma, window, *_ZIG)
 else:
     _draw_copies = _jit(_draw_copies_py)
 
@@ -308,16 +345,19 @@ def link_tables(n, rx, tx, gains, scale, ambient, m_min, m_tr):
     numpy for the reference backend. ``gains`` may also be the emitter sums (P, n_det, 1) when the IR layer
     provides them: the sum from 0.0 is then the sum itself (same G, an eighth of the memory read)."""
     P, nd, ne = gains.shape
-    tx_ptr = np.zeros(n + 1, dtype=np.int64)
+    tx_ptr = np.empty(n + 1, np.int64)
+    tx_ptr[:] = 0
     for p in range(P):
         tx_ptr[tx[p] + 1] += 1
     for t in range(n):
         tx_ptr[t + 1] += tx_ptr[t]
     nxt = tx_ptr[:n].copy()
-    lrx = np.empty(P, dtype=np.int64)
-    G = np.empty((P, nd))
-    sig = np.zeros(P, dtype=np.bool_)
-    sig_ptr = np.zeros(n + 1, dtype=np.int64)
+    lrx = np.empty(P, np.int64)
+    G = np.empty((P, nd), np.float64)
+    sig = np.empty(P, np.bool_)
+    sig[:] = 0
+    sig_ptr = np.empty(n + 1, np.int64)
+    sig_ptr[:] = 0
     for p in range(P):
         t = tx[p]
         q = nxt[t]
@@ -338,7 +378,7 @@ def link_tables(n, rx, tx, gains, scale, ambient, m_min, m_tr):
             sig_ptr[t + 1] += 1
     for t in range(n):
         sig_ptr[t + 1] += sig_ptr[t]
-    sig_rx = np.empty(sig_ptr[n], dtype=np.int64)
+    sig_rx = np.empty(sig_ptr[n], np.int64)
     k = 0
     for q in range(P):
         if sig[q]:
@@ -360,9 +400,11 @@ def build_frames(type_code, seq, origin, sender, payload, length, header_bits, i
         lmax = max(lmax, length[i])
     cols = header_bits + lmax + crc_bits  # information columns of the reference
     nb = max(1, (cols + code_k - 1) // code_k)
-    bits = np.zeros((M, 1 + nb * code_n), dtype=np.bool_)
-    slots = np.empty(M, dtype=np.int64)
-    info = np.zeros(nb * code_k, dtype=np.bool_)
+    bits = np.empty((M, 1 + nb * code_n), np.bool_)
+    bits[:] = 0
+    slots = np.empty(M, np.int64)
+    info = np.empty(nb * code_k, np.bool_)
+    info[:] = 0
     for i in range(M):
         info[:] = False
         o = 0
@@ -430,8 +472,10 @@ def _decode_stream(bits, nbits, n, k, table_msg, table_ok, info):
 @_jit
 def decode_words(words, n, k, table_msg, table_ok):
     """Vector form of the kernel's block decoder (for tests): words (M,) -> (messages (M,), ok (M,))."""
-    msg = np.zeros(words.size, dtype=np.int64)
-    ok = np.zeros(words.size, dtype=np.bool_)
+    msg = np.empty(words.size, np.int64)
+    msg[:] = 0
+    ok = np.empty(words.size, np.bool_)
+    ok[:] = 0
     for i in range(words.size):
         msg[i], ok[i] = _decode_block(words[i], n, k, table_msg, table_ok)
     return msg, ok
@@ -536,15 +580,23 @@ def slot_loop(
     W = buf.shape[1]
     has_inoise = inoise.shape[0] > 0
     filt = resp_kt > 0.0
-    ysum = np.zeros((n, n_det))
+    ysum = np.empty((n, n_det), np.float64)
+    ysum[:] = 0
     ysum_flat, level_flat = ysum.reshape(-1), rx_v.reshape(-1)  # (robot, detector) rows, for _respond
-    best_str = np.full(n, -np.inf)
-    best_tx = np.full(n, -1, dtype=np.int64)
-    sigcnt = np.zeros(n, dtype=np.int64)
-    fmask = np.zeros(n, dtype=np.int64)  # this slot's foreign light per receiving robot (bit d = detector d)
-    check = np.zeros(n, dtype=np.bool_)
-    info = np.zeros(W, dtype=np.bool_)
-    tinfo = np.zeros(W, dtype=np.bool_)
+    best_str = np.empty(n, np.float64)
+    best_str[:] = -np.inf
+    best_tx = np.empty(n, np.int64)
+    best_tx[:] = -1
+    sigcnt = np.empty(n, np.int64)
+    sigcnt[:] = 0
+    fmask = np.empty(n, np.int64)  # this slot's foreign light per receiving robot (bit d = detector d)
+    fmask[:] = 0
+    check = np.empty(n, np.bool_)
+    check[:] = 0
+    info = np.empty(W, np.bool_)
+    info[:] = 0
+    tinfo = np.empty(W, np.bool_)
+    tinfo[:] = 0
     dirty = False
     nd_out = 0
     fc = frame_counter[0]

@@ -412,6 +412,8 @@ class CSMA:
     def __init__(self, n: int, window: int = 32) -> None:
         self.n = int(n)
         self.window = int(window)
+        if not 1 <= self.window < 2**31:  # the compiled drawer's bounded integers (comm.kernels._copy_integers)
+            raise ValueError(f"backoff window must be an integer in [1, 2**31) slots, got {window!r}")
         self.backoff = np.zeros(n, dtype=np.int64)
 
     def reset(self) -> None:

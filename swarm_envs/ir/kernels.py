@@ -219,9 +219,9 @@ if HAVE_NUMBA:
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """:func:`gains_kernel` with its channel tables (:func:`_hardware_args`), compiled."""
         P, nd, ne = rel_position.shape[0], det_pos.shape[0], em_pos.shape[0]
-        out = np.empty((P, nd, ne))  # each row is zeroed just before it is filled (one pass over memory)
-        sums = np.empty((P, nd))
-        lit = np.empty(P, dtype=np.int64)
+        out = np.empty((P, nd, ne), np.float64)  # each row is zeroed just before it is filled (one pass over memory)
+        sums = np.empty((P, nd), np.float64)
+        lit = np.empty(P, np.int64)
         n_lit = _gains_chunk(
             0, P, out, sums, lit, rel_position, rel_cos_sin, det_pos, det_dir, em_pos, em_dir, kind, params,
             ir_range, occ_offsets, occ_xy, occ_radius, compact, hw_rx, hw_tx, hw_det, hw_em,
@@ -387,7 +387,8 @@ if HAVE_NUMBA:
         nd, ne = det_pos.shape[0], em_pos.shape[0]
         r2 = occ_radius * occ_radius
         r2_hi, r2_lo = r2 * (1.0 + _DISC_TOL), r2 * (1.0 - _DISC_TOL)
-        prm = np.zeros(8)
+        prm = np.empty(8, np.float64)
+        prm[:] = 0
         for i in range(params.shape[0]):  # element copy (a slice assignment from an array compiles numba's shape-error text)
             prm[i] = params[i]
         k_m, o_m, d_sat_cm = prm[0], prm[1], prm[2]  # e-puck
@@ -398,28 +399,30 @@ if HAVE_NUMBA:
         varied = hw_rx.shape[0] > 0
         dcos, dsin = np.cos(det_dir), np.sin(det_dir)
         ecos, esin = np.cos(em_dir), np.sin(em_dir)
-        det_self = np.empty(nd)  # d_i . u_i
+        det_self = np.empty(nd, np.float64)  # d_i . u_i
         rho_d = 0.0
         for i in range(nd):
             det_self[i] = det_pos[i, 0] * dcos[i] + det_pos[i, 1] * dsin[i]
             rho_d = max(rho_d, math.sqrt(det_pos[i, 0] ** 2 + det_pos[i, 1] ** 2))
-        em_self = np.empty(ne)  # e_j . (emitter axis), body frame
+        em_self = np.empty(ne, np.float64)  # e_j . (emitter axis), body frame
         rho_e = 0.0
         for j in range(ne):
             em_self[j] = em_pos[j, 0] * ecos[j] + em_pos[j, 1] * esin[j]
             rho_e = max(rho_e, math.sqrt(em_pos[j, 0] ** 2 + em_pos[j, 1] ** 2))
-        gd, ge = np.ones(nd), np.ones(ne)  # the pair's channel multipliers
+        gd, ge = np.empty(nd, np.float64), np.empty(ne, np.float64)  # the pair's channel multipliers
+        gd[:] = 1
+        ge[:] = 1
         last_rx = -1  # the receiver whose detectors are loaded (pairs come sorted by receiver)
         margin = 1e-9
         prune_det = kind == 1 or (kind == 2 and prm[3] > 0.0)
         prune_em = kind == 1 or (kind == 2 and prm[4] > 0.0)
-        ex, ey, eax, eay = np.empty(ne), np.empty(ne), np.empty(ne), np.empty(ne)  # a pair's emitters, RX frame
-        dets = np.empty(nd, dtype=np.int64)
-        ems = np.empty(ne, dtype=np.int64)
+        ex, ey, eax, eay = np.empty(ne, np.float64), np.empty(ne, np.float64), np.empty(ne, np.float64), np.empty(ne, np.float64)  # a pair's emitters, RX frame
+        dets = np.empty(nd, np.int64)
+        ems = np.empty(ne, np.int64)
         far_cap = 64 * nd * ne  # e-puck far rays waiting for their power
-        far_at = np.empty(far_cap, dtype=np.int64)
-        far_L2 = np.empty(far_cap)
-        power = np.empty(far_cap)
+        far_at = np.empty(far_cap, np.int64)
+        far_L2 = np.empty(far_cap, np.float64)
+        power = np.empty(far_cap, np.float64)
         expo = 0.5 * k_m - 5.0
         n_far = 0
         done = start  # rows before this one are finished
@@ -562,7 +565,7 @@ if HAVE_NUMBA:
         the pair's loop.
         """
         N = positions.shape[0]
-        near, dist2 = nbrs.copy(), np.empty(nbrs.shape[0])
+        near, dist2 = nbrs.copy(), np.empty(nbrs.shape[0], np.float64)
         _sort_neighbours(0, N, positions, starts, counts, near, dist2)
         base, cnt, idx = _occluder_buffers(rx, tx, counts, 1)
         _occluders_chunk(0, rx.shape[0], base[0], positions, width, rx, tx, starts, counts, near, dist2, cnt, idx)
@@ -638,13 +641,16 @@ if HAVE_NUMBA:
         ``idx`` (n_chunks + 1,), per-pair counts (P,) and ``idx``, sized by the candidates of both ends of
         every pair (a pair's occluders are among them)."""
         P = rx.shape[0]
-        base = np.zeros(n_chunks + 1, dtype=np.int64)
+        base = np.empty(n_chunks + 1, np.int64)
+        base[:] = 0
         for k in range(n_chunks):
             acc = 0
             for p in range((P * k) // n_chunks, (P * (k + 1)) // n_chunks):
                 acc += counts[rx[p]] + counts[tx[p]]
             base[k + 1] = base[k] + acc
-        return base, np.zeros(P, dtype=np.int64), np.empty(max(1, base[n_chunks]), dtype=np.int64)
+        cnt = np.empty(P, np.int64)
+        cnt[:] = 0
+        return base, cnt, np.empty(max(1, base[n_chunks]), np.int64)
 
     @njit(cache=True, inline="always", error_model="numpy", nogil=True)
     def _occluders_chunk(
@@ -655,7 +661,7 @@ if HAVE_NUMBA:
         ``idx`` from ``K`` on; their numbers into ``cnt``."""
         w2 = width * width
         w2_hi, w2_lo = w2 * (1.0 + _DISC_TOL), w2 * (1.0 - _DISC_TOL)
-        grey = np.empty(max(1, 2 * positions.shape[0]), dtype=np.int64)  # one pair's candidates near the disc edge
+        grey = np.empty(max(1, 2 * positions.shape[0]), np.int64)  # one pair's candidates near the disc edge
         for p in range(p0, p1):
             K0 = K
             a, b = rx[p], tx[p]
@@ -710,10 +716,11 @@ if HAVE_NUMBA:
     def _occluders_gather(base: np.ndarray, cnt: np.ndarray, idx: np.ndarray, n_chunks: int) -> tuple[np.ndarray, np.ndarray]:
         """CSR (offsets (P + 1,), robots (K,)) from the chunks' parts of ``idx`` (:func:`_occluder_buffers`)."""
         P = cnt.shape[0]
-        offsets = np.zeros(P + 1, dtype=np.int64)
+        offsets = np.empty(P + 1, np.int64)
+        offsets[:] = 0
         for p in range(P):
             offsets[p + 1] = offsets[p] + cnt[p]
-        out = np.empty(offsets[P], dtype=np.int64)
+        out = np.empty(offsets[P], np.int64)
         for k in range(n_chunks):
             first = (P * k) // n_chunks
             n = offsets[(P * (k + 1)) // n_chunks] - offsets[first]
@@ -728,8 +735,9 @@ if HAVE_NUMBA:
         is at most ``reach2`` (m^2). Equal to the lists of a KD-tree query within ``sqrt(reach2)`` when
         ``pairs`` holds every pair closer than a larger range (up to the order within a list)."""
         N, U = positions.shape[0], pairs.shape[0]
-        keep = np.empty(U, dtype=np.int64)
-        counts = np.zeros(N, dtype=np.int64)
+        keep = np.empty(U, np.int64)
+        counts = np.empty(N, np.int64)
+        counts[:] = 0
         n = 0
         for u in range(U):
             a, b = pairs[u, 0], pairs[u, 1]
@@ -739,14 +747,14 @@ if HAVE_NUMBA:
         for t in range(n):
             counts[pairs[keep[t], 0]] += 1
             counts[pairs[keep[t], 1]] += 1
-        starts = np.empty(N, dtype=np.int64)
-        fill = np.empty(N, dtype=np.int64)
+        starts = np.empty(N, np.int64)
+        fill = np.empty(N, np.int64)
         acc = 0
         for r in range(N):
             starts[r] = acc
             fill[r] = acc
             acc += counts[r]
-        nbrs = np.empty(acc, dtype=np.int64)
+        nbrs = np.empty(acc, np.int64)
         for t in range(n):
             a, b = pairs[keep[t], 0], pairs[keep[t], 1]
             nbrs[fill[a]] = b
@@ -763,10 +771,11 @@ if HAVE_NUMBA:
         frame (``cos_h``, ``sin_h``: the robots' heading cosines and sines): returns offsets (P + 1,) and
         centres (K, 2)."""
         P = rx.shape[0]
-        out_off = np.zeros(P + 1, dtype=np.int64)
+        out_off = np.empty(P + 1, np.int64)
+        out_off[:] = 0
         for p in range(P):
             out_off[p + 1] = out_off[p] + offsets[pair_of[p] + 1] - offsets[pair_of[p]]
-        xy = np.empty((out_off[P], 2))
+        xy = np.empty((out_off[P], 2), np.float64)
         for p in range(P):
             a, u = rx[p], pair_of[p]
             c, s = cos_h[a], sin_h[a]
@@ -785,8 +794,8 @@ if HAVE_NUMBA:
         """Rows ``lit`` of the links' arrays in one pass: ``(rx[lit], tx[lit], rel[lit], rel_heading[lit],
         distance[lit])`` (numpy's fancy indexing, one array at a time, is ~5x slower at 36k links)."""
         n = lit.shape[0]
-        rx_, tx_ = np.empty(n, dtype=rx.dtype), np.empty(n, dtype=tx.dtype)
-        rel_, rh_, d_ = np.empty((n, 2)), np.empty(n), np.empty(n)
+        rx_, tx_ = np.empty(n, rx.dtype), np.empty(n, tx.dtype)
+        rel_, rh_, d_ = np.empty((n, 2), np.float64), np.empty(n, np.float64), np.empty(n, np.float64)
         for k in range(n):
             p = lit[k]
             rx_[k], tx_[k] = rx[p], tx[p]
@@ -812,7 +821,8 @@ if HAVE_NUMBA:
         """
         U, N = pairs.shape[0], positions.shape[0]
         P = 2 * U
-        start = np.zeros(N + 1, dtype=np.int64)
+        start = np.empty(N + 1, np.int64)
+        start[:] = 0
         for u in range(U):
             start[pairs[u, 0] + 1] += 1
             start[pairs[u, 1] + 1] += 1
@@ -820,8 +830,8 @@ if HAVE_NUMBA:
             start[r + 1] += start[r]
         # each robot is the receiver of as many directed pairs as it is the transmitter of: one bucket layout
         fill = start[:N].copy()
-        by_tx_rx = np.empty(P, dtype=np.int64)  # pass 1: directed pairs bucketed by transmitter
-        by_tx_u = np.empty(P, dtype=np.int64)
+        by_tx_rx = np.empty(P, np.int64)  # pass 1: directed pairs bucketed by transmitter
+        by_tx_u = np.empty(P, np.int64)
         for u in range(U):
             for k in range(2):
                 a, b = pairs[u, k], pairs[u, 1 - k]
@@ -831,9 +841,9 @@ if HAVE_NUMBA:
                 by_tx_u[q] = u
         for i in range(N):  # element copy: a slice assignment from an array compiles numba's shape-error text
             fill[i] = start[i]
-        rx = np.empty(P, dtype=np.intp)
-        tx = np.empty(P, dtype=np.intp)
-        pair_of = np.empty(P, dtype=np.int64)
+        rx = np.empty(P, np.int64)
+        tx = np.empty(P, np.int64)
+        pair_of = np.empty(P, np.int64)
         for b in range(N):  # pass 2, stable: by receiver, each bucket in transmitter order
             for q0 in range(start[b], start[b + 1]):
                 a = by_tx_rx[q0]
@@ -842,10 +852,10 @@ if HAVE_NUMBA:
                 rx[q] = a
                 tx[q] = b
                 pair_of[q] = by_tx_u[q0]
-        rel = np.empty((P, 2))
-        rel_cs = np.empty((P, 2))
-        rel_heading = np.empty(P)
-        distance = np.empty(P)
+        rel = np.empty((P, 2), np.float64)
+        rel_cs = np.empty((P, 2), np.float64)
+        rel_heading = np.empty(P, np.float64)
+        distance = np.empty(P, np.float64)
         two_pi = 2.0 * np.pi
         for p in range(P):
             a, b = rx[p], tx[p]

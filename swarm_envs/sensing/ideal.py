@@ -102,10 +102,10 @@ if _HAVE_NUMBA:
     def _link_geometry_kernel(positions: np.ndarray, headings: np.ndarray, rx: np.ndarray, tx: np.ndarray):  # pragma: no cover - compiled
         """:func:`_link_geometry` in one pass (the same IEEE operations as the numpy path)."""
         P = len(rx)
-        dx = np.empty(P)
-        dy = np.empty(P)
-        heading_rx = np.empty(P)
-        heading = np.empty(P)
+        dx = np.empty(P, np.float64)
+        dy = np.empty(P, np.float64)
+        heading_rx = np.empty(P, np.float64)
+        heading = np.empty(P, np.float64)
         for q in range(P):
             r, t = rx[q], tx[q]
             dx[q] = positions[t, 0] - positions[r, 0]
@@ -119,7 +119,8 @@ if _HAVE_NUMBA:
         """Slot (r, c): ``distance * (cos, sin) / scale`` of its link, scale = robot r's mean neighbour
         distance (1 if not positive); zero for empty slots (the numpy path's operations, in its order)."""
         n, k = order.shape
-        out = np.zeros((n, k, 2))
+        out = np.empty((n, k, 2), np.float64)
+        out[:] = 0
         for r in range(n):
             scale = mean_distance[r] if mean_distance[r] > 0 else 1.0
             for c in range(k):
@@ -174,7 +175,8 @@ if _HAVE_NUMBA:
                 ny = int((ymax - ymin) / side) + 1
             cx = np.empty(m, np.int64)
             cy = np.empty(m, np.int64)
-            start = np.zeros(nx * ny + 1, np.int64)
+            start = np.empty(nx * ny + 1, np.int64)
+            start[:] = 0
             for a in range(m):
                 cx[a] = int((positions[o + a, 0] - xmin) / side)
                 cy[a] = int((positions[o + a, 1] - ymin) / side)
@@ -232,8 +234,10 @@ if _HAVE_NUMBA:
         """Row r's links in (rx, tx) order: first tx < r (pairs (tx, r), met in increasing tx), then tx > r
         (pairs (r, tx), also increasing) -- a counting sort, no comparison sort."""
         P = pairs.shape[0]
-        lower = np.zeros(n_rows, np.int64)
-        degree = np.zeros(n_rows, np.int64)
+        lower = np.empty(n_rows, np.int64)
+        lower[:] = 0
+        degree = np.empty(n_rows, np.int64)
+        degree[:] = 0
         for p in range(P):
             lower[pairs[p, 1]] += 1
             degree[pairs[p, 0]] += 1

@@ -65,18 +65,24 @@ if HAVE_NUMBA:
         k2 = rid_in.shape[2]
         order = np.empty((n, k), np.int64)
         inv = np.empty((n, k), np.int64)
-        ok = np.zeros((n, k), np.bool_)
+        ok = np.empty((n, k), np.bool_)
+        ok[:] = 0
         th = np.empty((n, k), np.float64)
         tu = np.empty(cap, np.int64)
         ti = np.empty(cap, np.int64)
         tj = np.empty(cap, np.int64)
         vals = np.empty((cap, 6), np.float64)
-        starts = np.zeros(n + 1, np.int64)
+        starts = np.empty(n + 1, np.int64)
+        starts[:] = 0
         ids = np.empty(k, np.int64)
-        has_zu = np.zeros(k, np.bool_)
-        tzu = np.zeros(k, np.float64)
-        has_zw = np.zeros((k, k), np.bool_)
-        tzw = np.zeros((k, k), np.float64)
+        has_zu = np.empty(k, np.bool_)
+        has_zu[:] = 0
+        tzu = np.empty(k, np.float64)
+        tzu[:] = 0
+        has_zw = np.empty((k, k), np.bool_)
+        has_zw[:] = 0
+        tzw = np.empty((k, k), np.float64)
+        tzw[:] = 0
         t = 0
         for u in range(n):
             # stable insertion sort of the slots by (key_b, key_id)
@@ -152,20 +158,28 @@ if HAVE_NUMBA:
         Returns ``logf`` (N, K) (0 at the root), ``known`` (N, K) bool and ``rigid`` (N,) bool.
         """
         n, k = ok.shape
-        logf = np.zeros((n, k), np.float64)
-        known = np.zeros((n, k), np.bool_)
-        rigid = np.zeros(n, np.bool_)
-        E = np.zeros((k, k), np.bool_)
-        LR = np.zeros((k, k), np.float64)
+        logf = np.empty((n, k), np.float64)
+        logf[:] = 0
+        known = np.empty((n, k), np.bool_)
+        known[:] = 0
+        rigid = np.empty(n, np.bool_)
+        rigid[:] = 0
+        E = np.empty((k, k), np.bool_)
+        E[:] = 0
+        LR = np.empty((k, k), np.float64)
+        LR[:] = 0
         W = np.empty((k, k), np.float64)
         comp = np.empty(k, np.int64)
-        size = np.zeros(k, np.int64)
+        size = np.empty(k, np.int64)
+        size[:] = 0
         stack = np.empty(k, np.int64)
         best = np.empty(k, np.float64)
         par = np.empty(k, np.int64)
         disc = np.empty(k, np.int64)
-        new = np.zeros(k, np.bool_)
-        parent = np.zeros(k, np.int64)
+        new = np.empty(k, np.bool_)
+        new[:] = 0
+        parent = np.empty(k, np.int64)
+        parent[:] = 0
         BIG = _INT64_MAX
         for u in range(n):
             for a in range(k):
@@ -402,7 +416,8 @@ if HAVE_NUMBA:
         neighbour, which is exactly the greedy order's choice). Returns (N,) bool."""
         n = prio.size
         m = u.size
-        deg = np.zeros(n + 1, np.int64)
+        deg = np.empty(n + 1, np.int64)
+        deg[:] = 0
         for e in range(m):
             deg[u[e] + 1] += 1
             deg[v[e] + 1] += 1
@@ -416,8 +431,10 @@ if HAVE_NUMBA:
             adj[fill[v[e]]] = u[e]
             fill[v[e]] += 1
         order = argsort_quick(-prio)
-        fired = np.zeros(n, np.bool_)
-        blocked = np.zeros(n, np.bool_)
+        fired = np.empty(n, np.bool_)
+        fired[:] = 0
+        blocked = np.empty(n, np.bool_)
+        blocked[:] = 0
         for k in range(n):
             x = order[k]
             if blocked[x]:
@@ -477,8 +494,10 @@ if HAVE_NUMBA:
         L = light.shape[0]
         nb = frames.shape[1] - 1
         H = noise.shape[0]
-        ident = np.zeros(H, np.int64)
-        crc = np.zeros(H, np.int64)
+        ident = np.empty(H, np.int64)
+        ident[:] = 0
+        crc = np.empty(H, np.int64)
+        crc[:] = 0
         buf = np.empty(max(L, 1), np.float64)  # scratch for the pairwise sums of large groups
         fr = np.empty((L, nb), np.float64)  # frame bits as 0.0 / 1.0: the products below without branches
         for l in range(L):
@@ -534,7 +553,8 @@ if HAVE_NUMBA:
         R = rows.size
         m = lam.shape[1]
         counts = np.empty((R, m), np.float64)
-        sat = np.zeros(R, np.bool_)
+        sat = np.empty(R, np.bool_)
+        sat[:] = 0
         has_noise = noise.shape[0] > 0
         for r in range(R):
             src = rows[r]
@@ -620,7 +640,8 @@ if HAVE_NUMBA:
         ``new_i`` the same for the new rows (their age column is ignored). Returns key, floats, ints."""
         K = old_key.size
         M = new_key.size
-        keep = np.zeros(K, np.bool_)
+        keep = np.empty(K, np.bool_)
+        keep[:] = 0
         n = M
         b = 0
         for a in range(K):
@@ -695,7 +716,8 @@ if HAVE_NUMBA:
         e = id_bits + bearing_bits
         nq = np.int64(1) << bearing_bits
         width = 2.0 * np.pi / nq
-        bits = np.zeros((R, count_bits + max_entries * e), np.uint8)
+        bits = np.empty((R, count_bits + max_entries * e), np.uint8)
+        bits[:] = 0
         lens = np.empty(R, np.int64)
         order = np.empty(k, np.int64)
         for r in range(R):
@@ -738,8 +760,10 @@ if HAVE_NUMBA:
         width read as 0). Returns ids, sectors (R, max_entries) int64."""
         R, W = bits.shape
         e = id_bits + bearing_bits
-        ids = np.full((R, max_entries), -1, np.int64)
-        qs = np.full((R, max_entries), -1, np.int64)
+        ids = np.empty((R, max_entries), np.int64)
+        ids[:] = -1
+        qs = np.empty((R, max_entries), np.int64)
+        qs[:] = -1
         for r in range(R):
             c = np.int64(0)
             for j in range(count_bits):
@@ -899,16 +923,21 @@ if HAVE_NUMBA:
         is False (and fired meaningless) when ``u`` is not sorted."""
         n = prio.size
         m = u.size
-        start = np.zeros(n + 1, np.int64)
+        start = np.empty(n + 1, np.int64)
+        start[:] = 0
         for e in range(m):
             if e > 0 and u[e] < u[e - 1]:
-                return np.zeros(n, np.bool_), False
+                none = np.empty(n, np.bool_)
+                none[:] = False
+                return none, False
             start[u[e] + 1] += 1
         for i in range(n):
             start[i + 1] += start[i]
         order = argsort_quick(-prio)
-        fired = np.zeros(n, np.bool_)
-        blocked = np.zeros(n, np.bool_)
+        fired = np.empty(n, np.bool_)
+        fired[:] = 0
+        blocked = np.empty(n, np.bool_)
+        blocked[:] = 0
         for k in range(n):
             x = order[k]
             if blocked[x]:
