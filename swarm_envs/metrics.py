@@ -106,7 +106,7 @@ if _HAVE_NUMBA:
                 r = parent[r]
             size[r] += 1
         largest = np.empty(B, np.float64)
-        largest[:] = 0
+        largest[:] = 0.0
         count = np.empty(B, np.int64)
         count[:] = 0
         for i in range(n):

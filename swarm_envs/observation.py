@@ -222,7 +222,7 @@ if _HAVE_NUMBA:
         F = values.shape[1]
         order = _nearest_slots_kernel(n_rows, row, key, k)
         packed = np.empty((n_rows, k, F), np.float64)
-        packed[:] = 0
+        packed[:] = 0.0
         for r in range(n_rows):
             for c in range(k):
                 if order[r, c] < 0:
@@ -264,7 +264,7 @@ if _HAVE_NUMBA:
         for empty slots."""
         n, k = order.shape
         out = np.empty((n, k, 7), np.float32)
-        out[:] = 0
+        out[:] = 0.0
         for r in range(n):
             for c in range(k):
                 o = order[r, c]

@@ -173,9 +173,9 @@ def _draw_buffers(B, n, S, n_det, noise_sigma, intensity_sigma):
     ni = S if intensity_sigma > 0 else 0
     noise = np.empty((S, N, n_det), np.float32)
     if noise_sigma <= 0:
-        noise[:] = 0
+        noise[:] = 0.0
     inoise = np.empty((ni, N if ni else 0, n_det if ni else 0), np.float64)
-    inoise[:] = 0
+    inoise[:] = 0.0
     return noise, inoise, np.empty((N, S), np.int64), np.empty(N, np.int64)
 
 
@@ -355,7 +355,7 @@ def link_tables(n, rx, tx, gains, scale, ambient, m_min, m_tr):
     lrx = np.empty(P, np.int64)
     G = np.empty((P, nd), np.float64)
     sig = np.empty(P, np.bool_)
-    sig[:] = 0
+    sig[:] = False
     sig_ptr = np.empty(n + 1, np.int64)
     sig_ptr[:] = 0
     for p in range(P):
@@ -401,10 +401,10 @@ def build_frames(type_code, seq, origin, sender, payload, length, header_bits, i
     cols = header_bits + lmax + crc_bits  # information columns of the reference
     nb = max(1, (cols + code_k - 1) // code_k)
     bits = np.empty((M, 1 + nb * code_n), np.bool_)
-    bits[:] = 0
+    bits[:] = False
     slots = np.empty(M, np.int64)
     info = np.empty(nb * code_k, np.bool_)
-    info[:] = 0
+    info[:] = False
     for i in range(M):
         info[:] = False
         o = 0
@@ -475,7 +475,7 @@ def decode_words(words, n, k, table_msg, table_ok):
     msg = np.empty(words.size, np.int64)
     msg[:] = 0
     ok = np.empty(words.size, np.bool_)
-    ok[:] = 0
+    ok[:] = False
     for i in range(words.size):
         msg[i], ok[i] = _decode_block(words[i], n, k, table_msg, table_ok)
     return msg, ok
@@ -581,7 +581,7 @@ def slot_loop(
     has_inoise = inoise.shape[0] > 0
     filt = resp_kt > 0.0
     ysum = np.empty((n, n_det), np.float64)
-    ysum[:] = 0
+    ysum[:] = 0.0
     ysum_flat, level_flat = ysum.reshape(-1), rx_v.reshape(-1)  # (robot, detector) rows, for _respond
     best_str = np.empty(n, np.float64)
     best_str[:] = -np.inf
@@ -592,11 +592,11 @@ def slot_loop(
     fmask = np.empty(n, np.int64)  # this slot's foreign light per receiving robot (bit d = detector d)
     fmask[:] = 0
     check = np.empty(n, np.bool_)
-    check[:] = 0
+    check[:] = False
     info = np.empty(W, np.bool_)
-    info[:] = 0
+    info[:] = False
     tinfo = np.empty(W, np.bool_)
-    tinfo[:] = 0
+    tinfo[:] = False
     dirty = False
     nd_out = 0
     fc = frame_counter[0]

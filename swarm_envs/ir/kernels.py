@@ -388,7 +388,7 @@ if HAVE_NUMBA:
         r2 = occ_radius * occ_radius
         r2_hi, r2_lo = r2 * (1.0 + _DISC_TOL), r2 * (1.0 - _DISC_TOL)
         prm = np.empty(8, np.float64)
-        prm[:] = 0
+        prm[:] = 0.0
         for i in range(params.shape[0]):  # element copy (a slice assignment from an array compiles numba's shape-error text)
             prm[i] = params[i]
         k_m, o_m, d_sat_cm = prm[0], prm[1], prm[2]  # e-puck
@@ -410,8 +410,8 @@ if HAVE_NUMBA:
             em_self[j] = em_pos[j, 0] * ecos[j] + em_pos[j, 1] * esin[j]
             rho_e = max(rho_e, math.sqrt(em_pos[j, 0] ** 2 + em_pos[j, 1] ** 2))
         gd, ge = np.empty(nd, np.float64), np.empty(ne, np.float64)  # the pair's channel multipliers
-        gd[:] = 1
-        ge[:] = 1
+        gd[:] = 1.0
+        ge[:] = 1.0
         last_rx = -1  # the receiver whose detectors are loaded (pairs come sorted by receiver)
         margin = 1e-9
         prune_det = kind == 1 or (kind == 2 and prm[3] > 0.0)

@@ -120,7 +120,7 @@ if _HAVE_NUMBA:
         distance (1 if not positive); zero for empty slots (the numpy path's operations, in its order)."""
         n, k = order.shape
         out = np.empty((n, k, 2), np.float64)
-        out[:] = 0
+        out[:] = 0.0
         for r in range(n):
             scale = mean_distance[r] if mean_distance[r] > 0 else 1.0
             for c in range(k):

@@ -66,7 +66,7 @@ if HAVE_NUMBA:
         order = np.empty((n, k), np.int64)
         inv = np.empty((n, k), np.int64)
         ok = np.empty((n, k), np.bool_)
-        ok[:] = 0
+        ok[:] = False
         th = np.empty((n, k), np.float64)
         tu = np.empty(cap, np.int64)
         ti = np.empty(cap, np.int64)
@@ -76,13 +76,13 @@ if HAVE_NUMBA:
         starts[:] = 0
         ids = np.empty(k, np.int64)
         has_zu = np.empty(k, np.bool_)
-        has_zu[:] = 0
+        has_zu[:] = False
         tzu = np.empty(k, np.float64)
-        tzu[:] = 0
+        tzu[:] = 0.0
         has_zw = np.empty((k, k), np.bool_)
-        has_zw[:] = 0
+        has_zw[:] = False
         tzw = np.empty((k, k), np.float64)
-        tzw[:] = 0
+        tzw[:] = 0.0
         t = 0
         for u in range(n):
             # stable insertion sort of the slots by (key_b, key_id)
@@ -159,15 +159,15 @@ if HAVE_NUMBA:
         """
         n, k = ok.shape
         logf = np.empty((n, k), np.float64)
-        logf[:] = 0
+        logf[:] = 0.0
         known = np.empty((n, k), np.bool_)
-        known[:] = 0
+        known[:] = False
         rigid = np.empty(n, np.bool_)
-        rigid[:] = 0
+        rigid[:] = False
         E = np.empty((k, k), np.bool_)
-        E[:] = 0
+        E[:] = False
         LR = np.empty((k, k), np.float64)
-        LR[:] = 0
+        LR[:] = 0.0
         W = np.empty((k, k), np.float64)
         comp = np.empty(k, np.int64)
         size = np.empty(k, np.int64)
@@ -177,7 +177,7 @@ if HAVE_NUMBA:
         par = np.empty(k, np.int64)
         disc = np.empty(k, np.int64)
         new = np.empty(k, np.bool_)
-        new[:] = 0
+        new[:] = False
         parent = np.empty(k, np.int64)
         parent[:] = 0
         BIG = _INT64_MAX
@@ -432,9 +432,9 @@ if HAVE_NUMBA:
             fill[v[e]] += 1
         order = argsort_quick(-prio)
         fired = np.empty(n, np.bool_)
-        fired[:] = 0
+        fired[:] = False
         blocked = np.empty(n, np.bool_)
-        blocked[:] = 0
+        blocked[:] = False
         for k in range(n):
             x = order[k]
             if blocked[x]:
@@ -554,7 +554,7 @@ if HAVE_NUMBA:
         m = lam.shape[1]
         counts = np.empty((R, m), np.float64)
         sat = np.empty(R, np.bool_)
-        sat[:] = 0
+        sat[:] = False
         has_noise = noise.shape[0] > 0
         for r in range(R):
             src = rows[r]
@@ -641,7 +641,7 @@ if HAVE_NUMBA:
         K = old_key.size
         M = new_key.size
         keep = np.empty(K, np.bool_)
-        keep[:] = 0
+        keep[:] = False
         n = M
         b = 0
         for a in range(K):
@@ -935,9 +935,9 @@ if HAVE_NUMBA:
             start[i + 1] += start[i]
         order = argsort_quick(-prio)
         fired = np.empty(n, np.bool_)
-        fired[:] = 0
+        fired[:] = False
         blocked = np.empty(n, np.bool_)
-        blocked[:] = 0
+        blocked[:] = False
         for k in range(n):
             x = order[k]
             if blocked[x]:
