@@ -8,7 +8,7 @@ kernels its scenario (task class and platform) calls, recorded in :mod:`swarm_en
 with their compile times. When those not on disk yet would take more than :data:`NOTICE_SECONDS` to
 compile, it prints one line to stderr, once per process, and, when a core is idle, starts one background
 process (``python -m swarm_envs._first_run TASK PLATFORM``, at low priority) that compiles them into the
-same cache while this process compiles them too (:func:`compile_in_order`) before the env is built. Both
+same cache while this process compiles them too (:func:`compile_share`) before the env is built. Both
 processes take the kernels longest first (by recorded compile time); each claims a kernel (a claim file
 beside its cache) before compiling it and skips the kernels the other has claimed, so no kernel is
 compiled twice, and the two finish within about one short kernel of each other; this process then waits
@@ -38,7 +38,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-__all__ = ["prepare", "compile_in_order", "longest_first", "NOTICE_SECONDS", "encode_type", "decode_type", "scenario_kernels", "cold_kernels"]
+__all__ = ["prepare", "compile_share", "longest_first", "NOTICE_SECONDS", "encode_type", "decode_type", "scenario_kernels", "cold_kernels"]
 
 #: expected compile time (s of one core) above which :func:`prepare` prints the notice
 NOTICE_SECONDS = 5.0
@@ -220,7 +220,7 @@ def prepare(task: str, platform: str, sensing: str) -> None:
             flush=True,
         )
     if helper:
-        compile_in_order(task, platform)
+        compile_share(task, platform)
 
 
 def longest_first(cold: Sequence[tuple[Any, tuple, float, int]]) -> list[tuple[Any, tuple, float, int]]:
@@ -230,7 +230,7 @@ def longest_first(cold: Sequence[tuple[Any, tuple, float, int]]) -> list[tuple[A
     return sorted(cold, key=lambda row: -row[2])
 
 
-def compile_in_order(task: str, platform: str) -> int:
+def compile_share(task: str, platform: str) -> int:
     """This process's share of a first run with the background process: the scenario's cold kernels longest
     first (:func:`longest_first`), each compiled unless the background process has claimed it; then wait
     until the kernels it is compiling are in the disk cache, so that none is compiled twice.
@@ -372,7 +372,7 @@ def _acquire(path: Path) -> bool:
 
 def compile_in_background(task: str, platform: str) -> int:
     """The background process: compile the scenario's cold kernels longest first (:func:`longest_first`),
-    each unless the disk cache has it by then or the main process has claimed it (:func:`compile_in_order`). A
+    each unless the disk cache has it by then or the main process has claimed it (:func:`compile_share`). A
     function recorded with more than one signature is left to the main process (two processes saving
     different signatures of one function at once could both name their data file alike). Runs at low
     priority (nice 10): it takes a core that is idle, not one the env or other work needs. Returns the

@@ -274,7 +274,7 @@ def test_a_kernel_claimed_by_another_process_is_not_compiled_twice(tmp_path, mon
     assert not _first_run._compile_claimed(double, argtypes, 0)  # cached now: nothing to do
 
 
-def test_compile_in_order_waits_only_while_someone_compiles(tmp_path, monkeypatch):
+def test_compile_share_waits_only_while_someone_compiles(tmp_path, monkeypatch):
     """The main process waits for a kernel the background process has claimed, and stops waiting as soon
     as nobody holds the claim (then the env compiles the kernel where it calls it)."""
     double, argtypes = _kernel_in(tmp_path, monkeypatch, "kern_waited")
@@ -284,7 +284,7 @@ def test_compile_in_order_waits_only_while_someone_compiles(tmp_path, monkeypatc
     try:
         claim.write_text(str(holder.pid))
         t0 = time.monotonic()
-        assert _first_run.compile_in_order("AggregationTask", "epuck") == 0
+        assert _first_run.compile_share("AggregationTask", "epuck") == 0
         waited = time.monotonic() - t0
     finally:
         holder.kill()
@@ -292,7 +292,7 @@ def test_compile_in_order_waits_only_while_someone_compiles(tmp_path, monkeypatc
     assert 1.0 < waited < 30.0, waited  # the holder's life, not the 210 s deadline
     assert not _first_run._cached(double, argtypes)
     claim.unlink()
-    assert _first_run.compile_in_order("AggregationTask", "epuck") == 1  # unclaimed: compiled here
+    assert _first_run.compile_share("AggregationTask", "epuck") == 1  # unclaimed: compiled here
     assert _first_run._cached(double, argtypes)
 
 
@@ -306,7 +306,7 @@ def test_both_processes_compile_the_longest_kernels_first(monkeypatch):
     monkeypatch.setattr(_first_run, "cold_kernels", lambda task, platform: rows)
     monkeypatch.setattr(_first_run, "_compile_claimed", lambda d, argtypes, index: order.append(d) or True)
     monkeypatch.setattr(_first_run, "_cached", lambda d, argtypes: True)
-    assert _first_run.compile_in_order("AggregationTask", "epuck") == 4
+    assert _first_run.compile_share("AggregationTask", "epuck") == 4
     assert order == ["b", "d", "a", "c"]
     names = {_kernel_manifest.KERNELS[i][1] for i, _ in _kernel_manifest.SCENARIOS[("AggregationTask", "epuck")]}
     assert "_generator_list" in names

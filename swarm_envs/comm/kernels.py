@@ -162,8 +162,7 @@ def _identity(f):  # pragma: no cover - used only without numba
 _jit = njit(cache=True, nogil=True) if HAVE_NUMBA else _identity
 #: for loops the compiler should vectorise: numpy's error model (no ZeroDivisionError branch in the loop)
 _jit_vector = njit(cache=True, nogil=True, error_model="numpy") if HAVE_NUMBA else _identity
-#: small helpers of one kernel, inlined where numba types the caller (one compile unit less each: the drawer
-#: compiles in 1.0 s instead of 1.3 s on the first run)
+#: small helpers of one kernel, inlined where numba types the caller (one compile unit less each on the first run)
 _jit_inline = njit(cache=True, nogil=True, inline="always") if HAVE_NUMBA else _identity
 
 
