@@ -11,7 +11,8 @@ tasks (``flocking``), and has five sections besides ``task``, ``imports``, ``see
   ``swarm_envs.settings.COMMON_SETTINGS``, or the task's own ``SETTINGS``; values are checked by the env's
   own validator, ``swarm_envs.settings.validate_settings``, for the env train.py would build, whatever its
   ``sensing``);
-- ``agent``: PPO hyper-parameters (stable-baselines3 names) and the scripted baseline;
+- ``agent``: PPO hyper-parameters (stable-baselines3 names), the policy variant (``algorithm``, ``encoder``,
+  ``odometry``, ``action_repeat``, ``frame_stack``: :mod:`swarm_envs.agents.policies`) and the scripted baseline;
 - ``train``: budget (``total_timesteps`` counts robot-steps: one per robot per env step), env copies,
   torch threads, checkpoints;
 - ``eval``: seeds and episode settings for the final comparison.
@@ -66,6 +67,14 @@ DEFAULTS: dict[str, Any] = {
         "activation": "tanh",
         "log_std_init": 0.0,
         "reward_scale": 1.0,  # multiplies env rewards seen by PPO (not the reported metrics)
+        # the policy variant (swarm_envs.agents.policies): algorithm, encoder, odometry, decisions, memory
+        "algorithm": "ppo",  # "ppo" (SB3) or "recurrent_ppo" (sb3-contrib, LSTM)
+        "encoder": "mlp",  # "mlp" (flat observation) or "deepsets" (masked mean over the neighbour/message rows)
+        "odometry": False,  # turn stale readings back by the robot's own rotation since they were measured
+        "action_repeat": 1,  # control steps each decision is held for (gamma discounts per decision)
+        "frame_stack": 1,  # decision observations the policy sees at once
+        "set_embedding": 64,  # deepsets: width of the per-row embedding
+        "lstm_hidden": 64,  # recurrent_ppo: LSTM units
     },
     "train": {
         "total_timesteps": 100_000,
@@ -80,10 +89,11 @@ DEFAULTS: dict[str, Any] = {
         "seed_start": 10_000,  # evaluation seeds are seed_start .. seed_start + n_seeds - 1
         "deterministic": True,
         "max_cycles": None,  # None = env.max_cycles
+        "baselines": True,  # also evaluate the scripted baseline and random actions (the suite does that once per task)
     },
 }
 
-_CHOICES = {"agent.activation": ("tanh", "relu")}
+_CHOICES = {"agent.activation": ("tanh", "relu"), "agent.algorithm": ("ppo", "recurrent_ppo"), "agent.encoder": ("mlp", "deepsets")}
 #: every numeric key: (low, high, reason for the bounds); floats must also be finite. ``low`` is exclusive
 #: for the keys of :data:`_OPEN_LOW`.
 BOUNDS: dict[str, tuple[float, float, str]] = {
@@ -100,6 +110,10 @@ BOUNDS: dict[str, tuple[float, float, str]] = {
     "agent.max_grad_norm": (0.0, 1e6, "a gradient-norm clip"),
     "agent.log_std_init": (-20.0, 5.0, "exp(5) = 148 is already far wider than the action range [-1, 1]"),
     "agent.reward_scale": (0.0, 1e6, "a factor on the rewards PPO sees"),
+    "agent.action_repeat": (1, 10_000, "control steps per decision; at most an episode's worth"),
+    "agent.frame_stack": (1, 64, "stacked observations multiply the network's input and the rollout buffer"),
+    "agent.set_embedding": (1, 4096, "units of a layer, like net_arch"),
+    "agent.lstm_hidden": (1, 4096, "units of a layer, like net_arch"),
     "train.total_timesteps": (1, 10**12, "robot-steps; 10^12 take decades at this simulator's speed"),
     "train.n_envs": (1, 100_000, "env copies of one batched core (make_vec's bound)"),
     "train.n_workers": (1, 64, "worker processes, each with its own batched core"),
@@ -277,11 +291,12 @@ def _check_batch(cfg: dict[str, Any], env: dict[str, int]) -> None:
             "one batched core takes; use fewer copies"
         )
     rollout = a["n_steps"] * t["n_envs"] * env["n_agents"]
-    size = rollout * (env["obs_size"] + env["act_size"] + 6) * 4
+    obs_size = env["obs_size"] * a["frame_stack"]
+    size = rollout * (obs_size + env["act_size"] + 6) * 4
     if size > MAX_ROLLOUT_BYTES:
         raise ConfigError(
             f"config key 'agent.n_steps': the PPO rollout of n_steps x n_envs x n_robots = {rollout} robot-steps would take "
-            f"{size / 2**30:.1f} GiB of memory ({env['obs_size']} observation entries each), at most {MAX_ROLLOUT_BYTES / 2**30:.0f} GiB"
+            f"{size / 2**30:.1f} GiB of memory ({obs_size} observation entries each), at most {MAX_ROLLOUT_BYTES / 2**30:.0f} GiB"
         )
     if a["batch_size"] > rollout:
         raise ConfigError(

@@ -259,31 +259,11 @@ def planned_timesteps(budget: int, n_steps: int, num_envs: int) -> int:
     return math.ceil(budget / rollout) * rollout
 
 
-def build_model(cfg: dict[str, Any], vec_env):
-    """A PPO model for ``vec_env`` from the ``agent`` section."""
-    import torch
-    from stable_baselines3 import PPO
+def build_model(cfg: dict[str, Any], vec_env, layout):
+    """The model of the ``agent`` section for ``vec_env`` (wrapped for the policy variant)."""
+    from swarm_envs.agents.policies import build_model as build
 
-    a = cfg["agent"]
-    activation = {"tanh": torch.nn.Tanh, "relu": torch.nn.ReLU}[a["activation"]]
-    return PPO(
-        "MlpPolicy",
-        vec_env,
-        learning_rate=a["learning_rate"],
-        n_steps=a["n_steps"],
-        batch_size=a["batch_size"],
-        n_epochs=a["n_epochs"],
-        gamma=a["gamma"],
-        gae_lambda=a["gae_lambda"],
-        clip_range=a["clip_range"],
-        ent_coef=a["ent_coef"],
-        vf_coef=a["vf_coef"],
-        max_grad_norm=a["max_grad_norm"],
-        policy_kwargs={"net_arch": list(a["net_arch"]), "activation_fn": activation, "log_std_init": a["log_std_init"]},
-        seed=cfg["seed"],
-        device="cpu",
-        verbose=0,
-    )
+    return build(cfg["agent"], vec_env, layout, cfg["seed"])
 
 
 class _ScaledRewards:
@@ -310,8 +290,9 @@ def _say(line: str) -> None:
     tqdm.write(line, file=sys.stdout)
 
 
-def _progress_writer(total: int):
-    """An SB3 logger output that prints one short line per ~10 % of ``total`` robot-steps (and the last)."""
+def _progress_writer(total: int, repeat: int = 1):
+    """An SB3 logger output that prints one short line per ~10 % of ``total`` PPO timesteps (and the last),
+    counted in robot-steps (``repeat`` per timestep)."""
     from stable_baselines3.common.logger import KVWriter
 
     class ProgressLine(KVWriter):
@@ -325,7 +306,7 @@ def _progress_writer(total: int):
                 return
             self.last = done
             self.next_fraction = math.floor(done / total * 10 + 1) / 10
-            parts = [f"PPO {done}/{total} robot-steps ({100 * done / total:.0f}%)"]
+            parts = [f"PPO {done * repeat}/{total * repeat} robot-steps ({100 * done / total:.0f}%)"]
             for key, label, fmt in (("rollout/ep_rew_mean", "ep_rew_mean", ".4g"), ("rollout/ep_len_mean", "ep_len", ".4g"),
                                     ("time/fps", "fps", ".0f"), ("train/loss", "loss", ".3g")):
                 if key in key_values:
@@ -338,20 +319,22 @@ def _progress_writer(total: int):
     return ProgressLine()
 
 
-def make_logger(out: Path, total: int, progress_lines: bool):
-    """SB3 logger: ``progress.csv`` always, TensorBoard if installed, short progress lines if asked."""
+def make_logger(out: Path, total: int, progress_lines: bool, repeat: int = 1):
+    """SB3 logger: ``progress.csv`` always, TensorBoard if installed, short progress lines if asked (``total``
+    PPO timesteps, each ``repeat`` robot-steps)."""
     from stable_baselines3.common.logger import Logger, make_output_format
 
     formats = [make_output_format("csv", str(out))]
     if importlib.util.find_spec("tensorboard") is not None:
         formats.append(make_output_format("tensorboard", str(out / "tensorboard")))
     if progress_lines:
-        formats.append(_progress_writer(total))
+        formats.append(_progress_writer(total, repeat))
     return Logger(folder=str(out), output_formats=formats)
 
 
 def make_callbacks(cfg: dict[str, Any], out: Path, num_envs: int, total: int):
-    """Checkpoints every ``train.checkpoint_freq`` robot-steps and a tqdm bar over the real ``total``."""
+    """Checkpoints every ``train.checkpoint_freq`` robot-steps and a tqdm bar over the real ``total``
+    robot-steps (``num_envs`` robot-steps per callback call: rows x action repeat)."""
     from stable_baselines3.common.callbacks import BaseCallback, CallbackList, CheckpointCallback
 
     callbacks = []
@@ -371,7 +354,7 @@ def make_callbacks(cfg: dict[str, Any], out: Path, num_envs: int, total: int):
                 self.bar = tqdm(total=total, desc="PPO", unit="step", dynamic_ncols=True)
 
             def _on_step(self) -> bool:
-                self.bar.update(self.training_env.num_envs)
+                self.bar.update(num_envs)
                 buf = self.model.ep_info_buffer
                 if buf and self.n_calls % 50 == 0:
                     self.bar.set_postfix(ep_rew=f"{np.mean([e['r'] for e in buf]):.3g}")
@@ -395,18 +378,24 @@ def train(cfg: dict[str, Any], stage: Staging) -> tuple[Any, float, bool]:
     out = stage.path
     from swarm_envs.agents.sb3_vec_env import SwarmVecEnv
 
+    from swarm_envs.agents.policies import PolicySpec, wrap_training_env
+
+    spec = PolicySpec.from_agent(cfg["agent"])
     venv = SwarmVecEnv(env_id(cfg["task"]), cfg["train"]["n_envs"], env_kwargs_of(cfg), n_workers=cfg["train"]["n_workers"])
     venv.seed(cfg["seed"])
     wrapped = venv if cfg["agent"]["reward_scale"] == 1.0 else _ScaledRewards(venv, cfg["agent"]["reward_scale"])
-    model = build_model(cfg, wrapped)
-    budget = cfg["train"]["total_timesteps"]
+    wrapped = wrap_training_env(wrapped, spec, venv.layout, venv.platform)
+    model = build_model(cfg, wrapped, venv.layout)
+    repeat = spec.action_repeat
+    budget = math.ceil(cfg["train"]["total_timesteps"] / repeat)  # PPO counts decisions: robot-steps / action_repeat
     total = planned_timesteps(budget, cfg["agent"]["n_steps"], venv.num_envs)
-    if total != budget:
-        _say(f"training {total} robot-steps: the budget {budget} rounded up to {total // (cfg['agent']['n_steps'] * venv.num_envs)} "
-             f"whole rollouts of {cfg['agent']['n_steps']} steps x {venv.num_envs} robots")
-    logger = make_logger(out, total, progress_lines=True)
+    if total * repeat != cfg["train"]["total_timesteps"]:
+        _say(f"training {total * repeat} robot-steps: the budget {cfg['train']['total_timesteps']} rounded up to "
+             f"{total // (cfg['agent']['n_steps'] * venv.num_envs)} whole rollouts of {cfg['agent']['n_steps']} "
+             f"{'steps' if repeat == 1 else f'decisions of {repeat} steps'} x {venv.num_envs} robots")
+    logger = make_logger(out, total, progress_lines=True, repeat=repeat)
     model.set_logger(logger)
-    callbacks = make_callbacks(cfg, out, venv.num_envs, total)
+    callbacks = make_callbacks(cfg, out, venv.num_envs * repeat, total * repeat)
     ctrl_c = _CtrlC()
     callbacks.callbacks.append(ctrl_c.callback())
     t0 = time.perf_counter()
@@ -586,18 +575,20 @@ def resolve_checkpoint(path: str) -> Path:
 
 def load_checkpoint(path: Path, cfg: dict[str, Any], env_kwargs: dict[str, Any]):
     """Load a PPO ``.zip`` and check it fits the config's env; :class:`TrainError` with one line otherwise."""
-    from stable_baselines3 import PPO
+    from swarm_envs.agents.policies import PolicySpec, algorithm_class
 
+    spec = PolicySpec.from_agent(cfg["agent"])
     if not zipfile.is_zipfile(path):
         raise TrainError(f"checkpoint '{path}' is not a zip archive (truncated, or not a stable-baselines3 model)")
     try:
-        model = PPO.load(path, device="cpu")
+        model = algorithm_class(spec).load(path, device="cpu")
     except Exception as err:  # SB3 raises many kinds (KeyError, BadZipFile, ValueError, pickle errors)
         detail = str(err).strip().splitlines()[0] if str(err).strip() else ""
-        raise TrainError(f"checkpoint '{path}' cannot be loaded as a PPO model ({type(err).__name__}{': ' + detail if detail else ''})") from None
+        raise TrainError(f"checkpoint '{path}' cannot be loaded as a {'RecurrentPPO' if spec.algorithm == 'recurrent_ppo' else 'PPO'} model ({type(err).__name__}{': ' + detail if detail else ''})") from None
     env = make_env(cfg["task"], **{**env_kwargs, "flatten": True})
     agent = env.possible_agents[0]
     obs_shape, act_shape = env.observation_space(agent).shape, env.action_space(agent).shape
+    obs_shape = (obs_shape[0] * spec.frame_stack,)
     env.close()
     settings = ", ".join(f"{k}={v}" for k, v in env_kwargs.items())
     if model.observation_space.shape != obs_shape:
@@ -622,6 +613,8 @@ def _parser() -> argparse.ArgumentParser:
                              "eval-<timestamp> directory beside the checkpoint)")
     parser.add_argument("--render", action="store_true", help="write a GIF of one evaluation episode")
     parser.add_argument("--eval-only", metavar="CHECKPOINT", default=None, help="skip training; evaluate this PPO .zip")
+    parser.add_argument("--baselines-only", action="store_true",
+                        help="no RL policy: evaluate the scripted baseline and random actions only (results as a run's)")
     parser.add_argument("--force", action="store_true",
                         help="replace the run already in the output directory (when the command ends; never before, "
                              "and never by an interrupted or failed command)")
@@ -704,6 +697,9 @@ def _run(args: argparse.Namespace, state: dict[str, Any]) -> int:
     if cfg["eval"]["max_cycles"] is not None:
         eval_kwargs["max_cycles"] = cfg["eval"]["max_cycles"]
     checkpoint = model = None
+    if args.eval_only and args.baselines_only:
+        print("error: --eval-only and --baselines-only exclude each other", file=sys.stderr)
+        return EXIT_BAD_INPUT
     if args.eval_only:
         checkpoint = resolve_checkpoint(args.eval_only)
         out = eval_output_dir(checkpoint, args.output, args.force)
@@ -721,18 +717,21 @@ def _run(args: argparse.Namespace, state: dict[str, Any]) -> int:
         tmp.write_text(yaml.safe_dump(cfg, sort_keys=False))
     t_start = time.perf_counter()
 
-    from swarm_envs.agents.sb3_vec_env import SB3Policy
+    from swarm_envs.agents.policies import PolicySpec, TrainedPolicy
     from swarm_envs.agents.scripted import make_scripted
 
     timing: dict[str, float] = {}
     if checkpoint is not None:
         state.update(phase="eval-only", model=checkpoint)
         print(f"loaded {checkpoint}; writing results to {out} (staged in {staged} until the evaluation ends)")
+    elif args.baselines_only:
+        state.update(phase="eval-only", model="the baselines")
+        print(f"evaluating the baselines into {out} (staged in {staged} until the evaluation ends)")
     else:
         state["phase"] = "train"
         print(f"training into {out} (staged in {staged} until the run ends)")
         model, timing["train_s"], interrupted = train(cfg, stage)
-        timing["robot_steps"] = model.num_timesteps
+        robot_steps = timing["robot_steps"] = model.num_timesteps * cfg["agent"]["action_repeat"]
         state["phase"] = "eval"
         with _naming(out / "learning_curve.png"):
             if plot_learning_curve(staged / "progress.csv", staged / "learning_curve.png", f"{task}: PPO learning curve"):
@@ -741,20 +740,24 @@ def _run(args: argparse.Namespace, state: dict[str, Any]) -> int:
             with stage.writing(staged / "timing.json") as tmp:
                 tmp.write_text(json.dumps(timing | {"interrupted": True}, indent=1))
             if run_entries(out):  # an interrupted command never replaces a finished run (--force or not)
-                print(f"interrupted by Ctrl-C after {model.num_timesteps} robot-steps: the run in {out} is kept; this run's "
+                print(f"interrupted by Ctrl-C after {robot_steps} robot-steps: the run in {out} is kept; this run's "
                       f"model and config are in {staged}", file=sys.stderr)
                 return EXIT_INTERRUPTED
             stage.publish()
-            print(f"interrupted by Ctrl-C after {model.num_timesteps} robot-steps: saved the model to {out / 'model.zip'} "
+            print(f"interrupted by Ctrl-C after {robot_steps} robot-steps: saved the model to {out / 'model.zip'} "
                   f"and the config to {out / 'config.yaml'}", file=sys.stderr)
             return EXIT_INTERRUPTED
-        print(f"trained {model.num_timesteps} robot-steps in {timing['train_s']:.1f} s -> {out / 'model.zip'}")
+        print(f"trained {robot_steps} robot-steps in {timing['train_s']:.1f} s -> {out / 'model.zip'}")
 
     seeds = list(range(cfg["eval"]["seed_start"], cfg["eval"]["seed_start"] + cfg["eval"]["n_seeds"]))
-    factories = {"ppo": lambda env: SB3Policy(model, env.platform, env.layout, deterministic=cfg["eval"]["deterministic"])}
-    if cfg["agent"]["scripted"] is not None:  # a task without a scripted baseline is compared with random only
-        factories["scripted"] = lambda env: make_scripted(cfg["agent"]["scripted"], env, **cfg["agent"]["scripted_kwargs"])
-    factories["random"] = random_factory
+    spec = PolicySpec.from_agent(cfg["agent"])
+    factories = {}
+    if not args.baselines_only:
+        factories["ppo"] = lambda env: TrainedPolicy(model, env.platform, env.layout, spec, deterministic=cfg["eval"]["deterministic"])
+    if cfg["eval"]["baselines"] or args.baselines_only:
+        if cfg["agent"]["scripted"] is not None:  # a task without a scripted baseline is compared with random only
+            factories["scripted"] = lambda env: make_scripted(cfg["agent"]["scripted"], env, **cfg["agent"]["scripted_kwargs"])
+        factories["random"] = random_factory
     t0 = time.perf_counter()
     results = {name: evaluate(task, eval_kwargs, f, seeds, progress=cfg["train"]["progress_bar"], desc=f"eval {name}")
                for name, f in factories.items()}
@@ -765,11 +768,11 @@ def _run(args: argparse.Namespace, state: dict[str, Any]) -> int:
     best = headline(task)
     reductions = ", ".join(f"{m} {how}" for m, how in metric_reductions(task).items())
     header = (
-        f"# {task}: PPO vs " + (f"scripted ({cfg['agent']['scripted']}) vs " if "scripted" in factories else "") +
-        f"random, {len(seeds)} evaluation seeds\n\n"
+        f"# {task}: " + " vs ".join(([f"PPO ({spec.name})"] if "ppo" in factories else []) + ([f"scripted ({cfg['agent']['scripted']})"] if "scripted" in factories else [])
+                                    + (["random"] if "random" in factories else [])) + f", {len(seeds)} evaluation seeds\n\n"
         f"env: {json.dumps(eval_kwargs)}; "
-        + (f"PPO checkpoint {checkpoint} (eval-only)" if checkpoint else
-           f"PPO budget {cfg['train']['total_timesteps']} robot-steps ({model.num_timesteps} run)")
+        + (f"PPO checkpoint {checkpoint} (eval-only)" if checkpoint else "no RL policy (--baselines-only)" if args.baselines_only else
+           f"PPO budget {cfg['train']['total_timesteps']} robot-steps ({timing.get('robot_steps', model.num_timesteps)} run)")
         + (f"; headline metric `{best[0]}` ({'higher' if best[1] > 0 else 'lower'} is better)" if best else "")
         + (f". Metrics over an episode: {reductions} (final = after the last step, mean = over the episode)" if reductions else "")
         + "; episode_return = mean per-robot return.\n\n"
@@ -783,7 +786,7 @@ def _run(args: argparse.Namespace, state: dict[str, Any]) -> int:
         plot_results(rows, staged / "results.png", f"{task} (n={len(seeds)} seeds, bootstrap 95% CI)")
     if args.render:
         with _naming(out / "episode.gif"):
-            write_gif(cfg, factories["ppo"], staged / "episode.gif", seeds[0])
+            write_gif(cfg, next(iter(factories.values())), staged / "episode.gif", seeds[0])
         print(f"wrote {out / 'episode.gif'}")
     timing["total_s"] = time.perf_counter() - t_start
     with stage.writing(staged / "timing.json") as tmp:
