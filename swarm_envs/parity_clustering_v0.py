@@ -25,7 +25,7 @@ from pettingzoo.utils.conversions import parallel_to_aec
 from swarm_envs.env import SwarmEnv
 from swarm_envs.factories import reports_unknown_kwargs
 from swarm_envs.platforms import Platform
-from swarm_envs.task import BatchState, Real, Task, bump_any, largest_component_fraction, pairs_within
+from swarm_envs.task import BatchState, Choice, Real, Task, bump_any, largest_component_fraction, pairs_within
 
 __all__ = ["ParityClusteringTask", "ParityClusteringEnv", "raw_env", "parallel_env", "env"]
 
@@ -45,6 +45,10 @@ class ParityClusteringTask(Task):
                                why="at most 100 m: a distance beyond every arena the defaults build; larger values only count more pairs"),
         "collision_penalty": Real(0.0, "weight of the fraction of robots bumping (Alg. 7 clusters by bumping)", low=0.0, high=1000.0,
                                   why="a reward weight; rewards stay within +-1000 per step"),
+        "reward_term": Choice("separation", "what a robot is rewarded for: 'separation' (mean distance to the other parity - "
+                              "to its own, over the arena size) or 'segregation' (its own share of same-parity neighbours "
+                              "within cluster_radius, the per-robot term of the headline metric, plus the separation term)",
+                              choices=("separation", "segregation")),
     }
     METRICS = {"segregation": "mean", "parity_cluster_fraction": "final", "n_parity_clusters": "final", "collision_fraction": "mean"}
     HEADLINE = ("segregation", +1)
@@ -72,7 +76,8 @@ class ParityClusteringTask(Task):
         ends = pairs.reshape(-1)
         neighbours = np.bincount(ends, minlength=B * A)
         same_parity = np.bincount(ends, np.repeat(same, 2), minlength=B * A)
-        segregation = (same_parity / np.maximum(neighbours, 1)).reshape(B, A).mean(axis=1)
+        own_segregation = (same_parity / np.maximum(neighbours, 1)).reshape(B, A)
+        segregation = own_segregation.mean(axis=1)
         # same-parity clusters
         link = CLUSTER_LINK_DIAMETERS * self.platform.diameter
         fractions, counts = [], np.zeros(B)
@@ -96,12 +101,15 @@ class ParityClusteringTask(Task):
         if not (even.any() and odd.any()):  # one parity only: nothing to keep apart
             d_other = np.zeros_like(d_same)
         own = (d_other - d_same) / self.arena.size
+        separation = own
+        if self.config["reward_term"] == "segregation":  # the headline metric's per-robot term, separation as shaping
+            own = own_segregation + separation
         bumped = bump_any(self.agents_of(state.bumps)).astype(float)
         c = self.config["collision_penalty"]
         local_reward = own - c * bumped
         global_reward = own.mean(axis=1) - c * bumped.mean(axis=1)
         rewards = np.repeat(global_reward[:, None], A, axis=1) if self.reward_mode == "global" else local_reward
-        terms = {"separation": own, "collision": bumped}
+        terms = {"separation": separation, "segregation": own_segregation, "collision": bumped}
         metrics = {
             "segregation": segregation,
             "parity_cluster_fraction": parity_cluster_fraction,
@@ -130,6 +138,7 @@ def parallel_env(
     n_robots: int = 10,
     cluster_radius: float | None = None,
     collision_penalty: float = 0.0,
+    reward_term: Literal["separation", "segregation"] = "separation",
     platform: Literal["droplet", "epuck", "rone"] | Platform = "rone",
     sensing: Literal["full", "ideal"] = "full",
     max_cycles: int = 500,
@@ -209,7 +218,10 @@ def parallel_env(
     ``reward_mode="global"``: the mean over robots of (mean distance to the robots of the other parity -
     mean distance to the other robots of its own parity) / arena size, minus ``collision_penalty`` x the
     fraction of robots bumping (default 0: Algorithm 7 clusters by bumping). ``"local"``: each robot its own
-    term and bump. Terms in ``infos[agent]["reward_terms", name]``: ``separation``, ``collision``. Metrics
+    term and bump. ``reward_term="segregation"`` adds to each robot's term its own share of same-parity
+    neighbours within ``cluster_radius`` (the per-robot term of the headline metric; the separation term alone
+    rewards moving away from the other parity without joining the own). Terms in
+    ``infos[agent]["reward_terms", name]``: ``separation``, ``segregation``, ``collision``. Metrics
     in ``infos[agent]["metrics", name]``: ``segregation`` (headline: the mean over robots of the
     same-parity share of its neighbours within ``cluster_radius``, 0 without any), ``parity_cluster_fraction`` (mean over
     the parities of the largest same-parity cluster's share, clusters chained at 1.5 diameters),
@@ -235,6 +247,7 @@ def parallel_env(
     | ``n_robots`` | 10 | number of agents (ids 0 .. N-1: five even, five odd) |
     | ``cluster_radius`` | ``None`` | pair distance (m) the segregation index counts; ``None``: 1.5 robot diameters (robots in contact within a cluster) |
     | ``collision_penalty`` | 0.0 | weight of the fraction of robots bumping, subtracted from the reward |
+    | ``reward_term`` | ``"separation"`` | ``"separation"`` or ``"segregation"`` (adds each robot's own same-parity share of its neighbours within ``cluster_radius``) |
     | ``platform`` | ``"rone"`` | ``"droplet"`` (4.4 cm, 6 IR channels), ``"epuck"`` (7 cm, 8 sensors), ``"rone"`` (11 cm, 8 RX + 8 TX), or a ``Platform`` |
     | ``sensing`` | ``"full"`` | ``"full"``: the modelled IR stack; ``"ideal"``: exact, noiseless, lossless values (true ids) in the same layout |
     | ``max_cycles`` | 500 | control steps of 0.1 s per episode |

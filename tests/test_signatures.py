@@ -31,6 +31,7 @@ def test_signature_defaults_match_env_defaults(module):
 @pytest.mark.parametrize("module", TASK_MODULES, ids=lambda m: m.__name__)
 def test_every_argument_is_typed_and_choices_match_validation(module):
     hints = typing.get_type_hints(module.parallel_env)
+    choices = {**_CHOICES, **{k: r.choices for k, r in module.raw_env.TASK.SETTINGS.items() if isinstance(r, Choice)}}
     assert set(hints) == set(_defaults(module)) | {"return"}
     assert hints["return"] is module.raw_env
     for name, hint in hints.items():
@@ -40,8 +41,8 @@ def test_every_argument_is_typed_and_choices_match_validation(module):
         values = {v for lit in literals for v in typing.get_args(lit)}
         if type(None) in typing.get_args(hint):
             values.add(None)
-        if name in _CHOICES:
-            assert values == set(_CHOICES[name]), name
+        if name in choices:
+            assert values == set(choices[name]), name
         elif name == "platform":
             assert values == set(PLATFORMS)
         else:
