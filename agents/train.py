@@ -45,6 +45,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import errno
 import importlib.util
 import json
 import math
@@ -135,30 +136,71 @@ class Staging:
                 tmp.unlink()
             raise TrainError(f"could not write '{self.final(path)}': {err.strerror or err}") from None
 
-    def publish(self) -> None:
-        """Move the staged files into ``out``: a new ``out`` is the staging directory renamed; otherwise the
-        run already in ``out`` (allowed with ``--force``) is first moved aside and deleted once the staged
-        files are in, keeping ``out`` itself (a shell inside it stays there) and its other files. Ctrl-C
-        waits until it ends."""
+    def publish(self, replace: bool = False) -> Path:
+        """Move the staged files into ``out`` and return where they went. The claim of ``out`` is atomic: a
+        new ``out`` is the staging directory renamed (which fails if another run got there first); an
+        existing ``out`` is claimed by linking the staged ``config.yaml`` into it (which fails if it holds
+        one). A run already in ``out`` is replaced only with ``replace`` (``--force``): it is first moved
+        aside and deleted once the staged files are in, keeping ``out`` itself (a shell inside it stays
+        there) and its other files. Without ``replace``, a run that finds ``out`` taken keeps its files
+        under the first free name ``out.2``, ``out.3``, ... and returns that path. Ctrl-C waits until it
+        ends."""
         with _sigint_ignored():
             try:
+                if not replace:
+                    if not self.out.exists() and self._rename_to(self.out):
+                        return self.out
+                    if self.out.is_dir() and not run_entries(self.out) and self._claim(self.out):
+                        self._move_into(self.out, skip="config.yaml")
+                        return self.out
+                    for k in range(2, 10_000):
+                        other = self.out.with_name(f"{self.out.name}.{k}")
+                        if not other.exists() and self._rename_to(other):
+                            return other
+                    raise OSError(f"no free name beside {self.out}")
                 if not self.out.exists():
                     os.replace(self.path, self.out)
-                    return
+                    return self.out
                 old, aside = run_entries(self.out), None
                 if old:
                     aside = Path(tempfile.mkdtemp(prefix=f".{self.out.name}.", suffix=".replaced", dir=self.out.parent))
                     for name in old:
                         os.replace(self.out / name, aside / name)
-                for entry in self.path.iterdir():
-                    os.replace(entry, self.out / entry.name)
-                self.path.rmdir()
+                self._move_into(self.out)
                 if aside is not None:
                     shutil.rmtree(aside, ignore_errors=True)
+                return self.out
             except OSError as err:
                 raise TrainError(
                     f"could not move the finished files from '{self.path}' into '{self.out}': {err.strerror or err}"
                 ) from None
+
+    def _rename_to(self, target: Path) -> bool:
+        """Rename the staging directory to the new ``target``; False if another run took it first."""
+        try:
+            os.rename(self.path, target)  # fails if target exists and is not an empty directory
+        except OSError as err:
+            if err.errno in (errno.EEXIST, errno.ENOTEMPTY, errno.ENOTDIR):
+                return False
+            raise
+        self.path = target
+        return True
+
+    def _claim(self, target: Path) -> bool:
+        """Claim the existing directory ``target`` by linking the staged config into it; False if taken."""
+        try:
+            os.link(self.path / "config.yaml", target / "config.yaml")
+        except FileExistsError:
+            return False
+        return True
+
+    def _move_into(self, target: Path, skip: str | None = None) -> None:
+        for entry in self.path.iterdir():
+            if entry.name != skip:
+                os.replace(entry, target / entry.name)
+        if skip is not None:
+            (self.path / skip).unlink()
+        self.path.rmdir()
 
     def abandon(self) -> str:
         """After a failure: delete the staging directory, unless it holds a trained model, which is kept;
@@ -675,8 +717,7 @@ def _interrupted(state: dict[str, Any]) -> int:
         where += f"{stage.path / 'model.zip'} (the run in {stage.out} is kept)"
     elif phase == "eval" and stage is not None:
         try:
-            stage.publish()
-            where += str(stage.out / "model.zip")
+            where += str(stage.publish() / "model.zip")
         except TrainError as err:
             where += f"{stage.path / 'model.zip'} ({err})"
     elif stage is not None:
@@ -743,9 +784,9 @@ def _run(args: argparse.Namespace, state: dict[str, Any]) -> int:
                 print(f"interrupted by Ctrl-C after {robot_steps} robot-steps: the run in {out} is kept; this run's "
                       f"model and config are in {staged}", file=sys.stderr)
                 return EXIT_INTERRUPTED
-            stage.publish()
-            print(f"interrupted by Ctrl-C after {robot_steps} robot-steps: saved the model to {out / 'model.zip'} "
-                  f"and the config to {out / 'config.yaml'}", file=sys.stderr)
+            final = stage.publish()
+            print(f"interrupted by Ctrl-C after {robot_steps} robot-steps: saved the model to {final / 'model.zip'} "
+                  f"and the config to {final / 'config.yaml'}", file=sys.stderr)
             return EXIT_INTERRUPTED
         print(f"trained {robot_steps} robot-steps in {timing['train_s']:.1f} s -> {out / 'model.zip'}")
 
@@ -791,10 +832,12 @@ def _run(args: argparse.Namespace, state: dict[str, Any]) -> int:
     timing["total_s"] = time.perf_counter() - t_start
     with stage.writing(staged / "timing.json") as tmp:
         tmp.write_text(json.dumps(timing, indent=1))
-    stage.publish()
+    final = stage.publish(replace=args.force)
     state["stage"] = None
     print(f"\n{header}{table}")
-    print(f"wrote {out / 'results.csv'}, {out / 'results.md'}, {out / 'results.png'}; timing {json.dumps({k: round(v, 1) for k, v in timing.items()})}")
+    if final != stage.out:
+        print(f"another run finished into {out} first: this run is kept in {final}", file=sys.stderr)
+    print(f"wrote {final / 'results.csv'}, {final / 'results.md'}, {final / 'results.png'}; timing {json.dumps({k: round(v, 1) for k, v in timing.items()})}")
     return 0
 
 

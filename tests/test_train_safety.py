@@ -161,3 +161,42 @@ def test_output_inside_the_evaluated_run_is_refused(tmp_path, capsys):
     assert train.main(["--config", AGG, "--eval-only", str(out / "model.zip"), "--output", str(out), "--force"] + _sets()) == 2
     _one_line(capsys, "holds the checkpoint being evaluated")
     assert (out / "model.zip").read_text() == "x"
+
+
+def _staged(out: Path, text: str) -> train.Staging:
+    stage = train.Staging(out)
+    (stage.path / "config.yaml").write_text(text)
+    (stage.path / "model.zip").write_text(f"model of {text}")
+    return stage
+
+
+def test_two_runs_into_one_new_output_both_stay_on_disk(tmp_path):
+    """Two runs that both passed the output check (it was empty then) publish one after the other: the first
+    takes the output, the second keeps its run under the next free name; neither is deleted."""
+    out = tmp_path / "run"
+    first, second = _staged(out, "first"), _staged(out, "second")
+    assert first.publish() == out
+    assert second.publish() == tmp_path / "run.2"
+    assert (out / "config.yaml").read_text() == "first" and (out / "model.zip").read_text() == "model of first"
+    assert (tmp_path / "run.2" / "config.yaml").read_text() == "second"
+    assert not first.path.name.endswith(".partial") and not list(tmp_path.glob(".*.partial"))
+
+
+def test_a_run_into_an_existing_directory_claims_it_once(tmp_path):
+    """An existing directory without a run (files of the user's) is claimed by the first run to finish."""
+    out = tmp_path / "run"
+    out.mkdir()
+    (out / "notes.txt").write_text("mine")
+    first, second, third = _staged(out, "first"), _staged(out, "second"), _staged(out, "third")
+    assert first.publish() == out
+    assert second.publish() == tmp_path / "run.2"
+    assert third.publish() == tmp_path / "run.3"
+    assert (out / "notes.txt").read_text() == "mine" and (out / "config.yaml").read_text() == "first"
+    assert (out / "model.zip").read_text() == "model of first"
+
+
+def test_force_still_replaces_at_publish(tmp_path):
+    out = tmp_path / "run"
+    _staged(out, "first").publish()
+    assert _staged(out, "second").publish(replace=True) == out
+    assert (out / "config.yaml").read_text() == "second" and not (tmp_path / "run.2").exists()
