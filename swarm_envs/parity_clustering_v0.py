@@ -22,7 +22,7 @@ import numpy as np
 from pettingzoo import AECEnv
 from pettingzoo.utils.conversions import parallel_to_aec
 
-from swarm_envs.env import SwarmEnv
+from swarm_envs.env import DT, SwarmEnv
 from swarm_envs.factories import reports_unknown_kwargs
 from swarm_envs.platforms import Platform
 from swarm_envs.task import BatchState, Choice, Real, Task, bump_any, largest_component_fraction, pairs_within
@@ -47,7 +47,8 @@ class ParityClusteringTask(Task):
                                   why="a reward weight; rewards stay within +-1000 per step"),
         "reward_term": Choice("separation", "what a robot is rewarded for: 'separation' (mean distance to the other parity - "
                               "to its own, over the arena size) or 'segregation' (its own share of same-parity neighbours "
-                              "within cluster_radius, the per-robot term of the headline metric, plus the separation term)",
+                              "within cluster_radius, the per-robot term of the headline metric, plus the step's gain in "
+                              "that distance difference over one step's drive)",
                               choices=("separation", "segregation")),
     }
     METRICS = {"segregation": "mean", "parity_cluster_fraction": "final", "n_parity_clusters": "final", "collision_fraction": "mean"}
@@ -60,6 +61,7 @@ class ParityClusteringTask(Task):
         #: pair distance (m) the segregation index counts
         self.cluster_radius = CLUSTER_LINK_DIAMETERS * platform.diameter if given is None else float(given)
         self.parity = np.arange(self.n_world)[self.n_static :] % 2  # agent ids' parities
+        self._prev_potential = np.zeros((self.n_copies, self.n_agents))  # reward_term="segregation" shaping
 
     def robot_groups(self) -> tuple[np.ndarray, tuple[str, str]]:
         """Even ids in one colour, odd ids in the other (drawing only)."""
@@ -102,8 +104,14 @@ class ParityClusteringTask(Task):
             d_other = np.zeros_like(d_same)
         own = (d_other - d_same) / self.arena.size
         separation = own
-        if self.config["reward_term"] == "segregation":  # the headline metric's per-robot term, separation as shaping
-            own = own_segregation + separation
+        if self.config["reward_term"] == "segregation":
+            # the headline metric's per-robot term, plus potential-based shaping (Ng et al., ICML 1999) on the
+            # separation in units of one step's drive: the step's gain in (distance to the other parity -
+            # distance to the own); it sums to the episode's net gain, so it guides without changing the optimum
+            potential = separation * self.arena.size / (self.platform.max_speed * DT)
+            self._prev_potential[first] = potential[first]
+            own = own_segregation + (potential - self._prev_potential)
+            self._prev_potential = potential
         bumped = bump_any(self.agents_of(state.bumps)).astype(float)
         c = self.config["collision_penalty"]
         local_reward = own - c * bumped
@@ -218,9 +226,11 @@ def parallel_env(
     ``reward_mode="global"``: the mean over robots of (mean distance to the robots of the other parity -
     mean distance to the other robots of its own parity) / arena size, minus ``collision_penalty`` x the
     fraction of robots bumping (default 0: Algorithm 7 clusters by bumping). ``"local"``: each robot its own
-    term and bump. ``reward_term="segregation"`` adds to each robot's term its own share of same-parity
+    term and bump. ``reward_term="segregation"`` rewards each robot instead with its own share of same-parity
     neighbours within ``cluster_radius`` (the per-robot term of the headline metric; the separation term alone
-    rewards moving away from the other parity without joining the own). Terms in
+    rewards moving away from the other parity without joining the own) plus the step's gain in its
+    separation, in units of one step's drive (``max_speed`` x 0.1 s): potential-based shaping, which sums to
+    the episode's net gain and leaves the best policy unchanged. Terms in
     ``infos[agent]["reward_terms", name]``: ``separation``, ``segregation``, ``collision``. Metrics
     in ``infos[agent]["metrics", name]``: ``segregation`` (headline: the mean over robots of the
     same-parity share of its neighbours within ``cluster_radius``, 0 without any), ``parity_cluster_fraction`` (mean over
@@ -247,7 +257,7 @@ def parallel_env(
     | ``n_robots`` | 10 | number of agents (ids 0 .. N-1: five even, five odd) |
     | ``cluster_radius`` | ``None`` | pair distance (m) the segregation index counts; ``None``: 1.5 robot diameters (robots in contact within a cluster) |
     | ``collision_penalty`` | 0.0 | weight of the fraction of robots bumping, subtracted from the reward |
-    | ``reward_term`` | ``"separation"`` | ``"separation"`` or ``"segregation"`` (adds each robot's own same-parity share of its neighbours within ``cluster_radius``) |
+    | ``reward_term`` | ``"separation"`` | ``"separation"`` or ``"segregation"`` (each robot's own same-parity share of its neighbours within ``cluster_radius``, plus the step's gain in separation) |
     | ``platform`` | ``"rone"`` | ``"droplet"`` (4.4 cm, 6 IR channels), ``"epuck"`` (7 cm, 8 sensors), ``"rone"`` (11 cm, 8 RX + 8 TX), or a ``Platform`` |
     | ``sensing`` | ``"full"`` | ``"full"``: the modelled IR stack; ``"ideal"``: exact, noiseless, lossless values (true ids) in the same layout |
     | ``max_cycles`` | 500 | control steps of 0.1 s per episode |

@@ -65,6 +65,28 @@ def test_segregation_and_parity_clusters():
     assert m["segregation"][0] == 0.0
 
 
+def test_segregation_reward_term_pays_the_metric_and_the_separation_gain():
+    """reward_term="segregation": each robot's own same-parity share of its contacts plus the step's gain in
+    (distance to the other parity - to its own) / one step's drive; no gain on the step that starts an
+    episode; the default reward_term keeps the separation reward."""
+    d = 0.11  # r-one diameter
+    pure = [[-1.0, 0.0], [1.0, 0.0], [-1.0 + 1.1 * d, 0.0], [1.0 + 1.1 * d, 0.0]]
+    moved = [[-1.0, 0.3], [1.0, 0.0], [-1.0 + 1.1 * d, 0.0], [1.0 + 1.1 * d, 0.0]]  # robot 0 left its partner
+    env = swarm_envs.make("swarm_envs/ParityClustering-v0", n_robots=4, sensing="ideal", reward_mode="local", reward_term="segregation")
+    task, step_drive = env.task, env.platform.max_speed * 0.1
+    rewards, terms, _ = task.rewards(_state(pure, np.zeros(4)), np.array([True]))
+    np.testing.assert_allclose(terms["segregation"][0], 1.0)
+    np.testing.assert_allclose(rewards[0], terms["segregation"][0])  # no gain on the first step
+    before = terms["separation"][0] * task.arena.size  # m: distance to the other parity - to the own
+    rewards, terms, _ = task.rewards(_state(moved, np.zeros(4)), np.array([False]))
+    after = terms["separation"][0] * task.arena.size
+    np.testing.assert_allclose(rewards[0], terms["segregation"][0] + (after - before) / step_drive)
+    assert terms["segregation"][0, 0] == 0.0 and rewards[0, 0] < 0.0, "robot 0 lost its contact and drove off"
+    default = swarm_envs.make("swarm_envs/ParityClustering-v0", n_robots=4, sensing="ideal", reward_mode="local")
+    rewards, terms, _ = default.task.rewards(_state(moved, np.zeros(4)), np.array([True]))
+    np.testing.assert_allclose(rewards[0], terms["separation"][0])
+
+
 # -- mid-angle navigation -----------------------------------------------------------------------------------
 @pytest.mark.parametrize("platform", ["rone", "epuck", "droplet"])
 @pytest.mark.parametrize("lanes", [1, 3])
