@@ -114,17 +114,28 @@ def _run(run: dict[str, Any], log: Path) -> tuple[str, int, float]:
 
 
 def execute(runs: list[dict[str, Any]], out: Path, jobs: int = 1) -> list[tuple[str, int, float]]:
-    """Run every run whose ``results.csv`` is missing, ``jobs`` at a time (a run waits for the one it
-    evaluates); returns (directory, exit code, seconds) of the runs started."""
+    """Run every run whose ``results.csv`` is missing, ``jobs`` at a time, in plan order; a run that
+    evaluates another run's model starts once that run has finished. Returns (directory, exit code,
+    seconds) of the runs started."""
     out.mkdir(parents=True, exist_ok=True)
     log = out / "suite.log"
     todo = [r for r in runs if not (Path(r["dir"]) / "results.csv").is_file()]
+    pending = {str(r["dir"]) for r in todo}
     done: list[tuple[str, int, float]] = []
-    first = [r for r in todo if "after" not in r]
-    later = [r for r in todo if "after" in r]
-    for batch in (first, later):
-        with concurrent.futures.ThreadPoolExecutor(max_workers=max(1, jobs)) as pool:
-            for result in pool.map(lambda r: _run(r, log), batch):
+    with concurrent.futures.ThreadPoolExecutor(max_workers=max(1, jobs)) as pool:
+        running: dict[concurrent.futures.Future, dict[str, Any]] = {}
+        while todo or running:
+            ready = [r for r in todo if str(r.get("after")) not in pending]
+            for run in ready[: max(1, jobs) - len(running)]:
+                todo.remove(run)
+                running[pool.submit(_run, run, log)] = run
+            if not running:  # what is left waits for runs that were not planned (or failed): run it anyway
+                running[pool.submit(_run, todo[0], log)] = todo.pop(0)
+            finished, _ = concurrent.futures.wait(running, return_when=concurrent.futures.FIRST_COMPLETED)
+            for future in finished:
+                run = running.pop(future)
+                pending.discard(str(run["dir"]))
+                result = future.result()
                 status = "ok" if result[1] == 0 else f"FAILED (exit {result[1]}, see {log})"
                 print(f"{result[0]}: {status} in {result[2]:.0f} s", flush=True)
                 done.append(result)
