@@ -31,8 +31,10 @@ from stable_baselines3.common.torch_layers import BaseFeaturesExtractor
 from stable_baselines3.common.vec_env import VecEnv, VecEnvWrapper
 
 from swarm_envs.agents.base import Policy, flatten_batch
+from swarm_envs.env import DT
 from swarm_envs.observation import ObservationLayout
 from swarm_envs.platforms import Platform
+from swarm_envs.world import N_BUMP_SECTORS
 
 __all__ = [
     "PolicySpec",
@@ -46,10 +48,6 @@ __all__ = [
     "TrainedPolicy",
 ]
 
-#: control step (s)
-DT = 0.1
-#: bump sectors at the start of ``proprio``; the last action follows (linear, angular, bits)
-N_BUMP_SECTORS = 8
 #: the row blocks of the observation that :class:`SetEncoder` pools over: base part, its id part
 ROW_PARTS = (("range_bearing", "range_bearing_ids"), ("scale_free", "scale_free_ids"), ("messages", "message_ids"))
 

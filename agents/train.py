@@ -1,8 +1,10 @@
-"""Train one PPO policy shared by all robots of a swarm task, then compare it with the scripted baseline and
-a random policy on the task metrics.
+"""Train one policy shared by all robots of a swarm task (PPO or RecurrentPPO, with the variant the ``agent``
+section chooses: :mod:`swarm_envs.agents.policies`), then compare it with the scripted baseline and a random
+policy on the task metrics.
 
     python train.py --config configs/aggregation.yaml [--output DIR [--force]] [--render] [--set key=value ...]
     python train.py --config configs/aggregation.yaml --eval-only CHECKPOINT [--output DIR [--force]]
+    python train.py --config configs/aggregation.yaml --baselines-only [--output DIR [--force]]
 
 Training writes into DIR (``output_dir`` of the config unless ``--output``): ``config.yaml`` (resolved),
 checkpoints ``checkpoints/ppo_<steps>_steps.zip`` and ``model.zip``, the learning curve ``progress.csv``
@@ -24,7 +26,9 @@ No run on disk is changed by a failed or interrupted command:
   unless ``--force`` is given;
 - a command writes its files into a hidden staging directory beside DIR (``.DIR.<random>.partial``; the
   learning curve and TensorBoard events can be watched there) and moves them into DIR only when it ends;
-  with ``--force`` the old run's files are replaced together at that moment (other files in DIR are kept).
+  with ``--force`` the old run's files are replaced together at that moment (other files in DIR are kept);
+  without it, a run that finds DIR taken by another run that finished first keeps its files in ``DIR.2``
+  (``DIR.3``, ...) and says so.
   Each file is written under a temporary name and renamed when complete.
 - a failure (a full disk included) is a one-line ``error`` naming the path, exit code 2, and leaves DIR as
   it was; a staging directory that already holds a trained model is kept (the message names it), any
