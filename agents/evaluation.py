@@ -31,6 +31,7 @@ __all__ = [
     "evaluate",
     "run_batch",
     "confidence_interval",
+    "t_interval",
     "summarise",
     "write_csv",
     "markdown_table",
@@ -180,12 +181,8 @@ def confidence_interval(
     so the interval lies within [min, max] of the values, hence within the metric's range. One value: no interval,
     ``(mean, nan, nan)``; no finite value: all NaN; all values equal: the point ``(mean, mean, mean)``.
     """
-    x = np.asarray(values, dtype=float)
-    x = x[np.isfinite(x)]
-    if len(x) == 0:
-        return math.nan, math.nan, math.nan
-    mean = float(x.mean())
-    if len(x) == 1:
+    x, mean = _finite(values)
+    if len(x) < 2:
         return mean, math.nan, math.nan
     if float(np.ptp(x)) == 0.0:
         return mean, mean, mean
@@ -194,6 +191,23 @@ def confidence_interval(
     lo, hi = float(res.confidence_interval.low), float(res.confidence_interval.high)
     # percentile bounds lie in [min, max] and bracket the mean up to floating-point ties: clamp those ulps
     return mean, max(min(lo, mean), float(x.min())), min(max(hi, mean), float(x.max()))
+
+
+def _finite(values: Sequence[float]) -> tuple[np.ndarray, float]:
+    """The finite ``values`` and their mean (NaN if none)."""
+    x = np.asarray(values, dtype=float)
+    x = x[np.isfinite(x)]
+    return x, float(x.mean()) if len(x) else math.nan
+
+
+def t_interval(values: Sequence[float], level: float = 0.95) -> tuple[float, float, float]:
+    """(mean, low, high): Student-t interval of the mean of the finite ``values`` (for a few training seeds,
+    each already a mean over evaluation seeds); one value: no interval ``(mean, nan, nan)``."""
+    x, mean = _finite(values)
+    if len(x) < 2:
+        return mean, math.nan, math.nan
+    half = float(stats.t.ppf(0.5 + level / 2, len(x) - 1) * x.std(ddof=1) / math.sqrt(len(x)))
+    return mean, mean - half, mean + half
 
 
 def summarise(results: dict[str, dict[str, np.ndarray]], seed: int = 0) -> list[dict[str, Any]]:

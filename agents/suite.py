@@ -38,7 +38,9 @@ from typing import Any
 import numpy as np
 import yaml
 
-__all__ = ["load_suite", "plan", "report", "main", "t_interval"]
+from swarm_envs.agents.evaluation import confidence_interval, t_interval
+
+__all__ = ["load_suite", "plan", "execute", "report", "main"]
 
 #: how the suite runs train.py (a subprocess per run)
 TRAIN = [sys.executable, "-m", "swarm_envs.agents.train"]
@@ -143,21 +145,6 @@ def execute(runs: list[dict[str, Any]], out: Path, jobs: int = 1) -> list[tuple[
 
 
 # -- report -----------------------------------------------------------------------------------------------
-def t_interval(values: list[float], level: float = 0.95) -> tuple[float, float, float]:
-    """(mean, low, high): Student-t interval of the mean of ``values`` (no interval for one value)."""
-    from scipy import stats
-
-    x = np.asarray(values, dtype=float)
-    x = x[np.isfinite(x)]
-    if len(x) == 0:
-        return math.nan, math.nan, math.nan
-    mean = float(x.mean())
-    if len(x) == 1:
-        return mean, math.nan, math.nan
-    half = float(stats.t.ppf(0.5 + level / 2, len(x) - 1) * x.std(ddof=1) / math.sqrt(len(x)))
-    return mean, mean - half, mean + half
-
-
 def _per_seed(path: Path) -> dict[str, dict[str, list[float]]]:
     return json.loads((path / "per_seed.json").read_text()) if (path / "per_seed.json").is_file() else {}
 
@@ -197,7 +184,6 @@ def _curve(run: Path, repeat: int) -> tuple[np.ndarray, np.ndarray] | None:
 def report(suite: dict[str, Any], out: Path, tasks: list[str] | None = None) -> str:
     """Write ``results.md``, ``results.csv``, ``sensing_cost.md`` and ``curves_<task>.png`` from the runs
     on disk; returns the Markdown of the results table."""
-    from swarm_envs.agents.evaluation import confidence_interval
     from swarm_envs.agents.tasks import headline
 
     lines = ["| task | headline metric | policy | mean [95 % interval] (n) | eval seeds |", "|---|---|---|---|---|"]

@@ -14,6 +14,7 @@ import yaml
 from scipy import stats
 
 from swarm_envs.agents import suite as suite_mod
+from swarm_envs.agents.evaluation import t_interval
 
 ROOT = Path(__file__).resolve().parents[1]
 TINY = [
@@ -84,10 +85,10 @@ def test_bad_suite_files_fail_clearly(tmp_path, text, message):
 
 def test_t_interval_is_students():
     values = [0.2, 0.5, 0.4]
-    mean, lo, hi = suite_mod.t_interval(values)
+    mean, lo, hi = t_interval(values)
     half = stats.t.ppf(0.975, 2) * np.std(values, ddof=1) / math.sqrt(3)
     assert mean == pytest.approx(np.mean(values)) and lo == pytest.approx(mean - half) and hi == pytest.approx(mean + half)
-    assert math.isnan(suite_mod.t_interval([0.3])[1])
+    assert math.isnan(t_interval([0.3])[1])
 
 
 def test_suite_end_to_end_resumes_and_reports(tmp_path, capsys):
