@@ -24,6 +24,7 @@ import numpy as np
 from swarm_envs.agents.evaluation import evaluate, markdown_table, random_factory, summarise
 from swarm_envs.agents.scripted import make_scripted, scripted_class
 from swarm_envs.agents.tasks import SHORT_NAMES, env_id, headline, import_modules, metric_reductions, scripted_policy
+from swarm_envs._text import shown
 from swarm_envs.registry import list_envs
 from swarm_envs.settings import COMMON_SETTINGS, Int, OneLineArgumentParser, cli_type
 
@@ -78,8 +79,14 @@ def _json_safe(obj: Any) -> Any:
 
 def parse_tasks(values: list[str]) -> list[str]:
     """Task names from repeated and/or comma-separated ``--task`` values (order kept, duplicates dropped);
-    ``ValueError`` for an unknown one."""
-    names = [t.strip() for v in values for t in v.split(",") if t.strip()]
+    ``ValueError`` for an unknown one, or a value with an empty name (``--task ''``, ``--task ','``)."""
+    for value in values:
+        if not all(t.strip() for t in value.split(",")):
+            raise ValueError(
+                f"--task {shown(value)} has an empty task name; give env ids or short names ({', '.join(SHORT_NAMES)}), "
+                "repeated or comma-separated, or leave --task out for every task with a scripted baseline"
+            )
+    names = [t.strip() for v in values for t in v.split(",")]
     for name in names:
         env_id(name)
     return list(dict.fromkeys(names))

@@ -43,6 +43,36 @@ class ConfigError(ValueError):
     """A bad training configuration (unknown key, wrong type or value)."""
 
 
+class _DuplicateKey(yaml.YAMLError):
+    """A mapping of a YAML document names a key twice (``key``; ``line`` of the repeat, ``first`` of the first, 1-based)."""
+
+    def __init__(self, key: Any, line: int, first: int) -> None:
+        super().__init__(f"the key {shown(key)} is given twice (lines {first} and {line})")
+        self.key, self.line, self.first = key, line, first
+
+
+class _StrictLoader(yaml.SafeLoader):
+    """``yaml.SafeLoader`` that refuses a key given twice in one mapping (PyYAML keeps the last one silently).
+
+    Keys merged in with ``<<: *anchor`` may still be overridden: only the mapping's own keys are compared."""
+
+    def construct_mapping(self, node: yaml.MappingNode, deep: bool = False) -> dict:
+        if isinstance(node, yaml.MappingNode):
+            first: dict[Any, int] = {}
+            for key_node, _ in node.value:
+                if key_node.tag == "tag:yaml.org,2002:merge":
+                    continue
+                key = self.construct_object(key_node, deep=deep)
+                line = key_node.start_mark.line + 1
+                try:
+                    if key in first:
+                        raise _DuplicateKey(key, line, first[key])
+                    first[key] = line
+                except TypeError:  # an unhashable key: SafeLoader's own error names it
+                    continue
+        return super().construct_mapping(node, deep=deep)
+
+
 #: schema and defaults; ``None`` under ``env`` means "free-form, validated by the env"
 DEFAULTS: dict[str, Any] = {
     "task": "aggregation",
@@ -216,10 +246,15 @@ def validate(cfg: dict[str, Any]) -> dict[str, Any]:
             example = _NULLABLE.get(dotted, default)
             if not _type_ok(value, example):
                 raise ConfigError(f"config key {dotted!r} must be of type {type(example).__name__}, got {shown(value)}")
+            if isinstance(example, float) and isinstance(value, numbers.Integral):
+                try:  # an integer where a float is meant (learning_rate: 1) is that float
+                    node[key] = float(value)
+                except OverflowError:
+                    pass  # too large for a float: the bounds refuse it
             if dotted in _CHOICES and value not in _CHOICES[dotted]:
                 raise ConfigError(f"config key {dotted!r}={shown(value)} not allowed; allowed values: {list(_CHOICES[dotted])}")
             if dotted in BOUNDS:
-                _check_bounds(dotted, value)
+                _check_bounds(dotted, value, integer=isinstance(example, int))
 
     walk(cfg, DEFAULTS, "")
     net = cfg["agent"]["net_arch"]
@@ -255,8 +290,9 @@ def validate(cfg: dict[str, Any]) -> dict[str, Any]:
     return cfg
 
 
-def _check_bounds(dotted: str, value: Any) -> None:
-    """:class:`ConfigError` unless ``value`` is finite and within :data:`BOUNDS` of ``dotted``."""
+def _check_bounds(dotted: str, value: Any, integer: bool | None = None) -> None:
+    """:class:`ConfigError` unless ``value`` is finite and within :data:`BOUNDS` of ``dotted``; ``integer``: the
+    key takes integers (the message says "an integer"; default: whether ``value`` is one)."""
     low, high, why = BOUNDS[dotted]
     if isinstance(value, numbers.Integral) and not isinstance(value, bool):
         number = int(value)  # integers compared exactly (a float rounds 2**63 - 1 up)
@@ -269,7 +305,9 @@ def _check_bounds(dotted: str, value: Any) -> None:
         above = number > low if dotted in _OPEN_LOW else number >= low
         ok = math.isfinite(number) and above and number <= high
     if not ok:
-        kind = "an integer" if isinstance(value, numbers.Integral) else "a finite number"
+        if integer is None:
+            integer = isinstance(value, numbers.Integral)
+        kind = "an integer" if integer else "a finite number"
         raise ConfigError(f"config key {dotted!r} must be {kind} in {_span(dotted)} ({why}), got {shown(value)}")
 
 
@@ -348,7 +386,9 @@ def _parse_value(key: str, text: str) -> Any:
     """``text`` as YAML (a string when it is not YAML); :class:`ConfigError` naming ``key`` for a number
     too long to read (Python reads integers of at most 4300 digits)."""
     try:
-        return yaml.safe_load(text)
+        return yaml.load(text, Loader=_StrictLoader)  # safe_load that refuses a key given twice
+    except _DuplicateKey as err:
+        raise ConfigError(f"config key {key!r}: the value names the key {shown(err.key)} twice; keep one") from None
     except yaml.YAMLError:
         return text
     except ValueError as err:
@@ -388,19 +428,24 @@ def load_config(path: str | Path | None, overrides: list[str] | None = None) -> 
     if path is not None:
         try:
             with open(path, encoding="utf-8") as fh:
-                raw = yaml.safe_load(fh)
+                raw = yaml.load(fh, Loader=_StrictLoader)  # safe_load that refuses a key given twice
         except FileNotFoundError:
             raise ConfigError(f"config file {str(path)!r} not found") from None
         except UnicodeDecodeError:
             raise ConfigError(f"config file {str(path)!r} is not a text (UTF-8 YAML) file") from None
         except OSError as err:
             raise ConfigError(f"config file {str(path)!r} cannot be read: {err.strerror or err}") from None
+        except _DuplicateKey as err:  # PyYAML would keep the last value silently
+            raise ConfigError(f"config file {str(path)!r}: {err}; keep one") from None
         except yaml.YAMLError as err:
             first = " ".join(str(err).split())
             raise ConfigError(f"config file {str(path)!r} is not valid YAML: {first:.200}") from None
         except ValueError as err:  # e.g. an integer of more than 4300 digits
             raise ConfigError(f"config file {str(path)!r}: a value cannot be read ({err})"[:300]) from None
-        raw = {} if raw is None else raw
+        if raw is None or raw == {}:  # an empty file, or only comments: it would silently train the default task
+            raise ConfigError(
+                f"config file {str(path)!r} names no task (it is empty or only comments); give at least 'task: <env id or short name>'"
+            )
         if not isinstance(raw, dict):
             raise ConfigError(f"config file {str(path)!r} must hold a mapping at the top level")
     cfg = _merge(DEFAULTS, raw)

@@ -2,7 +2,8 @@
 baseline and random actions on the same evaluation seeds, and the cost of faithful sensing.
 
     python -m swarm_envs.agents.suite [--suite configs/suite/benchmark.yaml] [--output DIR] [--tasks a,b] [--seeds 0,1,2]
-                                      [--variants mlp,odometry] [--jobs 2] [--set key=value ...] [--report-only]
+                                      [--variants mlp,odometry] [--jobs 2] [--set key=value ...] [--no-sensing-cost]
+                                      [--report-only]
 
 A suite file (``configs/suite/benchmark.yaml``) names, per task, a training config and the RL variants to train on
 it (each a set of ``--set`` overrides of ``train.py``, e.g. ``agent.odometry: true``), the training seeds, and
@@ -79,9 +80,10 @@ def _sets(overrides: dict[str, Any]) -> list[str]:
 
 
 def plan(suite: dict[str, Any], out: Path, tasks: list[str] | None = None, seeds: list[int] | None = None,
-         variants: list[str] | None = None, extra: list[str] | None = None) -> list[dict[str, Any]]:
+         variants: list[str] | None = None, extra: list[str] | None = None, sensing_cost: bool = True) -> list[dict[str, Any]]:
     """The runs of the suite (``train.py`` command lines), in order; each ``{"dir", "argv", "after"}`` (a run
-    with ``after`` evaluates the model another run trains)."""
+    with ``after`` evaluates the model another run trains); ``sensing_cost=False`` leaves out the sensing-cost
+    runs."""
     runs = []
     for task, entry in suite["tasks"].items():
         if tasks and task not in tasks:
@@ -95,7 +97,7 @@ def plan(suite: dict[str, Any], out: Path, tasks: list[str] | None = None, seeds
             for seed in seeds or suite["seeds"]:
                 base = [*common, *_sets(overrides), "--set", f"seed={seed}", "--set", "eval.baselines=false"]
                 runs.append({"dir": task_dir / name / f"seed{seed}", "argv": base})
-                if entry.get("sensing_cost") == name:
+                if sensing_cost and entry.get("sensing_cost") == name:
                     ideal = task_dir / f"{name}@ideal" / f"seed{seed}"
                     runs.append({"dir": ideal, "argv": [*base, "--set", "env.sensing=ideal"]})
                     runs.append({"dir": ideal / "eval-full", "after": ideal,
@@ -282,6 +284,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--jobs", type=int, default=max(1, (os.cpu_count() or 1)), help="train.py runs at a time (default: one per core)")
     parser.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
                         help="override for every run, e.g. train.total_timesteps=20000 (repeatable)")
+    parser.add_argument("--no-sensing-cost", action="store_true", help="leave out the sensing-cost runs (trained with ideal sensing)")
     parser.add_argument("--report-only", action="store_true", help="only rebuild the tables and curves from the runs on disk")
     args = parser.parse_args(argv)
     try:
@@ -300,7 +303,7 @@ def main(argv: list[str] | None = None) -> int:
     failed = 0
     if not args.report_only:
         t0 = time.perf_counter()
-        started = execute(plan(suite, out, tasks, seeds, variants, extra), out, args.jobs)
+        started = execute(plan(suite, out, tasks, seeds, variants, extra, sensing_cost=not args.no_sensing_cost), out, args.jobs)
         failed = sum(code != 0 for _, code, _ in started)
         timing_path = out / "timing.json"
         timing = json.loads(timing_path.read_text()) if timing_path.is_file() else {}

@@ -31,6 +31,7 @@ import numpy as np
 from swarm_envs.agents.evaluation import make_env, run_episode
 from swarm_envs.agents.tasks import SHORT_NAMES, headline, metric_reductions
 from swarm_envs.env import DT, info_group
+from swarm_envs.platforms import PLATFORMS
 from swarm_envs.registry import list_envs, task_class
 from swarm_envs.settings import Int, cli_type
 
@@ -297,7 +298,7 @@ def _parser() -> argparse.ArgumentParser:
     )
     parser.add_argument("--out", default=None, help="GIF path (default demo.gif); its directory must exist")
     parser.add_argument("--out-dir", default=None, help="with --all: folder for the GIFs (created; default .)")
-    parser.add_argument("--platform", default=None, help="droplet, epuck or rone (default: the task's showcase)")
+    parser.add_argument("--platform", default=None, choices=sorted(PLATFORMS), help="droplet, epuck or rone (default: the task's showcase)")
     parser.add_argument("--sensing", default="full", choices=["full", "ideal"])
     parser.add_argument("--n-robots", type=_int_at_least(1), default=None)
     parser.add_argument("--steps", type=_int_at_least(1), default=None, help="episode length in 0.1 s steps")
@@ -323,6 +324,19 @@ def _check_writable_dir(folder: Path, what: str) -> str | None:
     return None
 
 
+def _check_writable_file(path: Path, what: str, parser: argparse.ArgumentParser) -> None:
+    """A usage error naming ``path`` unless it can be opened for writing (checked before the episode runs, e.g.
+    ``/proc/x.gif``, which a directory check passes as root); a file this check creates is removed again."""
+    try:
+        existed = path.exists()
+        with open(path, "ab"):
+            pass
+        if not existed:
+            path.unlink(missing_ok=True)
+    except OSError as err:
+        parser.error(f"{what} '{path}' cannot be written ({err.strerror or err})")
+
+
 def _jobs(args: argparse.Namespace, parser: argparse.ArgumentParser) -> list[tuple[str, Path]]:
     """(task, output path) of every GIF the command asks for; argparse errors for bad combinations."""
     if args.all:
@@ -330,6 +344,8 @@ def _jobs(args: argparse.Namespace, parser: argparse.ArgumentParser) -> list[tup
             parser.error("--all writes every task to --out-dir; leave out --task and --out")
         if args.model is not None:
             parser.error("--model fits one env; use --task with it, not --all")
+        if args.out_dir is not None and not args.out_dir.strip():
+            parser.error(f"--out-dir {args.out_dir!r} names no folder; leave it out for the current folder")
         out_dir = Path(args.out_dir or ".")
         try:
             out_dir.mkdir(parents=True, exist_ok=True)
@@ -338,21 +354,30 @@ def _jobs(args: argparse.Namespace, parser: argparse.ArgumentParser) -> list[tup
         problem = _check_writable_dir(out_dir, "--out-dir")
         if problem:
             parser.error(problem)
-        return [(task, out_dir / gif_name(task)) for task in demo_tasks()]
+        jobs = [(task, out_dir / gif_name(task)) for task in demo_tasks()]
+        for _, path in jobs:
+            _check_writable_file(path, "--out-dir", parser)
+        return jobs
     if args.out_dir is not None:
         parser.error("--out-dir goes with --all; give a single demo's path with --out")
     if args.model is not None and args.policy is not None:
         parser.error("give either --policy or --model, not both")
     try:
-        task, _ = resolve_task(args.task or "flocking")
+        task, _ = resolve_task("flocking" if args.task is None else args.task)  # --task '' is an unknown task, not the default
     except DemoError as err:
         parser.error(str(err))
+    if args.out is not None and not args.out.strip():
+        parser.error(f"--out {args.out!r} names no file; give a GIF path such as demo.gif")
     out = Path(args.out or "demo.gif")
-    if out.is_dir():
-        parser.error(f"--out '{out}' is a directory; give a file path such as {out / 'demo.gif'}")
-    problem = _check_writable_dir(out.parent if str(out.parent) else Path("."), "--out")
-    if problem:
-        parser.error(problem)
+    try:
+        if out.is_dir():
+            parser.error(f"--out '{out}' is a directory; give a file path such as {out / 'demo.gif'}")
+        problem = _check_writable_dir(out.parent if str(out.parent) else Path("."), "--out")
+        if problem:
+            parser.error(problem)
+        _check_writable_file(out, "--out", parser)
+    except OSError as err:  # e.g. a name too long for the file system, which even is_dir() raises for
+        parser.error(f"--out '{out}' cannot be written ({err.strerror or err})")
     return [(task, out)]
 
 
@@ -369,7 +394,7 @@ def main(argv: list[str] | None = None) -> int:
         frame_skip = args.frame_skip or (preset.get("frame_skip", image["frame_skip"]) if args.all else image["frame_skip"])
         seed = preset["seed"] if args.seed is None else args.seed
         env_kwargs: dict[str, Any] = {
-            "platform": args.platform or preset["platform"],
+            "platform": preset["platform"] if args.platform is None else args.platform,
             "sensing": args.sensing,
             "n_robots": args.n_robots or preset["n_robots"],
             "max_cycles": args.steps or preset["steps"],
@@ -390,7 +415,10 @@ def main(argv: list[str] | None = None) -> int:
         finally:
             probe.close()
         result = run_demo(task, env_kwargs, policy, seed, frame_skip, pixels, overlay)
-        size = write_gif(result.frames, out, 1000.0 * DT)  # one frame per 0.1 s: frame_skip x real time
+        try:
+            size = write_gif(result.frames, out, 1000.0 * DT)  # one frame per 0.1 s: frame_skip x real time
+        except OSError as err:  # e.g. the disk filled up, or the folder went away during the episode
+            parser.error(f"{'--out-dir' if args.all else '--out'} '{out}' cannot be written ({err.strerror or err})")
         _report(result, out, size, frame_skip, env_kwargs, seed)
     return 0
 

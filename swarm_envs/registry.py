@@ -21,14 +21,19 @@ from dataclasses import dataclass, field
 from types import MappingProxyType
 from typing import Any
 
+import numpy as np
+
+from swarm_envs._text import shown
 from swarm_envs.env import SwarmEnv
 from swarm_envs.task import Task
 from swarm_envs.vector import AgentsAsEnvs, SwarmVectorEnv
 
 __all__ = ["EnvSpec", "register", "spec", "list_envs", "task_class", "resolve", "make", "make_vec", "ENV_IDS", "ID_PATTERN"]
 
-#: ``[namespace/]Name-vN``: letters, digits, ``_``, ``.`` and ``-`` in the namespace, a versioned name.
-ID_PATTERN = re.compile(r"^(?:[A-Za-z0-9_.-]+/)?[A-Za-z_][A-Za-z0-9_.]*-v(?:0|[1-9][0-9]*)$")
+#: ``[namespace/]Name-vN``, the whole string (``fullmatch``): a namespace of letters, digits, ``_``, ``.`` and
+#: ``-`` that does not start with ``.`` (so never ``..``), one ``/``, and a versioned name of letters, digits,
+#: ``_`` and ``.`` that starts with a letter or ``_``; no whitespace, control characters or other separators.
+ID_PATTERN = re.compile(r"(?:[A-Za-z0-9_-][A-Za-z0-9_.-]*/)?[A-Za-z_][A-Za-z0-9_.]*-v(?:0|[1-9][0-9]*)")
 
 
 @dataclass(frozen=True)
@@ -71,6 +76,18 @@ ENV_IDS: Mapping[str, EnvSpec] = MappingProxyType(_REGISTRY)
 def _check_entry_class(target: Any, env_id: str) -> None:
     if not (isinstance(target, type) and issubclass(target, (Task, SwarmEnv))):
         raise TypeError(f"{env_id}: the entry point must be a swarm_envs.task.Task or swarm_envs.env.SwarmEnv subclass, got {target!r}")
+    _check_concrete(target, f"{env_id}: the entry point")
+
+
+def _check_concrete(target: type, what: str) -> None:
+    """``TypeError`` for the abstract base ``Task`` itself (or a ``SwarmEnv`` class whose task it is): it has no
+    rewards, so an env of it would only fail at its first reset."""
+    if (target.TASK if issubclass(target, SwarmEnv) else target) is Task:
+        base = "the abstract base class swarm_envs.Task"
+        name = base if target is Task else f"{target.__qualname__}, whose TASK is {base}"
+        raise TypeError(
+            f"{what} is {name}: an env needs a subclass of swarm_envs.Task that implements its hooks (at least rewards(state, first))"
+        )
 
 
 def register(env_id: str, entry_point: type | str, *, kwargs: Mapping[str, Any] | None = None) -> EnvSpec:
@@ -82,8 +99,11 @@ def register(env_id: str, entry_point: type | str, *, kwargs: Mapping[str, Any] 
     another one it replaces the old entry and warns (as Gymnasium does). Settings are checked when an env
     is made. Returns the :class:`EnvSpec`.
     """
-    if not isinstance(env_id, str) or not ID_PATTERN.match(env_id):
-        raise ValueError(f"env id must look like 'namespace/Name-v0' (a versioned name, namespace optional), got {env_id!r}")
+    if not isinstance(env_id, str) or not ID_PATTERN.fullmatch(env_id):
+        raise ValueError(
+            "env id must look like 'namespace/Name-v0' (a versioned name, namespace optional; letters, digits, '_', '.' "
+            f"and '-' in the namespace, not starting with '.'; no spaces or other separators), got {shown(env_id)}"
+        )
     if isinstance(entry_point, str):
         if ":" not in entry_point or not all(entry_point.partition(":")[::2]):
             raise ValueError(f"a string entry point must be 'module:Class', got {entry_point!r}")
@@ -91,6 +111,9 @@ def register(env_id: str, entry_point: type | str, *, kwargs: Mapping[str, Any] 
         _check_entry_class(entry_point, env_id)
     if kwargs is not None and not isinstance(kwargs, Mapping):
         raise TypeError(f"kwargs must be a dict of default settings, got {type(kwargs).__name__}")
+    clash = next((other for other in _REGISTRY if other != env_id and other.lower() == env_id.lower()), None)
+    if clash is not None:
+        raise ValueError(f"env id {env_id!r} differs from the registered id {clash!r} only in letter case; use {clash!r} or another name")
     new = EnvSpec(env_id, entry_point, MappingProxyType(dict(kwargs or {})))
     old = _REGISTRY.get(env_id)
     if old is not None:
@@ -158,6 +181,7 @@ def resolve(env: Any) -> tuple[type, dict[str, Any]]:
         env_spec = spec(env)
         return env_spec.load(), dict(env_spec.kwargs)
     task_class(env)  # TypeError for anything else
+    _check_concrete(env, "the env")
     return env, {}
 
 
@@ -176,8 +200,8 @@ def make_vec(env: str | type, num_envs: int, *, agents_as_envs: bool = False, **
     core: a Gymnasium ``VectorEnv`` with ``(num_envs, n_agents, ...)`` arrays (:mod:`swarm_envs.vector`).
     ``agents_as_envs=True``: every robot of every copy as one sub-env (``num_envs x n_agents`` rows,
     :class:`swarm_envs.vector.AgentsAsEnvs`), for Gymnasium's vector wrappers."""
-    if not isinstance(agents_as_envs, bool):
+    if not isinstance(agents_as_envs, (bool, np.bool_)):
         raise TypeError(f"agents_as_envs must be True or False, got {agents_as_envs!r:.80}")
     entry, defaults = resolve(env)
     vec = SwarmVectorEnv(entry, num_envs, **{**defaults, **kwargs})
-    return AgentsAsEnvs(vec) if agents_as_envs else vec
+    return AgentsAsEnvs(vec) if bool(agents_as_envs) else vec

@@ -27,6 +27,8 @@ import argparse
 from dataclasses import dataclass, replace
 from typing import Any
 
+import numpy as np
+
 from swarm_envs._text import shown
 from swarm_envs.comm.bch import SUPPORTED as BCH_CODES
 from swarm_envs.comm.protocol import MAX_PAYLOAD
@@ -183,7 +185,7 @@ class Flag(Setting):
         return "True or False"
 
     def check(self, key: str, value: Any) -> bool:
-        if isinstance(value, bool) or type(value).__name__ == "bool_":
+        if isinstance(value, (bool, np.bool_)):  # np.bool_ is named "bool" under numpy 2, "bool_" before
             return bool(value)
         raise SettingsError(key, f"{key} must be True or False, got {shown(value)}")
 

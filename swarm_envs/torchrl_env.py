@@ -45,6 +45,7 @@ from tensordict import TensorDict, TensorDictBase
 from torchrl.data import Bounded, Categorical, Composite, Unbounded
 from torchrl.envs import EnvBase
 
+from swarm_envs._text import shown
 from swarm_envs.torch_threads import set_torch_threads
 from swarm_envs.vector import SwarmVectorEnv
 from swarm_envs.registry import resolve
@@ -59,6 +60,38 @@ def _box_spec(space: spaces.Box, lead: tuple[int, ...], device: torch.device) ->
     low = torch.as_tensor(np.broadcast_to(space.low, lead + space.shape).copy(), dtype=torch.float32)
     high = torch.as_tensor(np.broadcast_to(space.high, lead + space.shape).copy(), dtype=torch.float32)
     return Bounded(low=low, high=high, shape=lead + space.shape, dtype=torch.float32, device=device)
+
+
+def _check_device(device: Any) -> torch.device | None:
+    """``device`` as a ``torch.device``: a ``torch.device`` or a string torch reads (``"cpu"``, ``"cuda:0"``) of a
+    device this torch build can allocate on (the simulation runs on the CPU; its tensors are moved there), or
+    None (TorchRL's env without a device; the tensors stay on the CPU). ``TypeError`` / ``ValueError`` (one
+    line) otherwise."""
+    if device is None:
+        return None
+    if not isinstance(device, (str, torch.device)):
+        raise TypeError(f"device must be a torch.device or a device string such as 'cpu' or 'cuda:0', got {shown(device)}")
+    try:
+        parsed = torch.device(device)
+    except (RuntimeError, ValueError):
+        raise ValueError(f"device={shown(device)} is not a torch device; use 'cpu' (or an accelerator of this machine such as 'cuda:0')") from None
+    if parsed.type == "meta":
+        raise ValueError(f"device={shown(device)} holds no data; use 'cpu' (or an accelerator of this machine such as 'cuda:0')")
+    if parsed.type != "cpu":
+        try:
+            torch.empty(1, device=parsed)
+        except Exception as err:  # torch raises AssertionError, RuntimeError, NotImplementedError ... for a missing device
+            detail = " ".join(str(err).split())[:120]
+            raise ValueError(
+                f"device={shown(device)} is not available in this torch build ({type(err).__name__}: {detail}); the simulation runs on "
+                "the CPU, use device='cpu'"
+            ) from None
+    return parsed
+
+
+def _keys(tensordict: TensorDictBase) -> str:
+    """The tensordict's keys, nested ones as tuples, cut short for an error message."""
+    return shown(sorted(map(str, tensordict.keys(include_nested=True, leaves_only=True))), 160)
 
 
 def _agent_infos(infos: dict[str, Any]) -> dict[str, np.ndarray]:
@@ -83,7 +116,9 @@ class SwarmTorchRLEnv(EnvBase):
     Args:
         env_id: a registered id, e.g. ``"swarm_envs/Flocking-v0"``, or a ``Task`` / ``SwarmEnv`` subclass.
         num_envs: number of copies B (the env's ``batch_size``).
-        device: device of the returned tensors (the simulation runs on the CPU).
+        device: device of the returned tensors (the simulation runs on the CPU): a ``torch.device`` or a string
+            torch reads, of a device this torch build has (``"cpu"``, ``"cuda:0"``); ``TypeError`` /
+            ``ValueError`` otherwise.
         group: name of the agent group (the tensordict key of the per-agent entries).
         seed: if given, seeds the first reset (:meth:`set_seed`).
         torch_threads: torch's intra-op thread count, set at construction
@@ -106,6 +141,7 @@ class SwarmTorchRLEnv(EnvBase):
     ) -> None:
         if not isinstance(group, str) or not group or group in ("info", "state", "done", "terminated", "truncated", "next"):
             raise ValueError(f"group must be a non-empty name other than the root keys, got {group!r}")
+        device = _check_device(device)
         if torch_threads != 0:
             set_torch_threads(torch_threads)
         entry, defaults = resolve(env_id)  # an id (with its default settings) or a Task / SwarmEnv class
@@ -193,7 +229,13 @@ class SwarmTorchRLEnv(EnvBase):
     def _step(self, tensordict: TensorDictBase) -> TensorDictBase:
         if self._episode_over.any():
             raise RuntimeError("step after the episodes ended: reset the env (TorchRL's rollout and collectors do)")
-        action = tensordict.get((self.group, "action"))
+        action = tensordict.get((self.group, "action"), None)
+        if not isinstance(action, torch.Tensor):
+            got = "it has no such entry" if action is None else f"it holds a {type(action).__name__}"
+            raise ValueError(
+                f"step needs the actions as the tensor entry {(self.group, 'action')!r} of shape "
+                f"{tuple(self.action_spec[self.group, 'action'].shape)}; {got} (keys: {_keys(tensordict)})"
+            )
         obs, rewards, terminations, truncations, infos = self.vec.step(action.detach().cpu().numpy())
         self._episode_over = terminations.any(axis=1) | truncations.any(axis=1)
         out = self._tensordict(obs, infos, rewards, terminations[..., None], truncations[..., None])

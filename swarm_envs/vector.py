@@ -32,6 +32,7 @@ from swarm_envs.core import SwarmCore
 from swarm_envs.env import check_reset_options, check_seed, make_layout, resolve_config
 from swarm_envs.platforms import get_platform
 from swarm_envs.settings import SettingsError
+from swarm_envs.task import Task
 
 #: copies of one batched core at most, and robots over all its copies at most (memory grows with both)
 MAX_COPIES = 100_000
@@ -63,6 +64,10 @@ class SwarmVectorEnv(VectorEnv):
         if kwargs.get("render_mode") is not None:
             raise SettingsError("render_mode", "make_vec does not render; use the single env (swarm_envs.make) with render_mode")
         task_cls = getattr(task, "TASK", task)  # an env class's task
+        if not (isinstance(task_cls, type) and issubclass(task_cls, Task)) or task_cls is Task:
+            raise TypeError(
+                f"SwarmVectorEnv needs a subclass of swarm_envs.Task that implements the hooks (at least rewards), got {task!r:.80}"
+            )
         cfg = resolve_config(task_cls, kwargs)
         self.config = cfg
         self.platform = get_platform(cfg["platform"])

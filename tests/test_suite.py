@@ -64,6 +64,9 @@ def test_plan_covers_variants_seeds_and_the_sensing_cost(tmp_path):
     assert runs[5]["argv"][-2:] == ["--eval-only", str(tmp_path / "out" / "sorted_following" / "odometry@ideal" / "seed0" / "model.zip")]
     subset = suite_mod.plan(suite, tmp_path / "out", seeds=[1], variants=["mlp"])
     assert [Path(r["dir"]).name for r in subset] == ["baselines", "seed1"]
+    no_cost = suite_mod.plan(suite, tmp_path / "out", variants=["odometry"], sensing_cost=False)
+    assert [str(Path(r["dir"]).relative_to(tmp_path / "out" / "sorted_following")) for r in no_cost] == [
+        "baselines", "odometry/seed0", "odometry/seed1"]
 
 
 @pytest.mark.parametrize(

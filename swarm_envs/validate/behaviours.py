@@ -23,7 +23,6 @@ measure of [T20 Sec. 7]; the values :data:`swarm_envs.task.MESSAGE_RANGE` record
 
 from __future__ import annotations
 
-import argparse
 import json
 import os
 import sys
@@ -36,6 +35,7 @@ import swarm_envs
 from swarm_envs.agents.evaluation import confidence_interval, evaluate
 from swarm_envs.agents.scripted import make_scripted
 from swarm_envs.agents.tasks import headline, metric_reductions, scripted_policy
+from swarm_envs.settings import COMMON_SETTINGS, Int, OneLineArgumentParser, cli_type
 
 __all__ = ["BEHAVIOURS", "run_episode_trajectory", "message_ranges", "main"]
 
@@ -181,19 +181,18 @@ def message_ranges(steps: int = 300, seed: int = 0) -> dict[str, float]:
 
 def main(argv: list[str] | None = None) -> int:
     """Command line of ``python -m swarm_envs.validate behaviours``; returns the exit code."""
-    ap = argparse.ArgumentParser(prog="python -m swarm_envs.validate behaviours", description=__doc__.split("\n")[0])
+    ap = OneLineArgumentParser(prog="python -m swarm_envs.validate behaviours", description=__doc__.split("\n")[0])
     ap.add_argument("--out", default="validation_output", help="folder for the PNG figures")
-    ap.add_argument("--seed", type=int, default=None, help="draw this seed (default: the evaluated seed whose headline is nearest the median)")
-    ap.add_argument("--seeds", type=int, default=10, help="episodes per behaviour for the mean metrics (default 10)")
+    ap.add_argument("--seed", type=cli_type(Int(None, low=0, high=2**63 - 1), "--seed"), default=None,
+                    help="draw this seed (default: the evaluated seed whose headline is nearest the median)")
+    ap.add_argument("--seeds", type=cli_type(Int(10, low=1, high=100_000), "--seeds"), default=10,
+                    help="episodes per behaviour for the mean metrics (default 10)")
     ap.add_argument("--only", action="append", default=[], choices=list(BEHAVIOURS), help="run only these behaviours (repeatable)")
-    ap.add_argument("--max-cycles", type=int, default=None, help="episode length (default: each env's)")
+    ap.add_argument("--max-cycles", type=cli_type(COMMON_SETTINGS["max_cycles"], "--max-cycles"), default=None,
+                    help="episode length (default: each env's)")
     ap.add_argument("--message-range", action="store_true", help="also measure each platform's reliable message range")
     ap.add_argument("--json", action="store_true")
-    args = ap.parse_args(argv)
-    if args.seeds < 1:
-        ap.error("--seeds must be >= 1")
-    if args.max_cycles is not None and args.max_cycles < 1:
-        ap.error("--max-cycles must be >= 1")
+    args = ap.parse_args(argv)  # every number checked by its rule: a bad one is one usage line, exit code 2
     summary: dict[str, Any] = {"behaviours": {}}
     for name in args.only or list(BEHAVIOURS):
         env_id, settings, figure, what = BEHAVIOURS[name]
