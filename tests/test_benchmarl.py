@@ -2,6 +2,7 @@
 
 import importlib.util
 import math
+import sys
 from pathlib import Path
 
 import pytest
@@ -16,11 +17,14 @@ from swarm_envs.torchrl_env import SwarmTorchRLEnv  # noqa: E402
 
 pytestmark = pytest.mark.filterwarnings("ignore::DeprecationWarning")
 EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "benchmarl_mappo.py"
+CONFIGS = sorted((Path(__file__).resolve().parents[1] / "configs" / "benchmarl").glob("*.yaml"))
 
 
 def load_example():
     spec = importlib.util.spec_from_file_location("benchmarl_mappo", EXAMPLE)
     example = importlib.util.module_from_spec(spec)
+    # registered, so that BenchMARL can pickle the example's task class (NeighbourSetTask) by reference
+    sys.modules["benchmarl_mappo"] = example
     spec.loader.exec_module(example)
     return example
 
@@ -100,3 +104,85 @@ def test_example_main_with_the_flat_observation():
          "--n-robots", "3", "--max-steps", "10", "--sensing", "full", "--flatten", "--torch-threads", "1"]
     )
     assert set(results) == {"mappo"} and math.isfinite(results["mappo"]["episode_reward"])
+
+
+# --- models: the ready configs (configs/benchmarl/) and the example's --model ---
+
+TINY = ["--task", "aggregation", "--frames", "2000", "--frames-per-batch", "1000", "--num-envs", "10", "--n-robots", "3",
+        "--max-steps", "20", "--sensing", "ideal", "--torch-threads", "1"]
+
+
+def test_the_configs_are_there():
+    assert {p.stem for p in CONFIGS} >= {"mlp", "gru", "deepsets", "gnn", "gnn_gru"}
+
+
+@pytest.mark.parametrize("config", CONFIGS, ids=[p.stem for p in CONFIGS])
+def test_config_trains_mappo_and_ippo(config, capsys):
+    """Each ready config builds and trains MAPPO and IPPO on a tiny budget (its own model, the command line's
+    budget); the returned and the printed evaluation metrics are finite."""
+    example = load_example()
+    options = example.load_config(str(config))
+    assert set(options) <= set(vars(example.parse_args([]))) and options["algorithms"] == ["mappo", "ippo"]
+    if "gnn" in options["model"].split("+"):
+        pytest.importorskip("torch_geometric", reason="the gnn model needs torch_geometric")
+    results = example.main(["--config", str(config), *TINY])
+    assert set(results) == {"mappo", "ippo"}
+    printed = [line for line in capsys.readouterr().out.splitlines() if line.startswith(("mappo", "ippo"))]
+    assert len(printed) == 2
+    for algorithm, line in zip(["mappo", "ippo"], printed):
+        result = results[algorithm]
+        assert {"episode_reward", "largest_cluster_fraction", "mean_distance_to_centroid"} <= set(result)
+        assert all(math.isfinite(v) for v in result.values()), result
+        assert line.startswith(f"{algorithm:5s} {options['model']} aggregation: ")
+        values = [float(v) for v in line.split(": ", 1)[1].split()[1::2]]
+        assert len(values) == len(result) and all(math.isfinite(v) for v in values)
+
+
+def test_config_file_and_command_line(tmp_path):
+    example = load_example()
+    config = tmp_path / "c.yaml"
+    config.write_text("task: sorted_following\nalgorithms: [ippo]\nmodel: deepsets+gru\nframes: 10\nn_robots: null\n")
+    args = example.parse_args(["--config", str(config), "--frames", "20"])
+    got = (args.task, args.algorithms, args.model, args.frames, args.n_robots)
+    assert got == ("sorted_following", ["ippo"], "deepsets+gru", 20, None)
+    assert example.parse_args([]).model == "mlp"  # without a file: the defaults
+    for text in ("modle: gru\n", "model: gru+rnn\n", "task: nowhere\n", "algorithms: [mappo, qmix]\n"):
+        config.write_text(text)
+        with pytest.raises(SystemExit):
+            example.parse_args(["--config", str(config)])
+
+
+def test_model_chains_and_critics():
+    from benchmarl.models import DeepsetsConfig, GruConfig, MlpConfig, SequenceModelConfig
+
+    example = load_example()
+    chain = example.model_config("deepsets+gru", hidden=16)
+    assert isinstance(chain, SequenceModelConfig) and chain.intermediate_sizes == [16] and chain.is_rnn
+    assert [type(c) for c in chain.model_configs] == [DeepsetsConfig, GruConfig]
+    with pytest.raises(ValueError, match="first"):
+        example.model_config("gru+deepsets")
+    with pytest.raises(ValueError, match="unknown"):
+        example.model_config("transformer")
+    # the critic: MAPPO's an MLP on the state; IPPO's a DeepSets when the observation keeps the neighbour rows
+    assert isinstance(example.critic_config("mappo", "deepsets"), MlpConfig)
+    assert isinstance(example.critic_config("ippo", "deepsets+gru"), DeepsetsConfig)
+    assert isinstance(example.critic_config("ippo", "gru"), MlpConfig)
+
+
+@pytest.mark.parametrize("task", ["aggregation", "sorted_following"])
+def test_neighbour_set_task_keeps_the_range_bearing_rows(task):
+    example = load_example()
+    swarm_task = example.make_task(task, "deepsets", max_steps=5, n_robots=None, sensing="ideal")
+    assert isinstance(swarm_task, example.NeighbourSetTask) and swarm_task.config["max_steps"] == 5
+    base = swarm_task.get_env_fun(num_envs=2, continuous_actions=True, seed=0, device="cpu")()
+    env = TransformedEnv(base, Compose(*swarm_task.get_env_transforms(base)))
+    check_env_specs(env)
+    parts = dict(swarm_task.observation_spec(env)[GROUP, "observation"].items())
+    n, sets = base.n_agents, ["range_bearing"] + (["range_bearing_ids"] if "range_bearing_ids" in parts else [])
+    assert (task == "sorted_following") == ("range_bearing_ids" in parts)  # the r-one task observes ids
+    assert [tuple(parts[k].shape[:2]) for k in sets] == [(n, 8)] * len(sets)
+    assert all(len(p.shape) == 2 for k, p in parts.items() if k not in sets)  # the other parts flattened to vectors
+    flat = example.make_task(task, "deepsets", max_steps=5, sensing="ideal", flatten=True)
+    with pytest.raises(ValueError, match="flatten"):
+        flat.get_env_transforms(flat.get_env_fun(1, True, 0, "cpu")())
+    assert type(example.make_task(task, "gnn+gru")) is type(SwarmTask.AGGREGATION.get_task())
