@@ -41,3 +41,19 @@ def assert_tree_equal(a, b, path: str = "") -> None:
 @pytest.fixture
 def rng() -> np.random.Generator:
     return np.random.default_rng(12345)
+
+
+@pytest.fixture
+def forget_registered_ids():
+    """Env ids registered during a test (or wrongly accepted by the code under test) are removed after it,
+    from the suite's registry and PettingZoo's (other tests iterate over the registry)."""
+    import pettingzoo
+
+    from swarm_envs import registry
+
+    before = dict(registry._REGISTRY)
+    yield
+    for env_id in set(registry._REGISTRY) - set(before):
+        del registry._REGISTRY[env_id]
+        pettingzoo.parallel_registry.pop(env_id, None)
+        pettingzoo.aec_registry.pop(env_id, None)

@@ -110,16 +110,8 @@ def test_benchmark_command_takes_a_user_task(example, capsys):
 
 # -- the registry ---------------------------------------------------------------------------------------
 @pytest.fixture(autouse=True)
-def _forget_test_ids():
-    """Ids registered by a test are removed after it (the suite's other tests iterate over the registry)."""
-    from swarm_envs import registry
-
-    before = dict(registry._REGISTRY)
-    yield
-    for env_id in set(registry._REGISTRY) - set(before):
-        del registry._REGISTRY[env_id]
-        pettingzoo.parallel_registry.pop(env_id, None)
-        pettingzoo.aec_registry.pop(env_id, None)
+def _forget_test_ids(forget_registered_ids):
+    """Ids registered by a test are removed after it (conftest's ``forget_registered_ids``)."""
 
 
 class _Still(Task):

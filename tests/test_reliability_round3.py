@@ -9,7 +9,6 @@ import warnings
 from pathlib import Path
 
 import numpy as np
-import pettingzoo
 import pytest
 
 import swarm_envs
@@ -21,16 +20,8 @@ TINY_DEMO = ["--sensing", "ideal", "--n-robots", "2", "--steps", "1", "--pixels"
 
 
 @pytest.fixture(autouse=True)
-def _forget_test_ids():
-    """Ids registered by a test (or wrongly accepted by the code under test) are removed after it."""
-    from swarm_envs import registry
-
-    before = dict(registry._REGISTRY)
-    yield
-    for env_id in set(registry._REGISTRY) - set(before):
-        del registry._REGISTRY[env_id]
-        pettingzoo.parallel_registry.pop(env_id, None)
-        pettingzoo.aec_registry.pop(env_id, None)
+def _forget_test_ids(forget_registered_ids):
+    """Ids registered by a test are removed after it (conftest's ``forget_registered_ids``)."""
 
 
 def _one_line_exit(capsys, main, argv: list[str], *words: str) -> str:
