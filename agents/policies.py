@@ -34,7 +34,7 @@ from swarm_envs.agents.base import Policy, flatten_batch
 from swarm_envs.env import DT
 from swarm_envs.observation import ObservationLayout
 from swarm_envs.platforms import Platform
-from swarm_envs.world import N_BUMP_SECTORS
+from swarm_envs.world import N_BUMP_SECTORS, wheel_limited
 
 __all__ = [
     "PolicySpec",
@@ -80,13 +80,10 @@ class PolicySpec:
 
 
 # -- odometry ---------------------------------------------------------------------------------------------
-def _part_offsets(layout: ObservationLayout) -> dict[str, tuple[int, tuple[int, ...]]]:
-    """``{part: (offset in the flat vector, shape)}`` in the flattened order."""
-    out, start = {}, 0
-    for name, box in layout.dict_space().spaces.items():
-        out[name] = (start, tuple(box.shape))
-        start += int(np.prod(box.shape))
-    return out
+def _part_indices(layout: ObservationLayout) -> dict[str, np.ndarray]:
+    """``{part: flat indices in the part's shape}``: the layout's own unflattening of ``0 .. D - 1``."""
+    size = sum(int(np.prod(box.shape)) for box in layout.dict_space().spaces.values())
+    return layout.unflatten(np.arange(size))
 
 
 def _rotate(cos_sin: np.ndarray, angle: np.ndarray) -> np.ndarray:
@@ -109,13 +106,11 @@ class Odometry:
     """
 
     def __init__(self, layout: ObservationLayout, platform: Platform) -> None:
-        offsets = _part_offsets(layout)
-        self.rb_at, (self.k, _) = offsets["range_bearing"]
-        self.sf_at, _ = offsets["scale_free"]
-        self.ang_at = offsets["proprio"][0] + N_BUMP_SECTORS + 1
+        index = _part_indices(layout)
+        self.rb_index, self.sf_index = index["range_bearing"], index["scale_free"]  # (K, 7), (K, 3)
+        self.action_index = index["proprio"][N_BUMP_SECTORS : N_BUMP_SECTORS + 2]  # last (linear, angular) command
         self.history = int(layout.max_age) + 1
-        self.half_base, self.vmax = 0.5 * platform.wheel_base, platform.max_speed
-        self.max_angular = platform.max_angular_speed
+        self.platform = platform
         self.reset(0)
 
     def reset(self, n: int) -> None:
@@ -130,27 +125,27 @@ class Odometry:
         n = len(flat)
         if self.turned.shape[0] != n:
             self.reset(n)
-        lin_frac, ang_frac = flat[:, self.ang_at - 1].astype(np.float64), flat[:, self.ang_at].astype(np.float64)
-        linear, angular = lin_frac * self.vmax, ang_frac * self.max_angular
-        left = np.clip(linear - angular * self.half_base, -self.vmax, self.vmax)
-        right = np.clip(linear + angular * self.half_base, -self.vmax, self.vmax)
+        command = flat[:, self.action_index].astype(np.float64)
+        _, angular = wheel_limited(self.platform, command[:, 0] * self.platform.max_speed, command[:, 1] * self.platform.max_angular_speed)
         self.turned = np.roll(self.turned, 1, axis=1)
-        self.turned[:, 0] = (right - left) / (2 * self.half_base) * DT
+        self.turned[:, 0] = angular * DT
         since = np.concatenate([np.zeros((n, 1)), np.cumsum(self.turned, axis=1)], axis=1)  # since[:, a] = a steps
 
-        rb = flat[:, self.rb_at : self.rb_at + 7 * self.k].reshape(n, self.k, 7)
+        rb = flat[:, self.rb_index]
         age = np.clip(np.rint(rb[..., 6]).astype(np.int64), 0, self.history)
         angle = np.take_along_axis(since, age, axis=1) * (rb[..., 0] > 0.5)
         rb[..., 2:4] = _rotate(rb[..., 2:4], angle)
         rb[..., 4:6] = _rotate(rb[..., 4:6], angle)
+        flat[:, self.rb_index] = rb
 
-        sf = flat[:, self.sf_at : self.sf_at + 3 * self.k].reshape(n, self.k, 3)
+        sf = flat[:, self.sf_index]
         if self.sf_last is not None:
             changed = np.any(sf != self.sf_last, axis=(1, 2))
             self.sf_since = np.where(changed, 0, np.minimum(self.sf_since + 1, self.history))
         self.sf_last = sf.copy()
         sf_angle = since[np.arange(n), self.sf_since][:, None] * (sf[..., 0] > 0.5)
         sf[..., 1:3] = _rotate(sf[..., 1:3], sf_angle)
+        flat[:, self.sf_index] = sf
         return flat
 
 
@@ -208,21 +203,17 @@ def wrap_training_env(venv: VecEnv, spec: PolicySpec, layout: ObservationLayout,
 # -- set encoder ------------------------------------------------------------------------------------------
 def row_groups(layout: ObservationLayout) -> dict[str, Any]:
     """What :class:`SetEncoder` needs of a layout, as plain numbers (saved with the model): per row block,
-    the flat indices of each row's features (base part, then its id part) and of its ``valid`` flag; and the
-    indices of the rest (``proprio``, ``rigid``, ``own_id``)."""
-    offsets = _part_offsets(layout)
-    groups, used = [], set()
+    the flat indices of each row's features (base part, then its id part, whose rows are the same
+    neighbours); and the indices of the rest (``proprio``, ``rigid``, ``own_id``)."""
+    index = _part_indices(layout)
+    groups, used = [], []
     for base, ids in ROW_PARTS:
-        at, (rows, cols) = offsets[base]
-        index = at + np.arange(rows * cols).reshape(rows, cols)
-        used.update(range(at, at + rows * cols))
-        if ids in offsets:
-            at_i, (_, cols_i) = offsets[ids]
-            index = np.concatenate([index, at_i + np.arange(rows * cols_i).reshape(rows, cols_i)], axis=1)
-            used.update(range(at_i, at_i + rows * cols_i))
-        groups.append({"name": base, "index": index.tolist()})
-    size = sum(int(np.prod(shape)) for _, shape in offsets.values())
-    return {"groups": groups, "rest": [i for i in range(size) if i not in used], "size": size}
+        rows = index[base] if ids not in index else np.concatenate([index[base], index[ids]], axis=1)
+        groups.append({"index": rows.tolist()})
+        used.append(rows.ravel())
+    size = sum(part.size for part in index.values())
+    rest = np.setdiff1d(np.arange(size), np.concatenate(used))
+    return {"groups": groups, "rest": rest.tolist(), "size": size}
 
 
 class SetEncoder(BaseFeaturesExtractor):
@@ -243,7 +234,7 @@ class SetEncoder(BaseFeaturesExtractor):
         super().__init__(observation_space, per_frame * n_stack)
         if observation_space.shape[-1] != size * n_stack:
             raise ValueError(f"SetEncoder: observation size {observation_space.shape[-1]} is not {n_stack} x {size}")
-        self.size, self.n_stack, self.n_groups = size, n_stack, len(groups["groups"])
+        self.size, self.n_stack = size, n_stack
         for i, g in enumerate(groups["groups"]):
             self.register_buffer(f"_index{i}", torch.as_tensor(g["index"], dtype=torch.long), persistent=False)
         self.register_buffer("_rest", torch.as_tensor(rest, dtype=torch.long), persistent=False)
@@ -313,7 +304,7 @@ class TrainedPolicy(Policy):
     training: odometry every control step, a decision every ``action_repeat`` steps (the action held in
     between), the last ``frame_stack`` decision observations, the LSTM state of a recurrent model."""
 
-    name = "rl"
+    name = "ppo"
 
     def __init__(self, model, platform: Platform, layout: ObservationLayout, spec: PolicySpec | None = None, deterministic: bool = True) -> None:
         super().__init__(platform, layout)

@@ -171,10 +171,18 @@ def _rl_cell(dirs: list[Path], metric: str) -> tuple[float, float, float, int, l
     return mean, lo, hi, len(means), means
 
 
-def _curve(run: Path, repeat: int) -> tuple[np.ndarray, np.ndarray] | None:
+def _seed_dirs(variant: Path) -> list[Path]:
+    """The finished runs (``seed<S>`` with ``per_seed.json``) of one variant's directory."""
+    return sorted(p for p in variant.glob("seed*") if (p / "per_seed.json").is_file())
+
+
+def _curve(run: Path) -> tuple[np.ndarray, np.ndarray] | None:
+    """(robot-steps, mean episode return) of one run's ``progress.csv`` (PPO counts decisions: times the
+    run's ``agent.action_repeat``)."""
     path = run / "progress.csv"
     if not path.is_file():
         return None
+    repeat = int(((yaml.safe_load((run / "config.yaml").read_text()) or {}).get("agent") or {}).get("action_repeat", 1))
     with open(path, newline="") as fh:
         rows = [r for r in csv.DictReader(fh) if r.get("rollout/ep_rew_mean") not in (None, "")]
     if not rows:
@@ -202,18 +210,16 @@ def report(suite: dict[str, Any], out: Path, tasks: list[str] | None = None) -> 
         task_dir = out / task
         base = _per_seed(task_dir / "baselines")
         n_eval = len(base.get("seeds", []))
-        cfg = yaml.safe_load(Path(entry["config"]).read_text())
         curves: dict[str, list[tuple[np.ndarray, np.ndarray]]] = {}
-        for name, overrides in entry["variants"].items():
-            dirs = sorted(p for p in (task_dir / name).glob("seed*") if (p / "per_seed.json").is_file())
+        for name in entry["variants"]:
+            dirs = _seed_dirs(task_dir / name)
             mean, lo, hi, n, means = _rl_cell(dirs, metric)
             if n:
                 n_eval = n_eval or len(_per_seed(dirs[0]).get("seeds", []))
                 lines.append(f"| {task} | {metric} ({'higher' if sign > 0 else 'lower'} is better) | RL: {name} | {_fmt(mean, lo, hi, n)} training seeds | {n_eval} |")
                 csv_rows.append({"task": task, "metric": metric, "policy": f"rl:{name}", "mean": mean, "ci_low": lo, "ci_high": hi,
                                  "n": n, "interval": "t over training seeds", "per_training_seed": ";".join(f"{m:.6g}" for m in means)})
-            repeat = int(overrides.get("agent.action_repeat", (cfg.get("agent") or {}).get("action_repeat", 1)))
-            curves[name] = [c for c in (_curve(d, repeat) for d in dirs) if c is not None]
+            curves[name] = [c for c in map(_curve, dirs) if c is not None]
         for policy in ("scripted", "random"):
             values = base.get(policy, {}).get(metric)
             if values:
@@ -223,9 +229,9 @@ def report(suite: dict[str, Any], out: Path, tasks: list[str] | None = None) -> 
                                  "n": len(values), "interval": "bootstrap over evaluation seeds", "per_training_seed": ""})
         cost = entry.get("sensing_cost")
         if cost:
-            ideal_dirs = sorted(p for p in (task_dir / f"{cost}@ideal").glob("seed*") if (p / "per_seed.json").is_file())
+            ideal_dirs = _seed_dirs(task_dir / f"{cost}@ideal")
             full_eval = [d / "eval-full" for d in ideal_dirs if (d / "eval-full" / "per_seed.json").is_file()]
-            full_dirs = sorted(p for p in (task_dir / cost).glob("seed*") if (p / "per_seed.json").is_file())
+            full_dirs = _seed_dirs(task_dir / cost)
             cells = []
             for dirs in (ideal_dirs, full_eval, full_dirs):
                 mean, lo, hi, n, _ = _rl_cell(dirs, metric)

@@ -761,15 +761,20 @@ class World:
     # -- dynamics --------------------------------------------------------------------------------
     def wheel_limited(self, linear: np.ndarray, angular: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Clip commanded (v m/s, w rad/s) so neither wheel exceeds the platform's max speed."""
-        half_base = 0.5 * self.platform.wheel_base
-        vmax = self.platform.max_speed
-        left = np.clip(linear - angular * half_base, -vmax, vmax)
-        right = np.clip(linear + angular * half_base, -vmax, vmax)
-        return 0.5 * (left + right), (right - left) / (2 * half_base)
+        return wheel_limited(self.platform, linear, angular)
 
     def step(self, linear: np.ndarray, angular: np.ndarray, dt: float) -> None:
         """Advance ``dt`` seconds with commanded linear (m/s) and angular (rad/s) velocities (n,)."""
         step_worlds([self], linear, angular, dt)
+
+
+def wheel_limited(platform: Platform, linear: np.ndarray, angular: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Commanded (v m/s, w rad/s) clipped so neither wheel of ``platform`` exceeds its max speed."""
+    half_base = 0.5 * platform.wheel_base
+    vmax = platform.max_speed
+    left = np.clip(linear - angular * half_base, -vmax, vmax)
+    right = np.clip(linear + angular * half_base, -vmax, vmax)
+    return 0.5 * (left + right), (right - left) / (2 * half_base)
 
 
 def step_worlds(worlds: Sequence[World], linear: np.ndarray, angular: np.ndarray, dt: float) -> None:
