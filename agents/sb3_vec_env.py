@@ -32,7 +32,7 @@ from typing import Any
 import numpy as np
 from stable_baselines3.common.vec_env import VecEnv
 
-from swarm_envs.agents.base import Policy, flatten_batch
+from swarm_envs.agents.policies import TrainedPolicy
 from swarm_envs.registry import resolve
 
 __all__ = ["SwarmVecEnv", "SB3Policy"]
@@ -246,17 +246,11 @@ class _WorkerVec:
                 proc.terminate()
 
 
-class SB3Policy(Policy):
-    """A trained SB3 model (e.g. PPO) as a :class:`Policy`; flattens the named batch in the env's order."""
+class SB3Policy(TrainedPolicy):
+    """A trained SB3 model (e.g. PPO) of the plain variant as a :class:`Policy`: the flat observation in the
+    env's order, one action per step (:class:`swarm_envs.agents.policies.TrainedPolicy` with its defaults)."""
 
     name = "ppo"
 
     def __init__(self, model, platform, layout, deterministic: bool = True) -> None:
-        super().__init__(platform, layout)
-        self.model = model
-        self.deterministic = deterministic
-
-    def act_batch(self, obs: dict[str, np.ndarray]) -> np.ndarray:
-        flat = flatten_batch(self.layout, obs)
-        actions, _ = self.model.predict(flat, deterministic=self.deterministic)
-        return np.clip(np.asarray(actions, dtype=np.float32), -1.0, 1.0)
+        super().__init__(model, platform, layout, deterministic=deterministic)

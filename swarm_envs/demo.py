@@ -117,9 +117,11 @@ def _scripted_policy(env: Any):
 
 
 def load_model_policy(path: str | Path, env: Any):
-    """A trained SB3 PPO ``.zip`` (as ``train.py`` saves it) as a policy for ``env``.
+    """A trained SB3 model ``.zip`` (as ``train.py`` saves it) as a policy for ``env``, run through the policy
+    variant of the run's ``config.yaml`` (beside the model, or beside its ``checkpoints/`` folder: odometry,
+    action repeat, frame stacking, RecurrentPPO); the plain PPO without one.
 
-    :class:`DemoError` (one line) when the file is not a PPO model or does not fit the env's flat
+    :class:`DemoError` (one line) when the file is not such a model or does not fit the env's flat
     observation or action size."""
     path = Path(path)
     if not path.is_file():
@@ -127,9 +129,7 @@ def load_model_policy(path: str | Path, env: Any):
     if not zipfile.is_zipfile(path):
         raise DemoError(f"--model '{path}' is not a zip archive (truncated, or not a stable-baselines3 model)")
     try:
-        from stable_baselines3 import PPO
-
-        from swarm_envs.agents.sb3_vec_env import SB3Policy
+        from swarm_envs.agents.policies import TrainedPolicy, algorithm_class
     except ImportError as err:
         raise DemoError(f"--model needs stable-baselines3 ({err}); pip install 'swarm_envs[rl]'") from None
     from gymnasium.spaces import flatdim
@@ -137,12 +137,14 @@ def load_model_policy(path: str | Path, env: Any):
     from swarm_envs.torch_threads import set_torch_threads
 
     set_torch_threads()  # 1 thread on <= 2 cores (OMP_NUM_THREADS overrides): inference beside the simulation
+    spec = _run_policy_spec(path)
+    kind = "RecurrentPPO" if spec.algorithm == "recurrent_ppo" else "PPO"
     try:
-        model = PPO.load(path, device="cpu")
+        model = algorithm_class(spec).load(path, device="cpu")
     except Exception as err:  # SB3 raises many kinds (KeyError, BadZipFile, ValueError, pickle errors)
         detail = str(err).strip().splitlines()[0] if str(err).strip() else ""
-        raise DemoError(f"--model '{path}' cannot be loaded as a PPO model ({type(err).__name__}{': ' + detail if detail else ''})") from None
-    obs_size, act_size = flatdim(env.layout.dict_space()), env.layout.action_size
+        raise DemoError(f"--model '{path}' cannot be loaded as a {kind} model ({type(err).__name__}{': ' + detail if detail else ''})") from None
+    obs_size, act_size = flatdim(env.layout.dict_space()) * spec.frame_stack, env.layout.action_size
     if model.observation_space.shape != (obs_size,):
         raise DemoError(
             f"--model '{path}' expects observations of size {_size(model.observation_space.shape)} but this env gives "
@@ -150,7 +152,22 @@ def load_model_policy(path: str | Path, env: Any):
         )
     if model.action_space.shape != (act_size,):
         raise DemoError(f"--model '{path}' gives actions of size {_size(model.action_space.shape)} but this env expects {act_size}")
-    return SB3Policy(model, env.platform, env.layout, deterministic=True)
+    return TrainedPolicy(model, env.platform, env.layout, spec, deterministic=True)
+
+
+def _run_policy_spec(path: Path):
+    """The policy variant of the run that saved the model at ``path`` (its ``config.yaml``'s ``agent``
+    section; the run directory for ``checkpoints/*.zip``), or the plain PPO's when there is none."""
+    import yaml
+
+    from swarm_envs.agents.policies import PolicySpec
+
+    run = path.parent.parent if path.parent.name == "checkpoints" else path.parent
+    try:
+        agent = (yaml.safe_load((run / "config.yaml").read_text()) or {}).get("agent") or {}
+        return PolicySpec.from_agent(agent)
+    except (OSError, yaml.YAMLError, AttributeError, TypeError):  # no run config (a model saved elsewhere)
+        return PolicySpec()
 
 
 def _size(shape: tuple[int, ...] | None) -> str:

@@ -11,7 +11,8 @@ from swarm_envs.agents.base import RandomPolicy
 from swarm_envs.agents.evaluation import make_env, run_episode
 from swarm_envs.agents.tasks import headline, scripted_policy
 from swarm_envs.agents.scripted import make_scripted, scripted_class
-from swarm_envs.demo import SHOWCASE, TASKS, _scripted_policy, main
+import swarm_envs
+from swarm_envs.demo import SHOWCASE, TASKS, DemoError, _scripted_policy, main
 from swarm_envs.sensing.base import MessageReadings, NeighbourReadings, ScaleFreeReadings, SensorFrame
 
 SMALL = ["--sensing", "ideal", "--n-robots", "3", "--pixels", "200"]
@@ -208,3 +209,31 @@ def test_frame_shows_links_messages_caption_and_legend_in_the_palette():
     assert render._TEXT not in {tuple(c) for c in np.unique(plain.reshape(-1, 3), axis=0)}
     renderer.close()
     env.close()
+
+
+def test_model_runs_through_its_runs_policy_variant(tmp_path):
+    """A model saved by train.py with a policy variant (here odometry and two stacked frames) runs through
+    that variant, read from the run's config.yaml (beside the model or its checkpoints/ folder)."""
+    pytest.importorskip("stable_baselines3")
+    import yaml
+
+    from swarm_envs.agents.config import DEFAULTS
+    from swarm_envs.agents.policies import PolicySpec, build_model, wrap_training_env
+    from swarm_envs.agents.sb3_vec_env import SwarmVecEnv
+    from swarm_envs.demo import load_model_policy
+
+    agent = {**DEFAULTS["agent"], "n_steps": 8, "batch_size": 8, "odometry": True, "frame_stack": 2}
+    vec = SwarmVecEnv("swarm_envs/Flocking-v0", 1, {"sensing": "ideal", "n_robots": 3})
+    spec = PolicySpec.from_agent(agent)
+    model = build_model(agent, wrap_training_env(vec, spec, vec.layout, vec.platform), vec.layout, seed=0)
+    (tmp_path / "checkpoints").mkdir()
+    model.save(tmp_path / "checkpoints" / "ppo_8_steps.zip")
+    vec.close()
+    env = swarm_envs.make("swarm_envs/Flocking-v0", sensing="ideal", n_robots=3)
+    with pytest.raises(DemoError, match="expects observations of size"):  # no run config: the plain PPO's size
+        load_model_policy(tmp_path / "checkpoints" / "ppo_8_steps.zip", env)
+    (tmp_path / "config.yaml").write_text(yaml.safe_dump({"agent": agent}))
+    policy = load_model_policy(tmp_path / "checkpoints" / "ppo_8_steps.zip", env)
+    assert policy.spec == spec and policy.odometry is not None
+    assert main(["--task", "flocking", "--model", str(tmp_path / "checkpoints" / "ppo_8_steps.zip"), *SMALL, "--steps", "3",
+                 "--out", str(tmp_path / "v.gif")]) == 0
