@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 pytest.importorskip("hypothesis")
-from hypothesis import HealthCheck, given, settings  # noqa: E402
+from hypothesis import HealthCheck, event, given, settings  # noqa: E402
 from hypothesis import strategies as st  # noqa: E402
 from hypothesis.extra import numpy as hnp  # noqa: E402
 
@@ -339,11 +339,14 @@ SPECIAL = [np.nan, np.inf, -np.inf]
 
 @st.composite
 def returned_array(draw, shape: tuple[int, ...]) -> object:
-    """An array of ``shape`` or of a near shape, of any dtype, with finite, NaN or infinite values sometimes;
-    or a list of it, or something that is no array at all."""
+    """Mostly a well-formed array (``shape``, a real dtype, finite values); else one of a near shape, of any
+    dtype, with NaN or infinite values sometimes; or a list of it, or something that is no array at all."""
+    finite = st.floats(-1e3, 1e3, allow_nan=False, width=64)
+    if draw(st.integers(0, 9)) < 6:
+        arr = draw(hnp.arrays(np.float64, shape, elements=finite)).astype(draw(st.sampled_from(["float64", "float32", "int64", "bool"])))
+        return arr.tolist() if draw(st.integers(0, 4)) == 0 else arr
     near = [shape, shape[:-1], shape + (1,), (shape[0] + 1,) + shape[1:], shape[::-1], ()]
     got = draw(st.sampled_from(near[:1] * 4 + near[1:]))
-    finite = st.floats(-1e3, 1e3, allow_nan=False, width=64)
     values = draw(hnp.arrays(np.float64, got, elements=st.one_of(finite, finite, finite, st.sampled_from(SPECIAL))))
     dtype = draw(st.sampled_from(DTYPES[:1] * 4 + DTYPES[1:]))
     if dtype in ("int64", "uint8", "bool"):
@@ -367,18 +370,18 @@ def takes(value: object, shape: tuple[int, ...], nan: bool = False) -> bool:
 
 
 @st.composite
-def returned(draw, declared: bool) -> tuple[object, bool]:
-    """(a return of rewards() for B copies of N agents, whether the contract takes it)."""
-    reward = draw(returned_array((B, N)))
-    term_names = draw(st.lists(st.sampled_from(["a", "b", 3]), max_size=2, unique=True))
-    terms = {k: draw(returned_array((B, N))) for k in term_names}
-    metric_names = draw(st.lists(st.sampled_from(["m", "m", "z"]), max_size=2, unique=True))
-    metrics = {k: draw(returned_array((B,))) for k in metric_names}
-    form = draw(st.sampled_from(["tuple"] * 8 + ["list", "pair", "none", "terms list"]))
+def returned(draw, declared: bool, b: int) -> tuple[object, bool]:
+    """(a return of rewards() for ``b`` copies of N agents, whether the contract takes it)."""
+    reward = draw(returned_array((b, N)))
+    term_names = draw(st.sampled_from([[], ["a"], ["a"], ["a", "b"], [3]]))
+    terms = {k: draw(returned_array((b, N))) for k in term_names}
+    metric_names = draw(st.sampled_from([["m"], ["m"], ["m"], [], ["z"], ["m", "z"]]))
+    metrics = {k: draw(returned_array((b,))) for k in metric_names}
+    form = draw(st.sampled_from(["tuple"] * 12 + ["list", "pair", "none", "terms list"]))
     ok = (
-        takes(reward, (B, N))
-        and all(isinstance(k, str) and takes(v, (B, N)) for k, v in terms.items())
-        and all(takes(v, (B,), nan=True) for v in metrics.values())
+        takes(reward, (b, N))
+        and all(isinstance(k, str) and takes(v, (b, N)) for k, v in terms.items())
+        and all(takes(v, (b,), nan=True) for v in metrics.values())
         and (set(metrics) == {"m"} or not declared)
         and form in ("tuple", "list")
     )
@@ -393,28 +396,42 @@ def returned(draw, declared: bool) -> tuple[object, bool]:
 
 
 def check_any_return(data) -> None:
+    """A drawn rewards() return, in make_vec (B copies) or the single env: taken, with the right shapes and
+    the returned values, if the contract takes it; else a one-line TypeError or ValueError naming the hook."""
     declared = data.draw(st.booleans(), label="declared")
-    result, ok = data.draw(returned(declared), label="result")
+    vectorised = data.draw(st.booleans(), label="make_vec")
+    b = B if vectorised else 1
+    result, ok = data.draw(returned(declared, b), label="result")
+    event(f"taken: {ok}")
     cls = task_class(lambda t: result, **({} if declared else {"METRICS": {}}))
-    env = vec(cls)
+    env = vec(cls) if vectorised else single(cls)
     if not ok:
         with pytest.raises((TypeError, ValueError)) as caught:
             env.reset(seed=0)
         message = str(caught.value)
         assert message.startswith("MyTask.rewards()") and "\n" not in message, message
         return
-    _, infos = env.reset(seed=0)
-    _, rewards, *_, infos = env.step(np.zeros(env.action_space.shape))
-    reward, terms, metrics = result
-    assert rewards.shape == (B, N) and rewards.dtype == np.float32
-    np.testing.assert_array_equal(rewards, np.asarray(reward, dtype=np.float64).astype(np.float32))
-    assert list(infos["reward_terms"]) == list(terms) and list(infos["metrics"]) == list(metrics)
+    reward, terms, metrics = np.asarray(result[0], dtype=np.float64), result[1], result[2]
+    env.reset(seed=0)
+    if vectorised:
+        _, rewards, *_, infos = env.step(np.zeros(env.action_space.shape))
+        assert rewards.shape == (B, N) and rewards.dtype == np.float32
+        np.testing.assert_array_equal(rewards, reward.astype(np.float32))
+        got_terms, got_metrics = infos["reward_terms"], infos["metrics"]
+    else:
+        _, rewards, *_, infos = env.step({a: np.zeros(2) for a in env.agents})
+        assert list(rewards) == env.possible_agents
+        np.testing.assert_array_equal(list(rewards.values()), reward[0])
+        per_agent = [info_group(infos[a], "reward_terms") for a in env.possible_agents]
+        got_terms = {k: np.array([[t[k] for t in per_agent]]) for k in per_agent[0]}
+        got_metrics = {k: np.array([v]) for k, v in info_group(infos["robot_0"], "metrics").items()}
+    assert list(got_terms) == list(terms) and list(got_metrics) == list(metrics)
     for k, v in terms.items():
-        assert infos["reward_terms"][k].shape == (B, N)
-        np.testing.assert_array_equal(infos["reward_terms"][k], np.asarray(v, dtype=np.float64))
+        assert got_terms[k].shape == (b, N)
+        np.testing.assert_array_equal(got_terms[k], np.asarray(v, dtype=np.float64))
     for k, v in metrics.items():
-        assert infos["metrics"][k].shape == (B,)
-        np.testing.assert_array_equal(infos["metrics"][k], np.asarray(v, dtype=np.float64))
+        assert got_metrics[k].shape == (b,)
+        np.testing.assert_array_equal(got_metrics[k], np.asarray(v, dtype=np.float64))
 
 
 @settings(max_examples=40, deadline=None, suppress_health_check=list(HealthCheck), derandomize=True, database=None)
