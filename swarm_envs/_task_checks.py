@@ -209,8 +209,9 @@ def checked_robot_groups(task: Any, groups: Any) -> tuple[np.ndarray, tuple[str,
     if not isinstance(groups, (tuple, list)) or len(groups) != 2:
         raise TypeError(f"{owner} returned {_described(groups)}, expected None or a tuple (({n},) groups 0 or 1, (label 0, label 1))")
     which = checked_array(groups[0], owner, "groups", (n,), "(robots,)")
-    if not np.isin(which, (0, 1)).all():
-        raise ValueError(f"{owner}: groups hold {_one_line(shown(np.unique(which).tolist(), 60))}, expected 0 or 1 per robot")
+    other = np.unique(which[~np.isin(which, (0, 1))])
+    if len(other):
+        raise ValueError(f"{owner}: groups hold {', '.join(f'{v:g}' for v in other[:5])}, expected 0 or 1 per robot")
     labels = groups[1]
     if not isinstance(labels, (tuple, list)) or len(labels) != 2 or not all(isinstance(s, str) for s in labels):
         raise TypeError(f"{owner}: labels are {_described(labels)}, expected two str legend labels")
