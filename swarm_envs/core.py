@@ -24,6 +24,7 @@ from typing import Any
 
 import numpy as np
 
+from swarm_envs._task_checks import RewardsCheck, checked_mask, checked_spawn
 from swarm_envs._worker import worker
 from swarm_envs.copies import CopyStream
 from swarm_envs.observation import ObservationLayout, id_rows, nearest_slots, own_id_rows, pack_nearest, range_bearing_rows
@@ -76,6 +77,8 @@ class SwarmCore:
         self.rewards = np.zeros((self.B, task.n_agents))
         self.terms: dict[str, np.ndarray] = {}
         self.metrics: dict[str, np.ndarray] = {}
+        #: checks (shapes, dtypes, finiteness, names) and casts every return of task.rewards to float64
+        self._check_rewards = RewardsCheck(task)
         self._starting = np.zeros(self.B, dtype=bool)
         #: robots switched off in the last step (Task.switched_off), (n_total,) bool
         self.switched_off = np.zeros(self.n_total, dtype=bool)
@@ -109,14 +112,19 @@ class SwarmCore:
                 own = slice(int(b) * self.n_world, (int(b) + 1) * self.n_world)
                 self.wheel_gains[own] = wheel_gains(self.platform, self._motion.draw(np.full(self.n_world, b), (2,)))
             if given_positions is None:
-                positions, headings = self.task.spawn(spawn_rng)
+                positions, headings = checked_spawn(self.task, self.task.spawn(spawn_rng))
             else:
                 positions, headings = given_positions, None
             if given_headings is not None:
                 headings = given_headings
             elif headings is None:
                 headings = spawn_rng.uniform(-np.pi, np.pi, self.n_world)
-            self.worlds[b].place(positions, headings)  # a new physics space: nothing survives a reset
+            try:
+                self.worlds[b].place(positions, headings)  # a new physics space: nothing survives a reset
+            except ValueError as err:  # overlapping robots or robots outside the walls
+                if given_positions is not None:
+                    raise
+                raise ValueError(f"{type(self.task).__name__}.spawn(): {err}") from None
             sensing_rngs.append(sensing_rng)
         self.sensing.reset(copies, sensing_rngs)
         rows = np.flatnonzero(np.isin(self.copy_of_robot, copies))
@@ -174,7 +182,7 @@ class SwarmCore:
         finally:  # never leave the worker running on the task's state
             if rewards is not None:
                 rewards.exception()  # waits
-        self.rewards, self.terms, self.metrics = self.task.rewards(state, starting) if rewards is None else rewards.result()
+        self.rewards, self.terms, self.metrics = self._check_rewards(self.task.rewards(state, starting) if rewards is None else rewards.result())
         self._starting[:] = False
         if self._firmware:
             self._run_firmware(starting)
@@ -185,9 +193,7 @@ class SwarmCore:
         if mask is None:
             self.switched_off = np.zeros(self.n_total, dtype=bool)
         else:
-            mask = np.asarray(mask)
-            if mask.shape != (self.B, self.n_world) or mask.dtype != bool:
-                raise ValueError(f"{type(self.task).__name__}.switched_off must return a ({self.B}, {self.n_world}) bool array or None, got {mask.dtype} {mask.shape}")
+            mask = checked_mask(self.task, "switched_off", mask, (self.B, self.n_world), "(copies, world robots)")
             self.switched_off = mask.reshape(-1).copy()
         return self.switched_off
 
@@ -201,10 +207,8 @@ class SwarmCore:
         if bits is None:
             self._static_payloads[:] = False
             return
-        bits = np.asarray(bits)
-        if bits.shape != (B, n_static, b):
-            raise ValueError(f"{type(self.task).__name__}.static_messages must return ({B}, {n_static}, {b}) message bits or None, got shape {bits.shape}")
-        self._static_payloads[rows] = bits.reshape(B * n_static, b).astype(bool)
+        bits = checked_mask(self.task, "static_messages", bits, (B, n_static, b), "(copies, static robots, message bits)")
+        self._static_payloads[rows] = bits.reshape(B * n_static, b)
 
     def _gather(self) -> None:
         w = self.worlds

@@ -22,6 +22,7 @@ import numpy as np
 from gymnasium import spaces
 from pettingzoo import ParallelEnv
 
+from swarm_envs._task_checks import checked_markers
 from swarm_envs.core import DT, SwarmCore
 from swarm_envs.observation import ObservationLayout
 from swarm_envs.platforms import Platform, get_platform
@@ -178,10 +179,11 @@ class SwarmEnv(ParallelEnv):
         return self.core.frame
 
     def _markers(self) -> dict[str, np.ndarray]:
-        """Task markers (name -> world point (2,) m): drawn by the renderer and part of :meth:`state`.
-
-        A task must return the same names every step (the state has a fixed size)."""
-        return self.task.markers(self.world.positions)
+        """Task markers (name -> world point (2,) m, sorted by name): drawn by the renderer and part of
+        :meth:`state`. Checked (:func:`swarm_envs._task_checks.checked_markers`): a task returns the same
+        names every step (the state has a fixed size)."""
+        names, points = checked_markers(self.task, [self.task.markers(self.world.positions)])
+        return dict(zip(names, points[0]))
 
     # -- spaces ----------------------------------------------------------------------------------------
     def observation_space(self, agent: str) -> spaces.Space:
@@ -345,7 +347,7 @@ class SwarmEnv(ParallelEnv):
             [w.positions, np.cos(w.headings), np.sin(w.headings), w.velocities, w.angular_velocities]
         ).ravel()
         markers = self._markers()
-        points = np.concatenate([np.asarray(markers[name], float).reshape(2) for name in sorted(markers)]) if markers else np.zeros(0)
+        points = np.concatenate([markers[name] for name in sorted(markers)]) if markers else np.zeros(0)
         progress = min(self.num_cycles / self.max_cycles, 1.0)
         return np.concatenate([robots, points, [progress]]).astype(np.float32)
 

@@ -19,6 +19,7 @@ from typing import Any
 
 import numpy as np
 
+from swarm_envs._task_checks import checked_robot_groups
 from swarm_envs.observation import nearest_slots
 from swarm_envs.platforms import Platform
 from swarm_envs.sensing.base import SensorFrame
@@ -383,11 +384,11 @@ def render_env(env: Any, renderer: Renderer, caption: str | None = None, overlay
         world.positions,
         world.headings,
         fresh_links(frame),
-        env.task.markers(world.positions),
+        env._markers(),  # the task's markers, checked
         static=np.arange(len(world.positions)) < env.n_static,
         messages=messages,
         overlay=overlay,
         caption=caption,
         legend=legend,
-        groups=env.task.robot_groups(),
+        groups=checked_robot_groups(env.task, env.task.robot_groups()),
     )

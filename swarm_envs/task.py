@@ -41,6 +41,7 @@ from typing import Any, ClassVar
 import numpy as np
 from scipy.spatial import cKDTree
 
+from swarm_envs._task_checks import REDUCTIONS, check_declarations, checked_count, checked_length
 from swarm_envs.metrics import largest_component_fraction, neighbourhood_sums
 from swarm_envs.platforms import Platform
 from swarm_envs.settings import MAX_ROBOTS, Choice, Flag, Int, Real, Setting, SettingsError, task_settings
@@ -92,10 +93,6 @@ SPACING = {"droplet": 0.15, "epuck": 0.25, "rone": 0.45}
 #: 1 m range of [L Sec. 6.1]). Tasks size neighbourhoods by it (:func:`message_range`).
 MESSAGE_RANGE = {"droplet": 0.43, "epuck": 0.61, "rone": 1.0}
 
-#: how a metric is reduced over an episode for evaluation: its value after the last step, or its mean
-#: over the steps after the reset
-REDUCTIONS = ("final", "mean")
-
 
 @dataclass
 class BatchState:
@@ -137,6 +134,10 @@ class Task:
     settings (``self.config``: every common setting, see :data:`swarm_envs.settings.COMMON_SETTINGS`,
     plus the task's own), the platform and the number of copies.
 
+    The declarations are checked when the class is made, and whatever a hook returns into the env is checked
+    when it returns (shapes, dtypes, finiteness, names; :mod:`swarm_envs._task_checks`): a malformed one
+    raises a one-line ``TypeError`` or ``ValueError`` naming the class, the attribute or hook and the key.
+
     Args:
         config: resolved env settings.
         platform: the robots' platform.
@@ -154,16 +155,10 @@ class Task:
     def __init_subclass__(cls, **kwargs: Any) -> None:
         super().__init_subclass__(**kwargs)
         owner = f"{cls.__module__}.{cls.__qualname__}"
+        check_declarations(cls, owner)  # SETTINGS, METRICS, HEADLINE, SCRIPTED_POLICY: TypeError naming the attribute
         declared = {**getattr(super(cls, cls), "_settings", {}), **task_settings(cls.__dict__.get("SETTINGS", {}), owner)}
         cls._settings = declared
         cls.TASK_DEFAULTS = {key: s.default for key, s in declared.items()}
-        bad = {k: v for k, v in cls.METRICS.items() if v not in REDUCTIONS}
-        if bad:
-            raise TypeError(f"{owner}.METRICS: reductions must be one of {REDUCTIONS}, got {bad}")
-        if cls.HEADLINE is not None:
-            name, sign = cls.HEADLINE
-            if name not in cls.METRICS or sign not in (1, -1):
-                raise TypeError(f"{owner}.HEADLINE must be (a metric of METRICS, +1 or -1), got {cls.HEADLINE!r}")
 
     @classmethod
     def settings(cls) -> dict[str, Setting]:
@@ -174,14 +169,14 @@ class Task:
         self.config = config
         self.platform = platform
         self.n_copies = int(n_copies)
-        self.n_static = int(self.n_static_robots())
+        self.n_static = checked_count(self, "n_static_robots", self.n_static_robots(), MAX_ROBOTS)
         self.n_agents = int(config["n_robots"])
         self.n_world = self.n_static + self.n_agents
         if self.n_world > MAX_ROBOTS:
             raise SettingsError("n_robots", f"{self.n_world} robots per copy (agents and static robots) is above the limit of {MAX_ROBOTS}")
         self.max_cycles = int(config["max_cycles"])
         self.reward_mode = config["reward_mode"]
-        size = config["arena_size"] if config["arena_size"] is not None else self.default_arena_size()
+        size = config["arena_size"] if config["arena_size"] is not None else checked_length(self, "default_arena_size", self.default_arena_size())
         self.arena = Arena(config["arena"], float(size))
         self.agent_robots = np.arange(self.n_static, self.n_world)
         # an exact fit test: it passes if and only if the spawner (whose last resort is the densest lattice
@@ -258,7 +253,9 @@ class Task:
 
         Called after every control step and after every reset; ``first`` (B,) bool marks the copies whose
         episode starts with this state (their reset step), so per-copy memory (e.g. the previous spread)
-        can be restarted there. Return the same term and metric names every step.
+        can be restarted there. Return the same term and metric names every step; the metric names are
+        exactly those of ``METRICS`` when the task declares it. Rewards and terms are finite, metrics finite
+        or NaN (undefined in that copy at that step); bool, integer and float arrays are taken as float64.
         """
         raise NotImplementedError(f"{type(self).__name__} must implement rewards(state, first)")
 

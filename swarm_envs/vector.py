@@ -28,6 +28,7 @@ import numpy as np
 from gymnasium import spaces
 from gymnasium.vector import AutoresetMode, VectorEnv
 
+from swarm_envs._task_checks import checked_markers
 from swarm_envs.core import SwarmCore
 from swarm_envs.env import check_reset_options, check_seed, make_layout, resolve_config
 from swarm_envs.platforms import get_platform
@@ -146,8 +147,8 @@ class SwarmVectorEnv(VectorEnv):
         spin = np.stack([w.angular_velocities for w in core.worlds])
         fields = [positions, np.cos(headings)[..., None], np.sin(headings)[..., None], core.velocities.reshape(B, n, 2), spin[..., None]]
         robots = np.concatenate(fields, axis=2).reshape(B, -1)
-        markers = [self.task.markers(positions[b]) for b in range(B)]
-        points = np.array([[v for name in sorted(m) for v in np.asarray(m[name], float).reshape(2)] for m in markers]).reshape(B, -1)
+        _, points = checked_markers(self.task, [self.task.markers(positions[b]) for b in range(B)])
+        points = points.reshape(B, -1)
         progress = np.minimum(core.num_cycles / self.max_cycles, 1.0)
         return np.concatenate([robots, points, progress[:, None]], axis=1).astype(np.float32)
 

@@ -226,7 +226,7 @@ def test_a_switched_off_robot_stands_still_and_leaves_the_sensing(sensing, platf
 def test_switched_off_must_be_a_bool_mask():
     bad = type("Bad", (Walled,), {"switched_off": lambda self, c: np.zeros((1, 3))})
     env = swarm_envs.make(bad, n_robots=3, sensing="ideal")
-    with pytest.raises(ValueError, match=r"switched_off must return a \(1, 3\) bool array"):
+    with pytest.raises(TypeError, match=r"Bad.switched_off\(\) returned a float64 array of shape \(1, 3\), expected a \(1, 3\) bool array"):
         env.reset(seed=0)
 
 
@@ -265,5 +265,5 @@ def test_static_robots_broadcast_what_their_firmware_computes(sensing):
     # the exact channel delivers every payload as sent; the modelled one (uncoded) corrupts a few frames
     assert agree > 15 and (disagree == 0 if sensing == "ideal" else disagree < 0.2 * agree)
     bad = type("BadFirmware", (Beacons,), {"static_messages": lambda self, obs, first: np.zeros((1, 3, 1), bool)})
-    with pytest.raises(ValueError, match=r"static_messages must return \(1, 3, 2\) message bits"):
+    with pytest.raises(ValueError, match=r"BadFirmware.static_messages\(\) returned a bool array of shape \(1, 3, 1\), expected a \(1, 3, 2\) bool array"):
         swarm_envs.make(bad, n_robots=2, sensing="ideal", message_bits=2).reset(seed=0)
