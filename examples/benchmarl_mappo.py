@@ -5,6 +5,7 @@
     python examples/benchmarl_mappo.py --task aggregation --frames 200000 --algorithms mappo
     python examples/benchmarl_mappo.py --model gnn+gru --task flocking   # any chain of mlp, gru, deepsets, gnn
     python examples/benchmarl_mappo.py --config configs/benchmarl/gru.yaml --task sorted_following
+    python examples/benchmarl_mappo.py --import examples/custom_task.py --task swarm_examples/Dispersion-v0
 
 The task is :class:`swarm_envs.benchmarl_tasks.SwarmTask` (e.g. ``SwarmTask.FLOCKING``): BenchMARL builds
 one batched TorchRL env of ``--num-envs`` copies per collector (``swarm_envs.make_torchrl``), with the
@@ -58,6 +59,8 @@ from benchmarl.experiment import Experiment, ExperimentConfig
 from benchmarl.models import DeepsetsConfig, GnnConfig, GruConfig, MlpConfig, ModelConfig, SequenceModelConfig
 from torchrl.envs import EnvBase, Transform
 
+import swarm_envs
+from swarm_envs.agents.tasks import import_modules
 from swarm_envs.benchmarl_tasks import GROUP, SwarmTask, SwarmTaskClass
 from swarm_envs.torch_threads import set_torch_threads
 
@@ -149,10 +152,15 @@ def experiment_config(frames: int, frames_per_batch: int, num_envs: int, save_fo
 
 
 def make_task(task: str, model: str = "mlp", **settings: Any) -> SwarmTaskClass:
-    """The task ``task`` (a ``SwarmTask`` name, any case) with ``settings`` (``None`` values: the task's
-    defaults); a :class:`NeighbourSetTask` for a ``deepsets`` policy."""
-    member = SwarmTask[task.upper()]
-    swarm_task = member.get_task(config={k: v for k, v in settings.items() if v is not None})
+    """The task ``task`` (a ``SwarmTask`` name, any case, or a registered env id such as a task of your own,
+    which runs under a member with ``env_id`` in its config) with ``settings`` (``None`` values: the
+    task's defaults); a :class:`NeighbourSetTask` for a ``deepsets`` policy."""
+    config = {k: v for k, v in settings.items() if v is not None}
+    if task.upper() in SwarmTask.__members__:
+        member = SwarmTask[task.upper()]
+    else:
+        member, config["env_id"] = SwarmTask.AGGREGATION, task
+    swarm_task = member.get_task(config=config)
     if uses_neighbour_sets(model):
         return NeighbourSetTask(name=swarm_task.name, config=swarm_task.config)
     return swarm_task
@@ -228,7 +236,9 @@ def load_config(path: str) -> dict[str, Any]:
 def parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--config", default=None, help="yaml file of these options (configs/benchmarl/); the command line overrides it")
-    p.add_argument("--task", default="flocking", choices=[t.name.lower() for t in SwarmTask])
+    p.add_argument("--task", default="flocking", help=f"one of {[t.name.lower() for t in SwarmTask]} or a registered env id")
+    p.add_argument("--import", dest="imports", action="append", default=[], metavar="MODULE",
+                   help="import a module or .py file first, e.g. one that registers a task of your own (repeatable)")
     p.add_argument("--algorithms", nargs="+", default=["mappo", "ippo"], choices=sorted(ALGORITHMS))
     p.add_argument("--model", default="mlp", help=f"policy model: one of {', '.join(LAYERS)} or a '+' chain, e.g. gnn+gru")
     p.add_argument("--hidden", type=int, default=64, help="units of the models' layers and between chained layers")
@@ -264,6 +274,13 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
                 p.error(f"{args.config}: {name} {value!r} is not one of {list(choices)}")
     if isinstance(args.algorithms, str):
         args.algorithms = [args.algorithms]
+    try:
+        import_modules([args.imports] if isinstance(args.imports, str) else args.imports)
+    except ImportError as err:
+        p.error(str(err))
+    names = [t.name.lower() for t in SwarmTask]
+    if args.task.lower() not in names and args.task not in swarm_envs.list_envs():
+        p.error(f"--task {args.task!r} is neither one of {names} nor a registered env id (--import registers yours)")
     for name in args.model.split("+"):
         if name not in LAYERS:
             p.error(f"--model {args.model!r}: {name!r} is not one of {', '.join(LAYERS)}")

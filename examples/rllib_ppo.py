@@ -2,6 +2,7 @@
 
     pip install -e ".[rllib]"
     python examples/rllib_ppo.py --task swarm_envs/Flocking-v0 --num-env-runners 2
+    python examples/rllib_ppo.py --import examples/custom_task.py --task swarm_examples/Dispersion-v0
     # on a running Ray cluster (see below):
     python examples/rllib_ppo.py --address auto --num-env-runners 32 --iterations 200
 
@@ -42,6 +43,7 @@ from __future__ import annotations
 
 import argparse
 import time
+from pathlib import Path
 from typing import Any
 
 import ray
@@ -53,6 +55,7 @@ from ray.rllib.env.wrappers.pettingzoo_env import ParallelPettingZooEnv
 from ray.tune.registry import register_env
 
 import swarm_envs
+from swarm_envs.agents.tasks import import_modules
 from swarm_envs.torch_threads import set_torch_threads
 
 ENV_NAME = "swarm_envs_parallel"
@@ -60,8 +63,10 @@ POLICY = "shared"
 
 
 def env_creator(config: dict[str, Any]) -> ParallelPettingZooEnv:
-    """RLlib env factory: ``config = {"task": env id, **env kwargs}`` (runs inside each env runner)."""
+    """RLlib env factory: ``config = {"task": env id, "imports": modules, **env kwargs}`` (runs inside each
+    env runner, which first imports the modules that register a task of your own)."""
     config = dict(config)
+    import_modules(config.pop("imports", []))
     return ParallelPettingZooEnv(swarm_envs.make(config.pop("task"), **config))
 
 
@@ -81,9 +86,12 @@ def build_config(
     seed: int,
     flatten_in_env: bool = False,
     hidden: int = 64,
+    imports: list[str] | None = None,
 ) -> PPOConfig:
-    """PPO with one module shared by all robots; ``num_env_runners`` = 0 samples on the driver."""
-    env_config = {"task": task, **env_kwargs, "flatten": flatten_in_env}
+    """PPO with one module shared by all robots; ``num_env_runners`` = 0 samples on the driver; ``imports``:
+    modules (or .py files) each env runner imports before making the env, e.g. one registering ``task``."""
+    imports = [str(Path(m).resolve()) if m.endswith(".py") else m for m in imports or []]
+    env_config = {"task": task, "imports": imports, **env_kwargs, "flatten": flatten_in_env}
     runners: dict[str, Any] = {"num_env_runners": num_env_runners, "num_envs_per_env_runner": 1}
     if not flatten_in_env:
         runners["env_to_module_connector"] = flatten_connector
@@ -104,7 +112,9 @@ def build_config(
 
 def main(argv: list[str] | None = None) -> list[dict[str, float]]:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--task", default="swarm_envs/Aggregation-v0", choices=swarm_envs.list_envs())
+    parser.add_argument("--task", default="swarm_envs/Aggregation-v0", help="a registered env id")
+    parser.add_argument("--import", dest="imports", action="append", default=[], metavar="MODULE",
+                        help="import a module or .py file first (here and in every env runner), e.g. one that registers a task of your own")
     parser.add_argument("--n-robots", type=int, default=6)
     parser.add_argument("--max-cycles", type=int, default=100, help="episode length in control steps (0.1 s each)")
     parser.add_argument("--sensing", default="full", choices=["full", "ideal"])
@@ -119,6 +129,12 @@ def main(argv: list[str] | None = None) -> list[dict[str, float]]:
     parser.add_argument("--env-flatten", action="store_true", help="use the env's flatten=True instead of the connector")
     parser.add_argument("--torch-threads", type=int, default=None, help="the driver's (learner's) torch threads; default: 1 on <= 2 cores, else min(4, cores // 2)")
     args = parser.parse_args(argv)
+    try:
+        import_modules(args.imports)
+    except ImportError as err:
+        parser.error(str(err))
+    if args.task not in swarm_envs.list_envs():
+        parser.error(f"--task {args.task!r} is not a registered env id; registered: {swarm_envs.list_envs()} (--import registers yours)")
     set_torch_threads(args.torch_threads)  # Ray's env runners get OMP_NUM_THREADS = their CPUs (1) from Ray
 
     register_env(ENV_NAME, env_creator)
@@ -127,7 +143,8 @@ def main(argv: list[str] | None = None) -> list[dict[str, float]]:
         ray.init(address=args.address, include_dashboard=False, log_to_driver=False)
     env_kwargs = {"n_robots": args.n_robots, "max_cycles": args.max_cycles, "sensing": args.sensing}
     config = build_config(
-        args.task, env_kwargs, args.num_env_runners, args.batch, args.minibatch, args.epochs, args.lr, args.seed, args.env_flatten
+        args.task, env_kwargs, args.num_env_runners, args.batch, args.minibatch, args.epochs, args.lr, args.seed, args.env_flatten,
+        imports=args.imports,
     )
     algo = config.build_algo()
     history = []

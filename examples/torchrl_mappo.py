@@ -4,6 +4,7 @@
     python examples/torchrl_mappo.py                     # aggregation, 10 copies, ~1-2 min on 2 CPU cores
     python examples/torchrl_mappo.py --frames 200000 --n-robots 10 --num-envs 64
     python examples/torchrl_mappo.py --wrapper pettingzoo   # TorchRL's stock PettingZooWrapper, one env
+    python examples/torchrl_mappo.py --import examples/custom_task.py --task swarm_examples/Dispersion-v0
 
 The env is ``swarm_envs.make_torchrl``: ``--num-envs`` copies of the task stepped by one batched core, as
 one TorchRL env with ``batch_size=[num_envs]`` (:mod:`swarm_envs.torchrl_env`), with the default ``Dict``
@@ -44,6 +45,7 @@ from torchrl.modules import MLP, ProbabilisticActor, TanhNormal
 from torchrl.objectives import ClipPPOLoss, ValueEstimators
 
 import swarm_envs
+from swarm_envs.agents.tasks import import_modules
 from swarm_envs.torch_threads import set_torch_threads
 
 GROUP = "robot"  # the stock wrapper groups agents by name prefix (robot_0, robot_1, ... -> "robot"); make_torchrl uses it too
@@ -118,7 +120,9 @@ def build(env: EnvBase, hidden: int = 64) -> tuple[ProbabilisticActor, TensorDic
 
 def main(argv: list[str] | None = None) -> dict[str, float]:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--task", default="swarm_envs/Aggregation-v0", choices=swarm_envs.list_envs())
+    parser.add_argument("--task", default="swarm_envs/Aggregation-v0", help="a registered env id")
+    parser.add_argument("--import", dest="imports", action="append", default=[], metavar="MODULE",
+                        help="import a module or .py file first, e.g. one that registers a task of your own (repeatable)")
     parser.add_argument("--n-robots", type=int, default=6)
     parser.add_argument("--max-cycles", type=int, default=100, help="episode length in control steps (0.1 s each)")
     parser.add_argument("--sensing", default="full", choices=["full", "ideal"])
@@ -132,6 +136,12 @@ def main(argv: list[str] | None = None) -> dict[str, float]:
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--torch-threads", type=int, default=None, help="default: 1 on <= 2 cores, else min(4, cores // 2)")
     args = parser.parse_args(argv)
+    try:
+        import_modules(args.imports)
+    except ImportError as err:
+        parser.error(str(err))
+    if args.task not in swarm_envs.list_envs():
+        parser.error(f"--task {args.task!r} is not a registered env id; registered: {swarm_envs.list_envs()} (--import registers yours)")
     set_torch_threads(args.torch_threads)
     torch.manual_seed(args.seed)
 

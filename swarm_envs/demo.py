@@ -5,6 +5,7 @@
     swarm-demo --task flocking --out flocking.gif          # the task's scripted baseline (default policy)
     swarm-demo --task aggregation --policy random --overlay
     swarm-demo --task swarm_envs/Flocking-v0 --model runs/flocking/model.zip
+    swarm-demo --import examples/custom_task.py --task swarm_examples/Dispersion-v0 --policy random
     swarm-demo --all --out-dir docs/img/envs               # one small GIF per task (the docs' pictures)
 
 The frames (:func:`swarm_envs.render.render_env`) show the robots with their headings, the IR links that
@@ -29,7 +30,7 @@ from typing import Any
 import numpy as np
 
 from swarm_envs.agents.evaluation import make_env, run_episode
-from swarm_envs.agents.tasks import SHORT_NAMES, headline, metric_reductions
+from swarm_envs.agents.tasks import SHORT_NAMES, headline, import_modules, metric_reductions
 from swarm_envs.env import DT, info_group
 from swarm_envs.platforms import PLATFORMS
 from swarm_envs.registry import list_envs, task_class
@@ -307,6 +308,8 @@ class _Parser(argparse.ArgumentParser):
 def _parser() -> argparse.ArgumentParser:
     parser = _Parser(prog="swarm-demo", description=__doc__.split("\n\n")[0])
     parser.add_argument("--task", default=None, help=f"short name {sorted(TASKS)} or a registered env id (default flocking)")
+    parser.add_argument("--import", dest="imports", action="append", default=[], metavar="MODULE",
+                        help="import a module or .py file first, e.g. one that registers a task of your own (repeatable)")
     parser.add_argument("--all", action="store_true", help="one GIF per task, <task>.gif in --out-dir (small documentation GIFs)")
     parser.add_argument("--policy", choices=["scripted", "random"], default=None, help="default: the task's scripted baseline")
     parser.add_argument(
@@ -377,6 +380,10 @@ def _jobs(args: argparse.Namespace, parser: argparse.ArgumentParser) -> list[tup
         return jobs
     if args.out_dir is not None:
         parser.error("--out-dir goes with --all; give a single demo's path with --out")
+    try:
+        import_modules(args.imports)
+    except ImportError as err:
+        parser.error(str(err))
     if args.model is not None and args.policy is not None:
         parser.error("give either --policy or --model, not both")
     try:

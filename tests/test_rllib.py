@@ -40,3 +40,19 @@ def test_one_ppo_iteration_with_two_env_runners():
     assert row["agent_steps"] >= BATCH * N_ROBOTS
     assert row["agent_steps"] % N_ROBOTS == 0
     assert math.isfinite(row["episode_return_mean"])
+
+
+def test_env_runners_import_a_task_of_your_own(forget_registered_ids):
+    """``--import`` reaches every env runner (a separate process), which registers the id before making the env."""
+    import sys
+
+    sys.modules.pop("custom_task", None)
+    try:
+        history = load_example().main(
+            ["--import", str(EXAMPLE.parent / "custom_task.py"), "--task", "swarm_examples/Dispersion-v0", "--n-robots", "3",
+             "--max-cycles", "10", "--num-env-runners", "1", "--iterations", "1", "--batch", "20", "--minibatch", "10", "--epochs", "1",
+             "--torch-threads", "1"]
+        )
+    finally:
+        sys.modules.pop("custom_task", None)
+    assert len(history) == 1 and history[0]["agent_steps"] >= 20 * 3

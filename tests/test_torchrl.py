@@ -2,6 +2,7 @@
 
 import importlib.util
 import math
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -65,3 +66,34 @@ def test_mappo_example_trains_a_few_iterations(wrapper):
     )
     assert {"reward_per_step", "mean_distance_to_centroid", "largest_cluster_fraction"} <= set(log)
     assert all(math.isfinite(v) for v in log.values())
+
+
+# --- a registered id of your own (--import) ---
+CUSTOM_TASK = str(Path(__file__).resolve().parents[1] / "examples" / "custom_task.py")
+DISPERSION = "swarm_examples/Dispersion-v0"
+
+
+def _load_mappo_example():
+    spec = importlib.util.spec_from_file_location("torchrl_mappo", EXAMPLE)
+    example = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(example)
+    return example
+
+
+def test_mappo_example_takes_an_imported_id(forget_registered_ids):
+    sys.modules.pop("custom_task", None)  # imported anew through --import: the id it registers is forgotten after
+    try:
+        log = _load_mappo_example().main(
+            ["--import", CUSTOM_TASK, "--task", DISPERSION, "--frames", "40", "--frames-per-batch", "20", "--minibatch", "10",
+             "--epochs", "1", "--n-robots", "3", "--max-cycles", "10", "--sensing", "ideal", "--num-envs", "2", "--torch-threads", "1"]
+        )
+    finally:
+        sys.modules.pop("custom_task", None)
+    assert {"reward_per_step", "mean_spacing", "connected_fraction"} <= set(log)
+    assert all(math.isfinite(v) for v in log.values())
+
+
+def test_mappo_example_refuses_an_unregistered_id(capsys):
+    with pytest.raises(SystemExit) as exit_info:
+        _load_mappo_example().main(["--task", "my_lab/Nothing-v0"])
+    assert exit_info.value.code == 2 and "not a registered env id" in capsys.readouterr().err
