@@ -26,13 +26,14 @@ import subprocess
 import sys
 import time
 from pathlib import Path
+from types import ModuleType
 
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
 
 
-def _hostile_module():
+def _hostile_module() -> ModuleType:
     """``tests/test_contacts_hostile.py`` (the scenes and the measurement), loaded from its path."""
     spec = importlib.util.spec_from_file_location("contacts_hostile_scenes", ROOT / "tests" / "test_contacts_hostile.py")
     module = importlib.util.module_from_spec(spec)
