@@ -331,7 +331,8 @@ COMMON_SETTINGS: dict[str, Setting] = {
     "physics_substeps": Int(
         None, "pymunk sub-steps per control step", low=1, high=MAX_SUBSTEPS, allow_none=True,
         why="None: the platform's default (8 Droplet, 21 e-puck, 32 r-one; swarm_envs.world.default_substeps), at "
-        "which robots overlap by at most 2 % of a diameter at the default arena size; at least the platform's minimum (3 Droplet, 8 e-puck, "
+        "which robots overlap each other, and reach past a wall, by at most 2 % of a diameter at the default arena size, also when driven "
+        "at full speed into each other and into the walls; at least the platform's minimum (3 Droplet, 8 e-puck, "
         f"11 r-one; fewer let robots close more than 5 % of a diameter per sub-step, or leave their arcs); at most {MAX_SUBSTEPS} "
         "(the cost grows linearly: 1,000 sub-steps of 10 robots take ~5 ms per step)",
     ),

@@ -14,20 +14,35 @@ stops them (and chains of pushing robots add a little). :func:`default_substeps`
 sub-step to the platform: the smallest count (at least 8) at which two robots close at most
 :data:`DEFAULT_CLOSING` (1.75 %) of a diameter per sub-step -- 8 for the Droplet, 21 for the e-puck, 32
 for the r-one -- which keeps every overlap and every wall penetration within :data:`MAX_OVERLAP` (2 %) of
-a diameter (``benchmarks/physics_substeps.py`` measures the worst case over dense crushes). The motors'
-force is sized to what tracking needs, the largest velocity change of one sub-step with a 25 % margin
-(:func:`motor_limits`), so the solver's iterations are not spent fighting a motor far stronger than the
-contacts can absorb. The env settings refuse fewer sub-steps than :func:`min_substeps` (robots closing
-more than :data:`MAX_CLOSING` of a diameter per sub-step). A placement (:meth:`World.check_placement`)
-may overlap as deep as :data:`PLACEMENT_OVERLAP`, far beyond what the physics produces, so a state read
-back from ``infos`` is always accepted by ``reset(options=...)``.
+a diameter (``benchmarks/physics_substeps.py`` measures the worst case over dense crushes,
+``benchmarks/contacts_hostile.py`` over 600 steps of full-speed driving into each other and the walls).
+The env settings refuse fewer sub-steps than :func:`min_substeps` (robots closing more than
+:data:`MAX_CLOSING` of a diameter per sub-step).
 
-The control bodies are set once per control step (no Python work per sub-step): translation along the
-chord of the differential-drive arc, ``D = v dt sinc(w dt / 2)`` towards ``heading + w dt / 2``, and
-rotation at ``w``. pymunk moves a body with its previous velocity during the first sub-step (the joints
-act from the second on), so the control velocities are set to ``(D - h u) / (dt - h)`` and
-``(w dt - h omega) / (dt - h)`` (h the sub-step, u / omega the body's velocity at the step start): a free
-robot then ends every control step exactly on its differential-drive arc.
+Motor force. A robot's velocity changes only when a command arrives, once per control step: the motors
+make that change within the first sub-step, with the force of :func:`motor_limits` (the largest change a
+command can ask for, within one sub-step, with a 25 % margin), and a free robot needs no force for the
+rest of the step (the model has no rolling friction or drag). Only a robot pushing against another robot
+or a wall keeps its motors working after the first sub-step, and there they push with at most
+:func:`push_force`, the same velocity change made over the whole control step: 0.53 N for the e-puck,
+2.4 N for the r-one, 0.02 N for the Droplet, each less than the robot's weight and so within what its
+wheels (or legs) can transmit to the floor (at most friction coefficient x weight). The first sub-step's
+force held throughout would be 11 N for the e-puck and 77 N for the r-one, 7 and 26 times their weight:
+no wheel transmits that, and a pile of robots pressed with it is pushed through itself faster than the
+solver's iterations (which carry a push one contact further per iteration) and the contact correction
+push it apart, up to 10 % of a diameter of overlap in a corner. Contacts between frictionless discs act
+through the discs' centres and exert no torque, so the motors' torque keeps its first sub-step bound.
+
+A placement (:meth:`World.check_placement`) may overlap as deep as :data:`PLACEMENT_OVERLAP`, far beyond
+what the physics produces, so a state read back from ``infos`` is always accepted by ``reset(options=...)``.
+
+The control bodies are set once per control step (no Python work per sub-step besides the motors' force
+bound, set before the first sub-step and after it): translation along the chord of the differential-drive
+arc, ``D = v dt sinc(w dt / 2)`` towards ``heading + w dt / 2``, and rotation at ``w``. pymunk moves a
+body with its previous velocity during the first sub-step (the joints act from the second on), so the
+control velocities are set to ``(D - h u) / (dt - h)`` and ``(w dt - h omega) / (dt - h)`` (h the
+sub-step, u / omega the body's velocity at the step start): a free robot then ends every control step
+exactly on its differential-drive arc.
 
 Motion error: :func:`motion_error` turns commanded velocities into the ones a platform's wheels deliver
 (per-wheel gains, per-step noise, a dead zone; ``docs/design.md#motion-error``). The batched core applies it
@@ -59,7 +74,7 @@ from swarm_envs.platforms import Platform
 __all__ = [
     "Arena", "World", "step_worlds", "spawn_positions", "check_capacity", "lattice_lower_bound", "as_real_array", "wrap_angle",
     "N_BUMP_SECTORS", "CONTROL_STEP", "default_substeps", "min_substeps", "motor_limits", "fit_count", "lattice_positions",
-    "check_obstacles", "obstacle_points", "distance_to_segments", "wheel_gains", "motion_error",
+    "check_obstacles", "obstacle_points", "distance_to_segments", "wheel_gains", "motion_error", "push_force",
 ]
 
 #: bytes of commands a world keeps per episode for exact copies (16 per robot and step; 64 MB = 400,000
@@ -84,9 +99,9 @@ MAX_SUBSTEPS = 1000
 MAX_OVERLAP = 0.02
 #: fraction of a diameter two robots of a placement (``reset(options=...)``) may overlap: a deeper overlap
 #: (centres closer than one radius) is a mistake, such as two robots on one spot. The physics itself
-#: stays far below it (``benchmarks/physics_substeps.py``): <= 2 % at the default sub-steps and densities,
-#: ~13 % in a crush of 1,500 robots covering 60 % of the arena, ~23 % in such a crush of 400 robots at the
-#: fewest sub-steps
+#: stays far below it: <= 2 % at the default sub-steps and densities (``benchmarks/physics_substeps.py``,
+#: ``benchmarks/contacts_hostile.py``), 2-3 % in a full-speed crush of 1,500 robots covering 60 % of the
+#: arena, 6-18 % in such a crush of 400 robots at the fewest sub-steps (the Droplet's 3 the deepest)
 PLACEMENT_OVERLAP = 0.5
 #: fraction of a diameter a robot of a placement may reach past a wall (its centre stays half a radius inside)
 PLACEMENT_WALL_DEPTH = 0.25
@@ -210,8 +225,10 @@ def min_substeps(platform: Platform) -> int:
 
 
 def motor_limits(platform: Platform, substeps: int) -> tuple[float, float]:
-    """The motors' largest force (N) and torque (N m): :data:`MOTOR_MARGIN` times the largest velocity
-    change the control velocities of the module docstring ask for within one sub-step, linear and angular.
+    """The motors' largest force (N) and torque (N m) in the first sub-step of a control step, where the
+    commanded velocity change is made (:func:`push_force` bounds the force after it): :data:`MOTOR_MARGIN`
+    times the largest velocity change the control velocities of the module docstring ask for within one
+    sub-step, linear and angular.
 
     A control velocity is ``c = (D - h u) / (dt - h)`` with ``|D| <= v dt`` and ``u`` the previous one, so
     ``|c| <= v dt / (dt - 2 h)`` however the commands alternate, and a change ``c - u`` is at most twice
@@ -222,6 +239,15 @@ def motor_limits(platform: Platform, substeps: int) -> tuple[float, float]:
     force = MOTOR_MARGIN * platform.mass * reach * platform.max_speed / h
     torque = MOTOR_MARGIN * moment * reach * platform.max_angular_speed / h
     return force, torque
+
+
+def push_force(platform: Platform, substeps: int) -> float:
+    """The motors' largest force (N) after the first sub-step of a control step (module docstring): the
+    force of :func:`motor_limits` spread over the control step instead of one sub-step, ``force / substeps``,
+    i.e. the same largest velocity change made within one control step. A free robot needs no force then;
+    this bounds how hard a robot pushes against robots and walls."""
+    force, _ = motor_limits(platform, substeps)
+    return force / substeps
 
 
 def wheel_gains(platform: Platform, draws: np.ndarray) -> np.ndarray:
@@ -607,6 +633,10 @@ class World:
         # contacts of the sub-steps of a control step, appended by _substeps (see there)
         self._robot_ids = np.array([body.id for body in self.bodies], dtype=np.uintp)
         self._contacts = pymunk.batch.Buffer()
+        # the motors' linear joints and their force bounds of the first and of the later sub-steps (_advance)
+        self._pivots = [joint for joint in self.space.constraints if isinstance(joint, pymunk.PivotJoint)]
+        self._pivot_handles = [joint._constraint for joint in self._pivots] if _ffi is not None else None
+        self._motor_forces = (motor_limits(self.platform, self.substeps)[0], push_force(self.platform, self.substeps))
         # batch buffers: reads (robot and control rows interleaved), and the velocities written each step
         ids = pymunk.batch.Buffer()
         pymunk.batch.get_space_bodies(self.space, pymunk.batch.BodyFields.BODY_ID, ids)
@@ -633,7 +663,8 @@ class World:
     # and replays the episode's physics from its placement with the logged commands (physics only: the
     # sensing and task state are copied as they are), which is exact because the physics is deterministic.
     _NOT_COPIED = ("space", "bodies", "controls", "_robot_ids", "_contacts", "_read_buffer", "_write_values",
-                   "_write_rows", "_write_buffer", "_batched", "_read_ptr", "_read_rows")
+                   "_write_rows", "_write_buffer", "_batched", "_read_ptr", "_read_rows", "_pivots", "_pivot_handles",
+                   "_motor_forces")
 
     def __getstate__(self) -> dict:
         state = {k: v for k, v in self.__dict__.items() if k not in self._NOT_COPIED}
@@ -730,6 +761,27 @@ class World:
             return
         self._commands.append((linear.copy(), angular.copy(), dt))
 
+    def _set_motor_force(self, force: float) -> None:
+        """Bound every robot's linear motor joint (its pivot joint) to ``force`` (N); one C call per robot."""
+        if self._pivot_handles is None:  # another pymunk layout: the public API
+            for joint in self._pivots:
+                joint.max_force = force
+            return
+        set_max_force = _chipmunk.cpConstraintSetMaxForce
+        for handle in self._pivot_handles:
+            set_max_force(handle, force)
+
+    def _run_substeps(self, h: float, reader: object | None) -> None:
+        """The sub-steps of ``h`` seconds: the first with the motors' full force, which makes the commanded
+        velocity change, the others with :func:`push_force`, which bounds how hard a robot pushes (module
+        docstring). A free robot moves the same under both bounds."""
+        full, push = self._motor_forces
+        self._set_motor_force(full)
+        _substeps(self.space, h, 1, self._contacts, reader)
+        if self.substeps > 1:
+            self._set_motor_force(push)
+            _substeps(self.space, h, self.substeps - 1, self._contacts, reader)
+
     def _advance(self, control: np.ndarray, h: float) -> np.ndarray:
         """Set the control bodies' (vx, vy, omega) rows ``control`` (n, 3), run the sub-steps of ``h``
         seconds, and return every robot body's (x, y, angle, vx, vy, omega) (n, 6) from pymunk (a view of
@@ -741,7 +793,7 @@ class World:
         space, batched = self.space, self._batched
         if batched is None:  # another pymunk layout: the public API
             pymunk.batch.set_space_bodies(space, _WRITE, self._write_buffer)
-            _substeps(space, h, self.substeps, self._contacts, None)
+            self._run_substeps(h, None)
             self._read_buffer.clear()
             pymunk.batch.get_space_bodies(space, _READ, self._read_buffer)
             return np.frombuffer(self._read_buffer.float_buf(), dtype=np.float64)[: 12 * self.n].reshape(self.n, 2, 6)[:, 0]
@@ -750,7 +802,7 @@ class World:
         write.floatArray.num = 0
         _chipmunk.cpSpaceEachBody(space._space, _SET_BODY, write)
         write.floatArray.num = len(self._write_values)
-        _substeps(space, h, self.substeps, self._contacts, contacts)
+        self._run_substeps(h, contacts)
         read.floatArray.num = 0  # as Buffer.clear
         _chipmunk.cpSpaceEachBody(space._space, _GET_BODY, read)
         if read.floatArray.arr != self._read_ptr:  # the first read, or the C array moved: a new view
