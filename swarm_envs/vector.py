@@ -133,6 +133,7 @@ def _batch_space(space: spaces.Box, lead: tuple[int, ...]) -> spaces.Box:
 
 class SwarmVectorEnv(VectorEnv):
     """``num_envs`` copies of ``task`` (a :class:`swarm_envs.task.Task` subclass, its env class or a registered id).
+    Copies whose estimated memory exceeds the machine's available memory are refused (:func:`check_memory`).
 
     Args:
         task: the task (e.g. :class:`swarm_envs.aggregation_v0.AggregationTask`).
