@@ -145,7 +145,7 @@ BOUNDS: dict[str, tuple[float, float, str]] = {
     "agent.set_embedding": (1, 4096, "units of a layer, like net_arch"),
     "agent.lstm_hidden": (1, 4096, "units of a layer, like net_arch"),
     "train.total_timesteps": (1, 10**12, "robot-steps; 10^12 take decades at this simulator's speed"),
-    "train.n_envs": (1, 100_000, "env copies of one batched core (make_vec's bound)"),
+    "train.n_envs": (1, 100_000, "env copies of one batched core (make_vec's bound; their estimated memory must also fit the machine's available memory)"),
     "train.n_workers": (1, 64, "worker processes, each with its own batched core"),
     "train.torch_threads": (1, 256, "more threads than cores only add overhead"),
     "train.checkpoint_freq": (0, 10**12, "robot-steps between checkpoints (0: only the final model)"),
@@ -320,13 +320,20 @@ def _span(dotted: str) -> str:
 
 def _check_batch(cfg: dict[str, Any], env: dict[str, int]) -> None:
     """The rollout fits make_vec's bounds and memory, and the batch fits the rollout."""
-    from swarm_envs.vector import MAX_TOTAL_ROBOTS
+    from swarm_envs.vector import MAX_TOTAL_ROBOTS, available_memory
 
     a, t = cfg["agent"], cfg["train"]
     if t["n_envs"] * env["n_world"] > MAX_TOTAL_ROBOTS:
         raise ConfigError(
             f"config key 'train.n_envs': {t['n_envs']} copies of {env['n_world']} robots exceed the {MAX_TOTAL_ROBOTS} robots "
             "one batched core takes; use fewer copies"
+        )
+    available = available_memory()  # make_vec's memory check, over all workers' copies together
+    if available is not None and t["n_envs"] * env["copy_bytes"] > available:
+        raise ConfigError(
+            f"config key 'train.n_envs': {t['n_envs']} env copies of {env['n_world']} robot(s) would need "
+            f"~{t['n_envs'] * env['copy_bytes'] / 2**30:.2f} GiB of memory (~{env['copy_bytes'] / 1e3:,.0f} KB per copy over an "
+            f"episode), but the machine has {available / 2**30:.2f} GiB available; use at most {available // env['copy_bytes']:,} copies"
         )
     rollout = a["n_steps"] * t["n_envs"] * env["n_agents"]
     obs_size = env["obs_size"] * a["frame_stack"]
@@ -348,10 +355,12 @@ def _check_env_settings(task: str, env: dict[str, Any], scripted: tuple[str, dic
     would build the env with (YAML lists as tuples, ``flatten=True``), then build that env once (cheap: no
     reset) for the checks that need its arena (robots and anchors fit; the build's fit test is exact, so
     every seed resets), and the ``scripted`` (name, keyword arguments) baseline once on it. Returns its
-    sizes (``n_agents``, ``n_world``, ``obs_size``, ``act_size``); raises :class:`ConfigError`."""
+    sizes (``n_agents``, ``n_world``, ``obs_size``, ``act_size``) and ``copy_bytes``, the estimated memory of one env
+    copy (:func:`swarm_envs.vector.copy_memory`); raises :class:`ConfigError`."""
     import swarm_envs
     from swarm_envs.agents.tasks import env_id
     from swarm_envs.settings import SettingsError
+    from swarm_envs.vector import copy_memory
 
     kwargs = {**env, "flatten": True}
     if isinstance(kwargs.get("code"), list):
@@ -377,6 +386,7 @@ def _check_env_settings(task: str, env: dict[str, Any], scripted: tuple[str, dic
         "n_world": env.n_world,
         "obs_size": int(np.prod(env.observation_space(agent).shape)),
         "act_size": int(np.prod(env.action_space(agent).shape)),
+        "copy_bytes": copy_memory(env.task),
     }
     env.close()
     return sizes

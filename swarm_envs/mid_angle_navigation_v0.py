@@ -27,16 +27,18 @@ the contact distance), NaN while none arrived; ``collision_fraction`` = share of
 from __future__ import annotations
 
 import heapq
+import math
 from dataclasses import dataclass
 from typing import Any, Literal
 
 import numpy as np
+from scipy.spatial import cKDTree
 from pettingzoo import AECEnv
 from pettingzoo.utils.conversions import parallel_to_aec
 
 from swarm_envs.env import DT, SwarmEnv
 from swarm_envs.factories import reports_unknown_kwargs
-from swarm_envs.platforms import Platform
+from swarm_envs.platforms import Platform, get_platform
 from swarm_envs.task import (
     Arena,
     BatchState,
@@ -45,13 +47,25 @@ from swarm_envs.task import (
     SettingsError,
     Task,
     bump_any,
+    check_capacity,
     distance_to_segments,
     message_range,
     segments_crossed,
     spawn_positions,
 )
 
-__all__ = ["MidAngleNavigationTask", "MidAngleNavigationEnv", "Corridor", "HOP_MEMORY_STEPS", "raw_env", "parallel_env", "env"]
+__all__ = [
+    "MidAngleNavigationTask",
+    "MidAngleNavigationEnv",
+    "Corridor",
+    "HOP_MEMORY_STEPS",
+    "MAX_STATIC_ROBOTS",
+    "MAX_HOP_BITS",
+    "arena_size_range",
+    "raw_env",
+    "parallel_env",
+    "env",
+]
 
 #: steps a static robot keeps the hop count it last confirmed for a static neighbour (5 s: at 1250 bps it
 #: decodes each neighbour every second or two; a newer confirmed value replaces it)
@@ -62,6 +76,41 @@ ARRIVAL_RADII = 2.5
 LANE_DIAMETERS, MIN_LANE_DIAMETERS = 6.0, 4.5
 #: a gate's relays stand this many diameters either side of the centre line (a gap of 3 diameters between them)
 GATE_OFFSET_DIAMETERS = 2.0
+#: the start square is the lane's square inset by this many robot radii on every side
+START_INSET_RADII = 0.1
+#: static robots (the goal and the relays) of one corridor at most: building the corridor and spawning take
+#: O(relays log relays), but the relays' hop-count memory holds 24 bytes per ordered pair of static robots
+#: (96 MB per env copy at 2,000) and make() + reset() take ~1 s at 2,000 (measured; docs/settings.md)
+MAX_STATIC_ROBOTS = 2_000
+#: message_bits at most: a hop count, and 2**b - 1 for "unknown", is a signed 64-bit integer
+MAX_HOP_BITS = 63
+
+
+def gate_spacing(platform: Platform) -> float:
+    """Distance (m) between neighbouring gates along the centre line: 0.4 message ranges, at least 3 diameters."""
+    return max(0.4 * message_range(platform), 3.0 * platform.diameter)
+
+
+def arena_size_range(platform: Platform, lanes: int) -> tuple[float, float]:
+    """(smallest, largest) arena side (m, rounded inwards to the mm) the corridor of ``lanes`` lanes for
+    ``platform``'s robots is built for.
+
+    Smallest: lanes at least 4.5 robot diameters wide, and with one lane the start square (a lane width of
+    6 diameters, inset 0.1 radii) beyond the goal's arrival radius of 2.5 radii, so no seeker starts
+    arrived: side >= 1.5 lane widths + 2.4 radii. With more lanes the goal stands a lane away behind a wall.
+    Largest: the corridor holds at most :data:`MAX_STATIC_ROBOTS` static robots (the goal and two relays per
+    gate); its centre line is ``lanes`` x (side - W) + (lanes - 1) x W long for a lane width W."""
+    d, r = platform.diameter, platform.radius
+    W = LANE_DIAMETERS * d
+    low = lanes * MIN_LANE_DIAMETERS * d
+    if lanes == 1:
+        low = max(low, 1.5 * W + (ARRIVAL_RADII - START_INSET_RADII) * r)
+    # gates stand at W/2 + k spacing (k = 1, 2, ..) up to the centre line's length minus one spacing: fewer
+    # than G + 1 gates while the length is below W/2 + (G + 2) spacing
+    gates, spacing = (MAX_STATIC_ROBOTS - 1) // 2, gate_spacing(platform)
+    length = W / 2 + (gates + 2) * spacing
+    high = (length + W) / lanes
+    return math.ceil(low * 1000 - 1e-9) / 1000, math.floor(high * 1000 - 1e-6) / 1000
 
 
 @dataclass(frozen=True)
@@ -99,6 +148,16 @@ class Corridor:
         return np.where(seen, length, np.inf).min(axis=-1)
 
 
+def _size_ranges_text() -> dict[str, str]:
+    """The one-lane arena bounds of the suite's platforms as text, for the settings table."""
+    names = {"rone": "r-one", "epuck": "e-puck", "droplet": "Droplet"}
+    bounds = {name: arena_size_range(get_platform(key), 1) for key, name in names.items()}
+    return {end: ", ".join(f"{name} {b[i]:g} m" for name, b in bounds.items()) for i, end in enumerate(("low", "high"))}
+
+
+_SIZE_RANGES = _size_ranges_text()
+
+
 def corridor(size: float, lanes: int, platform: Platform) -> Corridor:
     """The corridor of ``lanes`` lanes in a square arena of side ``size`` (m) for ``platform``'s robots
     (module docstring). Lanes are 6 robot diameters wide (narrower, down to 4.5, when ``size`` is too
@@ -128,8 +187,10 @@ def corridor(size: float, lanes: int, platform: Platform) -> Corridor:
     seg = np.diff(line, axis=0)
     seg_len = np.linalg.norm(seg, axis=1)
     cum = np.concatenate([[0.0], np.cumsum(seg_len)])
-    spacing, offset = max(0.4 * message_range(platform), 3.0 * d), GATE_OFFSET_DIAMETERS * d
-    relays = []
+    spacing, offset = gate_spacing(platform), GATE_OFFSET_DIAMETERS * d
+    relays: list[np.ndarray] = []
+    cell = 2.4 * r  # relays in cells two or more apart are farther than 2.4 radii from each other
+    cells: dict[tuple[int, int], list[int]] = {}
     s = W / 2 + spacing
     while s <= cum[-1] - spacing + 1e-9:
         i = min(int(np.searchsorted(cum, s, side="right")) - 1, len(seg) - 1)
@@ -139,10 +200,13 @@ def corridor(size: float, lanes: int, platform: Platform) -> Corridor:
             normal = np.array([-direction[1], direction[0]])
             for side in (1.0, -1.0):
                 p = centre + side * offset * normal
+                cx, cy = int(math.floor(p[0] / cell)), int(math.floor(p[1] / cell))
+                near = [relays[k] for nx in (cx - 1, cx, cx + 1) for ny in (cy - 1, cy, cy + 1) for k in cells.get((nx, ny), ())]
                 # keep relays inside their lane, clear of the walls and of each other
                 if np.all(np.abs(p) <= half - r * 1.2) and distance_to_segments(p, walls_arr) > 1.2 * r and all(
-                    np.linalg.norm(p - q) > 2.4 * r for q in relays
+                    np.linalg.norm(p - q) > 2.4 * r for q in near
                 ):
+                    cells.setdefault((cx, cy), []).append(len(relays))
                     relays.append(p)
         s += spacing
     goal = line[-1].copy()
@@ -185,7 +249,19 @@ class MidAngleNavigationTask(Task):
         "n_robots": 1,
         "platform": "rone",
         "observe_ids": True,
-        "message_bits": 4,
+        "message_bits": Int(
+            4, "payload bits; the static robots broadcast their hop count to the goal in them", low=1, high=MAX_HOP_BITS,
+            why=f"at least 1: the relays' hop counts travel in the payload; at most {MAX_HOP_BITS}: a hop count, and 2**b - 1 "
+            "for 'unknown', is a signed 64-bit integer",
+        ),
+        "arena_size": Real(
+            None, low=0.0, low_open=True, high=10_000.0, allow_none=True, unit="of metres",
+            why="None: 2.5 message ranges (r-one 2.5 m), or lanes x 6 robot diameters if larger. Checked when the env is "
+            "built (mid_angle_navigation_v0.arena_size_range): at least 10.2 robot diameters with one lane (the start "
+            f"square beyond the goal's arrival radius; {_SIZE_RANGES['low']}), lanes x 4.5 diameters with more; at most "
+            f"the side whose corridor holds {MAX_STATIC_ROBOTS:,} static robots ({_SIZE_RANGES['high']} with one lane; "
+            "1/lanes of that with more), where make() + reset() take ~1-2 s and the relays' hop-count memory 96 MB per copy",
+        ),
         "max_cycles": 600,
         "lanes": Int(1, "corridor lanes (1: a straight corridor)", low=1, high=12,
                      why="each lane is 6 robot diameters wide and the default arena grows with the lanes; 12 lanes already make a 7.9 m r-one arena"),
@@ -199,7 +275,7 @@ class MidAngleNavigationTask(Task):
     def __init__(self, config: dict[str, Any], platform: Platform, n_copies: int = 1) -> None:
         super().__init__(config, platform, n_copies)
         B, A = self.n_copies, self.n_agents
-        self.hop_levels = 2 ** int(config["message_bits"]) if config["message_bits"] > 0 else 1
+        self.hop_levels = 2 ** int(config["message_bits"])  # hop counts 0 .. 2**b - 2; 2**b - 1 is "unknown"
         # per static robot and static sender: the hop count last decoded from it, the last one two frames in a
         # row agreed on, and the step of that agreement
         self._last_hop = np.full((B, self.n_static, self.n_static), -1, dtype=np.int64)
@@ -219,14 +295,41 @@ class MidAngleNavigationTask(Task):
         size = self.config["arena_size"]
         if size is not None:
             return float(size)
-        # lanes of 6 diameters, at least 2.5 message ranges long (the goal out of the start's sight)
-        return max(self.config["lanes"] * LANE_DIAMETERS * self.platform.diameter, 2.5 * message_range(self.platform))
+        # lanes of 6 diameters, at least 2.5 message ranges long (the goal out of the start's sight), and at
+        # least the smallest side the corridor is built for (a platform of your own with a short IR range)
+        lanes, platform = self.config["lanes"], self.platform
+        return max(lanes * LANE_DIAMETERS * platform.diameter, 2.5 * message_range(platform), arena_size_range(platform, lanes)[0])
+
+    def _check_size(self, size: float) -> None:
+        """:class:`SettingsError` naming ``arena_size`` when the corridor cannot be built for a side of ``size`` (m)."""
+        lanes, platform = self.config["lanes"], self.platform
+        low, high = arena_size_range(platform, lanes)
+        if low <= size <= high:
+            return
+        if size < low:
+            why = (
+                f"lanes at least {MIN_LANE_DIAMETERS} robot diameters wide" if lanes > 1 else
+                f"the start square must lie beyond the goal's arrival radius of {ARRIVAL_RADII} robot radii, and lanes at least "
+                f"{MIN_LANE_DIAMETERS} diameters wide"
+            )
+        else:
+            why = (
+                f"the corridor holds at most {MAX_STATIC_ROBOTS:,} static robots, the goal and 2 relays per gate; make() time and "
+                "the relays' hop-count memory grow with their number squared"
+            )
+        key = "arena_size" if self.config["arena_size"] is not None else "platform"
+        raise SettingsError(
+            key, f"arena_size={size:g} m is out of range for MidAngleNavigation with {lanes} lane(s) on {platform.name!r}: "
+            f"allowed [{low:g}, {high:g}] m ({why})"
+        )
 
     @property
     def corridor(self) -> Corridor:
-        """The corridor of this env (built once from the settings)."""
+        """The corridor of this env (built once from the settings, after checking that the arena fits it)."""
         if getattr(self, "_corridor", None) is None:
-            self._corridor = corridor(self._size(), self.config["lanes"], self.platform)
+            size = self._size()
+            self._check_size(size)
+            self._corridor = corridor(size, self.config["lanes"], self.platform)
         return self._corridor
 
     def n_static_robots(self) -> int:
@@ -238,42 +341,40 @@ class MidAngleNavigationTask(Task):
     def obstacles(self) -> np.ndarray:
         return self.corridor.walls
 
+    def start_square(self) -> Arena:
+        """The square (side a lane width minus 0.2 radii, centred on :attr:`Corridor.start_centre`) the seekers start in."""
+        return Arena("square", self.corridor.lane_width - 2 * START_INSET_RADII * self.platform.radius)
+
     def check_layout(self) -> None:
         if self.config["arena"] != "square":
             raise SettingsError("arena", "MidAngleNavigation's corridor needs arena='square'")
-        if self.config["message_bits"] < 1:
-            raise SettingsError("message_bits", "message_bits must be >= 1: the static robots broadcast their hop count to the goal in them")
-        W, d = self.corridor.lane_width, self.platform.diameter
-        if W < MIN_LANE_DIAMETERS * d * (1 - 1e-9):
-            raise SettingsError(
-                "arena_size", f"lanes of {W:.3f} m are narrower than {MIN_LANE_DIAMETERS} robot diameters ({MIN_LANE_DIAMETERS * d:.3f} m): "
-                "use a larger arena_size or fewer lanes"
-            )
-        region = Arena("square", W - 0.2 * self.platform.radius)
+        region = self.start_square()
         try:
-            from swarm_envs.task import check_capacity
-
             check_capacity(self.n_agents, self.platform.radius, region)
         except ValueError:
-            raise SettingsError("n_robots", f"{self.n_agents} seekers do not fit in the start square of side {W:.3f} m; use fewer seekers or a larger arena_size") from None
+            wider = " or a larger arena_size" if self.corridor.lane_width < LANE_DIAMETERS * self.platform.diameter else ""
+            raise SettingsError(
+                "n_robots", f"{self.n_agents} seekers do not fit in the start square of side {region.size:.3f} m; use fewer seekers{wider}"
+            ) from None
 
     def spawn(self, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
         c, r = self.corridor, self.platform.radius
-        spacing = max(0.4 * message_range(self.platform), 3.0 * self.platform.diameter)
+        spacing = gate_spacing(self.platform)
         nominal = np.concatenate([c.goal[None], c.relays])
         static = nominal + np.concatenate([np.zeros((1, 2)), rng.uniform(-0.1, 0.1, c.relays.shape) * spacing])  # a little jitter
         # a jittered relay must stay clear of the walls, the arena and the others; else it stands where nominal
         ok = (distance_to_segments(static, c.walls) > 1.05 * r) & np.all(np.abs(static) <= self.arena.half - 1.05 * r, axis=1)
         static = np.where(ok[:, None], static, nominal)
         for _ in range(len(static)):  # nominal positions are 2.4 radii apart: revert close pairs until none is left
-            gaps = np.linalg.norm(static[:, None] - static[None], axis=-1)
-            np.fill_diagonal(gaps, np.inf)
-            close = (gaps < 2.2 * r).any(axis=1) & np.any(static != nominal, axis=1)
+            pairs = cKDTree(static).query_pairs(2.2 * r * (1 + 1e-9), output_type="ndarray")  # a superset of the close pairs
+            pairs = pairs[np.linalg.norm(static[pairs[:, 0]] - static[pairs[:, 1]], axis=-1) < 2.2 * r]
+            close = np.zeros(len(static), dtype=bool)
+            close[pairs.reshape(-1)] = True
+            close &= np.any(static != nominal, axis=1)
             if not close.any():
                 break
             static[close] = nominal[close]
-        region = Arena("square", c.lane_width - 0.2 * r)
-        seekers = spawn_positions(rng, self.n_agents, r, region) + c.start_centre
+        seekers = spawn_positions(rng, self.n_agents, r, self.start_square()) + c.start_centre
         return np.concatenate([static, seekers]), rng.uniform(-np.pi, np.pi, self.n_world)
 
     def markers(self, positions: np.ndarray) -> dict[str, np.ndarray]:
@@ -299,7 +400,7 @@ class MidAngleNavigationTask(Task):
             self._last_hop[bb, ss, who] = value
         fresh = self._clock[:, None, None] - self._heard_at <= HOP_MEMORY_STEPS  # (B, S, senders)
         lowest = np.where(fresh, self._hop_of, self.hop_levels - 1).min(axis=2)
-        hops = np.minimum(lowest + 1, self.hop_levels - 1)
+        hops = np.minimum(lowest, self.hop_levels - 2) + 1  # at most 2**b - 1, without overflowing at b = 63
         hops[:, 0] = 0  # the goal
         return ((hops[..., None] >> np.arange(b)) & 1).astype(bool)
 
@@ -478,12 +579,12 @@ def parallel_env(
     | ``max_cycles`` | 600 | control steps of 0.1 s per episode |
     | ``render_mode`` | ``None`` | ``"rgb_array"`` (headless) or ``"human"`` (window) |
     | ``arena`` | ``"square"`` | ``"square"`` or ``"circle"`` |
-    | ``arena_size`` | ``None`` | side (m); ``None``: 2.5 message ranges (r-one 2.5 m), or ``lanes`` x 6 robot diameters if larger; only ``"square"`` arenas |
+    | ``arena_size`` | ``None`` | side (m); ``None``: 2.5 message ranges (r-one 2.5 m), or ``lanes`` x 6 robot diameters if larger; only ``"square"`` arenas; at least 10.2 robot diameters with one lane (no seeker starts within the arrival radius), ``lanes`` x 4.5 diameters with more, and at most the side whose corridor holds 2,000 static robots (one lane: r-one 401 m; ``arena_size_range(platform, lanes)``) |
     | ``reward_mode`` | ``"global"`` | ``"global"`` (one team reward) or ``"local"`` (each robot its own term) |
     | ``flatten`` | ``False`` | one flat ``Box`` observation instead of the ``Dict`` |
     | ``n_neighbours`` | 8 | rows K of ``range_bearing`` and ``scale_free`` |
     | ``n_messages`` | 8 | rows M of ``messages`` |
-    | ``message_bits`` | 4 | payload bits b of every robot's messages: the static robots' hop counts (at least 1); a seeker sends its action's bits |
+    | ``message_bits`` | 4 | payload bits b of every robot's messages: the static robots' hop counts (1 to 63: a hop count is a 64-bit integer); a seeker sends its action's bits |
     | ``observe_ids`` | ``True`` | the robot's own id and the neighbour and sender ids its sensing decoded (``own_id``, ``*_ids`` parts) |
     | ``bitrate`` | ``None`` | SwarmCom bit rate (bps): ``None`` the platform's (e-puck 310 [T20], r-one 1250 [L Sec. 3.2.1], Droplet 310), or 310, 650, 1080, 1160, 1250, 1670, 1800 |
     | ``relative_threshold`` | ``None`` | detector threshold m_tr (ADC counts); ``None``: 5 on e-puck and r-one [T20], 8 on the Droplet |

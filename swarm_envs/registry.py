@@ -199,7 +199,8 @@ def make_vec(env: str | type, num_envs: int, *, agents_as_envs: bool = False, **
     """``num_envs`` copies of a registered id (or a ``Task`` / ``SwarmEnv`` subclass) stepped by one batched
     core: a Gymnasium ``VectorEnv`` with ``(num_envs, n_agents, ...)`` arrays (:mod:`swarm_envs.vector`).
     ``agents_as_envs=True``: every robot of every copy as one sub-env (``num_envs x n_agents`` rows,
-    :class:`swarm_envs.vector.AgentsAsEnvs`), for Gymnasium's vector wrappers."""
+    :class:`swarm_envs.vector.AgentsAsEnvs`), for Gymnasium's vector wrappers. ``SettingsError`` naming
+    ``num_envs`` when the copies' estimated memory exceeds the machine's available memory."""
     if not isinstance(agents_as_envs, (bool, np.bool_)):
         raise TypeError(f"agents_as_envs must be True or False, got {agents_as_envs!r:.80}")
     entry, defaults = resolve(env)

@@ -63,9 +63,13 @@ class SortedFollowingTask(Task):
 
     def start_region(self) -> Arena:
         """The square (centred on the arena) the robots start in: half a message range, or more room for
-        many robots, so that they start within sensing range of each other."""
-        side = max(0.5 * message_range(self.platform), 4.0 * self.platform.diameter * np.sqrt(self.n_world))
-        return Arena("square", min(side, self.arena.size))
+        many robots, so that they start within sensing range of each other; the whole arena when that square
+        would reach past its walls (a small arena, or a circle too small for the square inside it)."""
+        side = min(max(0.5 * message_range(self.platform), 4.0 * self.platform.diameter * np.sqrt(self.n_world)), self.arena.size)
+        r = self.platform.radius
+        if self.arena.shape == "circle" and np.sqrt(2.0) * (side / 2 - r) > self.arena.half - r:
+            return self.arena  # the build's fit test covers the whole arena
+        return Arena("square", side)
 
     def spawn(self, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
         positions = spawn_positions(rng, self.n_world, self.platform.radius, self.arena, region=self.start_region())
@@ -243,7 +247,7 @@ def parallel_env(
 
     Robots are placed uniformly at random without overlap in a square at the arena's centre of side half
     the platform's message range (more for many robots), so they start within sensing range of each
-    other. Headings are uniform in [-pi, pi). ``reset(seed=..., options={"positions": (N, 2) m,
+    other; in the whole arena when that square does not fit inside it (a small arena). Headings are uniform in [-pi, pi). ``reset(seed=..., options={"positions": (N, 2) m,
     "headings": (N,) rad})`` places the robots exactly instead.
 
     ## Episode End

@@ -19,7 +19,7 @@ DENSE = {"epuck": 0.45, "droplet": 0.3, "rone": 0.7}  # small arenas: robots col
 def _kwargs(env_id: str, platform: str, sensing: str) -> dict:
     n = 2 if "Centroid" in env_id else 8
     kw = dict(platform=platform, sensing=sensing, n_robots=n, message_bits=2, max_cycles=200)
-    if "Centroid" not in env_id:
+    if "Centroid" not in env_id and "MidAngle" not in env_id:  # MidAngleNavigation: its seekers crowd the start square
         kw["arena_size"] = DENSE[platform]
     return kw
 

@@ -149,9 +149,9 @@ def test_arrival_time_and_path_ratio():
 def test_bad_corridor_settings_name_the_setting():
     with pytest.raises(ValueError, match="arena='square'"):
         swarm_envs.make("swarm_envs/MidAngleNavigation-v0", arena="circle")
-    with pytest.raises(ValueError, match="message_bits must be >= 1"):
+    with pytest.raises(ValueError, match=r"message_bits must be an integer in \[1, 63\].*hop count"):
         swarm_envs.make("swarm_envs/MidAngleNavigation-v0", message_bits=0)
-    with pytest.raises(ValueError, match="narrower than 4.5 robot diameters"):
+    with pytest.raises(ValueError, match="lanes at least 4.5 robot diameters wide"):
         swarm_envs.make("swarm_envs/MidAngleNavigation-v0", arena_size=1.0, lanes=3)
 
 
