@@ -109,7 +109,7 @@ def test_messages_travel_over_the_channel():
     # most decoded payloads are exactly what was sent (bit errors are possible, not the rule)
     exact = np.mean([np.array_equal(np.array(g) > 0.5, pattern > 0) for g in got])
     assert exact > 0.7
-    assert ("sensing", "tx_started") in infos["robot_0"]
+    assert "tx_started" in infos["robot_0"]["sensing"]
 
 
 def test_droplet_near_model_in_the_env():
