@@ -20,8 +20,8 @@ def _settings(env_id: str, sensing: str) -> dict[str, Any]:
 
 
 def _is_plain(value: Any) -> bool:
-    """A Python bool, int or float, or a list of plain values (no numpy types)."""
-    if isinstance(value, list):
+    """A Python bool, int or float, or a tuple or list of plain values (no numpy types)."""
+    if isinstance(value, (tuple, list)):
         return all(_is_plain(v) for v in value)
     return type(value) in (bool, int, float)
 
