@@ -454,11 +454,13 @@ class FlatInfos(BaseParallelWrapper):
     Everything else (spaces, ``state()``, ``agents``, attributes) is the wrapped env's.
     """
 
-    def reset(self, seed: int | None = None, options: dict[str, Any] | None = None):
+    def reset(
+        self, seed: int | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[dict[str, Any], dict[str, dict[tuple[str, str], Any]]]:
         obs, infos = self.env.reset(seed=seed, options=options)
         return obs, {agent: flat_info(info) for agent, info in infos.items()}
 
-    def step(self, actions: dict[str, Any]):
+    def step(self, actions: dict[str, Any]) -> tuple[dict, dict, dict, dict, dict[str, dict[tuple[str, str], Any]]]:
         obs, rewards, terminations, truncations, infos = self.env.step(actions)
         return obs, rewards, terminations, truncations, {agent: flat_info(info) for agent, info in infos.items()}
 
