@@ -2,7 +2,7 @@
 
 An episode is run with :func:`run_episode`: the policy sees the named batched observations of the agents
 (:meth:`swarm_envs.env.SwarmEnv.batched_observations`, rows = agents in ``possible_agents`` order); the task
-metrics are read from ``infos[agent]["metrics", name]`` by the *evaluator* only. Each task metric is reduced
+metrics are read from ``infos[agent]["metrics"][name]`` by the *evaluator* only. Each task metric is reduced
 over the episode as the task declares in ``Task.METRICS`` ("final" = value after the last step, "mean" = mean
 over all steps after reset). ``episode_return`` is the mean over robots of the summed per-robot reward.
 Confidence intervals: bootstrap percentile 95 % interval of the mean over seeds (:func:`confidence_interval`),
@@ -23,7 +23,6 @@ from scipy import stats
 
 from swarm_envs.agents.base import Policy, RandomPolicy
 from swarm_envs.agents.tasks import env_id, metric_reductions
-from swarm_envs.env import info_group
 
 __all__ = [
     "make_env",
@@ -70,7 +69,7 @@ def run_episode(
     """
     policy.reset(env.n_agents, rng=np.random.default_rng([seed, 7919]))
     _, infos = env.reset(seed=seed)
-    reductions = _reductions(task, info_group(infos[env.possible_agents[0]], "metrics"))
+    reductions = _reductions(task, infos[env.possible_agents[0]]["metrics"])
     if frames is not None:
         frames.append(env.render())
     sums = dict.fromkeys(reductions, 0.0)
@@ -82,7 +81,7 @@ def run_episode(
         actions = np.asarray(policy.act_batch(parts), dtype=np.float64)
         _, rewards, _, _, infos = env.step({a: actions[i] for i, a in enumerate(env.possible_agents)})
         returns += np.array([rewards[a] for a in env.possible_agents])
-        metrics = info_group(infos[env.possible_agents[0]], "metrics")
+        metrics = infos[env.possible_agents[0]]["metrics"]
         for name in reductions:
             sums[name] += metrics[name]
         last = metrics

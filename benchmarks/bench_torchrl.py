@@ -5,7 +5,7 @@ Times, in the same run and alternated round by round (so every ratio sees the sa
 - ``make_vec``: ``SwarmVectorEnv.step`` with uniform random actions (drawn inside the timed loop);
 - ``make_torchrl rollout``: ``SwarmTorchRLEnv.rollout(T, auto_reset=False, tensordict=...)`` with TorchRL's
   random policy (``action_spec.rand``), i.e. everything a TorchRL rollout does per step;
-- ``PettingZooWrapper rollout``: TorchRL's stock wrapper around one single env (B = 1), for reference.
+- ``PettingZooWrapper rollout``: TorchRL's stock wrapper around one single env (B = 1, in ``FlatInfos``), for reference.
 
 Each round runs T steps of each, continuing the same episodes (no resets are timed); the table gives the median agent-steps/s (robots x copies x steps per
 second) over the rounds and the median of the per-round ratios to ``make_vec``.
@@ -28,6 +28,7 @@ import numpy as np
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 
 import swarm_envs  # noqa: E402
+from swarm_envs.env import FlatInfos  # noqa: E402
 
 TASK = "swarm_envs/Flocking-v0"
 
@@ -70,7 +71,7 @@ def main(argv: list[str] | None = None) -> dict[str, float]:
         from torchrl.envs.libs.pettingzoo import PettingZooWrapper
 
         warnings.filterwarnings("ignore", message="PettingZoo in TorchRL is tested")
-        single = PettingZooWrapper(swarm_envs.make(TASK, **kwargs), seed=0)
+        single = PettingZooWrapper(FlatInfos(swarm_envs.make(TASK, **kwargs)), seed=0)  # flat info keys for the stock wrapper
     rng = np.random.default_rng(0)
     time_make_vec(vec, 3, rng)  # warm-up (compiled kernels load, caches fill)
     _, last = time_rollout(env, 3, env.reset())

@@ -8,7 +8,9 @@ against ``make_vec(..., 1)`` (arrays) over the same batched core, in the same ru
 Each round times ``--steps`` env steps of each view (random actions; the ParallelEnv's actions are made as
 a dict of arrays before the timer starts), one after the other, so both sides of a round's ratio see the
 same machine load. Prints env steps/s per round, the ratio ParallelEnv / make_vec per round and the median
-ratio, and the load average before and after.
+ratio, and the load average before and after. The same ratio of process CPU time per step (all threads of
+this process; it depends less on other processes' load than wall-clock time) is printed beside, and the
+median time of the ParallelEnv's infos alone (``SwarmEnv._infos``, per-agent nested dicts).
 """
 
 from __future__ import annotations
@@ -19,7 +21,9 @@ import os
 import statistics
 import sys
 import time
+from collections.abc import Callable, Sequence
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -31,24 +35,24 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 from swarm_envs.agents.tasks import import_modules  # noqa: E402
 
 
-def time_parallel(env, actions: list[dict], steps: int) -> float:
-    """Env steps per second of the ParallelEnv over ``steps`` steps (after 2 warm-up steps)."""
+def time_steps(step: Callable[[Any], Any], actions: Sequence[Any], steps: int) -> tuple[float, float]:
+    """(env steps per second, process CPU seconds per step) of ``step`` over ``steps`` actions, after 2 warm-up steps."""
     for a in actions[:2]:
-        env.step(a)
-    t0 = time.perf_counter()
+        step(a)
+    t0, c0 = time.perf_counter(), time.process_time()
     for a in actions[2 : 2 + steps]:
-        env.step(a)
-    return steps / (time.perf_counter() - t0)
+        step(a)
+    return steps / (time.perf_counter() - t0), (time.process_time() - c0) / steps
 
 
-def time_vector(vec, actions: np.ndarray, steps: int) -> float:
-    """Env steps per second of the vector env (one copy) over ``steps`` steps (after 2 warm-up steps)."""
-    for a in actions[:2]:
-        vec.step(a)
-    t0 = time.perf_counter()
-    for a in actions[2 : 2 + steps]:
-        vec.step(a)
-    return steps / (time.perf_counter() - t0)
+def time_infos(env, repeats: int = 50) -> float:
+    """Median seconds of the ParallelEnv's infos alone (``SwarmEnv._infos``) at its current step."""
+    times = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        env._infos()
+        times.append(time.perf_counter() - t0)
+    return statistics.median(times)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -77,25 +81,31 @@ def main(argv: list[str] | None = None) -> int:
     rng = np.random.default_rng(0)
     size = vec.layout.action_size
     load0 = os.getloadavg()
-    print(f"{args.env}, N = {args.n}, {args.sensing} sensing, {args.steps} steps per view and round; load {load0[0]:.2f}")
-    print("| round | ParallelEnv (env steps/s) | make_vec(1) (env steps/s) | ratio |")
-    print("|---|---|---|---|")
-    ratios, par_rates, arr_rates = [], [], []
+    print(f"{args.env}, N = {args.n}, {args.sensing} sensing, {args.steps} steps per view and round; swarm_envs "
+          f"{swarm_envs.__version__} from {Path(swarm_envs.__file__).parent}; load {load0[0]:.2f} on {os.cpu_count()} cores")
+    print("| round | ParallelEnv (env steps/s) | make_vec(1) (env steps/s) | ratio | CPU ms/step ParallelEnv | make_vec(1) | CPU ratio | infos ms |")
+    print("|---|---|---|---|---|---|---|---|")
+    ratios, cpu_ratios, par_rates, arr_rates, info_times = [], [], [], [], []
     for r in range(args.rounds):
         arrays = rng.uniform(-1, 1, (args.steps + 2, 1, vec.n_agents, size))
         dicts = [{a: arrays[t, 0, i] for i, a in enumerate(env.possible_agents)} for t in range(args.steps + 2)]
-        par = time_parallel(env, dicts, args.steps)
-        arr = time_vector(vec, arrays, args.steps)
+        par, par_cpu = time_steps(env.step, dicts, args.steps)
+        arr, arr_cpu = time_steps(vec.step, arrays, args.steps)
+        info_times.append(time_infos(env))
         ratios.append(par / arr)
+        cpu_ratios.append(arr_cpu / par_cpu)  # a speed ratio, as the wall-clock one
         par_rates.append(par)
         arr_rates.append(arr)
-        print(f"| {r + 1} | {par:.2f} | {arr:.2f} | {par / arr:.3f} |", flush=True)
+        print(f"| {r + 1} | {par:.2f} | {arr:.2f} | {par / arr:.3f} | {par_cpu * 1e3:.1f} | {arr_cpu * 1e3:.1f} | {cpu_ratios[-1]:.3f} "
+              f"| {info_times[-1] * 1e3:.2f} |", flush=True)
     load1 = os.getloadavg()
-    print(f"\nmedian ratio ParallelEnv / make_vec(1): {statistics.median(ratios):.3f}; load {load0[0]:.2f} -> {load1[0]:.2f}")
+    print(f"\nmedian ratio ParallelEnv / make_vec(1): {statistics.median(ratios):.3f} (wall clock), {statistics.median(cpu_ratios):.3f} "
+          f"(process CPU time); infos {statistics.median(info_times) * 1e3:.2f} ms; load {load0[0]:.2f} -> {load1[0]:.2f}")
     if args.json:
         print(json.dumps({"env": args.env, "n": args.n, "sensing": args.sensing, "rounds": args.rounds,
                           "parallel_env_steps_per_s": statistics.median(par_rates),
-                          "make_vec_steps_per_s": statistics.median(arr_rates), "ratio": statistics.median(ratios)}))
+                          "make_vec_steps_per_s": statistics.median(arr_rates), "ratio": statistics.median(ratios),
+                          "cpu_ratio": statistics.median(cpu_ratios), "infos_s": statistics.median(info_times)}))
     return 0
 
 

@@ -258,7 +258,7 @@ def render(info: dict[str, str], runs: list[dict], train: dict | str, sizes: lis
             f"robots, {views['sensing']} sensing ({views['env']}), {views['rounds']} alternated rounds: "
             f"{views['parallel_env_steps_per_s']:.1f} against {views['make_vec_steps_per_s']:.1f} env steps/s,",
             f"**ratio {views['ratio']:.2f}** (median of the rounds' ratios; `python benchmarks/bench_views.py`). The",
-            "ParallelEnv builds its per-agent dicts column by column over all agents and its infos lazily.",
+            "ParallelEnv builds its per-agent dicts (observations, rewards, nested infos) column by column over all agents.",
             "",
         ]
     if isinstance(torchrl, dict):

@@ -9,7 +9,9 @@
 The env is ``swarm_envs.make_torchrl``: ``--num-envs`` copies of the task stepped by one batched core, as
 one TorchRL env with ``batch_size=[num_envs]`` (:mod:`swarm_envs.torchrl_env`), with the default ``Dict``
 observation and the global ``state``. ``--wrapper pettingzoo`` uses TorchRL's stock ``PettingZooWrapper``
-around the single parallel env (``return_state=True``) instead: the same model and loss work on both.
+around the single parallel env (``return_state=True``) instead, with flat ``(group, name)`` info keys
+(``swarm_envs.env.FlatInfos``; the stock wrapper does not read nested info dicts): the same model and loss
+work on both.
 
 - **Actor** (decentralised, parameters shared by all robots): each robot's Dict observation (range &
   bearing, messages, scale-free coordinates, rigidity, proprioception: sensing only) is flattened and
@@ -46,6 +48,7 @@ from torchrl.objectives import ClipPPOLoss, ValueEstimators
 
 import swarm_envs
 from swarm_envs.agents.tasks import import_modules
+from swarm_envs.env import FlatInfos
 from swarm_envs.torch_threads import set_torch_threads
 
 GROUP = "robot"  # the stock wrapper groups agents by name prefix (robot_0, robot_1, ... -> "robot"); make_torchrl uses it too
@@ -74,7 +77,7 @@ def make_env(task: str, n_robots: int, max_cycles: int, sensing: str, seed: int,
     settings = dict(n_robots=n_robots, max_cycles=max_cycles, sensing=sensing)
     if wrapper == "batched":
         return swarm_envs.make_torchrl(task, num_envs, group=GROUP, seed=seed, torch_threads=0, **settings)
-    return PettingZooWrapper(swarm_envs.make(task, **settings), return_state=True, seed=seed)
+    return PettingZooWrapper(FlatInfos(swarm_envs.make(task, **settings)), return_state=True, seed=seed)
 
 
 def build(env: EnvBase, hidden: int = 64) -> tuple[ProbabilisticActor, TensorDictSequential]:

@@ -2,7 +2,7 @@
 
 Reward (global, default) = decrease of the swarm's spread (mean distance to the centroid) this step,
 normalised by the arena size; ``reward_mode="local"`` rewards each robot for the decrease of its own
-distance to the centroid. Metrics in ``infos[agent]["metrics", name]``: largest-cluster fraction (clusters =
+distance to the centroid. Metrics in ``infos[agent]["metrics"][name]``: largest-cluster fraction (clusters =
 robots whose centres are within 1.5 diameters, chained), number of clusters, mean distance to centroid (m).
 """
 
@@ -150,8 +150,8 @@ def parallel_env(
     With ``D_t`` the robots' mean distance (m) to their centroid and ``L`` the arena size (m):
     ``reward_mode="global"`` gives every agent ``(D_{t-1} - D_t) / L``, the decrease of the swarm's
     spread this step; ``"local"`` gives each robot the decrease of its own distance to the centroid, / L.
-    Both terms are in ``infos[agent]["reward_terms", name]`` (``spread_decrease``, ``own_distance_decrease``).
-    Metrics in ``infos[agent]["metrics", name]``: ``largest_cluster_fraction``, ``n_clusters``,
+    Both terms are in ``infos[agent]["reward_terms"][name]`` (``spread_decrease``, ``own_distance_decrease``).
+    Metrics in ``infos[agent]["metrics"][name]``: ``largest_cluster_fraction``, ``n_clusters``,
     ``mean_distance_to_centroid`` (m).
 
     ## Starting State

@@ -276,8 +276,8 @@ def parallel_env(
 
     Each seeker gets ``-d / L``, its distance d (m) to the anchors' centroid over the arena size L (m);
     ``reward_mode="global"`` gives every seeker the mean over seekers. Term in
-    ``infos[agent]["reward_terms", name]``: ``distance_to_centroid`` (m). Metrics in
-    ``infos[agent]["metrics", name]``: ``mean_distance_to_centroid`` and ``mean_distance_second_half`` (m, the
+    ``infos[agent]["reward_terms"][name]``: ``distance_to_centroid`` (m). Metrics in
+    ``infos[agent]["metrics"][name]``: ``mean_distance_to_centroid`` and ``mean_distance_second_half`` (m, the
     mean over the second half of the episode so far; compare [L]'s 14.03 cm).
 
     ## Starting State

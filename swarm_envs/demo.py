@@ -31,7 +31,7 @@ import numpy as np
 
 from swarm_envs.agents.evaluation import make_env, run_episode
 from swarm_envs.agents.tasks import SHORT_NAMES, headline, import_modules, metric_reductions
-from swarm_envs.env import DT, info_group
+from swarm_envs.env import DT
 from swarm_envs.platforms import PLATFORMS
 from swarm_envs.registry import list_envs, task_class
 from swarm_envs.settings import Int, cli_type
@@ -216,7 +216,7 @@ def run_demo(
     )
     policy.reset(env.n_agents, rng=np.random.default_rng([seed, 7919]))
     _, infos = env.reset(seed=seed)
-    first = info_group(infos[env.possible_agents[0]], "metrics")
+    first = infos[env.possible_agents[0]]["metrics"]
     best, _ = _headline(task, first)
     reductions = _reductions(task, first)
 
@@ -232,7 +232,7 @@ def run_demo(
         parts = {k: v[env.agent_robots] for k, v in env.batched_observations().items()}
         actions = np.asarray(policy.act_batch(parts), dtype=np.float64)
         _, _, _, _, infos = env.step({a: actions[i] for i, a in enumerate(env.possible_agents)})
-        last = info_group(infos[env.possible_agents[0]], "metrics")
+        last = infos[env.possible_agents[0]]["metrics"]
         for name in reductions:
             sums[name] += last[name]
         steps += 1

@@ -164,9 +164,9 @@ def parallel_env(
     [0, 1]) and cohesion = the mean over robots of the share of the other robots whose centres are
     within the platform's reliable message range (e-puck 0.61 m [T20 Sec. 7], Droplet 0.43 m, r-one
     1.0 m). ``"local"``: each robot's polarisation is taken over itself and those neighbours and
-    only its own bump is penalised. Terms in ``infos[agent]["reward_terms", name]``:
+    only its own bump is penalised. Terms in ``infos[agent]["reward_terms"][name]``:
     ``polarisation``, ``local_polarisation``, ``cohesion``, ``collision``. Metrics in
-    ``infos[agent]["metrics", name]``: ``polarisation``, ``cohesion``, ``collision_fraction``.
+    ``infos[agent]["metrics"][name]``: ``polarisation``, ``cohesion``, ``collision_fraction``.
 
     ## Starting State
 

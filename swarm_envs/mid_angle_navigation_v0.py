@@ -546,8 +546,8 @@ def parallel_env(
     Per seeker: its progress this step along the shortest path to the goal (around the walls' ends) over
     that path's length at the start, ``arrival_bonus`` when it arrives (centre within 2.5 radii of the
     goal's), nothing after that, minus ``collision_penalty`` while it is in contact. ``reward_mode="global"``:
-    the mean over seekers; ``"local"``: each its own. Terms in ``infos[agent]["reward_terms", name]``:
-    ``progress``, ``arrived``, ``collision``. Metrics in ``infos[agent]["metrics", name]``:
+    the mean over seekers; ``"local"``: each its own. Terms in ``infos[agent]["reward_terms"][name]``:
+    ``progress``, ``arrived``, ``collision``. Metrics in ``infos[agent]["metrics"][name]``:
     ``success_rate`` (headline: share of seekers that arrived), ``time_to_goal`` (s; the elapsed time for a
     seeker not there yet), ``path_ratio`` (path driven until arrival over the shortest path; NaN while no
     seeker arrived), ``collision_fraction``.

@@ -231,8 +231,8 @@ def parallel_env(
     rewards moving away from the other parity without joining the own) plus the step's gain in its
     separation, in units of one step's drive (``max_speed`` x 0.1 s): potential-based shaping, which sums to
     the episode's net gain and leaves the best policy unchanged. Terms in
-    ``infos[agent]["reward_terms", name]``: ``separation``, ``segregation``, ``collision``. Metrics
-    in ``infos[agent]["metrics", name]``: ``segregation`` (headline: the mean over robots of the
+    ``infos[agent]["reward_terms"][name]``: ``separation``, ``segregation``, ``collision``. Metrics
+    in ``infos[agent]["metrics"][name]``: ``segregation`` (headline: the mean over robots of the
     same-parity share of its neighbours within ``cluster_radius``, 0 without any), ``parity_cluster_fraction`` (mean over
     the parities of the largest same-parity cluster's share, clusters chained at 1.5 diameters),
     ``n_parity_clusters`` (same-parity clusters, single robots included; 2 at best), ``collision_fraction``.

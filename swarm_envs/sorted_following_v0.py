@@ -239,8 +239,8 @@ def parallel_env(
     ``mean_speed`` = mean speed / max speed, ``collision_fraction`` = share of robots in contact.
     ``"local"``: a follower gets 1 while it follows, the leader ``speed_weight x`` its speed fraction, each
     minus ``collision_penalty`` when it bumps. Switched-off robots get 0. Terms in
-    ``infos[agent]["reward_terms", name]``: ``following``, ``speed``, ``collision``. Metrics in
-    ``infos[agent]["metrics", name]``: ``following_fraction`` (headline), ``line_order`` (share of the
+    ``infos[agent]["reward_terms"][name]``: ``following``, ``speed``, ``collision``. Metrics in
+    ``infos[agent]["metrics"][name]``: ``following_fraction`` (headline), ``line_order`` (share of the
     followers in the unbroken sorted line from the leader), ``collision_fraction``, ``mean_speed``.
 
     ## Starting State

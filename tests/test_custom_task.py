@@ -15,7 +15,7 @@ import pytest
 from pettingzoo.test import parallel_api_test
 
 import swarm_envs
-from swarm_envs.env import SwarmEnv, info_group
+from swarm_envs.env import SwarmEnv
 from swarm_envs.registry import spec, task_class
 from swarm_envs.settings import SettingsError
 from swarm_envs.task import Int, Real, Task
@@ -82,7 +82,7 @@ def test_example_copies_equal_single_envs_bit_for_bit(example, sensing):
                 for key, value in single[agent].items():
                     np.testing.assert_array_equal(v_obs[key][b, i], value)
                 assert v_rew[b, i] == np.float32(rewards[agent])
-            for name, value in info_group(infos["robot_0"], "metrics").items():
+            for name, value in infos["robot_0"]["metrics"].items():
                 assert v_infos["metrics"][name][b] == value
 
 

@@ -209,7 +209,7 @@ def test_vector_copies_carry_the_error_and_equal_single_envs():
                 _, infos = env.reset()
             else:
                 *_, infos = env.step({a: actions[t, b, i] for i, a in enumerate(env.possible_agents)})
-            np.testing.assert_array_equal(trajectories[True][t][b], np.stack([infos[a]["ground_truth", "position"] for a in env.possible_agents]))
+            np.testing.assert_array_equal(trajectories[True][t][b], np.stack([infos[a]["ground_truth"]["position"] for a in env.possible_agents]))
     assert not np.array_equal(trajectories[True][5], trajectories[False][5])
 
 

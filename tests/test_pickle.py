@@ -11,6 +11,7 @@ import pytest
 
 import swarm_envs
 from swarm_envs import world as world_module
+from tests.conftest import assert_tree_equal
 
 TASKS = [i for i in swarm_envs.list_envs() if i.startswith("swarm_envs/")]  # every task of the suite
 DENSE = {"epuck": 0.45, "droplet": 0.3, "rone": 0.7}  # small arenas: robots collide, so contacts are copied too
@@ -35,9 +36,7 @@ def _assert_same_step(a, b):
     for agent in obs_a:
         for key in obs_a[agent]:
             np.testing.assert_array_equal(obs_a[agent][key], obs_b[agent][key], err_msg=f"{agent} {key}")
-        assert info_a[agent].keys() == info_b[agent].keys()
-        for key, value in info_a[agent].items():
-            np.testing.assert_array_equal(value, info_b[agent][key], err_msg=f"{agent} {key}")
+        assert_tree_equal(info_a[agent], info_b[agent], agent)
 
 
 @pytest.mark.parametrize(

@@ -13,7 +13,6 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from swarm_envs.env import info_group
 
 import swarm_envs
 from swarm_envs import aggregation_v0, centroid_seeking_v0, flocking_v0
@@ -267,11 +266,11 @@ def test_non_real_actions_are_rejected(env, action):
 def test_centroid_metric_is_never_nan_and_is_the_second_half_so_far():
     env = centroid_seeking_v0.parallel_env(sensing="ideal", max_cycles=9)
     _, infos = env.reset(seed=2)
-    distances = [infos["robot_0"]["metrics", "mean_distance_to_centroid"]]
-    assert infos["robot_0"]["metrics", "mean_distance_second_half"] == pytest.approx(distances[0])
+    distances = [infos["robot_0"]["metrics"]["mean_distance_to_centroid"]]
+    assert infos["robot_0"]["metrics"]["mean_distance_second_half"] == pytest.approx(distances[0])
     for t in range(1, 10):
         _, _, _, _, infos = env.step({"robot_0": np.array([1.0, 0.4])})
-        m = info_group(infos["robot_0"], "metrics")
+        m = infos["robot_0"]["metrics"]
         distances.append(m["mean_distance_to_centroid"])
         assert np.isfinite(m["mean_distance_second_half"])
         assert m["mean_distance_second_half"] == pytest.approx(np.mean(distances[math.ceil(t / 2):]))

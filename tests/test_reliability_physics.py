@@ -106,7 +106,7 @@ def test_states_from_infos_are_always_accepted_by_reset(platform, substeps):
     for seed, kind in ((0, "crush"), (1, "wall")):
         _, infos = env.reset(seed=seed)
         for _ in range(60):
-            gt = {k: np.array([infos[a]["ground_truth", k] for a in env.agents]) for k in ("position", "heading")}
+            gt = {k: np.array([infos[a]["ground_truth"][k] for a in env.agents]) for k in ("position", "heading")}
             twin.reset(seed=seed, options={"positions": gt["position"], "headings": gt["heading"]})
             np.testing.assert_array_equal(twin.world.positions, gt["position"])
             d = np.linalg.norm(gt["position"][:, None] - gt["position"][None], axis=-1) + np.eye(env.n_world)

@@ -8,7 +8,6 @@ import pytest
 from scipy.sparse.csgraph import shortest_path
 
 import swarm_envs
-from swarm_envs.env import info_group
 from swarm_envs.mid_angle_navigation_v0 import MidAngleNavigationTask
 from swarm_envs.task import BatchState, distance_to_segments, segments_crossed
 
@@ -140,7 +139,7 @@ def test_arrival_time_and_path_ratio():
     env.reset(seed=0, options={"positions": placed, "headings": np.zeros(env.n_world)})
     for _ in range(40):
         _, _, _, _, infos = env.step({"robot_0": np.r_[1.0, 0.0, -np.ones(env.layout.message_bits)]})
-    m = info_group(infos["robot_0"], "metrics")
+    m = infos["robot_0"]["metrics"]
     assert m["success_rate"] == 1.0 and 0 < m["time_to_goal"] < 4.0
     assert 0.9 < m["path_ratio"] < 1.2  # a straight drive: about the shortest path
     assert isinstance(env.task, MidAngleNavigationTask)
@@ -180,5 +179,5 @@ def test_copies_equal_single_envs_on_the_rone(env_id, kwargs):
                 for key, value in obs[a].items():
                     np.testing.assert_array_equal(history[t][0][key][b, i], value, err_msg=f"{key} copy {b} step {t}")
                 assert history[t][1][b, i] == np.float32(rew[a])
-            for name, value in info_group(infos[env.possible_agents[0]], "metrics").items():
+            for name, value in infos[env.possible_agents[0]]["metrics"].items():
                 np.testing.assert_array_equal(history[t][2][name][b], value, err_msg=name)

@@ -48,7 +48,7 @@ def test_scripted_metric_improves_over_the_episode():
     policy = make_scripted("bearing_aggregation", env)
     for seed in SEEDS[:3]:
         _, infos = env.reset(seed=seed)
-        start = infos["robot_0"]["metrics", "mean_distance_to_centroid"]
+        start = infos["robot_0"]["metrics"]["mean_distance_to_centroid"]
         end = run_episode(env, policy, seed, "aggregation")["mean_distance_to_centroid"]
         assert end < 0.6 * start
 
@@ -60,12 +60,12 @@ def _displacement(policy_factory, seeds, steps=60):
         policy = policy_factory(env)
         policy.reset(env.n_agents, np.random.default_rng(seed))
         _, infos = env.reset(seed=seed)
-        start = np.array([infos[a]["ground_truth", "position"] for a in env.possible_agents])
+        start = np.array([infos[a]["ground_truth"]["position"] for a in env.possible_agents])
         while env.agents:
             parts = {k: v[env.agent_robots] for k, v in env.batched_observations().items()}
             act = policy.act_batch(parts)
             _, _, _, _, infos = env.step({a: act[i] for i, a in enumerate(env.possible_agents)})
-        end = np.array([infos[a]["ground_truth", "position"] for a in env.possible_agents])
+        end = np.array([infos[a]["ground_truth"]["position"] for a in env.possible_agents])
         out.append(np.linalg.norm(end - start, axis=1).mean())
     return np.array(out)
 
@@ -155,7 +155,7 @@ def test_sorted_following_keeps_robots_behind_their_predecessor():
             parts = {k: v[env.agent_robots] for k, v in env.batched_observations().items()}
             act = policy.act_batch(parts)
             _, _, _, _, infos = env.step({a: act[i] for i, a in enumerate(env.possible_agents)})
-            pos = np.array([infos[a]["ground_truth", "position"] for a in env.possible_agents])
+            pos = np.array([infos[a]["ground_truth"]["position"] for a in env.possible_agents])
             d.append(np.linalg.norm(pos[1:] - pos[:-1], axis=1).mean())
         return np.mean(d[100:])
 

@@ -1,10 +1,10 @@
-"""Global state for centralised critics, the PettingZoo space dicts, and the flat (group, name) infos."""
+"""Global state for centralised critics and the PettingZoo space dicts."""
 
 import numpy as np
 import pytest
 
 import swarm_envs
-from swarm_envs.env import INFO_GROUPS, STATE_ROBOT_FIELDS, info_group
+from swarm_envs.env import STATE_ROBOT_FIELDS
 
 N_FIELDS = len(STATE_ROBOT_FIELDS)
 
@@ -64,9 +64,9 @@ def test_state_equals_ground_truth(env_id):
     # the agents' rows agree with what infos report as ground truth
     for i, agent in enumerate(env.possible_agents):
         row = robots[env.agent_robots[i]]
-        np.testing.assert_allclose(row[0:2], infos[agent]["ground_truth", "position"], atol=1e-6)
-        np.testing.assert_allclose(row[4:6], infos[agent]["ground_truth", "velocity"], atol=1e-5)
-        heading = infos[agent]["ground_truth", "heading"]
+        np.testing.assert_allclose(row[0:2], infos[agent]["ground_truth"]["position"], atol=1e-6)
+        np.testing.assert_allclose(row[4:6], infos[agent]["ground_truth"]["velocity"], atol=1e-5)
+        heading = infos[agent]["ground_truth"]["heading"]
         np.testing.assert_allclose(row[2:4], [np.cos(heading), np.sin(heading)], atol=1e-6)
     # marker: every task's centroid marker
     markers = state[N_FIELDS * env.n_world : -1].reshape(-1, 2)
@@ -107,25 +107,3 @@ def test_state_is_not_in_the_observations():
         flat = np.concatenate([np.ravel(v) for v in o.values()])
         # no absolute (arena-frame) coordinate of any robot appears in an observation
         assert not np.any(np.isin(np.round(positions.ravel(), 6), np.round(flat, 6)[np.abs(flat) > 1e-3]))
-
-
-@pytest.mark.parametrize("env_id", swarm_envs.list_envs())
-@pytest.mark.parametrize("sensing", ["ideal", "full"])
-def test_infos_are_flat_group_name_keys_with_fixed_shape_numbers(env_id, sensing):
-    env = make(env_id, sensing=sensing, n_robots=3, max_cycles=4)
-    _, infos = env.reset(seed=5)
-    shapes = {k: np.shape(v) for k, v in infos["robot_0"].items()}
-    rng = np.random.default_rng(2)
-    while env.agents:
-        for info in infos.values():
-            assert {k: np.shape(v) for k, v in info.items()} == shapes, "info keys and shapes must not change"
-            for key, value in info.items():
-                assert isinstance(key, tuple) and len(key) == 2 and key[0] in INFO_GROUPS
-                assert np.asarray(value).dtype.kind in "fiub", f"{key} is not numeric"
-        _, _, _, _, infos = env.step(random_actions(env, rng))
-    info = infos["robot_0"]
-    assert set(info_group(info, "ground_truth")) == {"position", "heading", "velocity"}
-    assert info_group(info, "metrics") and info_group(info, "reward_terms")
-    assert bool(info_group(info, "sensing")) == (sensing == "full")
-    with pytest.raises(KeyError, match="groups"):
-        info_group(info, "metric")

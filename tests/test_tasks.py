@@ -3,7 +3,6 @@
 import numpy as np
 
 from swarm_envs import aggregation_v0, centroid_seeking_v0, flocking_v0
-from swarm_envs.env import info_group
 
 
 def run(env, action_fn, steps):
@@ -35,14 +34,14 @@ def test_aggregation_rewards_moving_together():
         env.reset(seed=0, options={"positions": start, "headings": heads + np.pi})
         outward, _ = run(env, lambda e, i: np.array([1.0, 0.0]), 20)
         assert np.all(inward > 0) and np.all(outward < 0), (mode, inward, outward)
-        assert info["robot_0"]["metrics", "mean_distance_to_centroid"] < info0["robot_0"]["metrics", "mean_distance_to_centroid"]
+        assert info["robot_0"]["metrics"]["mean_distance_to_centroid"] < info0["robot_0"]["metrics"]["mean_distance_to_centroid"]
 
 
 def test_aggregation_cluster_metrics():
     env = aggregation_v0.parallel_env(n_robots=4, sensing="ideal", arena_size=2.0)
     pos = np.array([[0.0, 0.0], [0.08, 0.0], [0.7, 0.7], [-0.7, 0.7]])
     _, infos = env.reset(seed=0, options={"positions": pos, "headings": np.zeros(4)})
-    m = info_group(infos["robot_0"], "metrics")
+    m = infos["robot_0"]["metrics"]
     assert m["n_clusters"] == 3 and m["largest_cluster_fraction"] == 0.5
 
 
@@ -51,10 +50,10 @@ def test_flocking_rewards_aligned_motion():
     env = flocking_v0.parallel_env(n_robots=4, sensing="ideal", arena_size=3.0)
     env.reset(seed=0, options={"positions": pos, "headings": np.zeros(4)})
     aligned, info = run(env, lambda e, i: np.array([1.0, 0.0]), 10)
-    assert info["robot_0"]["metrics", "polarisation"] > 0.99
+    assert info["robot_0"]["metrics"]["polarisation"] > 0.99
     env.reset(seed=0, options={"positions": pos, "headings": np.array([0.0, np.pi, np.pi / 2, -np.pi / 2])})
     opposed, info = run(env, lambda e, i: np.array([1.0, 0.0]), 10)
-    assert info["robot_0"]["metrics", "polarisation"] < 0.05
+    assert info["robot_0"]["metrics"]["polarisation"] < 0.05
     env.reset(seed=0, options={"positions": pos, "headings": np.zeros(4)})
     still, _ = run(env, lambda e, i: np.zeros(2), 10)
     assert np.all(aligned > opposed + 5) and np.all(aligned > still + 5)
@@ -68,7 +67,7 @@ def test_centroid_seeker_approaching_raises_reward():
     env.reset(seed=4)
     away, _ = run(env, towards(2 * env.world.positions[env.agent_robots[0]] - centroid), 40)
     assert toward[0] > away[0]
-    m = info_group(info["robot_0"], "metrics")
+    m = info["robot_0"]["metrics"]
     assert m["mean_distance_to_centroid"] < 0.05
     assert np.isfinite(m["mean_distance_second_half"])
     # anchors never move and are not agents

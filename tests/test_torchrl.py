@@ -1,4 +1,4 @@
-"""TorchRL: the stock PettingZooWrapper works on every env (Dict and flat observations, infos, global state)."""
+"""TorchRL: the stock PettingZooWrapper works on every env in ``FlatInfos`` (Dict and flat observations, infos, global state)."""
 
 import importlib.util
 import math
@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 import swarm_envs
+from swarm_envs.env import FlatInfos, flat_info
 
 pytest.importorskip("torchrl", reason="torchrl is not installed: pip install -e '.[torchrl]'")
 import torch  # noqa: E402
@@ -22,9 +23,9 @@ EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "torchrl_mappo.py"
 
 @pytest.mark.parametrize("env_id", swarm_envs.list_envs())
 @pytest.mark.parametrize("flatten", [False, True])
-def test_wrapper_out_of_the_box_passes_check_env_specs(env_id, flatten):
+def test_wrapper_on_flat_infos_passes_check_env_specs(env_id, flatten):
     env = swarm_envs.make(env_id, n_robots=3, max_cycles=6, flatten=flatten)
-    wrapped = PettingZooWrapper(env)  # no options: must work as is
+    wrapped = PettingZooWrapper(FlatInfos(env))  # no wrapper options: must work as is
     check_env_specs(wrapped)
     obs_spec = wrapped.observation_spec["robot", "observation"]
     if flatten:
@@ -34,7 +35,7 @@ def test_wrapper_out_of_the_box_passes_check_env_specs(env_id, flatten):
     # every info group arrives as a nested tensordict, with the same names as the env's infos
     _, infos = env.reset(seed=0)
     info_keys = set(wrapped.observation_spec["robot", "info"].keys(include_nested=True, leaves_only=True))
-    assert info_keys == set(infos["robot_0"])
+    assert info_keys == set(flat_info(infos["robot_0"]))
     # rollout across an episode end (auto-reset), values match the env's own infos at the last step
     td = wrapped.rollout(8, break_when_any_done=False)
     assert td["next", "robot", "done"][5].all()  # max_cycles=6: the 6th step truncates
@@ -46,7 +47,7 @@ def test_wrapper_out_of_the_box_passes_check_env_specs(env_id, flatten):
 @pytest.mark.parametrize("env_id", swarm_envs.list_envs())
 def test_return_state_gives_the_global_state(env_id):
     env = swarm_envs.make(env_id, n_robots=2, max_cycles=10, sensing="ideal")
-    wrapped = PettingZooWrapper(env, return_state=True)
+    wrapped = PettingZooWrapper(FlatInfos(env), return_state=True)
     assert wrapped.observation_spec["state"].shape == env.state_space.shape
     check_env_specs(wrapped)
     td = wrapped.rollout(4)

@@ -6,7 +6,6 @@ import numpy as np
 import pytest
 
 import swarm_envs
-from swarm_envs.env import info_group
 
 STEPS = 300
 PLATFORMS = ["epuck", "droplet", "rone"]
@@ -39,12 +38,12 @@ def _assert_copy_equals_single(vec_obs, vec_rew, vec_infos, b, agents, single, f
                 np.testing.assert_array_equal(vec_obs[k][b, i], v, err_msg=f"{k} of {a}")
         if rew is not None:
             assert vec_rew[b, i] == np.float32(rew[a])
-        gt = info_group(infos[a], "ground_truth")
+        gt = infos[a]["ground_truth"]
         np.testing.assert_array_equal(vec_infos["ground_truth"]["position"][b, i], gt["position"])
         assert vec_infos["ground_truth"]["heading"][b, i] == gt["heading"]
-        for k, v in info_group(infos[a], "metrics").items():
+        for k, v in infos[a]["metrics"].items():
             np.testing.assert_array_equal(vec_infos["metrics"][k][b], v, err_msg=k)
-        for k, v in info_group(infos[a], "reward_terms").items():
+        for k, v in infos[a]["reward_terms"].items():
             assert vec_infos["reward_terms"][k][b, i] == v, k
 
 
@@ -120,10 +119,10 @@ def test_autoreset_next_step_restarts_like_a_single_env(sensing):
     for t in range(5):
         env.step({a: actions[t, 0, i] for i, a in enumerate(env.possible_agents)})
     _, infos = env.reset()
-    np.testing.assert_array_equal(positions[5][0], np.stack([infos[a]["ground_truth", "position"] for a in env.possible_agents]))
+    np.testing.assert_array_equal(positions[5][0], np.stack([infos[a]["ground_truth"]["position"] for a in env.possible_agents]))
     for t in range(6, 11):  # the second episode: 5 steps, then copy 0 restarts again at t = 11
         _, _, _, _, infos = env.step({a: actions[t, 0, i] for i, a in enumerate(env.possible_agents)})
-        np.testing.assert_array_equal(positions[t][0], np.stack([infos[a]["ground_truth", "position"] for a in env.possible_agents]))
+        np.testing.assert_array_equal(positions[t][0], np.stack([infos[a]["ground_truth"]["position"] for a in env.possible_agents]))
 
 
 @pytest.mark.parametrize("sensing", ["ideal", "full"])

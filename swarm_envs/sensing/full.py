@@ -38,7 +38,7 @@ Each control step, in this order (data flows one way):
    or instantly (``exchange="ideal"``); the 2-hop algorithm turns what each robot knows into neighbour
    coordinates up to scale.
 
-Channel and sensor statistics go to ``infos[agent]["sensing", name]``.
+Channel and sensor statistics go to ``infos[agent]["sensing"][name]``.
 """
 
 from __future__ import annotations

@@ -69,7 +69,7 @@ def run_episode_trajectory(env_id: str, settings: dict[str, Any], seed: int) -> 
         actions = policy.act_batch(parts)
         _, _, _, _, infos = env.step({a: actions[i] for i, a in enumerate(env.possible_agents)})
         path.append(env.world.positions.copy())
-        last = {k[1]: float(v) for k, v in infos[env.possible_agents[0]].items() if k[0] == "metrics"}
+        last = infos[env.possible_agents[0]]["metrics"]
         for name in reductions:
             sums[name] += last[name]
         steps += 1
