@@ -94,7 +94,7 @@ def test_the_smallest_accepted_arena_resets(env_id, platform, shape):
         pos = env.world.positions
         assert np.linalg.norm(pos[env.n_static :] - pos[0], axis=1).min() > mid.ARRIVAL_RADII * env.platform.radius
         _, _, _, _, infos = env.step({a: np.r_[1.0, 0.0, np.ones(env.layout.message_bits)] for a in env.agents})
-        assert infos["robot_0"]["metrics", "success_rate"] == 0.0
+        assert infos["robot_0"]["metrics"]["success_rate"] == 0.0
 
 
 @pytest.mark.parametrize("env_id, shape", [(e, s) for e in BUILT_IN if e != MID for s in shapes(e)])
