@@ -285,10 +285,14 @@ def _one_line(message: object) -> str:
 def is_interrupt(err: BaseException) -> bool:
     """Whether ``err`` is Ctrl-C: a ``KeyboardInterrupt``, or the ``SystemError`` CPython raises in its place
     when the signal arrives just as a compiled (numba) function returns ("... returned a result with an
-    exception set", caused by the ``KeyboardInterrupt``)."""
-    if isinstance(err, KeyboardInterrupt):
-        return True
-    return isinstance(err, SystemError) and isinstance(err.__cause__ or err.__context__, KeyboardInterrupt)
+    exception set"): the handler runs in a Python call numba makes from compiled code (``_numba_unpickle``),
+    and each C level between it and the caller wraps the ``KeyboardInterrupt`` in one more such
+    ``SystemError``, so the chain of causes is followed through them."""
+    for _ in range(64):
+        if not isinstance(err, SystemError):
+            break
+        err = err.__cause__ or err.__context__
+    return isinstance(err, KeyboardInterrupt)
 
 
 def env_kwargs_of(cfg: dict[str, Any]) -> dict[str, Any]:

@@ -122,12 +122,15 @@ def test_ctrl_c_while_the_modules_load_is_one_line(tmp_path):
     assert sorted(p.name for p in tmp_path.iterdir()) == []  # nothing written
 
 
-def _ctrl_c_in_compiled_code():
-    """The SystemError CPython raises when Ctrl-C arrives as a compiled function returns."""
-    try:
+def _ctrl_c_in_compiled_code(levels: int = 1):
+    """The SystemError CPython raises when Ctrl-C arrives in a Python call made from compiled code (numba's
+    ``_numba_unpickle``): one per C level between the handler and the caller, each caused by the one below."""
+    if levels == 0:
         raise KeyboardInterrupt
-    except KeyboardInterrupt as interrupt:
-        raise SystemError("CPUDispatcher(<function kernel>) returned a result with an exception set") from interrupt
+    try:
+        _ctrl_c_in_compiled_code(levels - 1)
+    except (KeyboardInterrupt, SystemError) as inner:
+        raise SystemError("CPUDispatcher(<function kernel>) returned a result with an exception set") from inner
 
 
 def test_ctrl_c_surfacing_as_a_systemerror_is_an_interrupt(monkeypatch, capsys):
@@ -136,6 +139,14 @@ def test_ctrl_c_surfacing_as_a_systemerror_is_an_interrupt(monkeypatch, capsys):
     with pytest.raises(SystemError) as caught:
         _ctrl_c_in_compiled_code()
     assert train.is_interrupt(caught.value) and train.is_interrupt(KeyboardInterrupt())
+    for levels in (2, 3, 4):  # as measured: up to four SystemErrors above the KeyboardInterrupt
+        with pytest.raises(SystemError) as caught:
+            _ctrl_c_in_compiled_code(levels)
+        assert train.is_interrupt(caught.value)
+    try:  # a SystemError caused by another error is not Ctrl-C
+        raise SystemError("a real bug") from ValueError("cause")
+    except SystemError as err:
+        assert not train.is_interrupt(err)
     assert not train.is_interrupt(SystemError("something else")) and not train.is_interrupt(ValueError())
     monkeypatch.setattr(train, "_run", lambda args, state: _ctrl_c_in_compiled_code())
     assert train.main(["--config", str(ROOT / "configs" / "aggregation.yaml")]) == 130
