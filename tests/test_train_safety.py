@@ -200,3 +200,55 @@ def test_force_still_replaces_at_publish(tmp_path):
     _staged(out, "first").publish()
     assert _staged(out, "second").publish(replace=True) == out
     assert (out / "config.yaml").read_text() == "second" and not (tmp_path / "run.2").exists()
+
+
+# -- a task that cannot be evaluated fails before training ------------------------------------------------
+class _GhostMetric:
+    """A user's task whose METRICS declares a metric ('ghost') that its rewards() never returns."""
+
+    @staticmethod
+    def register() -> str:
+        import numpy as np
+
+        import swarm_envs
+        from swarm_envs.task import Task
+
+        class Ghost(Task):
+            METRICS = {"spread": "mean", "ghost": "final"}
+            HEADLINE = ("ghost", 1)
+
+            def rewards(self, state, first):
+                spread = self.agents_of(state.positions).std(axis=(1, 2))
+                return np.zeros((self.n_copies, self.n_agents)), {}, {"spread": spread}
+
+        swarm_envs.register("tests/Ghost-v0", Ghost)
+        return "tests/Ghost-v0"
+
+
+def test_a_task_that_cannot_be_evaluated_fails_before_training(tmp_path, capsys, forget_registered_ids):
+    """One short evaluation episode per policy runs before training, through the final evaluation and its
+    table: a declared metric the env never reports fails in seconds (the budget here would take hours),
+    with one line naming the metric, and writes nothing."""
+    import time
+
+    task = _GhostMetric.register()
+    t0 = time.perf_counter()
+    code = train.main(["--config", AGG, "--output", str(tmp_path / "run")]
+                      + _sets(f"task={task}", "agent.scripted=null", "train.total_timesteps=100000000"))
+    seconds = time.perf_counter() - t0
+    assert code == 2
+    _one_line(capsys, "error: the evaluation check before training failed (a 3-step episode of 'ppo')",
+              f"task {task} declares the metric(s) 'ghost' in METRICS, but its env reports only 'spread'")
+    assert seconds < 60, seconds
+    assert sorted(tmp_path.iterdir()) == []  # nothing written, no staging directory left
+
+
+def test_the_evaluation_names_a_declared_metric_the_env_does_not_report(forget_registered_ids):
+    from swarm_envs.agents.evaluation import evaluate, make_env, random_factory, run_episode
+
+    task = _GhostMetric.register()
+    with pytest.raises(ValueError, match=r"declares the metric\(s\) 'ghost' in METRICS, but its env reports only 'spread'"):
+        evaluate(task, {"n_robots": 3, "sensing": "ideal", "max_cycles": 2}, random_factory, [0])
+    env = make_env(task, n_robots=3, sensing="ideal", max_cycles=2)
+    with pytest.raises(ValueError, match="'ghost'"):
+        run_episode(env, random_factory(env), 0, task)
