@@ -38,7 +38,8 @@ No run on disk is changed by a failed or interrupted command:
 
 ``--eval-only`` writes into ``eval-<UTC timestamp>/`` beside the checkpoint (in the run directory when the
 checkpoint is in ``checkpoints/``), or into ``--output``, with the same rules (never the checkpoint's own
-directory).
+directory). The checkpoint's run (its ``config.yaml``) must have trained the config's task, platform,
+observation and action spaces and policy variant (:func:`check_run_config`).
 
 Ctrl-C during training saves the current model (``model.zip``), the learning curve and the resolved
 config, moves them into DIR, then exits with code 130 and a one-line message; worker processes
@@ -74,7 +75,7 @@ import numpy as np
 import yaml
 
 from swarm_envs.agents.base import Policy
-from swarm_envs.agents.config import ConfigError, load_config, resolve
+from swarm_envs.agents.config import DEFAULTS, ConfigError, load_config, resolve
 from swarm_envs.agents.tasks import env_id, headline, metric_reductions
 from swarm_envs.agents.evaluation import (
     evaluate,
@@ -87,7 +88,7 @@ from swarm_envs.agents.evaluation import (
 )
 
 __all__ = ["main", "TrainError", "Staging", "RUN_ENTRIES", "planned_timesteps", "load_checkpoint", "plot_learning_curve", "is_interrupt",
-           "policy_factories", "report_text", "check_evaluation", "CHECK_STEPS"]
+           "policy_factories", "report_text", "check_evaluation", "CHECK_STEPS", "check_run_config"]
 
 #: exit code after Ctrl-C (128 + SIGINT), as shells report it
 EXIT_INTERRUPTED = 130
@@ -672,6 +673,69 @@ def load_checkpoint(path: Path, cfg: dict[str, Any], env_kwargs: dict[str, Any])
     return model
 
 
+def check_run_config(checkpoint: Path, cfg: dict[str, Any], env_kwargs: dict[str, Any], config: str) -> None:
+    """:class:`TrainError` (one line naming both) if the run that saved ``checkpoint`` (its ``config.yaml``:
+    :func:`swarm_envs.agents.config.run_config_path`) trained another task, on another platform, with other
+    observation or action spaces or another policy variant than the config ``config`` (resolved: ``cfg``,
+    env settings ``env_kwargs``) evaluates. A model without a run config (or with one train.py did not
+    write) is checked by :func:`load_checkpoint`'s observation and action sizes only."""
+    from swarm_envs.agents.config import run_config_path
+    from swarm_envs.agents.policies import PolicySpec
+    from swarm_envs.agents.tasks import SHORT_NAMES
+
+    path = run_config_path(checkpoint)
+    if path is None:
+        return
+    try:
+        run = yaml.safe_load(path.read_text())
+    except (OSError, UnicodeDecodeError, yaml.YAMLError):
+        return
+    if not isinstance(run, dict) or not isinstance(run.get("task"), str) or not isinstance(run.get("env") or {}, dict):
+        return
+    trained = f"checkpoint '{checkpoint}' was trained"
+    hint = f"evaluate it with its run's config ({path})"
+    run_id, ours = SHORT_NAMES.get(run["task"], run["task"]), env_id(cfg["task"])
+    if run_id != ours:
+        raise TrainError(f"{trained} on {run_id} (its run config {path}) but {config} evaluates {ours}; {hint}")
+    try:
+        run_env = make_env(run_id, **{**env_kwargs_of({"env": run.get("env") or {}}), "flatten": True})
+    except Exception:  # settings this version does not take: the sizes were checked
+        return
+    env = make_env(ours, **{**env_kwargs, "flatten": True})
+    try:
+        if run_env.platform.name != env.platform.name:
+            raise TrainError(f"{trained} on the {run_env.platform.name} platform (its run config {path}) but {config} "
+                             f"uses the {env.platform.name}; {hint}")
+        spaces = [(e.layout.dict_space(), e.action_space(e.possible_agents[0])) for e in (run_env, env)]
+        if spaces[0] != spaces[1]:
+            raise TrainError(f"{trained} with {_spaces_text(*spaces[0])} (its run config {path}) but {config} gives "
+                             f"{_spaces_text(*spaces[1])}; {hint}")
+    finally:
+        run_env.close()
+        env.close()
+    agent = run.get("agent") if isinstance(run.get("agent"), dict) else {}
+    try:
+        run_spec = PolicySpec.from_agent({**DEFAULTS["agent"], **agent})
+    except TypeError:
+        return
+    spec = PolicySpec.from_agent(cfg["agent"])
+    differ = [k for k in spec.__dataclass_fields__ if getattr(run_spec, k) != getattr(spec, k)]
+    if differ:
+        raise TrainError(f"{trained} as the policy variant {run_spec.name}, {_fields(run_spec, differ)} (its run config "
+                         f"{path}) but {config} evaluates {spec.name}, {_fields(spec, differ)}; {hint}")
+
+
+def _spaces_text(observations: Any, actions: Any) -> str:
+    """``observations range_bearing 8x7, proprio 10; actions 2`` (each part's shape)."""
+    parts = ", ".join(f"{name} {_size(space.shape)}" for name, space in observations.spaces.items())
+    return f"observations {parts}; actions {_size(actions.shape)}"
+
+
+def _fields(spec: Any, names: list[str]) -> str:
+    """``agent.frame_stack=4, agent.odometry=True``: the named fields of a policy variant."""
+    return ", ".join(f"agent.{k}={getattr(spec, k)}" for k in names)
+
+
 def _size(shape: tuple[int, ...] | None) -> str:
     return "x".join(str(s) for s in shape) if shape else "?"
 
@@ -911,6 +975,7 @@ def _run(args: argparse.Namespace, state: dict[str, Any]) -> int:
         checkpoint = resolve_checkpoint(args.eval_only)
         out = eval_output_dir(checkpoint, args.output, args.force)
         model = load_checkpoint(checkpoint, cfg, eval_kwargs)
+        check_run_config(checkpoint, cfg, eval_kwargs, args.config)
     else:
         out = Path(args.output or cfg["output_dir"])
         check_output(out, args.force)

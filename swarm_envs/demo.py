@@ -160,13 +160,16 @@ def _run_policy_spec(path: Path):
     section; the run directory for ``checkpoints/*.zip``), or the plain PPO's when there is none."""
     import yaml
 
+    from swarm_envs.agents.config import run_config_path
     from swarm_envs.agents.policies import PolicySpec
 
-    run = path.parent.parent if path.parent.name == "checkpoints" else path.parent
+    config = run_config_path(path)
+    if config is None:  # a model saved elsewhere
+        return PolicySpec()
     try:
-        agent = (yaml.safe_load((run / "config.yaml").read_text()) or {}).get("agent") or {}
+        agent = (yaml.safe_load(config.read_text()) or {}).get("agent") or {}
         return PolicySpec.from_agent(agent)
-    except (OSError, yaml.YAMLError, AttributeError, TypeError):  # no run config (a model saved elsewhere)
+    except (OSError, UnicodeDecodeError, yaml.YAMLError, AttributeError, TypeError):  # not a run's config
         return PolicySpec()
 
 
