@@ -5,6 +5,7 @@ policy on the task metrics.
     python train.py --config configs/aggregation.yaml [--output DIR [--force]] [--render] [--set key=value ...]
     python train.py --config configs/aggregation.yaml --eval-only CHECKPOINT [--output DIR [--force]]
     python train.py --config configs/aggregation.yaml --baselines-only [--output DIR [--force]]
+    python train.py --list-partial DIR | --clean-partial DIR
 
 Training writes into DIR (``output_dir`` of the config unless ``--output``): ``config.yaml`` (resolved),
 checkpoints ``checkpoints/ppo_<steps>_steps.zip`` and ``model.zip``, the learning curve ``progress.csv``
@@ -26,15 +27,18 @@ No run on disk is changed by a failed or interrupted command:
   (:func:`check_evaluation`), so a task that cannot be evaluated fails in seconds, not after the budget;
 - a directory that already holds a run (any of :data:`RUN_ENTRIES`, or an ``eval-*`` directory) is refused
   unless ``--force`` is given;
-- a command writes its files into a hidden staging directory beside DIR (``.DIR.<random>.partial``; the
-  learning curve and TensorBoard events can be watched there) and moves them into DIR only when it ends;
+- a command writes its files into a hidden staging directory beside DIR (``.DIR.<pid>-<random>.partial``;
+  the learning curve and TensorBoard events can be watched there) and moves them into DIR only when it ends;
   with ``--force`` the old run's files are replaced together at that moment (other files in DIR are kept);
   without it, a run that finds DIR taken by another run that finished first keeps its files in ``DIR.2``
   (``DIR.3``, ...) and says so.
   Each file is written under a temporary name and renamed when complete.
 - a failure (a full disk included) is a one-line ``error`` naming the path, exit code 2, and leaves DIR as
   it was; a staging directory that already holds a trained model is kept (the message names it), any
-  other is removed.
+  other is removed;
+- a run killed before it could publish leaves its staging directory: a run names those of its output at
+  its start, and ``--list-partial DIR`` / ``--clean-partial DIR`` list them / remove those whose process
+  no longer runs (:func:`staging_dirs`).
 
 ``--eval-only`` writes into ``eval-<UTC timestamp>/`` beside the checkpoint (in the run directory when the
 checkpoint is in ``checkpoints/``), or into ``--output``, with the same rules (never the checkpoint's own
@@ -60,6 +64,7 @@ import importlib.util
 import json
 import math
 import os
+import re
 import shutil
 import signal
 import sys
@@ -68,6 +73,7 @@ import threading
 import time
 import zipfile
 from collections.abc import Callable, Iterator
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -88,7 +94,8 @@ from swarm_envs.agents.evaluation import (
 )
 
 __all__ = ["main", "TrainError", "Staging", "RUN_ENTRIES", "planned_timesteps", "load_checkpoint", "plot_learning_curve", "is_interrupt",
-           "policy_factories", "report_text", "check_evaluation", "CHECK_STEPS", "check_run_config"]
+           "policy_factories", "report_text", "check_evaluation", "CHECK_STEPS", "check_run_config",
+           "StagingDir", "staging_dirs", "report_staging_dirs", "clean_staging_dirs"]
 
 #: exit code after Ctrl-C (128 + SIGINT), as shells report it
 EXIT_INTERRUPTED = 130
@@ -124,7 +131,7 @@ class Staging:
         self.out = Path(os.path.abspath(out))  # "." or "runs/.." get a real name and parent
         try:
             self.out.parent.mkdir(parents=True, exist_ok=True)
-            self.path = Path(tempfile.mkdtemp(prefix=f".{self.out.name}.", suffix=".partial", dir=self.out.parent))
+            self.path = Path(tempfile.mkdtemp(prefix=f".{self.out.name}.{os.getpid()}-", suffix=".partial", dir=self.out.parent))
         except OSError as err:
             raise TrainError(f"output directory '{out}' is not writable: {err.strerror or err}") from None
 
@@ -221,6 +228,145 @@ class Staging:
             return f"; the trained model is kept in '{self.path}'"
         shutil.rmtree(self.path, ignore_errors=True)
         return ""
+
+
+#: a staging directory's name between ``.<output name>.`` and ``.partial``: the owner's process id and
+#: mkdtemp's 8 random characters (names made without the process id have the random characters only)
+_STAGING_TAIL = re.compile(r"(?:(?P<pid>[0-9]+)-)?[a-z0-9_]{8}")
+#: a staging directory whose name carries no process id counts as in use until this long after its last write
+UNKNOWN_OWNER_S = 3600.0
+
+
+@dataclass(frozen=True)
+class StagingDir:
+    """A staging directory found on disk (:func:`staging_dirs`): its ``path``, the output it belongs to, the
+    process id in its name (None in names without one), seconds since its last write, whether it holds a
+    trained model."""
+
+    path: Path
+    out: Path
+    pid: int | None
+    age_s: float
+    has_model: bool
+
+    @property
+    def owner_running(self) -> bool:
+        """Whether the process that made it still runs on this machine (its pid in the name is alive); a
+        name without a pid counts as running for :data:`UNKNOWN_OWNER_S` after the last write."""
+        if self.pid is None:
+            return self.age_s < UNKNOWN_OWNER_S
+        if self.pid == os.getpid():
+            return True
+        try:
+            os.kill(self.pid, 0)
+        except ProcessLookupError:
+            return False
+        except OSError:  # exists, owned by another user
+            return True
+        return True
+
+    def describe(self) -> str:
+        """``PATH (3.2 h old, holds a trained model)``."""
+        notes = [f"{_age(self.age_s)} old"] + (["holds a trained model"] if self.has_model else [])
+        if self.owner_running:
+            notes.append(f"in use by process {self.pid}" if self.pid is not None else "written less than an hour ago: may be in use")
+        return f"{self.path} ({', '.join(notes)})"
+
+
+def _age(seconds: float) -> str:
+    if seconds < 90:
+        return f"{max(seconds, 0):.0f} s"
+    if seconds < 90 * 60:
+        return f"{seconds / 60:.0f} min"
+    if seconds < 48 * 3600:
+        return f"{seconds / 3600:.1f} h"
+    return f"{seconds / 86400:.1f} days"
+
+
+def _last_write(path: Path) -> float:
+    """The newest modification time of ``path`` and the entries in it (and in its ``checkpoints/``)."""
+    times = [path.stat().st_mtime]
+    for folder in (path, path / "checkpoints"):
+        with contextlib.suppress(OSError):
+            for entry in os.scandir(folder):
+                with contextlib.suppress(OSError):
+                    times.append(entry.stat(follow_symlinks=False).st_mtime)
+    return max(times)
+
+
+def staging_dirs(folder: str | Path) -> list[StagingDir]:
+    """The staging directories (``.NAME.<pid>-<random>.partial``) of the output ``folder`` (beside it) and of
+    the outputs inside ``folder``, oldest first."""
+    folder = Path(os.path.abspath(folder))
+    found: list[StagingDir] = []
+    places = [(folder.parent, folder.name)] + ([(folder, None)] if folder.is_dir() else [])
+    now = time.time()
+    for parent, name in places:
+        try:
+            entries = list(os.scandir(parent))
+        except OSError:
+            continue
+        for entry in entries:
+            if not entry.name.startswith(".") or not entry.name.endswith(".partial"):
+                continue
+            out_name, _, tail = entry.name[1:-len(".partial")].rpartition(".")
+            match = _STAGING_TAIL.fullmatch(tail)
+            if not match or not out_name or (name is not None and out_name != name):
+                continue
+            path = Path(entry.path)
+            try:
+                if not entry.is_dir(follow_symlinks=False):
+                    continue
+                age = now - _last_write(path)
+            except OSError:
+                continue
+            pid = int(match["pid"]) if match["pid"] else None
+            found.append(StagingDir(path, parent / out_name, pid, age, (path / "model.zip").is_file()))
+    return sorted(found, key=lambda d: -d.age_s)
+
+
+def report_staging_dirs(out: Path, command: str) -> list[StagingDir]:
+    """Print one line (stderr) per staging directory of ``out`` that another process left or is writing;
+    returns them."""
+    found = [d for d in staging_dirs(out) if d.out == Path(os.path.abspath(out)) and d.pid != os.getpid()]
+    for d in found:
+        if d.owner_running and d.pid is not None:
+            print(_one_line(f"note: process {d.pid} is also writing a run for {out}: {d.describe()}"), file=sys.stderr)
+        else:
+            print(_one_line(f"note: staging directory left by an earlier run of {out}: {d.describe()}; list or remove "
+                            f"such directories with: {command} --list-partial / --clean-partial {out}"), file=sys.stderr)
+    return found
+
+
+def clean_staging_dirs(folder: str | Path, remove: bool, command: str) -> int:
+    """``--list-partial`` / ``--clean-partial FOLDER``: list the staging directories of the output ``folder``
+    and of the outputs in it; with ``remove``, delete those whose process no longer runs. Returns the exit
+    code (2 if one could not be removed)."""
+    found = staging_dirs(folder)
+    if not found:
+        print(f"no staging directories for {folder}")
+        return 0
+    code, removed = 0, 0
+    for d in found:
+        if not remove:
+            print(d.describe())
+        elif d.owner_running:
+            print(f"kept {d.describe()}")
+        else:
+            try:
+                shutil.rmtree(d.path)
+            except OSError as err:
+                print(_one_line(f"error: could not remove '{d.path}': {err.strerror or err}"), file=sys.stderr)
+                code = EXIT_BAD_INPUT
+                continue
+            removed += 1
+            print(f"removed {d.describe()}")
+    if remove:
+        print(f"removed {removed} of {len(found)} staging directories")
+    else:
+        free = sum(not d.owner_running for d in found)
+        print(f"{len(found)} staging directories, {free} not in use; remove those with: {command} --clean-partial {folder}")
+    return code
 
 
 @contextlib.contextmanager
@@ -740,9 +886,23 @@ def _size(shape: tuple[int, ...] | None) -> str:
     return "x".join(str(s) for s in shape) if shape else "?"
 
 
+def _command() -> str:
+    """How the user runs this command, for the messages: ``swarm-train`` or ``python train.py``."""
+    return "swarm-train" if os.path.basename(sys.argv[0] or "") == "swarm-train" else "python train.py"
+
+
 def _parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--config", required=True, help="YAML config, e.g. configs/aggregation.yaml")
+    from swarm_envs.settings import OneLineArgumentParser
+
+    parser = OneLineArgumentParser(prog=_command().removeprefix("python "), description=__doc__.split("\n\n")[0])
+    what = parser.add_mutually_exclusive_group(required=True)
+    what.add_argument("--config", help="YAML config, e.g. configs/aggregation.yaml")
+    what.add_argument("--list-partial", metavar="DIR", default=None,
+                      help="list the staging directories (.NAME.<pid>-<random>.partial) of the output DIR and of the "
+                           "outputs in DIR: their age, whether they hold a trained model, whether their process still runs")
+    what.add_argument("--clean-partial", metavar="DIR", default=None,
+                      help="remove the staging directories of the output DIR and of the outputs in DIR whose process "
+                           "no longer runs (a run killed before it could publish leaves one)")
     parser.add_argument("--output", default=None,
                         help="output directory (default: the config's output_dir; with --eval-only: a new "
                              "eval-<timestamp> directory beside the checkpoint)")
@@ -761,7 +921,23 @@ def _parser() -> argparse.ArgumentParser:
 def main(argv: list[str] | None = None) -> int:
     """Command line of ``train.py``; returns the exit code (0 ok, 2 bad input or a failed write, 130 interrupted).
     Every failure is one line on stderr; no run on disk is changed by a failed or interrupted command."""
-    args = _parser().parse_args(argv)
+    parser = _parser()
+    args = parser.parse_args(argv)
+    folder = args.clean_partial if args.clean_partial is not None else args.list_partial
+    if folder is not None:
+        option = "--clean-partial" if args.clean_partial is not None else "--list-partial"
+        given = [flag for flag, value in (("--output", args.output), ("--set", args.overrides), ("--eval-only", args.eval_only),
+                                          ("--render", args.render), ("--baselines-only", args.baselines_only),
+                                          ("--force", args.force)) if value not in (None, False, [])]
+        if given:
+            parser.error(f"{option} takes no other option, got {given[0]}")
+        if not folder.strip():
+            parser.error(f"{option} needs an output directory (or a folder of outputs), got {folder!r}")
+        try:
+            return clean_staging_dirs(folder, remove=option == "--clean-partial", command=_command())
+        except KeyboardInterrupt:
+            print(f"interrupted by Ctrl-C during {option}", file=sys.stderr)
+            return EXIT_INTERRUPTED
     state: dict[str, Any] = {"phase": "setup"}
     main_thread = threading.current_thread() is threading.main_thread()
     handler = signal.getsignal(signal.SIGINT) if main_thread else None
@@ -979,6 +1155,7 @@ def _run(args: argparse.Namespace, state: dict[str, Any]) -> int:
     else:
         out = Path(args.output or cfg["output_dir"])
         check_output(out, args.force)
+    report_staging_dirs(out, _command())
     import torch
 
     torch.set_num_threads(cfg["train"]["torch_threads"])
