@@ -299,7 +299,11 @@ def staging_dirs(folder: str | Path) -> list[StagingDir]:
     the outputs inside ``folder``, oldest first."""
     folder = Path(os.path.abspath(folder))
     found: list[StagingDir] = []
-    places = [(folder.parent, folder.name)] + ([(folder, None)] if folder.is_dir() else [])
+    try:
+        inside = folder.is_dir()
+    except OSError:  # e.g. a name too long for the file system: nothing inside it
+        inside = False
+    places = [(folder.parent, folder.name)] + ([(folder, None)] if inside else [])
     now = time.time()
     for parent, name in places:
         try:
@@ -748,7 +752,11 @@ def write_gif(cfg: dict[str, Any], policy_factory, path: Path, seed: int) -> Non
 def check_output(out: Path, force: bool, eval_only: bool = False) -> None:
     """:class:`TrainError` if ``out`` is a file, or holds a run (:func:`run_entries`) and ``force`` is not
     set. Reads only; the staging directory (:class:`Staging`) is the write test."""
-    if out.exists() and not out.is_dir():
+    try:
+        is_file = out.exists() and not out.is_dir()
+    except OSError as err:  # e.g. a name too long for the file system
+        raise TrainError(f"output directory '{out}' cannot be used: {err.strerror or err}") from None
+    if is_file:
         raise TrainError(f"output directory '{out}' exists and is a file, not a directory")
     existing = run_entries(out)
     if existing and not force:
@@ -782,12 +790,17 @@ def eval_output_dir(checkpoint: Path, output: str | None, force: bool) -> Path:
 def resolve_checkpoint(path: str) -> Path:
     """The checkpoint file (SB3 accepts the name without ``.zip``); :class:`TrainError` if missing."""
     p = Path(path)
-    if not p.exists() and p.suffix != ".zip" and p.with_name(p.name + ".zip").is_file():
-        p = p.with_name(p.name + ".zip")
-    if not p.exists():
-        raise TrainError(f"checkpoint '{path}' not found")
-    if not p.is_file():
-        raise TrainError(f"checkpoint '{p}' is a directory, not a model .zip")
+    try:
+        if not p.exists() and p.suffix != ".zip" and p.with_name(p.name + ".zip").is_file():
+            p = p.with_name(p.name + ".zip")
+        if not p.exists():
+            raise TrainError(f"checkpoint '{path}' not found")
+        if p.is_dir():
+            raise TrainError(f"checkpoint '{p}' is a directory, not a model .zip")
+        if not p.is_file():
+            raise TrainError(f"checkpoint '{p}' is not a regular file (a device or a pipe), not a model .zip")
+    except OSError as err:  # e.g. a name too long for the file system
+        raise TrainError(f"checkpoint '{path}' cannot be read: {err.strerror or err}") from None
     return p
 
 
@@ -844,7 +857,8 @@ def check_run_config(checkpoint: Path, cfg: dict[str, Any], env_kwargs: dict[str
     if run_id != ours:
         raise TrainError(f"{trained} on {run_id} (its run config {path}) but {config} evaluates {ours}; {hint}")
     try:
-        run_env = make_env(run_id, **{**env_kwargs_of({"env": run.get("env") or {}}), "flatten": True})
+        run_kwargs = {k: v for k, v in env_kwargs_of({"env": run.get("env") or {}}).items() if k != "render_mode"}
+        run_env = make_env(run_id, **run_kwargs, flatten=True)
     except Exception:  # settings this version does not take: the sizes were checked
         return
     env = make_env(ours, **{**env_kwargs, "flatten": True})
