@@ -1043,7 +1043,7 @@ def _publish_interrupted(stage: Staging, state: dict[str, Any]) -> str:
     except TrainError as err:
         return f"interrupted by Ctrl-C {when}: the trained model is kept in {staged} ({err})"
     tail = ("with its results" if results else
-            f"no results (evaluate it with: python train.py --config {final / 'config.yaml'} --eval-only {final / 'model.zip'})")
+            f"no results (evaluate it with: {_command()} --config {final / 'config.yaml'} --eval-only {final / 'model.zip'})")
     return (f"interrupted by Ctrl-C {when}: saved the trained model to {final / 'model.zip'} and the config to "
             f"{final / 'config.yaml'}; {tail}")
 
