@@ -3,6 +3,7 @@
 
     python train.py --config configs/aggregation.yaml [--output DIR] [--render] [--set key=value ...]
     python train.py --config configs/aggregation.yaml --eval-only CHECKPOINT [--output DIR [--force]]
+    python train.py --list-partial DIR | --clean-partial DIR
 """
 
 import sys

@@ -36,7 +36,7 @@ import yaml
 
 from swarm_envs._text import shown
 
-__all__ = ["ConfigError", "DEFAULTS", "BOUNDS", "load_config", "apply_overrides", "validate", "resolve", "bounds_table"]
+__all__ = ["ConfigError", "DEFAULTS", "BOUNDS", "load_config", "apply_overrides", "validate", "resolve", "bounds_table", "run_config_path"]
 
 
 class ConfigError(ValueError):
@@ -479,3 +479,12 @@ def bounds_table() -> str:
     for key, (_, _, why) in BOUNDS.items():
         rows.append(f"| `{key}` | {_span(key)} | {why} |")
     return "\n".join(rows) + "\n"
+
+
+def run_config_path(model: str | Path) -> Path | None:
+    """The ``config.yaml`` of the run that saved ``model`` (train.py's ``model.zip`` or a
+    ``checkpoints/*.zip``): beside the model, or beside its ``checkpoints/`` folder; None if there is none."""
+    model = Path(model)
+    run = model.parent.parent if model.parent.name == "checkpoints" else model.parent
+    path = run / "config.yaml"
+    return path if path.is_file() else None

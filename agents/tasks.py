@@ -67,9 +67,12 @@ def import_modules(names: list[str]) -> None:
             raise ImportError(f"a module to import is a module name or a .py path, got {name!r:.80}")
         module_name, folder = name, Path.cwd()
         if name.endswith(".py"):
-            path = Path(name).resolve()
-            if not path.is_file():
-                raise ImportError(f"cannot import {name!r}: no such file")
+            try:
+                path = Path(name).resolve()
+                if not path.is_file():
+                    raise ImportError(f"cannot import {name!r}: no such file")
+            except OSError as err:  # e.g. a name too long for the file system
+                raise ImportError(f"cannot import {name!r}: {err.strerror or err}") from None
             module_name, folder = path.stem, path.parent
         if str(folder) not in sys.path:
             sys.path.insert(0, str(folder))

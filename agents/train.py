@@ -5,6 +5,7 @@ policy on the task metrics.
     python train.py --config configs/aggregation.yaml [--output DIR [--force]] [--render] [--set key=value ...]
     python train.py --config configs/aggregation.yaml --eval-only CHECKPOINT [--output DIR [--force]]
     python train.py --config configs/aggregation.yaml --baselines-only [--output DIR [--force]]
+    python train.py --list-partial DIR | --clean-partial DIR
 
 Training writes into DIR (``output_dir`` of the config unless ``--output``): ``config.yaml`` (resolved),
 checkpoints ``checkpoints/ppo_<steps>_steps.zip`` and ``model.zip``, the learning curve ``progress.csv``
@@ -22,27 +23,36 @@ No run on disk is changed by a failed or interrupted command:
 
 - the whole config and every ``--set`` are checked first (one-line ``config error`` naming the key, exit
   code 2), and so are the output directory and the checkpoint, before anything is written;
+- before training, each policy runs one short episode through the evaluation and its results table
+  (:func:`check_evaluation`), so a task that cannot be evaluated fails in seconds, not after the budget;
 - a directory that already holds a run (any of :data:`RUN_ENTRIES`, or an ``eval-*`` directory) is refused
   unless ``--force`` is given;
-- a command writes its files into a hidden staging directory beside DIR (``.DIR.<random>.partial``; the
-  learning curve and TensorBoard events can be watched there) and moves them into DIR only when it ends;
+- a command writes its files into a hidden staging directory beside DIR (``.DIR.<pid>-<random>.partial``;
+  the learning curve and TensorBoard events can be watched there) and moves them into DIR only when it ends;
   with ``--force`` the old run's files are replaced together at that moment (other files in DIR are kept);
   without it, a run that finds DIR taken by another run that finished first keeps its files in ``DIR.2``
   (``DIR.3``, ...) and says so.
   Each file is written under a temporary name and renamed when complete.
 - a failure (a full disk included) is a one-line ``error`` naming the path, exit code 2, and leaves DIR as
   it was; a staging directory that already holds a trained model is kept (the message names it), any
-  other is removed.
+  other is removed;
+- a run killed before it could publish leaves its staging directory: a run names those of its output at
+  its start, and ``--list-partial DIR`` / ``--clean-partial DIR`` list them / remove those whose process
+  no longer runs (:func:`staging_dirs`).
 
 ``--eval-only`` writes into ``eval-<UTC timestamp>/`` beside the checkpoint (in the run directory when the
 checkpoint is in ``checkpoints/``), or into ``--output``, with the same rules (never the checkpoint's own
-directory).
+directory). The checkpoint's run (its ``config.yaml``) must have trained the config's task, platform,
+observation and action spaces and policy variant (:func:`check_run_config`).
 
 Ctrl-C during training saves the current model (``model.zip``), the learning curve and the resolved
-config, moves them into DIR (replacing an old run only with ``--force``), then exits with code 130 and a
-one-line message; worker processes (``train.n_workers``) ignore Ctrl-C and are closed by the trainer.
-Ctrl-C before training or during an ``--eval-only`` evaluation writes nothing; during the final
-evaluation it keeps the trained model (without results).
+config, moves them into DIR, then exits with code 130 and a one-line message; worker processes
+(``train.n_workers``) ignore Ctrl-C and are closed by the trainer. Ctrl-C once the model is saved (during
+the final evaluation) does the same with the trained model: it is published into DIR with its config and
+learning curve (and the results, if all were written), and the line gives the ``--eval-only`` command that
+evaluates it. An interrupted command never replaces a finished run: over one (``--force``) its files stay
+in the staging directory, which the line names. Ctrl-C before training or during an ``--eval-only``
+evaluation writes nothing.
 """
 
 from __future__ import annotations
@@ -54,6 +64,7 @@ import importlib.util
 import json
 import math
 import os
+import re
 import shutil
 import signal
 import sys
@@ -61,14 +72,16 @@ import tempfile
 import threading
 import time
 import zipfile
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 import yaml
 
-from swarm_envs.agents.config import ConfigError, load_config, resolve
+from swarm_envs.agents.base import Policy
+from swarm_envs.agents.config import DEFAULTS, ConfigError, load_config, resolve
 from swarm_envs.agents.tasks import env_id, headline, metric_reductions
 from swarm_envs.agents.evaluation import (
     evaluate,
@@ -80,7 +93,9 @@ from swarm_envs.agents.evaluation import (
     write_csv,
 )
 
-__all__ = ["main", "TrainError", "Staging", "RUN_ENTRIES", "planned_timesteps", "load_checkpoint", "plot_learning_curve", "is_interrupt"]
+__all__ = ["main", "TrainError", "Staging", "RUN_ENTRIES", "planned_timesteps", "load_checkpoint", "plot_learning_curve", "is_interrupt",
+           "policy_factories", "report_text", "check_evaluation", "CHECK_STEPS", "check_run_config",
+           "StagingDir", "staging_dirs", "report_staging_dirs", "clean_staging_dirs"]
 
 #: exit code after Ctrl-C (128 + SIGINT), as shells report it
 EXIT_INTERRUPTED = 130
@@ -116,7 +131,7 @@ class Staging:
         self.out = Path(os.path.abspath(out))  # "." or "runs/.." get a real name and parent
         try:
             self.out.parent.mkdir(parents=True, exist_ok=True)
-            self.path = Path(tempfile.mkdtemp(prefix=f".{self.out.name}.", suffix=".partial", dir=self.out.parent))
+            self.path = Path(tempfile.mkdtemp(prefix=f".{self.out.name}.{os.getpid()}-", suffix=".partial", dir=self.out.parent))
         except OSError as err:
             raise TrainError(f"output directory '{out}' is not writable: {err.strerror or err}") from None
 
@@ -215,6 +230,149 @@ class Staging:
         return ""
 
 
+#: a staging directory's name between ``.<output name>.`` and ``.partial``: the owner's process id and
+#: mkdtemp's 8 random characters (names made without the process id have the random characters only)
+_STAGING_TAIL = re.compile(r"(?:(?P<pid>[0-9]+)-)?[a-z0-9_]{8}")
+#: a staging directory whose name carries no process id counts as in use until this long after its last write
+UNKNOWN_OWNER_S = 3600.0
+
+
+@dataclass(frozen=True)
+class StagingDir:
+    """A staging directory found on disk (:func:`staging_dirs`): its ``path``, the output it belongs to, the
+    process id in its name (None in names without one), seconds since its last write, whether it holds a
+    trained model."""
+
+    path: Path
+    out: Path
+    pid: int | None
+    age_s: float
+    has_model: bool
+
+    @property
+    def owner_running(self) -> bool:
+        """Whether the process that made it still runs on this machine (its pid in the name is alive); a
+        name without a pid counts as running for :data:`UNKNOWN_OWNER_S` after the last write."""
+        if self.pid is None:
+            return self.age_s < UNKNOWN_OWNER_S
+        if self.pid == os.getpid():
+            return True
+        try:
+            os.kill(self.pid, 0)
+        except ProcessLookupError:
+            return False
+        except OSError:  # exists, owned by another user
+            return True
+        return True
+
+    def describe(self) -> str:
+        """``PATH (3.2 h old, holds a trained model)``."""
+        notes = [f"{_age(self.age_s)} old"] + (["holds a trained model"] if self.has_model else [])
+        if self.owner_running:
+            notes.append(f"in use by process {self.pid}" if self.pid is not None else "written less than an hour ago: may be in use")
+        return f"{self.path} ({', '.join(notes)})"
+
+
+def _age(seconds: float) -> str:
+    if seconds < 90:
+        return f"{max(seconds, 0):.0f} s"
+    if seconds < 90 * 60:
+        return f"{seconds / 60:.0f} min"
+    if seconds < 48 * 3600:
+        return f"{seconds / 3600:.1f} h"
+    return f"{seconds / 86400:.1f} days"
+
+
+def _last_write(path: Path) -> float:
+    """The newest modification time of ``path`` and the entries in it (and in its ``checkpoints/``)."""
+    times = [path.stat().st_mtime]
+    for folder in (path, path / "checkpoints"):
+        with contextlib.suppress(OSError):
+            for entry in os.scandir(folder):
+                with contextlib.suppress(OSError):
+                    times.append(entry.stat(follow_symlinks=False).st_mtime)
+    return max(times)
+
+
+def staging_dirs(folder: str | Path) -> list[StagingDir]:
+    """The staging directories (``.NAME.<pid>-<random>.partial``) of the output ``folder`` (beside it) and of
+    the outputs inside ``folder``, oldest first."""
+    folder = Path(os.path.abspath(folder))
+    found: list[StagingDir] = []
+    try:
+        inside = folder.is_dir()
+    except OSError:  # e.g. a name too long for the file system: nothing inside it
+        inside = False
+    places = [(folder.parent, folder.name)] + ([(folder, None)] if inside else [])
+    now = time.time()
+    for parent, name in places:
+        try:
+            entries = list(os.scandir(parent))
+        except OSError:
+            continue
+        for entry in entries:
+            if not entry.name.startswith(".") or not entry.name.endswith(".partial"):
+                continue
+            out_name, _, tail = entry.name[1:-len(".partial")].rpartition(".")
+            match = _STAGING_TAIL.fullmatch(tail)
+            if not match or not out_name or (name is not None and out_name != name):
+                continue
+            path = Path(entry.path)
+            try:
+                if not entry.is_dir(follow_symlinks=False):
+                    continue
+                age = now - _last_write(path)
+            except OSError:
+                continue
+            pid = int(match["pid"]) if match["pid"] else None
+            found.append(StagingDir(path, parent / out_name, pid, age, (path / "model.zip").is_file()))
+    return sorted(found, key=lambda d: -d.age_s)
+
+
+def report_staging_dirs(out: Path, command: str) -> list[StagingDir]:
+    """Print one line (stderr) per staging directory of ``out`` that another process left or is writing;
+    returns them."""
+    found = [d for d in staging_dirs(out) if d.out == Path(os.path.abspath(out)) and d.pid != os.getpid()]
+    for d in found:
+        if d.owner_running and d.pid is not None:
+            print(_one_line(f"note: process {d.pid} is also writing a run for {out}: {d.describe()}"), file=sys.stderr)
+        else:
+            print(_one_line(f"note: staging directory left by an earlier run of {out}: {d.describe()}; list or remove "
+                            f"such directories with: {command} --list-partial / --clean-partial {out}"), file=sys.stderr)
+    return found
+
+
+def clean_staging_dirs(folder: str | Path, remove: bool, command: str) -> int:
+    """``--list-partial`` / ``--clean-partial FOLDER``: list the staging directories of the output ``folder``
+    and of the outputs in it; with ``remove``, delete those whose process no longer runs. Returns the exit
+    code (2 if one could not be removed)."""
+    found = staging_dirs(folder)
+    if not found:
+        print(f"no staging directories for {folder}")
+        return 0
+    code, removed = 0, 0
+    for d in found:
+        if not remove:
+            print(d.describe())
+        elif d.owner_running:
+            print(f"kept {d.describe()}")
+        else:
+            try:
+                shutil.rmtree(d.path)
+            except OSError as err:
+                print(_one_line(f"error: could not remove '{d.path}': {err.strerror or err}"), file=sys.stderr)
+                code = EXIT_BAD_INPUT
+                continue
+            removed += 1
+            print(f"removed {d.describe()}")
+    if remove:
+        print(f"removed {removed} of {len(found)} staging directories")
+    else:
+        free = sum(not d.owner_running for d in found)
+        print(f"{len(found)} staging directories, {free} not in use; remove those with: {command} --clean-partial {folder}")
+    return code
+
+
 @contextlib.contextmanager
 def _sigint_ignored() -> Iterator[None]:
     """Ignore Ctrl-C inside the block (main thread only), so a file move is never cut short."""
@@ -229,14 +387,21 @@ def _sigint_ignored() -> Iterator[None]:
 
 
 class _CtrlC:
-    """Ctrl-C during training. The first one asks training to stop at the next env step (a callback that
-    returns False ends SB3's ``learn``), so the request is never lost: raised as a ``KeyboardInterrupt``
-    wherever the signal lands, it can land in a cffi finalizer (pymunk's bodies), where CPython prints it
-    and drops it. A second Ctrl-C raises ``KeyboardInterrupt`` at once. After an interrupted training,
-    Ctrl-C stays ignored so the save that follows is never cut short."""
+    """Ctrl-C during training and evaluation. The first one asks the work to stop at the next env step (a
+    callback that returns False ends SB3's ``learn``; an evaluated policy calls :meth:`check` every step),
+    so the request is never lost: raised as a ``KeyboardInterrupt`` wherever the signal lands, it can land
+    in a cffi finalizer (pymunk's bodies), where CPython prints it and drops it, or in a Python call made
+    from numba-compiled code, where it surfaces as a ``SystemError``. A second Ctrl-C raises
+    ``KeyboardInterrupt`` at once. After an interrupted training, Ctrl-C stays ignored so the save that
+    follows is never cut short."""
 
     def __init__(self) -> None:
         self.requested = False
+
+    def check(self) -> None:
+        """Raise ``KeyboardInterrupt`` if Ctrl-C was pressed (from ordinary code, where it is never dropped)."""
+        if self.requested:
+            raise KeyboardInterrupt
 
     def _handler(self, signum: int, frame: Any) -> None:
         if self.requested:
@@ -285,10 +450,14 @@ def _one_line(message: object) -> str:
 def is_interrupt(err: BaseException) -> bool:
     """Whether ``err`` is Ctrl-C: a ``KeyboardInterrupt``, or the ``SystemError`` CPython raises in its place
     when the signal arrives just as a compiled (numba) function returns ("... returned a result with an
-    exception set", caused by the ``KeyboardInterrupt``)."""
-    if isinstance(err, KeyboardInterrupt):
-        return True
-    return isinstance(err, SystemError) and isinstance(err.__cause__ or err.__context__, KeyboardInterrupt)
+    exception set"): the handler runs in a Python call numba makes from compiled code (``_numba_unpickle``),
+    and each C level between it and the caller wraps the ``KeyboardInterrupt`` in one more such
+    ``SystemError``, so the chain of causes is followed through them."""
+    for _ in range(64):
+        if not isinstance(err, SystemError):
+            break
+        err = err.__cause__ or err.__context__
+    return isinstance(err, KeyboardInterrupt)
 
 
 def env_kwargs_of(cfg: dict[str, Any]) -> dict[str, Any]:
@@ -418,8 +587,11 @@ def make_callbacks(cfg: dict[str, Any], out: Path, num_envs: int, total: int):
     return CallbackList(callbacks)
 
 
-def train(cfg: dict[str, Any], stage: Staging) -> tuple[Any, float, bool]:
+def train(cfg: dict[str, Any], stage: Staging, ctrl_c: _CtrlC | None = None,
+          before_learning: Callable[[Any], None] | None = None) -> tuple[Any, float, bool]:
     """Train PPO and save ``model.zip`` in the staging directory; returns (model, seconds, interrupted by Ctrl-C).
+    ``ctrl_c`` is a Ctrl-C handler the caller has installed (without one, a handler is installed around
+    training and the save); ``before_learning(model)`` runs once the model is built, before any training.
     A failed write of the logs or checkpoints is a :class:`TrainError`."""
     out = stage.path
     from swarm_envs.agents.sb3_vec_env import SwarmVecEnv
@@ -427,47 +599,51 @@ def train(cfg: dict[str, Any], stage: Staging) -> tuple[Any, float, bool]:
     from swarm_envs.agents.policies import PolicySpec, wrap_training_env
 
     spec = PolicySpec.from_agent(cfg["agent"])
+    own = ctrl_c is None
+    ctrl_c = ctrl_c or _CtrlC()
     venv = SwarmVecEnv(env_id(cfg["task"]), cfg["train"]["n_envs"], env_kwargs_of(cfg), n_workers=cfg["train"]["n_workers"])
-    venv.seed(cfg["seed"])
-    wrapped = venv if cfg["agent"]["reward_scale"] == 1.0 else _ScaledRewards(venv, cfg["agent"]["reward_scale"])
-    wrapped = wrap_training_env(wrapped, spec, venv.layout, venv.platform)
-    model = build_model(cfg, wrapped, venv.layout)
-    repeat = spec.action_repeat
-    budget = math.ceil(cfg["train"]["total_timesteps"] / repeat)  # PPO counts decisions: robot-steps / action_repeat
-    total = planned_timesteps(budget, cfg["agent"]["n_steps"], venv.num_envs)
-    if total * repeat != cfg["train"]["total_timesteps"]:
-        _say(f"training {total * repeat} robot-steps: the budget {cfg['train']['total_timesteps']} rounded up to "
-             f"{total // (cfg['agent']['n_steps'] * venv.num_envs)} whole rollouts of {cfg['agent']['n_steps']} "
-             f"{'steps' if repeat == 1 else f'decisions of {repeat} steps'} x {venv.num_envs} robots")
-    logger = make_logger(out, total, progress_lines=True, repeat=repeat)
-    model.set_logger(logger)
-    callbacks = make_callbacks(cfg, out, venv.num_envs * repeat, total * repeat)
-    ctrl_c = _CtrlC()
-    callbacks.callbacks.append(ctrl_c.callback())
-    t0 = time.perf_counter()
     try:
-        with ctrl_c.installed():
-            model.learn(budget, callback=callbacks)  # SB3 dumps a row per iteration, before that iteration's update
-    except (KeyboardInterrupt, SystemError) as err:  # a second Ctrl-C, or one outside the main thread's handler
-        if not is_interrupt(err):
-            raise
-        ctrl_c.requested = True
-        if threading.current_thread() is threading.main_thread():
-            signal.signal(signal.SIGINT, signal.SIG_IGN)  # a further Ctrl-C must not cut the save short
-    except OSError as err:  # the logger or a checkpoint could not write (a full disk)
-        venv.close()
-        where = stage.final(Path(err.filename)) if getattr(err, "filename", None) else stage.out
-        raise TrainError(f"could not write the training logs or checkpoints in '{where}': {err.strerror or err}") from None
-    finally:
-        for cb in callbacks.callbacks:
-            if hasattr(cb, "close"):
-                cb.close()
-        with contextlib.suppress(OSError):
-            logger.close()
-    seconds = time.perf_counter() - t0
-    try:
-        with stage.writing(out / "model.zip") as tmp:
-            model.save(tmp)
+        venv.seed(cfg["seed"])
+        wrapped = venv if cfg["agent"]["reward_scale"] == 1.0 else _ScaledRewards(venv, cfg["agent"]["reward_scale"])
+        wrapped = wrap_training_env(wrapped, spec, venv.layout, venv.platform)
+        model = build_model(cfg, wrapped, venv.layout)
+        if before_learning is not None:
+            before_learning(model)
+        ctrl_c.check()  # Ctrl-C while setting up: nothing trained, nothing to save
+        repeat = spec.action_repeat
+        budget = math.ceil(cfg["train"]["total_timesteps"] / repeat)  # PPO counts decisions: robot-steps / action_repeat
+        total = planned_timesteps(budget, cfg["agent"]["n_steps"], venv.num_envs)
+        if total * repeat != cfg["train"]["total_timesteps"]:
+            _say(f"training {total * repeat} robot-steps: the budget {cfg['train']['total_timesteps']} rounded up to "
+                 f"{total // (cfg['agent']['n_steps'] * venv.num_envs)} whole rollouts of {cfg['agent']['n_steps']} "
+                 f"{'steps' if repeat == 1 else f'decisions of {repeat} steps'} x {venv.num_envs} robots")
+        logger = make_logger(out, total, progress_lines=True, repeat=repeat)
+        model.set_logger(logger)
+        callbacks = make_callbacks(cfg, out, venv.num_envs * repeat, total * repeat)
+        callbacks.callbacks.append(ctrl_c.callback())
+        with ctrl_c.installed() if own else contextlib.nullcontext():
+            t0 = time.perf_counter()
+            try:
+                model.learn(budget, callback=callbacks)  # SB3 dumps a row per iteration, before that iteration's update
+            except (KeyboardInterrupt, SystemError) as err:  # a second Ctrl-C, or one outside the main thread's handler
+                if not is_interrupt(err):
+                    raise
+                ctrl_c.requested = True
+            except OSError as err:  # the logger or a checkpoint could not write (a full disk)
+                where = stage.final(Path(err.filename)) if getattr(err, "filename", None) else stage.out
+                raise TrainError(f"could not write the training logs or checkpoints in '{where}': {err.strerror or err}") from None
+            finally:
+                for cb in callbacks.callbacks:
+                    if hasattr(cb, "close"):
+                        cb.close()
+                with contextlib.suppress(OSError):
+                    logger.close()
+            seconds = time.perf_counter() - t0
+            if ctrl_c.requested and threading.current_thread() is threading.main_thread():
+                signal.signal(signal.SIGINT, signal.SIG_IGN)  # a further Ctrl-C must not cut the save short
+            # a first Ctrl-C from here on only sets ctrl_c.requested: the save is never cut short
+            with stage.writing(out / "model.zip") as tmp:
+                model.save(tmp)
     finally:
         venv.close()
     return model, seconds, ctrl_c.requested
@@ -576,7 +752,11 @@ def write_gif(cfg: dict[str, Any], policy_factory, path: Path, seed: int) -> Non
 def check_output(out: Path, force: bool, eval_only: bool = False) -> None:
     """:class:`TrainError` if ``out`` is a file, or holds a run (:func:`run_entries`) and ``force`` is not
     set. Reads only; the staging directory (:class:`Staging`) is the write test."""
-    if out.exists() and not out.is_dir():
+    try:
+        is_file = out.exists() and not out.is_dir()
+    except OSError as err:  # e.g. a name too long for the file system
+        raise TrainError(f"output directory '{out}' cannot be used: {err.strerror or err}") from None
+    if is_file:
         raise TrainError(f"output directory '{out}' exists and is a file, not a directory")
     existing = run_entries(out)
     if existing and not force:
@@ -610,12 +790,17 @@ def eval_output_dir(checkpoint: Path, output: str | None, force: bool) -> Path:
 def resolve_checkpoint(path: str) -> Path:
     """The checkpoint file (SB3 accepts the name without ``.zip``); :class:`TrainError` if missing."""
     p = Path(path)
-    if not p.exists() and p.suffix != ".zip" and p.with_name(p.name + ".zip").is_file():
-        p = p.with_name(p.name + ".zip")
-    if not p.exists():
-        raise TrainError(f"checkpoint '{path}' not found")
-    if not p.is_file():
-        raise TrainError(f"checkpoint '{p}' is a directory, not a model .zip")
+    try:
+        if not p.exists() and p.suffix != ".zip" and p.with_name(p.name + ".zip").is_file():
+            p = p.with_name(p.name + ".zip")
+        if not p.exists():
+            raise TrainError(f"checkpoint '{path}' not found")
+        if p.is_dir():
+            raise TrainError(f"checkpoint '{p}' is a directory, not a model .zip")
+        if not p.is_file():
+            raise TrainError(f"checkpoint '{p}' is not a regular file (a device or a pipe), not a model .zip")
+    except OSError as err:  # e.g. a name too long for the file system
+        raise TrainError(f"checkpoint '{path}' cannot be read: {err.strerror or err}") from None
     return p
 
 
@@ -647,13 +832,91 @@ def load_checkpoint(path: Path, cfg: dict[str, Any], env_kwargs: dict[str, Any])
     return model
 
 
+def check_run_config(checkpoint: Path, cfg: dict[str, Any], env_kwargs: dict[str, Any], config: str) -> None:
+    """:class:`TrainError` (one line naming both) if the run that saved ``checkpoint`` (its ``config.yaml``:
+    :func:`swarm_envs.agents.config.run_config_path`) trained another task, on another platform, with other
+    observation or action spaces or another policy variant than the config ``config`` (resolved: ``cfg``,
+    env settings ``env_kwargs``) evaluates. A model without a run config (or with one train.py did not
+    write) is checked by :func:`load_checkpoint`'s observation and action sizes only."""
+    from swarm_envs.agents.config import run_config_path
+    from swarm_envs.agents.policies import PolicySpec
+    from swarm_envs.agents.tasks import SHORT_NAMES
+
+    path = run_config_path(checkpoint)
+    if path is None:
+        return
+    try:
+        run = yaml.safe_load(path.read_text())
+    except (OSError, UnicodeDecodeError, yaml.YAMLError):
+        return
+    if not isinstance(run, dict) or not isinstance(run.get("task"), str) or not isinstance(run.get("env") or {}, dict):
+        return
+    trained = f"checkpoint '{checkpoint}' was trained"
+    hint = f"evaluate it with its run's config ({path})"
+    run_id, ours = SHORT_NAMES.get(run["task"], run["task"]), env_id(cfg["task"])
+    if run_id != ours:
+        raise TrainError(f"{trained} on {run_id} (its run config {path}) but {config} evaluates {ours}; {hint}")
+    try:
+        run_kwargs = {k: v for k, v in env_kwargs_of({"env": run.get("env") or {}}).items() if k != "render_mode"}
+        run_env = make_env(run_id, **run_kwargs, flatten=True)
+    except Exception:  # settings this version does not take: the sizes were checked
+        return
+    env = make_env(ours, **{**env_kwargs, "flatten": True})
+    try:
+        if run_env.platform.name != env.platform.name:
+            raise TrainError(f"{trained} on the {run_env.platform.name} platform (its run config {path}) but {config} "
+                             f"uses the {env.platform.name}; {hint}")
+        spaces = [(e.layout.dict_space(), e.action_space(e.possible_agents[0])) for e in (run_env, env)]
+        if spaces[0] != spaces[1]:
+            raise TrainError(f"{trained} with {_spaces_text(*spaces[0])} (its run config {path}) but {config} gives "
+                             f"{_spaces_text(*spaces[1])}; {hint}")
+    finally:
+        run_env.close()
+        env.close()
+    agent = run.get("agent") if isinstance(run.get("agent"), dict) else {}
+    try:
+        run_spec = PolicySpec.from_agent({**DEFAULTS["agent"], **agent})
+    except TypeError:
+        return
+    spec = PolicySpec.from_agent(cfg["agent"])
+    differ = [k for k in spec.__dataclass_fields__ if getattr(run_spec, k) != getattr(spec, k)]
+    if differ:
+        raise TrainError(f"{trained} as the policy variant {run_spec.name}, {_fields(run_spec, differ)} (its run config "
+                         f"{path}) but {config} evaluates {spec.name}, {_fields(spec, differ)}; {hint}")
+
+
+def _spaces_text(observations: Any, actions: Any) -> str:
+    """``observations range_bearing 8x7, proprio 10; actions 2`` (each part's shape)."""
+    parts = ", ".join(f"{name} {_size(space.shape)}" for name, space in observations.spaces.items())
+    return f"observations {parts}; actions {_size(actions.shape)}"
+
+
+def _fields(spec: Any, names: list[str]) -> str:
+    """``agent.frame_stack=4, agent.odometry=True``: the named fields of a policy variant."""
+    return ", ".join(f"agent.{k}={getattr(spec, k)}" for k in names)
+
+
 def _size(shape: tuple[int, ...] | None) -> str:
     return "x".join(str(s) for s in shape) if shape else "?"
 
 
+def _command() -> str:
+    """How the user runs this command, for the messages: ``swarm-train`` or ``python train.py``."""
+    return "swarm-train" if os.path.basename(sys.argv[0] or "") == "swarm-train" else "python train.py"
+
+
 def _parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--config", required=True, help="YAML config, e.g. configs/aggregation.yaml")
+    from swarm_envs.settings import OneLineArgumentParser
+
+    parser = OneLineArgumentParser(prog=_command().removeprefix("python "), description=__doc__.split("\n\n")[0])
+    what = parser.add_mutually_exclusive_group(required=True)
+    what.add_argument("--config", help="YAML config, e.g. configs/aggregation.yaml")
+    what.add_argument("--list-partial", metavar="DIR", default=None,
+                      help="list the staging directories (.NAME.<pid>-<random>.partial) of the output DIR and of the "
+                           "outputs in DIR: their age, whether they hold a trained model, whether their process still runs")
+    what.add_argument("--clean-partial", metavar="DIR", default=None,
+                      help="remove the staging directories of the output DIR and of the outputs in DIR whose process "
+                           "no longer runs (a run killed before it could publish leaves one)")
     parser.add_argument("--output", default=None,
                         help="output directory (default: the config's output_dir; with --eval-only: a new "
                              "eval-<timestamp> directory beside the checkpoint)")
@@ -672,8 +935,34 @@ def _parser() -> argparse.ArgumentParser:
 def main(argv: list[str] | None = None) -> int:
     """Command line of ``train.py``; returns the exit code (0 ok, 2 bad input or a failed write, 130 interrupted).
     Every failure is one line on stderr; no run on disk is changed by a failed or interrupted command."""
-    args = _parser().parse_args(argv)
+    parser = _parser()
+    args = parser.parse_args(argv)
+    folder = args.clean_partial if args.clean_partial is not None else args.list_partial
+    if folder is not None:
+        option = "--clean-partial" if args.clean_partial is not None else "--list-partial"
+        given = [flag for flag, value in (("--output", args.output), ("--set", args.overrides), ("--eval-only", args.eval_only),
+                                          ("--render", args.render), ("--baselines-only", args.baselines_only),
+                                          ("--force", args.force)) if value not in (None, False, [])]
+        if given:
+            parser.error(f"{option} takes no other option, got {given[0]}")
+        if not folder.strip():
+            parser.error(f"{option} needs an output directory (or a folder of outputs), got {folder!r}")
+        try:
+            return clean_staging_dirs(folder, remove=option == "--clean-partial", command=_command())
+        except KeyboardInterrupt:
+            print(f"interrupted by Ctrl-C during {option}", file=sys.stderr)
+            return EXIT_INTERRUPTED
     state: dict[str, Any] = {"phase": "setup"}
+    main_thread = threading.current_thread() is threading.main_thread()
+    handler = signal.getsignal(signal.SIGINT) if main_thread else None
+    try:
+        return _main(args, state)
+    finally:  # the command leaves Ctrl-C as it found it (it ignores Ctrl-C after an interrupt)
+        if main_thread and handler is not None:
+            signal.signal(signal.SIGINT, handler)
+
+
+def _main(args: argparse.Namespace, state: dict[str, Any]) -> int:
     try:
         return _run(args, state)
     except (TrainError, OSError, MemoryError) as err:
@@ -711,23 +1000,151 @@ def _unexpected(err: BaseException, state: dict[str, Any]) -> int:
 
 
 def _interrupted(state: dict[str, Any]) -> int:
-    """One line after Ctrl-C outside training; keeps a trained model (published), discards anything else."""
-    stage, phase = state.get("stage"), state["phase"]
-    where = {"setup": "before training started; nothing saved",
-             "train": "while setting up training; nothing saved",
-             "eval": "during evaluation; the trained model is saved in ",
-             "eval-only": f"during the evaluation of {state.get('model', '?')}; no results written"}[phase]
-    if phase == "eval" and stage is not None and run_entries(stage.out):  # never replace a finished run
-        where += f"{stage.path / 'model.zip'} (the run in {stage.out} is kept)"
-    elif phase == "eval" and stage is not None:
-        try:
-            where += str(stage.publish() / "model.zip")
-        except TrainError as err:
-            where += f"{stage.path / 'model.zip'} ({err})"
-    elif stage is not None:
-        stage.abandon()
-    print(_one_line(f"interrupted by Ctrl-C {where}"), file=sys.stderr)
+    """One line after Ctrl-C outside training (further Ctrl-C ignored meanwhile). Once the trained model is
+    saved, the run so far is published (:func:`_publish_interrupted`); before that, and in an ``--eval-only``
+    or ``--baselines-only`` evaluation, nothing is kept."""
+    with _sigint_ignored():
+        stage, phase = state.get("stage"), state["phase"]
+        if stage is not None and phase in ("train", "eval") and (stage.path / "model.zip").is_file():
+            line = _publish_interrupted(stage, state)
+        else:
+            if stage is not None:
+                stage.abandon()
+            line = "interrupted by Ctrl-C " + {
+                "setup": "before training started; nothing saved",
+                "train": "while setting up training; nothing saved",
+                "eval": "during evaluation; nothing saved",
+                "eval-only": f"during the evaluation of {state.get('model', '?')}; no results written",
+                "done": f"after the run was written to {state.get('final', '?')}",
+            }[phase]
+        print(_one_line(line), file=sys.stderr)
     return EXIT_INTERRUPTED
+
+
+def _publish_interrupted(stage: Staging, state: dict[str, Any]) -> str:
+    """After Ctrl-C with the trained model saved: publish the model, config, learning curve and the results
+    if all were written (``timing.json`` says ``"interrupted": true``), as a run that ended does; over a
+    finished run (``--force``) the files stay in the staging directory. Returns the message line."""
+    staged, out = stage.path, stage.out
+    when = "during evaluation" if state["phase"] == "eval" else "after training"
+    written = [name for name in RESULT_FILES if (staged / name).is_file()]
+    results = len(written) == len(RESULT_FILES)
+    if not results:  # never publish part of a result set
+        for name in written:
+            (staged / name).unlink(missing_ok=True)
+    timing = {**state.get("timing", {}), "interrupted": True}
+    with contextlib.suppress(TrainError), stage.writing(staged / "timing.json") as tmp:
+        tmp.write_text(json.dumps(timing, indent=1))
+    if run_entries(out):  # an interrupted command never replaces a finished run (--force or not)
+        return (f"interrupted by Ctrl-C {when}: the run in {out} is kept; this run's trained model and config are in "
+                f"{staged}" + ("" if results else " (no results)"))
+    try:
+        final = stage.publish()
+    except TrainError as err:
+        return f"interrupted by Ctrl-C {when}: the trained model is kept in {staged} ({err})"
+    tail = ("with its results" if results else
+            f"no results (evaluate it with: {_command()} --config {final / 'config.yaml'} --eval-only {final / 'model.zip'})")
+    return (f"interrupted by Ctrl-C {when}: saved the trained model to {final / 'model.zip'} and the config to "
+            f"{final / 'config.yaml'}; {tail}")
+
+
+class _StopsOnCtrlC(Policy):
+    """An evaluated policy that raises ``KeyboardInterrupt`` at its next step once Ctrl-C was pressed."""
+
+    def __init__(self, policy: Policy, ctrl_c: _CtrlC) -> None:
+        super().__init__(policy.platform, policy.layout, policy.rng)
+        self.policy, self.ctrl_c, self.name = policy, ctrl_c, policy.name
+
+    def reset(self, n: int, rng: np.random.Generator | None = None) -> None:
+        self.ctrl_c.check()
+        super().reset(n, rng)
+        self.policy.reset(n, rng)
+
+    def act_batch(self, obs: dict[str, np.ndarray]) -> np.ndarray:
+        self.ctrl_c.check()
+        return self.policy.act_batch(obs)
+
+
+def policy_factories(cfg: dict[str, Any], model: Any, baselines_only: bool = False,
+                     ctrl_c: _CtrlC | None = None) -> dict[str, Callable[[Any], Policy]]:
+    """``{name: factory(env)}`` of the policies the run evaluates: ``ppo`` (``model`` through the config's
+    policy variant; not with ``baselines_only``), then, if ``eval.baselines``, ``scripted`` (when the
+    config names one) and ``random``. With ``ctrl_c``, each policy stops the evaluation once Ctrl-C was
+    pressed."""
+    from swarm_envs.agents.policies import PolicySpec, TrainedPolicy
+    from swarm_envs.agents.scripted import make_scripted
+
+    spec = PolicySpec.from_agent(cfg["agent"])
+    factories: dict[str, Callable[[Any], Policy]] = {}
+    if not baselines_only:
+        factories["ppo"] = lambda env: TrainedPolicy(model, env.platform, env.layout, spec, deterministic=cfg["eval"]["deterministic"])
+    if cfg["eval"]["baselines"] or baselines_only:
+        if cfg["agent"]["scripted"] is not None:  # a task without a scripted baseline is compared with random only
+            factories["scripted"] = lambda env: make_scripted(cfg["agent"]["scripted"], env, **cfg["agent"]["scripted_kwargs"])
+        factories["random"] = random_factory
+    if ctrl_c is None:
+        return factories
+    return {name: (lambda env, f=f: _StopsOnCtrlC(f(env), ctrl_c)) for name, f in factories.items()}
+
+
+def report_text(cfg: dict[str, Any], eval_kwargs: dict[str, Any], policies: list[str], seeds: list[int],
+                rows: list[dict[str, Any]], source: str) -> tuple[str, str]:
+    """(header, table) of ``results.md``: the policies compared, the env, ``source`` (where the PPO policy
+    comes from), the task's headline metric and reductions, then the Markdown table of ``rows``."""
+    from swarm_envs.agents.policies import PolicySpec
+
+    task, spec = cfg["task"], PolicySpec.from_agent(cfg["agent"])
+    best = headline(task)
+    reductions = ", ".join(f"{m} {how}" for m, how in metric_reductions(task).items())
+    names = ([f"PPO ({spec.name})"] if "ppo" in policies else []) + ([f"scripted ({cfg['agent']['scripted']})"] if "scripted" in policies else [])
+    names += ["random"] if "random" in policies else []
+    header = (
+        f"# {task}: " + " vs ".join(names) + f", {len(seeds)} evaluation seeds\n\n"
+        f"env: {json.dumps(eval_kwargs)}; {source}"
+        + (f"; headline metric `{best[0]}` ({'higher' if best[1] > 0 else 'lower'} is better)" if best else "")
+        + (f". Metrics over an episode: {reductions} (final = after the last step, mean = over the episode)" if reductions else "")
+        + "; episode_return = mean per-robot return.\n\n"
+    )
+    return header, markdown_table(rows, n_seeds=len(seeds))
+
+
+#: steps of the evaluation episode each policy runs before training (:func:`check_evaluation`)
+CHECK_STEPS = 3
+
+
+def check_evaluation(cfg: dict[str, Any], eval_kwargs: dict[str, Any], factories: dict[str, Callable[[Any], Policy]]) -> float:
+    """Run each policy of ``factories`` for one :data:`CHECK_STEPS`-step episode (the first evaluation seed)
+    through the evaluation the run ends with, and build its results table and headline, so a task that
+    cannot be evaluated (e.g. a metric its ``METRICS`` declares but its env never reports) fails before
+    training; returns the seconds taken. :class:`TrainError` naming the task, the policy and the problem."""
+    t0 = time.perf_counter()
+    task = cfg["task"]
+    kwargs = {**eval_kwargs, "max_cycles": min(CHECK_STEPS, eval_kwargs.get("max_cycles") or CHECK_STEPS)}
+    seeds = [cfg["eval"]["seed_start"]]
+    results = {}
+    for name, factory in factories.items():
+        try:
+            results[name] = evaluate(task, kwargs, factory, seeds)
+        except Exception as err:  # whatever the task's or the policy's code raises
+            if is_interrupt(err):
+                raise
+            text = _error_text(err)
+            where = "" if task in text else f" on {task}"
+            raise TrainError(f"the evaluation check before training failed (a {kwargs['max_cycles']}-step episode of "
+                             f"'{name}'{where}): {text}") from None
+    try:
+        report_text(cfg, kwargs, list(results), seeds, summarise(results, seed=cfg["seed"]), "check")
+    except Exception as err:
+        raise TrainError(f"the evaluation check before training failed (the results table of {task}): {_error_text(err)}") from None
+    return time.perf_counter() - t0
+
+
+def _error_text(err: BaseException) -> str:
+    """``err`` as one short phrase: its message, or its type with the message for a bare built-in error."""
+    text = _one_line(err)
+    if isinstance(err, (ValueError, TrainError)) and text:
+        return text
+    return f"{type(err).__name__}: {text}" if text else type(err).__name__
 
 
 def _run(args: argparse.Namespace, state: dict[str, Any]) -> int:
@@ -737,7 +1154,6 @@ def _run(args: argparse.Namespace, state: dict[str, Any]) -> int:
         print(_one_line(f"config error: {err}"), file=sys.stderr)
         return EXIT_BAD_INPUT
 
-    task = cfg["task"]
     eval_kwargs = env_kwargs_of(cfg)
     if cfg["eval"]["max_cycles"] is not None:
         eval_kwargs["max_cycles"] = cfg["eval"]["max_cycles"]
@@ -749,33 +1165,46 @@ def _run(args: argparse.Namespace, state: dict[str, Any]) -> int:
         checkpoint = resolve_checkpoint(args.eval_only)
         out = eval_output_dir(checkpoint, args.output, args.force)
         model = load_checkpoint(checkpoint, cfg, eval_kwargs)
+        check_run_config(checkpoint, cfg, eval_kwargs, args.config)
     else:
         out = Path(args.output or cfg["output_dir"])
         check_output(out, args.force)
+    report_staging_dirs(out, _command())
     import torch
 
     torch.set_num_threads(cfg["train"]["torch_threads"])
     # everything is checked: from here on files are written, into the staging directory
     stage = state["stage"] = Staging(out)
-    staged = stage.path
+    ctrl_c = _CtrlC()
+    with ctrl_c.installed():
+        return _staged_run(args, cfg, eval_kwargs, stage, checkpoint, model, state, ctrl_c)
+
+
+def _staged_run(args: argparse.Namespace, cfg: dict[str, Any], eval_kwargs: dict[str, Any], stage: Staging,
+                checkpoint: Path | None, model: Any, state: dict[str, Any], ctrl_c: _CtrlC) -> int:
+    """The part of a command that writes: train (unless ``checkpoint`` or ``--baselines-only``), evaluate,
+    write the results into the staging directory and publish it; Ctrl-C is handled by ``ctrl_c``."""
+    task, out, staged = cfg["task"], stage.out, stage.path
     with stage.writing(staged / "config.yaml") as tmp:
         tmp.write_text(yaml.safe_dump(cfg, sort_keys=False))
     t_start = time.perf_counter()
-
-    from swarm_envs.agents.policies import PolicySpec, TrainedPolicy
-    from swarm_envs.agents.scripted import make_scripted
-
-    timing: dict[str, float] = {}
+    timing: dict[str, Any] = state.setdefault("timing", {})
     if checkpoint is not None:
         state.update(phase="eval-only", model=checkpoint)
         print(f"loaded {checkpoint}; writing results to {out} (staged in {staged} until the evaluation ends)")
+        source = f"PPO checkpoint {checkpoint} (eval-only)"
     elif args.baselines_only:
         state.update(phase="eval-only", model="the baselines")
         print(f"evaluating the baselines into {out} (staged in {staged} until the evaluation ends)")
+        source = "no RL policy (--baselines-only)"
     else:
         state["phase"] = "train"
         print(f"training into {out} (staged in {staged} until the run ends)")
-        model, timing["train_s"], interrupted = train(cfg, stage)
+
+        def check(untrained: Any) -> None:
+            timing["check_s"] = check_evaluation(cfg, eval_kwargs, policy_factories(cfg, untrained, ctrl_c=ctrl_c))
+
+        model, timing["train_s"], interrupted = train(cfg, stage, ctrl_c, before_learning=check)
         robot_steps = timing["robot_steps"] = model.num_timesteps * cfg["agent"]["action_repeat"]
         state["phase"] = "eval"
         with _naming(out / "learning_curve.png"):
@@ -793,36 +1222,21 @@ def _run(args: argparse.Namespace, state: dict[str, Any]) -> int:
                   f"and the config to {final / 'config.yaml'}", file=sys.stderr)
             return EXIT_INTERRUPTED
         print(f"trained {robot_steps} robot-steps in {timing['train_s']:.1f} s -> {out / 'model.zip'}")
+        source = f"PPO budget {cfg['train']['total_timesteps']} robot-steps ({robot_steps} run)"
 
     seeds = list(range(cfg["eval"]["seed_start"], cfg["eval"]["seed_start"] + cfg["eval"]["n_seeds"]))
-    spec = PolicySpec.from_agent(cfg["agent"])
-    factories = {}
-    if not args.baselines_only:
-        factories["ppo"] = lambda env: TrainedPolicy(model, env.platform, env.layout, spec, deterministic=cfg["eval"]["deterministic"])
-    if cfg["eval"]["baselines"] or args.baselines_only:
-        if cfg["agent"]["scripted"] is not None:  # a task without a scripted baseline is compared with random only
-            factories["scripted"] = lambda env: make_scripted(cfg["agent"]["scripted"], env, **cfg["agent"]["scripted_kwargs"])
-        factories["random"] = random_factory
+    factories = policy_factories(cfg, model, args.baselines_only, ctrl_c)
+    print(f"evaluating {', '.join(factories)} on {len(seeds)} seeds")
     t0 = time.perf_counter()
-    results = {name: evaluate(task, eval_kwargs, f, seeds, progress=cfg["train"]["progress_bar"], desc=f"eval {name}")
-               for name, f in factories.items()}
+    results = {}
+    for name, factory in factories.items():
+        ctrl_c.check()
+        results[name] = evaluate(task, eval_kwargs, factory, seeds, progress=cfg["train"]["progress_bar"], desc=f"eval {name}")
     timing["eval_s"] = time.perf_counter() - t0
     rows = summarise(results, seed=cfg["seed"])
+    header, table = report_text(cfg, eval_kwargs, list(factories), seeds, rows, source)
     with stage.writing(staged / "results.csv") as tmp:
         write_csv(rows, tmp)
-    best = headline(task)
-    reductions = ", ".join(f"{m} {how}" for m, how in metric_reductions(task).items())
-    header = (
-        f"# {task}: " + " vs ".join(([f"PPO ({spec.name})"] if "ppo" in factories else []) + ([f"scripted ({cfg['agent']['scripted']})"] if "scripted" in factories else [])
-                                    + (["random"] if "random" in factories else [])) + f", {len(seeds)} evaluation seeds\n\n"
-        f"env: {json.dumps(eval_kwargs)}; "
-        + (f"PPO checkpoint {checkpoint} (eval-only)" if checkpoint else "no RL policy (--baselines-only)" if args.baselines_only else
-           f"PPO budget {cfg['train']['total_timesteps']} robot-steps ({timing.get('robot_steps', model.num_timesteps)} run)")
-        + (f"; headline metric `{best[0]}` ({'higher' if best[1] > 0 else 'lower'} is better)" if best else "")
-        + (f". Metrics over an episode: {reductions} (final = after the last step, mean = over the episode)" if reductions else "")
-        + "; episode_return = mean per-robot return.\n\n"
-    )
-    table = markdown_table(rows, n_seeds=len(seeds))
     with stage.writing(staged / "results.md") as tmp:
         tmp.write_text(header + table)
     with stage.writing(staged / "per_seed.json") as tmp:
@@ -837,11 +1251,14 @@ def _run(args: argparse.Namespace, state: dict[str, Any]) -> int:
     with stage.writing(staged / "timing.json") as tmp:
         tmp.write_text(json.dumps(timing, indent=1))
     final = stage.publish(replace=args.force)
-    state["stage"] = None
+    state.update(stage=None, phase="done", final=final)
     print(f"\n{header}{table}")
     if final != stage.out:
         print(f"another run finished into {out} first: this run is kept in {final}", file=sys.stderr)
     print(f"wrote {final / 'results.csv'}, {final / 'results.md'}, {final / 'results.png'}; timing {json.dumps({k: round(v, 1) for k, v in timing.items()})}")
+    if ctrl_c.requested:
+        print(f"interrupted by Ctrl-C after the evaluation had ended: the complete run is in {final}", file=sys.stderr)
+        return EXIT_INTERRUPTED
     return 0
 
 

@@ -125,10 +125,15 @@ def load_model_policy(path: str | Path, env: Any):
     :class:`DemoError` (one line) when the file is not such a model or does not fit the env's flat
     observation or action size."""
     path = Path(path)
-    if not path.is_file():
-        raise DemoError(f"--model '{path}' does not exist")
-    if not zipfile.is_zipfile(path):
-        raise DemoError(f"--model '{path}' is not a zip archive (truncated, or not a stable-baselines3 model)")
+    try:
+        if not path.exists():
+            raise DemoError(f"--model '{path}' does not exist")
+        if not path.is_file():
+            raise DemoError(f"--model '{path}' is {'a directory' if path.is_dir() else 'not a regular file'}, not a model .zip")
+        if not zipfile.is_zipfile(path):
+            raise DemoError(f"--model '{path}' is not a zip archive (truncated, or not a stable-baselines3 model)")
+    except OSError as err:  # e.g. a name too long for the file system, or a file that cannot be read
+        raise DemoError(f"--model '{path}' cannot be read ({err.strerror or err})") from None
     try:
         from swarm_envs.agents.policies import TrainedPolicy, algorithm_class
     except ImportError as err:
@@ -161,13 +166,16 @@ def _run_policy_spec(path: Path):
     section; the run directory for ``checkpoints/*.zip``), or the plain PPO's when there is none."""
     import yaml
 
+    from swarm_envs.agents.config import run_config_path
     from swarm_envs.agents.policies import PolicySpec
 
-    run = path.parent.parent if path.parent.name == "checkpoints" else path.parent
+    config = run_config_path(path)
+    if config is None:  # a model saved elsewhere
+        return PolicySpec()
     try:
-        agent = (yaml.safe_load((run / "config.yaml").read_text()) or {}).get("agent") or {}
+        agent = (yaml.safe_load(config.read_text()) or {}).get("agent") or {}
         return PolicySpec.from_agent(agent)
-    except (OSError, yaml.YAMLError, AttributeError, TypeError):  # no run config (a model saved elsewhere)
+    except (OSError, UnicodeDecodeError, yaml.YAMLError, AttributeError, TypeError):  # not a run's config
         return PolicySpec()
 
 
@@ -295,14 +303,19 @@ def _env_setting(text: str) -> tuple[str, Any]:
     own = {"render_mode": "the demo", "platform": "--platform", "sensing": "--sensing", "n_robots": "--n-robots", "max_cycles": "--steps"}
     if key in own:
         raise argparse.ArgumentTypeError(f"{key} is set by {own[key]}")
-    return key, yaml.safe_load(value)
+    try:
+        return key, yaml.safe_load(value)
+    except yaml.YAMLError as err:
+        problem = " ".join(str(getattr(err, "problem", None) or "not valid YAML").split())
+        raise argparse.ArgumentTypeError(f"{key}={value!r}: the value is not valid YAML ({problem})") from None
 
 
 class _Parser(argparse.ArgumentParser):
-    """argparse with one-line errors: ``swarm-demo: error: <message>`` and exit code 2."""
+    """argparse with one-line errors: ``swarm-demo: error: <message>`` and exit code 2 (line breaks in the
+    message, e.g. in a path given, become spaces)."""
 
     def error(self, message: str):
-        self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+        self.exit(2, f"{self.prog}: error: {' '.join(message.split())} (see {self.prog} --help)\n")
 
 
 def _parser() -> argparse.ArgumentParser:

@@ -283,3 +283,55 @@ def test_empty_sections_take_defaults(tmp_path):
     cfg = load_config(path)
     assert cfg["env"] == {} and cfg["train"]["n_envs"] == 3
     assert cfg["train"]["total_timesteps"] == DEFAULTS["train"]["total_timesteps"]
+
+
+# -- --eval-only checks the model's run against the config ------------------------------------------------
+FLOCKING = str(ROOT / "configs" / "flocking.yaml")
+
+
+def _fake_run(trained_out: Path, folder: Path, **changes: dict) -> Path:
+    """A copy of the trained model in ``folder`` beside its run's config.yaml with ``changes`` per section."""
+    folder.mkdir()
+    cfg = yaml.safe_load((trained_out / "config.yaml").read_text())
+    for section, values in changes.items():
+        cfg[section] = {**cfg[section], **values}
+    (folder / "config.yaml").write_text(yaml.safe_dump(cfg))
+    (folder / "model.zip").write_bytes((trained_out / "model.zip").read_bytes())
+    return folder / "model.zip"
+
+
+def test_eval_only_refuses_a_model_of_another_task(trained, tmp_path, capsys):
+    """An aggregation model under flocking.yaml (same observation and action sizes): refused, naming both
+    tasks and both configs; also for a checkpoint (its run config is beside checkpoints/)."""
+    out, _, _ = trained
+    for model in (out / "model.zip", out / "checkpoints" / "ppo_512_steps.zip"):
+        assert train.main(["--config", FLOCKING, "--eval-only", str(model), "--output", str(tmp_path / "e")] + _tiny()) == 2
+        _one_line_error(capsys, f"error: checkpoint '{model}' was trained on swarm_envs/Aggregation-v0 (its run config "
+                                f"{out / 'config.yaml'}) but {FLOCKING} evaluates swarm_envs/Flocking-v0")
+    assert not (tmp_path / "e").exists()
+
+
+@pytest.mark.parametrize("changes, needles", [
+    ({"env": {"platform": "droplet"}}, ["was trained on the droplet platform", "uses the epuck"]),
+    # 10 x 7 neighbour rows + 2 x 13 message rows = 10 x 8 + 2 x 8: the same size, another layout
+    ({"env": {"n_neighbours": 7, "n_messages": 13}}, ["was trained with observations messages 13x2", "range_bearing 7x7",
+                                                      "gives observations messages 8x2", "range_bearing 8x7"]),
+    ({"agent": {"action_repeat": 2}}, ["as the policy variant ppo+repeat2, agent.action_repeat=2 (its", "evaluates ppo, agent.action_repeat=1;"]),
+])
+def test_eval_only_refuses_a_model_whose_run_differs(trained, tmp_path, capsys, changes, needles):
+    out, _, _ = trained
+    model = _fake_run(out, tmp_path / "run", **changes)
+    assert train.main(["--config", AGG, "--eval-only", str(model)] + _tiny()) == 2
+    _one_line_error(capsys, f"error: checkpoint '{model}'", f"(its run config {tmp_path / 'run' / 'config.yaml'}", AGG, *needles)
+    assert sorted(p.name for p in (tmp_path / "run").iterdir()) == ["config.yaml", "model.zip"]
+
+
+def test_eval_only_without_a_run_config_checks_the_sizes(trained, tmp_path, capsys):
+    """A model saved elsewhere (no config.yaml beside it) is evaluated if its sizes fit the config's env."""
+    out, _, _ = trained
+    (tmp_path / "bare").mkdir()
+    model = tmp_path / "bare" / "model.zip"
+    model.write_bytes((out / "model.zip").read_bytes())
+    assert train.main(["--config", FLOCKING, "--eval-only", str(model)] + _tiny("eval.n_seeds=1")) == 0
+    (results,) = (tmp_path / "bare").glob("eval-*/results.csv")
+    assert "ppo,polarisation," in results.read_text()

@@ -122,12 +122,15 @@ def test_ctrl_c_while_the_modules_load_is_one_line(tmp_path):
     assert sorted(p.name for p in tmp_path.iterdir()) == []  # nothing written
 
 
-def _ctrl_c_in_compiled_code():
-    """The SystemError CPython raises when Ctrl-C arrives as a compiled function returns."""
-    try:
+def _ctrl_c_in_compiled_code(levels: int = 1):
+    """The SystemError CPython raises when Ctrl-C arrives in a Python call made from compiled code (numba's
+    ``_numba_unpickle``): one per C level between the handler and the caller, each caused by the one below."""
+    if levels == 0:
         raise KeyboardInterrupt
-    except KeyboardInterrupt as interrupt:
-        raise SystemError("CPUDispatcher(<function kernel>) returned a result with an exception set") from interrupt
+    try:
+        _ctrl_c_in_compiled_code(levels - 1)
+    except (KeyboardInterrupt, SystemError) as inner:
+        raise SystemError("CPUDispatcher(<function kernel>) returned a result with an exception set") from inner
 
 
 def test_ctrl_c_surfacing_as_a_systemerror_is_an_interrupt(monkeypatch, capsys):
@@ -136,6 +139,14 @@ def test_ctrl_c_surfacing_as_a_systemerror_is_an_interrupt(monkeypatch, capsys):
     with pytest.raises(SystemError) as caught:
         _ctrl_c_in_compiled_code()
     assert train.is_interrupt(caught.value) and train.is_interrupt(KeyboardInterrupt())
+    for levels in (2, 3, 4):  # as measured: up to four SystemErrors above the KeyboardInterrupt
+        with pytest.raises(SystemError) as caught:
+            _ctrl_c_in_compiled_code(levels)
+        assert train.is_interrupt(caught.value)
+    try:  # a SystemError caused by another error is not Ctrl-C
+        raise SystemError("a real bug") from ValueError("cause")
+    except SystemError as err:
+        assert not train.is_interrupt(err)
     assert not train.is_interrupt(SystemError("something else")) and not train.is_interrupt(ValueError())
     monkeypatch.setattr(train, "_run", lambda args, state: _ctrl_c_in_compiled_code())
     assert train.main(["--config", str(ROOT / "configs" / "aggregation.yaml")]) == 130
@@ -177,3 +188,125 @@ def test_the_first_ctrl_c_stops_training_and_is_never_dropped():
         assert signal.getsignal(signal.SIGINT) is signal.SIG_IGN
     finally:
         signal.signal(signal.SIGINT, previous)
+
+
+# -- Ctrl-C after training: the trained model is published ------------------------------------------------
+QUICK = [o for o in TINY if not o.startswith("train.total_timesteps")] + ["train.total_timesteps=256", "train.n_workers=1"]
+
+
+@pytest.mark.skipif(sys.platform == "win32", reason="SIGINT to a child process is POSIX")
+def test_ctrl_c_at_the_start_of_evaluation_publishes_the_trained_model(tmp_path):
+    """SIGINT as soon as train.py says it starts evaluating (its ``evaluating ...`` line; the evaluation then
+    runs far longer than the signal takes to arrive): exit 130, one line, the trained model, config and
+    learning curve published into --output, no results, no staging directory left."""
+    from stable_baselines3 import PPO
+
+    out = tmp_path / "run"
+    # 20 seeds of 20000 steps per policy: minutes, unless Ctrl-C stops them
+    overrides = QUICK + ["eval.max_cycles=20000", "eval.n_seeds=20"]
+    cmd = [sys.executable, str(ROOT / "train.py"), "--config", str(ROOT / "configs" / "aggregation.yaml"), "--output", str(out)]
+    cmd += [x for o in overrides for x in ("--set", o)]
+    env = {**os.environ, "PYTHONUNBUFFERED": "1", "PYTHONPATH": str(ROOT)}
+    proc = subprocess.Popen(cmd, cwd=ROOT, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            preexec_fn=_own_group_default_sigint)
+    try:
+        seen = []
+        for line in proc.stdout:  # blocks until the marker line (or the end of the output)
+            seen.append(line)
+            if line.startswith("evaluating "):
+                proc.send_signal(signal.SIGINT)
+                break
+        assert seen and seen[-1].startswith("evaluating ppo, scripted, random on 20 seeds"), seen
+        stdout, stderr = proc.communicate(timeout=120)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.communicate()
+    assert proc.returncode == 130, (stdout, stderr)
+    lines = stderr.strip().splitlines()
+    assert len(lines) == 1 and "Traceback" not in stderr, stderr
+    assert lines[0].startswith(f"interrupted by Ctrl-C during evaluation: saved the trained model to {out / 'model.zip'} "
+                               f"and the config to {out / 'config.yaml'}; no results"), lines[0]
+    assert f"--eval-only {out / 'model.zip'}" in lines[0]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["run"]  # published: no staging directory left
+    assert {"config.yaml", "model.zip", "progress.csv", "learning_curve.png", "timing.json"} <= {p.name for p in out.iterdir()}
+    assert not [name for name in train_results() if (out / name).exists()]
+    timing = json.loads((out / "timing.json").read_text())
+    assert timing["interrupted"] is True and "eval_s" not in timing
+    assert PPO.load(out / "model.zip", device="cpu").num_timesteps == timing["robot_steps"] == 512  # one whole rollout
+
+
+def train_results() -> tuple[str, ...]:
+    from swarm_envs.agents.train import RESULT_FILES
+
+    return (*RESULT_FILES, "results.png")
+
+
+def _quick_args(out: Path, *extra: str) -> list[str]:
+    return ["--config", str(ROOT / "configs" / "aggregation.yaml"), "--output", str(out), *extra] + [
+        x for o in QUICK + ["eval.n_seeds=2"] for x in ("--set", o)]
+
+
+def test_ctrl_c_as_a_systemerror_during_evaluation_keeps_the_trained_model(tmp_path, monkeypatch, capsys):
+    """Ctrl-C surfacing from numba-compiled code as a chain of SystemErrors during the evaluation: exit 130
+    and the trained model published; over a finished run (--force) the finished run stays as it was and the
+    trained model stays in the staging directory, which the line names."""
+    from swarm_envs.agents import train
+
+    real = train.evaluate
+
+    def interrupted(task, env_kwargs, *args, **kwargs):
+        if env_kwargs["max_cycles"] == train.CHECK_STEPS:  # the check before training runs as usual
+            return real(task, env_kwargs, *args, **kwargs)
+        _ctrl_c_in_compiled_code(3)
+
+    monkeypatch.setattr(train, "evaluate", interrupted)
+    out = tmp_path / "run"
+    assert train.main(_quick_args(out)) == 130
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and err.startswith(f"interrupted by Ctrl-C during evaluation: saved the trained model to {out / 'model.zip'}")
+    assert (out / "model.zip").is_file() and not (out / "results.csv").exists()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["run"]
+
+    old = tmp_path / "old"
+    files = _old_run(old)
+    assert train.main(_quick_args(old, "--force")) == 130
+    err = capsys.readouterr().err
+    (staged,) = tmp_path.glob(".old.*.partial")
+    assert err.count("\n") == 1 and f"the run in {old} is kept" in err and str(staged) in err and "(no results)" in err
+    assert {name: (old / name).read_bytes() for name in files} == files
+    assert (staged / "model.zip").is_file() and json.loads((staged / "timing.json").read_text())["interrupted"] is True
+
+
+@pytest.mark.skipif(sys.platform == "win32", reason="SIGINT to this process is POSIX")
+def test_ctrl_c_is_honoured_at_the_next_evaluation_step(tmp_path, monkeypatch, capsys):
+    """The first Ctrl-C during the evaluation only sets a flag, which the evaluated policies check at every
+    step (so it is never dropped in a finalizer); during the check before training it stops the command
+    with nothing saved. Ctrl-C is restored to its handler afterwards."""
+    from swarm_envs.agents import train
+
+    real = train.evaluate
+
+    def ctrl_c_in(check: bool):
+        def evaluate(task, env_kwargs, *args, **kwargs):
+            if (env_kwargs["max_cycles"] == train.CHECK_STEPS) == check:
+                os.kill(os.getpid(), signal.SIGINT)  # the handler runs at once and only sets the flag
+            return real(task, env_kwargs, *args, **kwargs)
+
+        return evaluate
+
+    before = signal.getsignal(signal.SIGINT)
+    monkeypatch.setattr(train, "evaluate", ctrl_c_in(check=False))
+    out = tmp_path / "run"
+    assert train.main(_quick_args(out)) == 130
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and err.startswith("interrupted by Ctrl-C during evaluation: saved the trained model to")
+    assert (out / "model.zip").is_file() and sorted(p.name for p in tmp_path.iterdir()) == ["run"]
+    assert signal.getsignal(signal.SIGINT) is before
+
+    monkeypatch.setattr(train, "evaluate", ctrl_c_in(check=True))
+    assert train.main(_quick_args(tmp_path / "second")) == 130
+    err = capsys.readouterr().err
+    assert err == "interrupted by Ctrl-C while setting up training; nothing saved\n"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["run"]
+    assert signal.getsignal(signal.SIGINT) is before

@@ -200,3 +200,165 @@ def test_force_still_replaces_at_publish(tmp_path):
     _staged(out, "first").publish()
     assert _staged(out, "second").publish(replace=True) == out
     assert (out / "config.yaml").read_text() == "second" and not (tmp_path / "run.2").exists()
+
+
+# -- a task that cannot be evaluated fails before training ------------------------------------------------
+class _GhostMetric:
+    """A user's task whose METRICS declares a metric ('ghost') that its rewards() never returns."""
+
+    @staticmethod
+    def register() -> str:
+        import numpy as np
+
+        import swarm_envs
+        from swarm_envs.task import Task
+
+        class Ghost(Task):
+            METRICS = {"spread": "mean", "ghost": "final"}
+            HEADLINE = ("ghost", 1)
+
+            def rewards(self, state, first):
+                spread = self.agents_of(state.positions).std(axis=(1, 2))
+                return np.zeros((self.n_copies, self.n_agents)), {}, {"spread": spread}
+
+        swarm_envs.register("tests/Ghost-v0", Ghost)
+        return "tests/Ghost-v0"
+
+
+def test_a_task_that_cannot_be_evaluated_fails_before_training(tmp_path, capsys, forget_registered_ids):
+    """One short evaluation episode per policy runs before training, through the final evaluation and its
+    table: a declared metric the env never reports fails in seconds (the budget here would take hours),
+    with one line naming the metric, and writes nothing."""
+    import time
+
+    task = _GhostMetric.register()
+    t0 = time.perf_counter()
+    code = train.main(["--config", AGG, "--output", str(tmp_path / "run")]
+                      + _sets(f"task={task}", "agent.scripted=null", "train.total_timesteps=100000000"))
+    seconds = time.perf_counter() - t0
+    assert code == 2
+    _one_line(capsys, "error: the evaluation check before training failed (a 3-step episode of 'ppo')",
+              f"task {task} declares the metric(s) 'ghost' in METRICS, but its env reports only 'spread'")
+    assert seconds < 60, seconds
+    assert sorted(tmp_path.iterdir()) == []  # nothing written, no staging directory left
+
+
+def test_the_evaluation_names_a_declared_metric_the_env_does_not_report(forget_registered_ids):
+    from swarm_envs.agents.evaluation import evaluate, make_env, random_factory, run_episode
+
+    task = _GhostMetric.register()
+    with pytest.raises(ValueError, match=r"declares the metric\(s\) 'ghost' in METRICS, but its env reports only 'spread'"):
+        evaluate(task, {"n_robots": 3, "sensing": "ideal", "max_cycles": 2}, random_factory, [0])
+    env = make_env(task, n_robots=3, sensing="ideal", max_cycles=2)
+    with pytest.raises(ValueError, match="'ghost'"):
+        run_episode(env, random_factory(env), 0, task)
+
+
+# -- staging directories that a killed run leaves ---------------------------------------------------------
+def _dead_pid() -> int:
+    import subprocess
+    import sys
+
+    proc = subprocess.Popen([sys.executable, "-c", "pass"])
+    proc.wait()
+    return proc.pid
+
+
+def _leftover(parent: Path, name: str, age_s: float = 0.0, model: bool = False) -> Path:
+    path = parent / name
+    path.mkdir(parents=True)
+    (path / "config.yaml").write_text("seed: 0\n")
+    if model:
+        (path / "model.zip").write_text("model")
+    if age_s:
+        for p in (path / "config.yaml", path / "model.zip", path):
+            if p.exists():
+                os.utime(p, (p.stat().st_atime, p.stat().st_mtime - age_s))
+    return path
+
+
+def test_staging_directories_carry_their_process_id(tmp_path):
+    import re
+
+    stage = train.Staging(tmp_path / "run")
+    assert re.fullmatch(rf"\.run\.{os.getpid()}-[a-z0-9_]{{8}}\.partial", stage.path.name), stage.path.name
+    (found,) = train.staging_dirs(tmp_path / "run")
+    assert found.path == stage.path and found.pid == os.getpid() and found.owner_running and not found.has_model
+
+
+def test_a_run_reports_the_staging_directories_left_for_its_output(tmp_path, capsys, monkeypatch):
+    """At its start, a run names each staging directory of its output that a killed run left (path, age,
+    whether it holds a model) and how to list or remove them; one another process is writing is named as such."""
+    import subprocess
+    import sys
+
+    dead = _leftover(tmp_path, f".run.{_dead_pid()}-abcdefgh.partial", age_s=7200, model=True)
+    old = _leftover(tmp_path, ".run.zyxwvuts.partial", age_s=3 * 86400)  # a name without a process id
+    _leftover(tmp_path, f".other.{_dead_pid()}-abcdefgh.partial")  # another output's: not reported
+    sleeper = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(60)"])
+    try:
+        live = _leftover(tmp_path, f".run.{sleeper.pid}-abcdefgh.partial")
+
+        def stop(self, out):
+            raise train.TrainError("stopped before writing")
+
+        monkeypatch.setattr(train.Staging, "__init__", stop)
+        assert train.main(["--config", AGG, "--output", str(tmp_path / "run")] + _sets()) == 2
+    finally:
+        sleeper.kill()
+        sleeper.wait()
+    lines = capsys.readouterr().err.splitlines()
+    assert lines[-1] == "error: stopped before writing"
+    notes = lines[:-1]
+    assert len(notes) == 3, notes
+    assert notes[0].startswith(f"note: staging directory left by an earlier run of {tmp_path / 'run'}: {old} (3.0 days old)")
+    assert notes[1].startswith(f"note: staging directory left by an earlier run of {tmp_path / 'run'}: {dead} (2.0 h old, holds a trained model)")
+    assert notes[1].endswith(f"list or remove such directories with: python train.py --list-partial / --clean-partial {tmp_path / 'run'}")
+    assert notes[2] == f"note: process {sleeper.pid} is also writing a run for {tmp_path / 'run'}: {live} (0 s old, in use by process {sleeper.pid})"
+
+
+def test_list_and_clean_partial(tmp_path, capsys):
+    """--list-partial DIR lists the staging directories of the output DIR and of the outputs in DIR;
+    --clean-partial DIR removes those whose process no longer runs (a name without a process id: an hour
+    after its last write) and keeps the others; neither touches anything else."""
+    runs = tmp_path / "runs"
+    (runs / "a").mkdir(parents=True)
+    (runs / "a" / "model.zip").write_text("a finished run")
+    dead = _leftover(runs, f".a.{_dead_pid()}-abcdefgh.partial", age_s=600, model=True)
+    old = _leftover(runs, ".b.zyxwvuts.partial", age_s=7200)
+    recent = _leftover(runs, ".b.qwertyui.partial", age_s=300)  # no process id, written 5 min ago: may be in use
+    mine = train.Staging(runs / "c").path  # this process's
+    beside = _leftover(tmp_path, f".runs.{_dead_pid()}-abcdefgh.partial")  # of the output "runs" itself
+    other = _leftover(runs, "not-staging.partial")
+
+    assert train.main(["--list-partial", str(runs)]) == 0
+    out = capsys.readouterr().out.splitlines()
+    assert out[-1] == f"5 staging directories, 3 not in use; remove those with: python train.py --clean-partial {runs}"
+    assert out[0].startswith(f"{old} (2.0 h old)") and f"{dead} (10 min old, holds a trained model)" in out
+    assert f"{recent} (5 min old, written less than an hour ago: may be in use)" in out
+    assert any(line.startswith(f"{mine} (") and line.endswith(f"in use by process {os.getpid()})") for line in out)
+    assert any(line.startswith(f"{beside} (") for line in out)
+
+    assert train.main(["--clean-partial", str(runs)]) == 0
+    out = capsys.readouterr().out
+    assert out.splitlines()[-1] == "removed 3 of 5 staging directories"
+    assert not dead.exists() and not old.exists() and not beside.exists()
+    assert recent.is_dir() and mine.is_dir() and other.is_dir() and (runs / "a" / "model.zip").is_file()
+    assert f"kept {mine} (" in out
+
+    assert train.main(["--list-partial", str(tmp_path / "nothing")]) == 0
+    assert capsys.readouterr().out == f"no staging directories for {tmp_path / 'nothing'}\n"
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["--clean-partial", "x", "--force"], "--clean-partial takes no other option, got --force"),
+    (["--list-partial", "x", "--set", "seed=1"], "--list-partial takes no other option, got --set"),
+    (["--list-partial", " "], "--list-partial needs an output directory"),
+    (["--config", AGG, "--clean-partial", "x"], "not allowed with argument --config"),
+    ([], "one of the arguments --config --list-partial --clean-partial is required"),
+])
+def test_partial_options_are_one_line_usage_errors(argv, message, capsys):
+    with pytest.raises(SystemExit) as exit_:
+        train.main(argv)
+    assert exit_.value.code == 2
+    _one_line(capsys, "train.py: error: ", message)

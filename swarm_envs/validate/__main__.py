@@ -22,6 +22,8 @@ EXPERIMENTS = {
 
 
 def main(argv: list[str] | None = None) -> int:
+    """Command line of ``swarm-validate``: run the experiment ``argv[0]`` with its options; returns the exit
+    code (0 ok or help, 2 an unknown experiment, a bad option or a folder that cannot be written)."""
     argv = list(sys.argv[1:] if argv is None else argv)
     if not argv or argv[0] in ("-h", "--help") or argv[0] not in EXPERIMENTS:
         print(__doc__.strip())
@@ -29,7 +31,7 @@ def main(argv: list[str] | None = None) -> int:
         for name, (_, what) in EXPERIMENTS.items():
             print(f"  {name:14s} {what}")
         if argv and argv[0] not in ("-h", "--help"):
-            print(f"\nerror: unknown experiment {argv[0]!r}; allowed: {', '.join(EXPERIMENTS)}", file=sys.stderr)
+            print(f"error: unknown experiment {argv[0]!r}; allowed: {', '.join(EXPERIMENTS)}", file=sys.stderr)
             return 2
         return 0
     module = importlib.import_module(EXPERIMENTS[argv[0]][0])
