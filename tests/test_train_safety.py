@@ -237,8 +237,8 @@ def test_a_task_that_cannot_be_evaluated_fails_before_training(tmp_path, capsys,
                       + _sets(f"task={task}", "agent.scripted=null", "train.total_timesteps=100000000"))
     seconds = time.perf_counter() - t0
     assert code == 2
-    _one_line(capsys, "error: the evaluation check before training failed (a 3-step episode of 'ppo')",
-              f"task {task} declares the metric(s) 'ghost' in METRICS, but its env reports only 'spread'")
+    _one_line(capsys, f"error: the evaluation check before training failed (a 3-step episode of 'ppo' on {task})",
+              "metric 'ghost' declared in Ghost.METRICS is missing from the returned metrics ['spread']")
     assert seconds < 60, seconds
     assert sorted(tmp_path.iterdir()) == []  # nothing written, no staging directory left
 
@@ -247,7 +247,7 @@ def test_the_evaluation_names_a_declared_metric_the_env_does_not_report(forget_r
     from swarm_envs.agents.evaluation import evaluate, make_env, random_factory, run_episode
 
     task = _GhostMetric.register()
-    with pytest.raises(ValueError, match=r"declares the metric\(s\) 'ghost' in METRICS, but its env reports only 'spread'"):
+    with pytest.raises(ValueError, match=r"metric 'ghost' declared in Ghost.METRICS is missing from the returned metrics \['spread'\]"):
         evaluate(task, {"n_robots": 3, "sensing": "ideal", "max_cycles": 2}, random_factory, [0])
     env = make_env(task, n_robots=3, sensing="ideal", max_cycles=2)
     with pytest.raises(ValueError, match="'ghost'"):

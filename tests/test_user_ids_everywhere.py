@@ -38,11 +38,11 @@ def test_demo_takes_an_imported_id(tmp_path, capsys):
     assert out.stat().st_size > 0 and "mean_spacing" in capsys.readouterr().out
 
 
-def test_demo_without_the_import_names_the_flag(capsys):
+def test_demo_refuses_an_unknown_id_and_a_failed_import(capsys):
     from swarm_envs.demo import main
 
     with pytest.raises(SystemExit) as exit_info:
-        main(["--task", DISPERSION, "--policy", "random"])
+        main(["--task", "my_lab/NeverRegistered-v0", "--policy", "random"])
     assert exit_info.value.code == 2 and "unknown task" in capsys.readouterr().err
     with pytest.raises(SystemExit) as exit_info:
         main(["--import", "no_such_module_anywhere", "--task", DISPERSION])
