@@ -11,11 +11,17 @@ from __future__ import annotations
 import numpy as np
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
+from scipy.spatial import cKDTree
+
+from swarm_envs.geometry import wrap_angle
 
 __all__ = [
     "pack_nearest",
     "directed_links",
     "largest_component_fraction",
+    "ir_directed_pairs",
+    "occluder_lists",
+    "occluder_frames",
 ]
 
 
@@ -80,3 +86,87 @@ def largest_component_fraction(positions: np.ndarray, link_distance: float, pair
     np.maximum.at(largest, label_copy[present], sizes[present])
     count = np.bincount(label_copy[present], minlength=B)
     return largest / N, count
+
+
+# -- IR layer (swarm_envs.ir.layer, kernels in swarm_envs.ir.kernels) ------------------------------------------
+def ir_directed_pairs(
+    pairs: np.ndarray, positions: np.ndarray, headings: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Reference of :func:`swarm_envs.ir.kernels.directed_pairs_kernel` (``swarm_envs.ir.layer._directed_pairs``):
+    both directions of the unordered ``pairs`` (U, 2) sorted by (rx, tx) with one argsort, and their frames.
+    Returns (rx, tx, row of ``pairs``, tx centre in rx's frame (P, 2) (m), (cos, sin) of tx's heading in
+    rx's frame (P, 2) from the robots' own cosines and sines, that heading (P,) (rad, :func:`wrap_angle`),
+    centre distance (P,) (m))."""
+    c, s = np.cos(headings), np.sin(headings)
+    U, N = pairs.shape[0], positions.shape[0]
+    rx = np.concatenate([pairs[:, 0], pairs[:, 1]]).astype(np.intp)
+    tx = np.concatenate([pairs[:, 1], pairs[:, 0]]).astype(np.intp)
+    order = np.argsort(rx.astype(np.int64) * N + tx)  # by (rx, tx); the keys are unique, so any sort agrees
+    rx, tx = rx[order], tx[order]
+    d = positions[tx] - positions[rx]
+    c, s = c[rx], s[rx]
+    rel = np.stack([c * d[:, 0] + s * d[:, 1], -s * d[:, 0] + c * d[:, 1]], axis=-1)
+    ct, st = np.cos(headings)[tx], np.sin(headings)[tx]
+    rel_cs = np.stack([ct * c + st * s, st * c - ct * s], axis=-1)
+    return rx, tx, order % U, rel, rel_cs, wrap_angle(headings[tx] - headings[rx]), np.sqrt(d[:, 0] * d[:, 0] + d[:, 1] * d[:, 1])
+
+
+def occluder_lists(
+    positions: np.ndarray, a: np.ndarray, b: np.ndarray, width: float, tree: cKDTree | None = None
+) -> tuple[np.ndarray, np.ndarray]:
+    """Reference of the occluder search (:func:`swarm_envs.ir.kernels.occluders_kernel` on the neighbour
+    lists of ``swarm_envs.ir.layer._occluder_lists``; the robots :func:`swarm_envs.ir.layer.pair_occluders`
+    and :func:`swarm_envs.ir.layer.line_of_sight` find): the third robots closer than ``width`` (m) to
+    segment a[p]-b[p], as CSR (offsets (P + 1,), robots (K,) sorted per pair). The candidates are the
+    KD-tree neighbours of both ends within ``sqrt(longest^2 / 4 + width^2)``, tested as flat (pair,
+    candidate) arrays."""
+    from swarm_envs.ir.layer import _neighbour_csr
+
+    positions = np.ascontiguousarray(positions, dtype=float).reshape(-1, 2)
+    a = np.ascontiguousarray(a, dtype=np.int64).reshape(-1)
+    b = np.ascontiguousarray(b, dtype=np.int64).reshape(-1)
+    P, N = a.shape[0], positions.shape[0]
+    if P == 0 or N < 3:
+        return np.zeros(P + 1, dtype=np.int64), np.zeros(0, dtype=np.int64)
+    if tree is None:
+        tree = cKDTree(positions)
+    seg = positions[b] - positions[a]
+    length = np.hypot(seg[:, 0], seg[:, 1])
+    reach = float(np.sqrt(0.25 * float(length.max()) ** 2 + float(width) ** 2 + 2e-9))
+    starts, counts, nbrs = _neighbour_csr(positions, reach, tree)
+    pairs, cands = [], []
+    L2 = np.where(length > 0, length * length, 1.0)
+    for end in (a, b):  # two vectorised passes: neighbours of a, then of b
+        c = counts[end]
+        pair = np.repeat(np.arange(P), c)
+        offset = np.arange(int(c.sum())) - np.repeat(np.cumsum(c) - c, c)
+        cand = nbrs[np.repeat(starts[end], c) + offset]
+        keep = (cand != a[pair]) & (cand != b[pair])
+        cand, pair = cand[keep], pair[keep]
+        ap = positions[cand] - positions[a[pair]]
+        sp = seg[pair]
+        t = np.clip((ap[:, 0] * sp[:, 0] + ap[:, 1] * sp[:, 1]) / L2[pair], 0.0, 1.0)
+        qx, qy = ap[:, 0] - t * sp[:, 0], ap[:, 1] - t * sp[:, 1]
+        near = qx * qx + qy * qy < width * width
+        pairs.append(pair[near])
+        cands.append(cand[near])
+    key = np.unique(np.concatenate(pairs).astype(np.int64) * N + np.concatenate(cands))
+    offsets = np.concatenate([[0], np.cumsum(np.bincount(key // N, minlength=P))]).astype(np.int64)
+    return offsets, (key % N).astype(np.int64)
+
+
+def occluder_frames(
+    positions: np.ndarray, headings: np.ndarray, rx: np.ndarray, pair_of: np.ndarray, offsets: np.ndarray, idx: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Reference of :func:`swarm_envs.ir.kernels.occluder_frames_kernel`: the occluders of pair
+    ``pair_of[p]`` (CSR ``offsets``, ``idx``) as centres in receiver ``rx[p]``'s frame. Returns (offsets
+    (P + 1,), centres (K, 2))."""
+    rx = np.ascontiguousarray(rx, dtype=np.int64)
+    pair_of = np.ascontiguousarray(pair_of, dtype=np.int64)
+    counts = np.diff(offsets)[pair_of]
+    out = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
+    row = np.repeat(np.arange(rx.shape[0]), counts)
+    k = idx[np.repeat(offsets[pair_of], counts) + np.arange(int(out[-1])) - np.repeat(out[:-1], counts)]
+    d = positions[k] - positions[rx[row]]
+    c, s = np.cos(headings[rx[row]]), np.sin(headings[rx[row]])
+    return out, np.stack([c * d[:, 0] + s * d[:, 1], -s * d[:, 0] + c * d[:, 1]], axis=-1).reshape(-1, 2)
