@@ -23,7 +23,8 @@ from bench_scale_free import place, timeit  # noqa: E402
 from swarm_envs.ir.layer import compute_links  # noqa: E402
 from swarm_envs.sensing.bearing_sensor import sense_bearings  # noqa: E402
 from swarm_envs.sensing.exchange import BearingExchange  # noqa: E402
-from swarm_envs.sensing.scale_free import coordinates_all, coordinates_all_numpy  # noqa: E402
+from swarm_envs.reference import coordinates_all as coordinates_all_numpy  # noqa: E402
+from swarm_envs.sensing.scale_free import coordinates_all  # noqa: E402
 
 
 def main() -> None:
@@ -42,10 +43,10 @@ def main() -> None:
         links = compute_links(pos, rng.uniform(-np.pi, np.pi, n), "rone")
         kn = BearingExchange(n, "ideal", k_max=args.k).step(sense_bearings(links, "rone"))
         t_ref, ref = timeit(lambda: coordinates_all_numpy(kn), args.reps)
-        t_new, new = timeit(lambda: coordinates_all(kn, compiled=True), args.reps)
+        t_new, new = timeit(lambda: coordinates_all(kn), args.reps)
         same = all(
             np.array_equal(getattr(a, f), getattr(b, f), equal_nan=getattr(a, f).dtype.kind == "f")
-            for a, b in [(ref, new), (coordinates_all_numpy(kn, False), coordinates_all(kn, False, compiled=True))]
+            for a, b in [(ref, new), (coordinates_all_numpy(kn, False), coordinates_all(kn, False))]
             for f in ("xy", "valid", "rigid", "length")
         )
         deg = (kn.ids >= 0).sum(1).mean()

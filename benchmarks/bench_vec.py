@@ -107,11 +107,9 @@ def interleaved(rounds: int, copies: tuple[int, ...] = (64, 256), vmas_steps: in
     print(f"load average at end: {os.getloadavg()[0]:.2f}")
 
 
-def _numba_threads() -> int | str:
-    try:
-        import numba
-    except ImportError:
-        return "none (numba not installed)"
+def _numba_threads() -> int:
+    import numba
+
     return numba.get_num_threads()
 
 

@@ -188,15 +188,14 @@ def prepare(task: str, platform: str, sensing: str) -> None:
     """Before an env's first step (see the module docstring): when the kernels of scenario (``task`` class
     name, ``platform`` name) still to compile take more than :data:`NOTICE_SECONDS`, print the notice
     (once per process) and start the background compile process. Does nothing for ``sensing="ideal"``
-    (a few seconds of compiling), without numba, or for a scenario already prepared in this process."""
+    (a few seconds of compiling), with numba's JIT disabled, or for a scenario already prepared in this
+    process."""
     global _noticed
     if sensing != "full" or (task, platform) in _prepared:
         return
     _prepared.add((task, platform))
-    try:
-        import numba
-    except ImportError:
-        return
+    import numba
+
     if numba.config.DISABLE_JIT:
         return
     try:

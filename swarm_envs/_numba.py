@@ -20,8 +20,8 @@ place (``x[:] = 0``) instead of calling ``np.zeros``, ``np.ones`` or ``np.full``
 those library functions once per shape and dtype and process, about 30 ms each on the first run, and
 ``np.zeros`` compiles ``np.empty`` and a fill function besides (``tests/test_first_run.py`` checks the form).
 
-Raises ``ImportError`` when numba is not installed (as ``from numba import njit`` would), so modules can
-keep their numpy fallback.
+numba is a required dependency: the kernels are the simulator's only implementation of their steps (their
+plain numpy references, for the tests, are in :mod:`swarm_envs.reference`).
 """
 
 from __future__ import annotations

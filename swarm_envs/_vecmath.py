@@ -10,9 +10,9 @@ Microsystems, 1993, as in musl), with the exponent and mantissa taken from the I
 agrees with ``math.exp(y * math.log(x))`` to a few 1e-14 relative for the arguments it is used with (the
 rounding of ``y * log(x)`` dominates both; ``tests/test_vecmath.py``).
 
-:func:`exp_array` is the same ``exp`` in numpy operations (no numba needed): the same IEEE operations in the
-same order, so it equals :func:`exp_moderate` / :func:`exp_into` bit for bit; numpy references of compiled
-kernels use it.
+:func:`exp_array` is the same ``exp`` in numpy operations: the same IEEE operations in the same order, so
+it equals :func:`exp_moderate` / :func:`exp_into` bit for bit; numpy code that must give a kernel's bits
+uses it (:func:`swarm_envs.comm.channel.detector_response`).
 
 Scope: ``x`` positive, normal and finite; ``y * log(x)`` within about +-700 (no overflow or underflow
 handling). The results do not depend on an element's position in the array (the vector and scalar
@@ -25,6 +25,11 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from llvmlite import ir
+from numba import types
+from numba.core.extending import intrinsic
+
+from swarm_envs._numba import njit
 
 __all__ = ["log_positive", "exp_moderate", "exp_into", "exp_array", "power_into"]
 
@@ -62,87 +67,71 @@ def exp_array(x: np.ndarray) -> np.ndarray:
     return (y * ((k + 1023) << 52).view(np.float64)).reshape(x.shape)
 
 
-try:  # the compiled versions need numba (an accelerator, not a requirement)
-    from llvmlite import ir
-    from numba import types
-    from numba.core.extending import intrinsic
+@intrinsic
+def _bits(typingctx, x):  # float64 -> its IEEE bits as int64
+    if x != types.float64:
+        return None
 
-    from swarm_envs._numba import njit
+    def codegen(context, builder, signature, args):
+        return builder.bitcast(args[0], ir.IntType(64))
 
-    HAVE_NUMBA = True
-except ImportError:  # pragma: no cover - exercised only without numba
-    HAVE_NUMBA = False
-
-if HAVE_NUMBA:
-
-    @intrinsic
-    def _bits(typingctx, x):  # float64 -> its IEEE bits as int64
-        if x != types.float64:
-            return None
-
-        def codegen(context, builder, signature, args):
-            return builder.bitcast(args[0], ir.IntType(64))
-
-        return types.int64(types.float64), codegen
+    return types.int64(types.float64), codegen
 
 
-    @intrinsic
-    def _from_bits(typingctx, n):  # int64 IEEE bits -> float64
-        if n != types.int64:
-            return None
+@intrinsic
+def _from_bits(typingctx, n):  # int64 IEEE bits -> float64
+    if n != types.int64:
+        return None
 
-        def codegen(context, builder, signature, args):
-            return builder.bitcast(args[0], ir.DoubleType())
+    def codegen(context, builder, signature, args):
+        return builder.bitcast(args[0], ir.DoubleType())
 
-        return types.float64(types.int64), codegen
-
-
+    return types.float64(types.int64), codegen
 
 
-    @njit(cache=True, error_model="numpy")
-    def log_positive(x: float) -> float:
-        """Natural log of a positive, normal, finite ``x`` (``e_log.c``: ``x = 2^k (1 + f)``, ``1 + f`` in
-        [sqrt(2)/2, sqrt(2)), ``log(1 + f) = f - f^2/2 + s (f^2/2 + R(s^2))``)."""
-        bits = _bits(x)
-        hx = (bits >> 32) + (0x3FF00000 - 0x3FE6A09E)
-        k = (hx >> 20) - 0x3FF
-        hx = (hx & 0x000FFFFF) + 0x3FE6A09E
-        f = _from_bits((hx << 32) | (bits & 0xFFFFFFFF)) - 1.0
-        hfsq = 0.5 * f * f
-        s = f / (2.0 + f)
-        z = s * s
-        w = z * z
-        t1 = w * (_LG2 + w * (_LG4 + w * _LG6))
-        t2 = z * (_LG1 + w * (_LG3 + w * (_LG5 + w * _LG7)))
-        dk = _from_bits(_ROUND_BITS + k) - _ROUND  # float(k), exactly
-        return s * (hfsq + (t2 + t1)) + dk * _LN2_LO - hfsq + f + dk * _LN2_HI
+@njit(cache=True, error_model="numpy")
+def log_positive(x: float) -> float:
+    """Natural log of a positive, normal, finite ``x`` (``e_log.c``: ``x = 2^k (1 + f)``, ``1 + f`` in
+    [sqrt(2)/2, sqrt(2)), ``log(1 + f) = f - f^2/2 + s (f^2/2 + R(s^2))``)."""
+    bits = _bits(x)
+    hx = (bits >> 32) + (0x3FF00000 - 0x3FE6A09E)
+    k = (hx >> 20) - 0x3FF
+    hx = (hx & 0x000FFFFF) + 0x3FE6A09E
+    f = _from_bits((hx << 32) | (bits & 0xFFFFFFFF)) - 1.0
+    hfsq = 0.5 * f * f
+    s = f / (2.0 + f)
+    z = s * s
+    w = z * z
+    t1 = w * (_LG2 + w * (_LG4 + w * _LG6))
+    t2 = z * (_LG1 + w * (_LG3 + w * (_LG5 + w * _LG7)))
+    dk = _from_bits(_ROUND_BITS + k) - _ROUND  # float(k), exactly
+    return s * (hfsq + (t2 + t1)) + dk * _LN2_LO - hfsq + f + dk * _LN2_HI
 
 
-    @njit(cache=True, error_model="numpy")
-    def exp_moderate(x: float) -> float:
-        """``e^x`` for |x| < ~700 (``e_exp.c``: ``x = k ln2 + r``, |r| <= ln2 / 2, ``e^r = 1 + r + r c / (2 - c)``,
-        times ``2^k`` set in the exponent bits)."""
-        kf = math.floor(_INV_LN2 * x + 0.5)
-        hi = x - kf * _LN2_HI
-        lo = kf * _LN2_LO
-        r = hi - lo
-        rr = r * r
-        c = r - rr * (_P1 + rr * (_P2 + rr * (_P3 + rr * (_P4 + rr * _P5))))
-        y = 1.0 + (r * c / (2.0 - c) - lo + hi)
-        k = _bits(kf + _ROUND) - _ROUND_BITS  # int(kf), exactly
-        return y * _from_bits((k + 1023) << 52)
+@njit(cache=True, error_model="numpy")
+def exp_moderate(x: float) -> float:
+    """``e^x`` for |x| < ~700 (``e_exp.c``: ``x = k ln2 + r``, |r| <= ln2 / 2, ``e^r = 1 + r + r c / (2 - c)``,
+    times ``2^k`` set in the exponent bits)."""
+    kf = math.floor(_INV_LN2 * x + 0.5)
+    hi = x - kf * _LN2_HI
+    lo = kf * _LN2_LO
+    r = hi - lo
+    rr = r * r
+    c = r - rr * (_P1 + rr * (_P2 + rr * (_P3 + rr * (_P4 + rr * _P5))))
+    y = 1.0 + (r * c / (2.0 - c) - lo + hi)
+    k = _bits(kf + _ROUND) - _ROUND_BITS  # int(kf), exactly
+    return y * _from_bits((k + 1023) << 52)
 
 
-    @njit(cache=True, error_model="numpy")
-    def power_into(x: np.ndarray, y: float, out: np.ndarray) -> None:
-        """``out[k] = exp(y * log(x[k]))`` (module docstring for the domain) in one vectorisable loop."""
-        for k in range(x.shape[0]):
-            out[k] = exp_moderate(y * log_positive(x[k]))
+@njit(cache=True, error_model="numpy")
+def power_into(x: np.ndarray, y: float, out: np.ndarray) -> None:
+    """``out[k] = exp(y * log(x[k]))`` (module docstring for the domain) in one vectorisable loop."""
+    for k in range(x.shape[0]):
+        out[k] = exp_moderate(y * log_positive(x[k]))
 
 
-    @njit(cache=True, error_model="numpy")
-    def exp_into(x: np.ndarray, out: np.ndarray) -> None:
-        """``out[k] = exp_moderate(x[k])`` (|x| < ~700) in one vectorisable loop."""
-        for k in range(x.shape[0]):
-            out[k] = exp_moderate(x[k])
-
+@njit(cache=True, error_model="numpy")
+def exp_into(x: np.ndarray, out: np.ndarray) -> None:
+    """``out[k] = exp_moderate(x[k])`` (|x| < ~700) in one vectorisable loop."""
+    for k in range(x.shape[0]):
+        out[k] = exp_moderate(x[k])

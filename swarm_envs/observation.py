@@ -30,6 +30,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from gymnasium import spaces
 
+from swarm_envs._numba import njit
 from swarm_envs.geometry import wrap_angle
 from swarm_envs.world import N_BUMP_SECTORS
 
@@ -95,7 +96,8 @@ def relative_pose(
 
 
 def wrapped_difference(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """``wrap_angle(a - b)`` (rad, in (-pi, pi]) elementwise; compiled when numba is installed.
+    """``wrap_angle(a - b)`` (rad, in (-pi, pi]) elementwise; compiled for two 1-D arrays of one shape
+    (other shapes: :func:`swarm_envs.geometry.wrap_angle`).
 
     The kernel does the same IEEE operations as :func:`swarm_envs.geometry.wrap_angle` (``np.mod`` is
     ``fmod``, exact, plus one addition of 2 pi for negative remainders), so the results are the same bits,
@@ -103,7 +105,7 @@ def wrapped_difference(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """
     a = np.asarray(a, dtype=np.float64)
     b = np.asarray(b, dtype=np.float64)
-    if _HAVE_NUMBA and a.ndim == 1 and a.shape == b.shape:
+    if a.ndim == 1 and a.shape == b.shape:
         return _wrapped_difference_kernel(a, b)
     return wrap_angle(a - b)
 
@@ -121,36 +123,38 @@ def range_bearing_rows(
     heading (rad) and age (steps); ``bearing_cos_sin`` (n, k, 2): cos and sin of the slots' bearings if
     already known. cos and sin are taken by numpy on the kept links only; a compiled pass writes the rows
     (the same float32 values as stacking in float64 and casting)."""
-    valid = order >= 0
     if len(distance) == 0:
         return np.zeros(order.shape + (7,), np.float32)
-    kept = np.where(valid, order, 0)  # empty slots read link 0 and are zeroed
+    kept = np.where(order >= 0, order, 0)  # empty slots read link 0 and are zeroed
     if bearing_cos_sin is None:
         b = bearing[kept]
         bearing_cos_sin = np.stack([np.cos(b), np.sin(b)], axis=-1)
     h = heading[kept]
     heading_cos_sin = np.stack([np.cos(h), np.sin(h)], axis=-1)
-    if _HAVE_NUMBA:
-        return _range_bearing_kernel(
-            np.ascontiguousarray(order, dtype=np.int64),
-            np.ascontiguousarray(distance, dtype=np.float64),
-            np.ascontiguousarray(bearing_cos_sin, dtype=np.float64),
-            heading_cos_sin,
-            np.ascontiguousarray(age, dtype=np.float64),
-        )
-    rows = np.concatenate([np.ones(order.shape + (1,)), distance[kept][..., None], bearing_cos_sin, heading_cos_sin, age[kept][..., None]], axis=-1)
-    return np.where(valid[..., None], rows, 0.0).astype(np.float32)
+    return _range_bearing_kernel(
+        np.ascontiguousarray(order, dtype=np.int64),
+        np.ascontiguousarray(distance, dtype=np.float64),
+        np.ascontiguousarray(bearing_cos_sin, dtype=np.float64),
+        heading_cos_sin,
+        np.ascontiguousarray(age, dtype=np.float64),
+    )
 
 
 def nearest_slots(n_rows: int, row: np.ndarray, key: np.ndarray, k: int) -> np.ndarray:
     """(n_rows, k) link index of the ``k`` smallest ``key`` per row (-1 where a row has fewer links), the
     ``order`` of :func:`pack_nearest` without packing any values."""
-    if _HAVE_NUMBA and len(row) and k > 0:
-        row = np.ascontiguousarray(row, dtype=np.int64).reshape(-1)
-        if row.min() < 0 or row.max() >= n_rows:
-            raise ValueError(f"pack_nearest: rows must lie in [0, {n_rows}), got [{row.min()}, {row.max()}]")
-        return _nearest_slots_kernel(int(n_rows), row, np.ascontiguousarray(key, dtype=np.float64).reshape(-1), int(k))
-    return _pack_nearest_numpy(n_rows, row, key, np.zeros((len(row), 0)), k)[1]
+    if len(row) == 0 or k == 0:
+        return np.full((n_rows, k), -1, dtype=np.int64)
+    row = _checked_rows(n_rows, row)
+    return _nearest_slots_kernel(int(n_rows), row, np.ascontiguousarray(key, dtype=np.float64).reshape(-1), int(k))
+
+
+def _checked_rows(n_rows: int, row: np.ndarray) -> np.ndarray:
+    """``row`` as a contiguous int64 vector; raises ValueError for a row outside [0, n_rows)."""
+    row = np.ascontiguousarray(row, dtype=np.int64).reshape(-1)
+    if row.min() < 0 or row.max() >= n_rows:
+        raise ValueError(f"pack_nearest: rows must lie in [0, {n_rows}), got [{row.min()}, {row.max()}]")
+    return row
 
 
 def pack_nearest(
@@ -160,170 +164,144 @@ def pack_nearest(
 
     Returns ``(packed, order)``: ``packed`` zero-filled where a row has fewer than k entries, and
     ``order`` (n_rows, k) with the link index in each slot (-1 where empty). Slots are in increasing
-    ``key`` order (NaN last), equal keys in link order. A compiled one-pass selection (numba) when
-    installed, else :func:`_pack_nearest_numpy` (the reference it is tested against).
+    ``key`` order (NaN last), equal keys in link order. A compiled one-pass selection; its plain numpy
+    reference is :func:`swarm_envs.reference.pack_nearest`.
     """
     values = np.asarray(values, dtype=np.float64)
     if values.ndim == 1:
         values = values[:, None]
-    if _HAVE_NUMBA and len(row) and k > 0:
-        row = np.ascontiguousarray(row, dtype=np.int64).reshape(-1)
-        if row.min() < 0 or row.max() >= n_rows:
-            raise ValueError(f"pack_nearest: rows must lie in [0, {n_rows}), got [{row.min()}, {row.max()}]")
-        return _pack_nearest_kernel(
-            int(n_rows), row, np.ascontiguousarray(key, dtype=np.float64).reshape(-1), np.ascontiguousarray(values), int(k)
-        )
-    return _pack_nearest_numpy(n_rows, row, key, values, k)
-
-
-def _pack_nearest_numpy(
-    n_rows: int, row: np.ndarray, key: np.ndarray, values: np.ndarray, k: int
-) -> tuple[np.ndarray, np.ndarray]:
-    """The numpy reference of :func:`pack_nearest` (a stable sort by row, then key)."""
-    values = np.asarray(values, dtype=np.float64)
-    if values.ndim == 1:
-        values = values[:, None]
-    packed = np.zeros((n_rows, k, values.shape[1]))
-    order = np.full((n_rows, k), -1, dtype=np.int64)
     if len(row) == 0 or k == 0:
-        return packed, order
-    idx = np.lexsort((key, row))
-    sorted_rows = row[idx]
-    starts = np.searchsorted(sorted_rows, sorted_rows, side="left")
-    rank = np.arange(len(idx)) - starts
-    keep = rank < k
-    packed[sorted_rows[keep], rank[keep]] = values[idx[keep]]
-    order[sorted_rows[keep], rank[keep]] = idx[keep]
+        return np.zeros((n_rows, k, values.shape[1])), np.full((n_rows, k), -1, dtype=np.int64)
+    row = _checked_rows(n_rows, row)
+    return _pack_nearest_kernel(
+        int(n_rows), row, np.ascontiguousarray(key, dtype=np.float64).reshape(-1), np.ascontiguousarray(values), int(k)
+    )
+
+
+@njit(cache=True, inline="always")
+def _before(key_a: float, idx_a: int, key_b: float, idx_b: int) -> bool:
+    """Whether link a comes before link b: smaller key first, NaN keys last, then link order."""
+    nan_a, nan_b = key_a != key_a, key_b != key_b
+    if nan_a != nan_b:
+        return nan_b
+    if not nan_a and key_a != key_b:
+        return key_a < key_b
+    return idx_a < idx_b
+
+
+@njit(cache=True)
+def _pack_nearest_kernel(n_rows: int, row: np.ndarray, key: np.ndarray, values: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`pack_nearest`: the slots of :func:`_nearest_slots_kernel`, then the values copied in."""
+    F = values.shape[1]
+    order = _nearest_slots_kernel(n_rows, row, key, k)
+    packed = np.empty((n_rows, k, F), np.float64)
+    packed[:] = 0.0
+    for r in range(n_rows):
+        for c in range(k):
+            if order[r, c] < 0:
+                break
+            for f in range(F):
+                packed[r, c, f] = values[order[r, c], f]
     return packed, order
 
 
-try:  # numba is optional: the compiled selection of pack_nearest
-    from swarm_envs._numba import njit
-
-    _HAVE_NUMBA = True
-except ImportError:  # pragma: no cover - exercised only without numba
-    _HAVE_NUMBA = False
-
-if _HAVE_NUMBA:
-
-    @njit(cache=True, inline="always")
-    def _before(key_a: float, idx_a: int, key_b: float, idx_b: int) -> bool:
-        """Whether link a comes before link b: smaller key first, NaN keys last, then link order."""
-        nan_a, nan_b = key_a != key_a, key_b != key_b
-        if nan_a != nan_b:
-            return nan_b
-        if not nan_a and key_a != key_b:
-            return key_a < key_b
-        return idx_a < idx_b
-
-    @njit(cache=True)
-    def _pack_nearest_kernel(n_rows: int, row: np.ndarray, key: np.ndarray, values: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray]:
-        """:func:`pack_nearest`: the slots of :func:`_nearest_slots_kernel`, then the values copied in."""
-        F = values.shape[1]
-        order = _nearest_slots_kernel(n_rows, row, key, k)
-        packed = np.empty((n_rows, k, F), np.float64)
-        packed[:] = 0.0
-        for r in range(n_rows):
-            for c in range(k):
-                if order[r, c] < 0:
-                    break
-                for f in range(F):
-                    packed[r, c, f] = values[order[r, c], f]
-        return packed, order
-
-    @njit(cache=True)
-    def _nearest_slots_kernel(n_rows: int, row: np.ndarray, key: np.ndarray, k: int) -> np.ndarray:
-        """:func:`nearest_slots` in one pass over the links: each row keeps its k first links in
-        :func:`_before` order by insertion (links arrive in index order, so ties keep link order)."""
-        P = len(row)
-        order = np.empty((n_rows, k), np.int64)
-        order[:] = -1
-        best = np.empty((n_rows, k), np.float64)
-        count = np.empty(n_rows, np.int64)
-        count[:] = 0
-        for p in range(P):
-            r, kp = row[p], key[p]
-            c = count[r]
-            if c == k:
-                if not _before(kp, p, best[r, k - 1], order[r, k - 1]):
-                    continue
-                c = k - 1
-            else:
-                count[r] = c + 1
-            while c > 0 and _before(kp, p, best[r, c - 1], order[r, c - 1]):
-                best[r, c] = best[r, c - 1]
-                order[r, c] = order[r, c - 1]
-                c -= 1
-            best[r, c] = kp
-            order[r, c] = p
-        return order
-
-    @njit(cache=True)
-    def _range_bearing_kernel(order: np.ndarray, distance: np.ndarray, bcs: np.ndarray, hcs: np.ndarray, age: np.ndarray) -> np.ndarray:
-        """Rows [1, range, cos, sin bearing, cos, sin heading, age] of the kept links as float32; zero rows
-        for empty slots."""
-        n, k = order.shape
-        out = np.empty((n, k, 7), np.float32)
-        out[:] = 0.0
-        for r in range(n):
-            for c in range(k):
-                o = order[r, c]
-                if o < 0:
-                    continue
-                out[r, c, 0] = 1.0
-                out[r, c, 1] = np.float32(distance[o])
-                out[r, c, 2] = np.float32(bcs[r, c, 0])
-                out[r, c, 3] = np.float32(bcs[r, c, 1])
-                out[r, c, 4] = np.float32(hcs[r, c, 0])
-                out[r, c, 5] = np.float32(hcs[r, c, 1])
-                out[r, c, 6] = np.float32(age[o])
-        return out
-
-    @njit(cache=True, inline="always")
-    def wrap_difference_scalar(a: float, b: float) -> float:
-        """``pi - np.mod(pi - (a - b), 2 pi)`` with numpy's remainder rule: ``fmod`` (exact), plus 2 pi
-        when it is negative, +0 when it is zero (NaN stays NaN). For compiled callers."""
-        two_pi = 2.0 * np.pi
-        y = np.pi - (a - b)
-        # fmod without the library call where its result is known exactly: y itself in [0, 2 pi),
-        # y - 2 pi in [2 pi, 4 pi) (exact by Sterbenz's lemma)
-        if 0.0 <= y < two_pi:
-            m = y
-        elif two_pi <= y < 2.0 * two_pi:
-            m = y - two_pi
+@njit(cache=True)
+def _nearest_slots_kernel(n_rows: int, row: np.ndarray, key: np.ndarray, k: int) -> np.ndarray:
+    """:func:`nearest_slots` in one pass over the links: each row keeps its k first links in
+    :func:`_before` order by insertion (links arrive in index order, so ties keep link order)."""
+    P = len(row)
+    order = np.empty((n_rows, k), np.int64)
+    order[:] = -1
+    best = np.empty((n_rows, k), np.float64)
+    count = np.empty(n_rows, np.int64)
+    count[:] = 0
+    for p in range(P):
+        r, kp = row[p], key[p]
+        c = count[r]
+        if c == k:
+            if not _before(kp, p, best[r, k - 1], order[r, k - 1]):
+                continue
+            c = k - 1
         else:
-            m = np.fmod(y, two_pi)
-        if m != 0.0:
-            if m < 0.0:
-                m += two_pi
-        else:
-            m = 0.0
-        return np.pi - m
+            count[r] = c + 1
+        while c > 0 and _before(kp, p, best[r, c - 1], order[r, c - 1]):
+            best[r, c] = best[r, c - 1]
+            order[r, c] = order[r, c - 1]
+            c -= 1
+        best[r, c] = kp
+        order[r, c] = p
+    return order
 
-    @njit(cache=True)
-    def _wrapped_difference_kernel(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-        """:func:`wrap_difference_scalar` elementwise."""
-        out = np.empty(len(a), np.float64)
-        for i in range(len(a)):
-            out[i] = wrap_difference_scalar(a[i], b[i])
-        return out
 
-    @njit(cache=True)
-    def _clip_float32_kernel(values: np.ndarray, low: np.ndarray, high: np.ndarray) -> np.ndarray:
-        """``np.clip(values.astype(float32), low, high)`` for (n, S) float64 or float32 values and (S,) float32
-        bounds (NaN stays NaN, as with ``np.clip``)."""
-        n, S = values.shape
-        out = np.empty((n, S), np.float32)
-        for i in range(n):
-            for s in range(S):
-                v = np.float32(values[i, s])
-                if v == v:  # numpy's clip: max then min, each keeping a NaN and taking the bound on ties
-                    if not v > low[s]:
-                        v = low[s]
-                    if not v < high[s]:
-                        v = high[s]
-                out[i, s] = v
-        return out
+@njit(cache=True)
+def _range_bearing_kernel(order: np.ndarray, distance: np.ndarray, bcs: np.ndarray, hcs: np.ndarray, age: np.ndarray) -> np.ndarray:
+    """Rows [1, range, cos, sin bearing, cos, sin heading, age] of the kept links as float32; zero rows
+    for empty slots."""
+    n, k = order.shape
+    out = np.empty((n, k, 7), np.float32)
+    out[:] = 0.0
+    for r in range(n):
+        for c in range(k):
+            o = order[r, c]
+            if o < 0:
+                continue
+            out[r, c, 0] = 1.0
+            out[r, c, 1] = np.float32(distance[o])
+            out[r, c, 2] = np.float32(bcs[r, c, 0])
+            out[r, c, 3] = np.float32(bcs[r, c, 1])
+            out[r, c, 4] = np.float32(hcs[r, c, 0])
+            out[r, c, 5] = np.float32(hcs[r, c, 1])
+            out[r, c, 6] = np.float32(age[o])
+    return out
+
+
+@njit(cache=True, inline="always")
+def wrap_difference_scalar(a: float, b: float) -> float:
+    """``pi - np.mod(pi - (a - b), 2 pi)`` with numpy's remainder rule: ``fmod`` (exact), plus 2 pi
+    when it is negative, +0 when it is zero (NaN stays NaN). For compiled callers."""
+    two_pi = 2.0 * np.pi
+    y = np.pi - (a - b)
+    # fmod without the library call where its result is known exactly: y itself in [0, 2 pi),
+    # y - 2 pi in [2 pi, 4 pi) (exact by Sterbenz's lemma)
+    if 0.0 <= y < two_pi:
+        m = y
+    elif two_pi <= y < 2.0 * two_pi:
+        m = y - two_pi
+    else:
+        m = np.fmod(y, two_pi)
+    if m != 0.0:
+        if m < 0.0:
+            m += two_pi
+    else:
+        m = 0.0
+    return np.pi - m
+
+
+@njit(cache=True)
+def _wrapped_difference_kernel(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """:func:`wrap_difference_scalar` elementwise."""
+    out = np.empty(len(a), np.float64)
+    for i in range(len(a)):
+        out[i] = wrap_difference_scalar(a[i], b[i])
+    return out
+
+
+@njit(cache=True)
+def _clip_float32_kernel(values: np.ndarray, low: np.ndarray, high: np.ndarray) -> np.ndarray:
+    """``np.clip(values.astype(float32), low, high)`` for (n, S) float64 or float32 values and (S,) float32
+    bounds (NaN stays NaN, as with ``np.clip``)."""
+    n, S = values.shape
+    out = np.empty((n, S), np.float32)
+    for i in range(n):
+        for s in range(S):
+            v = np.float32(values[i, s])
+            if v == v:  # numpy's clip: max then min, each keeping a NaN and taking the bound on ties
+                if not v > low[s]:
+                    v = low[s]
+                if not v < high[s]:
+                    v = high[s]
+            out[i, s] = v
+    return out
 
 
 @dataclass
@@ -427,9 +405,9 @@ class ObservationLayout:
 
 def _clip_to_box(values: np.ndarray, low: np.ndarray, high: np.ndarray) -> np.ndarray:
     """``np.clip(values as float32, low, high)`` for float64 or float32 values (n, *box shape) and float32
-    bounds of the box shape; one compiled pass when numba is installed (same float32 results)."""
+    bounds of the box shape, in one compiled pass (same float32 results; other dtypes or shapes: ``np.clip``)."""
     values = np.asarray(values)
-    if _HAVE_NUMBA and values.dtype in (np.float64, np.float32) and values.ndim >= 1 and values.shape[1:] == low.shape and low.dtype == np.float32:
+    if values.dtype in (np.float64, np.float32) and values.ndim >= 1 and values.shape[1:] == low.shape and low.dtype == np.float32:
         n = values.shape[0]
         flat = _clip_float32_kernel(
             np.ascontiguousarray(values).reshape(n, -1), np.ascontiguousarray(low).reshape(-1), np.ascontiguousarray(high).reshape(-1)

@@ -1,19 +1,17 @@
 """The fast per-step paths (ideal sensing, observations, task rewards and metrics) equal straightforward
-numpy formulas, bit for bit. The ``_old_*`` functions below are those plain reference implementations
-(KD-tree pairs + argsort, ``np.add.at``, ``np.mod`` wrapping, packing of every link, ``np.clip``).
+numpy formulas, bit for bit: the ``_plain_*`` functions below (KD-tree pairs + argsort, ``np.add.at``,
+``np.mod`` wrapping, packing of every link, ``np.clip``) and :mod:`swarm_envs.reference`.
 """
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
-from scipy.sparse import coo_matrix
-from scipy.sparse.csgraph import connected_components
 
 import swarm_envs
-from swarm_envs import observation
+from swarm_envs import observation, reference
 from swarm_envs.geometry import wrap_angle
-from swarm_envs.observation import _pack_nearest_numpy, nearest_slots, wrapped_difference
+from swarm_envs.observation import nearest_slots, wrapped_difference
 from swarm_envs.sensing import ideal
 from swarm_envs.task import MESSAGE_RANGE
 from swarm_envs.sensing.ideal import candidate_pairs, copy_pairs, directed_links, directed_pairs
@@ -28,7 +26,7 @@ def _equal(a, b, what=""):
 
 
 # -- the plain reference implementations -----------------------------------------------------------------
-def _old_relative_pose(positions, headings, rx, tx):
+def _plain_relative_pose(positions, headings, rx, tx):
     delta = positions[tx] - positions[rx]
     distance = np.hypot(delta[:, 0], delta[:, 1])
     bearing = np.arctan2(delta[:, 1], delta[:, 0]) - headings[rx]
@@ -36,21 +34,21 @@ def _old_relative_pose(positions, headings, rx, tx):
     return distance, wrap_angle(bearing), wrap_angle(heading)
 
 
-def _old_ideal_step(sensing, positions, headings):
+def _plain_ideal_step(sensing, positions, headings):
     """IdealSensing.step without messages, plain reference: KD-tree pairs, every link packed."""
     copy = sensing.copy if sensing.n_copies > 1 else None
     rx, tx = directed_pairs(candidate_pairs(positions, sensing.platform.ir_range, copy))
-    distance, bearing, heading = _old_relative_pose(positions, headings, rx, tx)
+    distance, bearing, heading = _plain_relative_pose(positions, headings, rx, tx)
     n = sensing.n
     mean_distance = np.bincount(rx, distance, n) / np.maximum(np.bincount(rx, minlength=n), 1)
     scale = np.where(mean_distance > 0, mean_distance, 1.0)[rx]
     local = np.stack([distance * np.cos(bearing), distance * np.sin(bearing)], -1) / scale[:, None]
-    packed, order = _pack_nearest_numpy(n, rx, distance, local, sensing.k)
+    packed, order = reference.pack_nearest(n, rx, distance, local, sensing.k)
     valid = order >= 0
     return (rx, tx, distance, bearing, heading), (packed, valid, valid.any(axis=1))
 
 
-def _old_observations(core):
+def _plain_observations(core):
     """SwarmCore.observations, plain reference: every link's values stacked and packed, then np.clip."""
     frame = core.frame
     n, k, m, b = core.n_total, core.layout.n_neighbours, core.layout.n_messages, core.layout.message_bits
@@ -63,14 +61,14 @@ def _old_observations(core):
         if len(nb.rx)
         else np.zeros((0, 7))
     )
-    range_bearing, _ = _pack_nearest_numpy(n, nb.rx, nb.range, rb_values, k)
+    range_bearing, _ = reference.pack_nearest(n, nb.rx, nb.range, rb_values, k)
     msg = frame.messages
     if len(msg.receiver):
         key = msg.distance_hint if msg.distance_hint is not None else np.arange(len(msg.receiver), dtype=float)
         msg_values = np.concatenate(
             [np.ones((len(msg.receiver), 1)), msg.bearing[:, None] / np.pi, msg.payload.reshape(len(msg.receiver), b)], axis=1
         )
-        messages, _ = _pack_nearest_numpy(n, msg.receiver, key, msg_values, m)
+        messages, _ = reference.pack_nearest(n, msg.receiver, key, msg_values, m)
     else:
         messages = np.zeros((n, m, 2 + b))
     sf = frame.scale_free
@@ -80,25 +78,7 @@ def _old_observations(core):
     return {name: np.clip(np.asarray(parts[name], np.float32), box.low, box.high) for name, box in core.layout.dict_space().spaces.items()}
 
 
-def _old_largest_component_fraction(positions, link_distance, pairs=None):
-    B, N = positions.shape[:2]
-    copy = np.repeat(np.arange(B), N)
-    if pairs is None:
-        pairs = candidate_pairs(positions.reshape(B * N, 2), link_distance, copy)
-    n = B * N
-    graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(n, n))
-    labels = connected_components(graph, directed=False)[1]
-    sizes = np.bincount(labels, minlength=n)
-    label_copy = np.full(sizes.size, -1)
-    label_copy[labels] = copy
-    present = sizes > 0
-    largest = np.zeros(B)
-    np.maximum.at(largest, label_copy[present], sizes[present])
-    count = np.bincount(label_copy[present], minlength=B)
-    return largest / N, count
-
-
-def _old_flocking_rewards(task, state):
+def _plain_flocking_rewards(task, state):
     """The flocking rewards written plainly (per copy, a KD-tree's pairs, ``np.add.at``)."""
     B, A = task.n_copies, task.n_agents
     pos, head = task.agents_of(state.positions), task.agents_of(state.headings)
@@ -153,8 +133,8 @@ def test_copy_pairs_equal_kd_tree_pairs(copies, size, spread, r):
 
 
 @pytest.mark.parametrize("spread,r", [(1.0, 0.3), (1.0, 5.0), (100.0, 0.05), (3.0, 0.2)])
-def test_copy_pairs_grid_and_numpy_branches(monkeypatch, spread, r):
-    """The cell grid (copies above BRUTE_FORCE_MAX; one cell, capped cells) and the KD-tree fallback."""
+def test_copy_pairs_grid_branch(monkeypatch, spread, r):
+    """The cell grid (copies above BRUTE_FORCE_MAX; one cell, capped cells)."""
     rng = np.random.default_rng(3)
     pos = rng.uniform(0, spread, (240, 2))
     pos[40:60] = pos[40] + rng.normal(0, r / 3, (20, 2))  # a dense clump in every case
@@ -162,16 +142,13 @@ def test_copy_pairs_grid_and_numpy_branches(monkeypatch, spread, r):
     assert len(ref) > 0
     monkeypatch.setattr(ideal, "BRUTE_FORCE_MAX", 5)
     _equal(copy_pairs(pos, r, 80), ref)
-    monkeypatch.setattr(ideal, "_HAVE_NUMBA", False)
-    _equal(copy_pairs(pos, r, 80), ref)
 
 
-def test_directed_links_numpy_path_equals_compiled(monkeypatch):
+def test_directed_links_equal_the_reference():
     rng = np.random.default_rng(4)
     pairs = candidate_pairs(rng.uniform(0, 1, (80, 2)), 0.3)
     got = directed_links(pairs, 80)
-    monkeypatch.setattr(ideal, "_HAVE_NUMBA", False)
-    ref = directed_links(pairs, 80)
+    ref = reference.directed_links(pairs, 80)
     for a, b in zip(got, ref):
         _equal(a, b)
 
@@ -206,7 +183,7 @@ def test_nearest_slots_equal_pack_nearest_order():
     row, key = rng.integers(0, 300, 4000), rng.uniform(0, 1, 4000)
     key[::7] = 0.5
     key[::31] = np.nan
-    _equal(nearest_slots(300, row, key, 6), _pack_nearest_numpy(300, row, key, np.zeros((4000, 1)), 6)[1])
+    _equal(nearest_slots(300, row, key, 6), reference.pack_nearest(300, row, key, np.zeros((4000, 1)), 6)[1])
 
 
 # -- whole steps -------------------------------------------------------------------------------------------
@@ -219,26 +196,15 @@ def _rollout(env_id, B, steps=4, **kwargs):
     return vec
 
 
-def _numpy_only(monkeypatch):
-    """Switch every compiled fast path of this change to its numpy fallback."""
-    from swarm_envs import metrics
-
-    for module in (observation, ideal, metrics):
-        monkeypatch.setattr(module, "_HAVE_NUMBA", False)
-
-
-@pytest.mark.parametrize("compiled", [True, False])
 @pytest.mark.parametrize(
     "B,kwargs",
     [(5, dict(n_robots=10)), (1, dict(n_robots=200, platform="droplet")), (3, dict(n_robots=12, message_bits=2, n_neighbours=5))],
 )
-def test_ideal_sensing_and_observations_equal_the_previous_formulas(monkeypatch, B, kwargs, compiled):
-    if not compiled:
-        _numpy_only(monkeypatch)
+def test_ideal_sensing_and_observations_equal_the_plain_formulas(B, kwargs):
     vec = _rollout("swarm_envs/Flocking-v0", B, sensing="ideal", **kwargs)
     core = vec.core
     frame = core.sensing.step(core.positions, core.headings, None)
-    (rx, tx, distance, bearing, heading), (xy, valid, rigid) = _old_ideal_step(core.sensing, core.positions, core.headings)
+    (rx, tx, distance, bearing, heading), (xy, valid, rigid) = _plain_ideal_step(core.sensing, core.positions, core.headings)
     nb = frame.neighbours
     assert len(rx) > 0
     for got, ref in [(nb.rx, rx), (nb.tx, tx), (nb.range, distance), (nb.bearing, bearing), (nb.heading, heading)]:
@@ -246,27 +212,25 @@ def test_ideal_sensing_and_observations_equal_the_previous_formulas(monkeypatch,
     _equal(frame.scale_free.xy, xy)
     _equal(frame.scale_free.valid, valid)
     _equal(frame.scale_free.rigid, rigid)
-    got, ref = core.observations(), _old_observations(core)  # with the last step's frame (messages if any)
+    got, ref = core.observations(), _plain_observations(core)  # with the last step's frame (messages if any)
     assert got.keys() == ref.keys()
     for name in ref:
         _equal(got[name], ref[name], name)
 
 
-def test_full_sensing_observations_equal_the_previous_formulas():
+def test_full_sensing_observations_equal_the_plain_formulas():
     vec = _rollout("swarm_envs/Flocking-v0", 2, steps=6, sensing="full", n_robots=8, message_bits=2)
-    got, ref = vec.core.observations(), _old_observations(vec.core)
+    got, ref = vec.core.observations(), _plain_observations(vec.core)
     assert (ref["range_bearing"][..., 0] > 0).any()
     for name in ref:
         _equal(got[name], ref[name], name)
 
 
-@pytest.mark.parametrize("B,n,mode,compiled", [(6, 10, "global", True), (2, 9, "local", True), (1, 1100, "local", True), (3, 10, "local", False)])
-def test_flocking_rewards_equal_the_previous_formulas(monkeypatch, B, n, mode, compiled):
-    if not compiled:
-        _numpy_only(monkeypatch)
+@pytest.mark.parametrize("B,n,mode", [(6, 10, "global"), (2, 9, "local"), (1, 1100, "local"), (3, 10, "local")])
+def test_flocking_rewards_equal_the_plain_formulas(B, n, mode):
     vec = _rollout("swarm_envs/Flocking-v0", B, steps=3, sensing="ideal", n_robots=n, reward_mode=mode)
     task, state = vec.core.task, vec.core.state()
-    got, ref = task.rewards(state, np.zeros(B, bool)), _old_flocking_rewards(task, state)
+    got, ref = task.rewards(state, np.zeros(B, bool)), _plain_flocking_rewards(task, state)
     _equal(got[0], ref[0], "rewards")
     for d_got, d_ref in zip(got[1:], ref[1:]):
         assert d_got.keys() == d_ref.keys()
@@ -275,26 +239,20 @@ def test_flocking_rewards_equal_the_previous_formulas(monkeypatch, B, n, mode, c
     assert (ref[1]["local_polarisation"] != ref[1]["polarisation"]).any()
 
 
-@pytest.mark.parametrize("compiled", [True, False])
-def test_cluster_metrics_equal_the_previous_formulas(monkeypatch, compiled):
+def test_cluster_metrics_equal_the_reference():
     from swarm_envs import metrics
 
-    if not compiled:
-        monkeypatch.setattr(metrics, "_HAVE_NUMBA", False)
     rng = np.random.default_rng(8)
     for B, N, link in [(9, 10, 0.3), (1, 1200, 0.25), (3, 30, 0.1), (2, 5, 2.0), (4, 6, 1e-3)]:
         pos = rng.uniform(0, 1 if N < 100 else 8, (B, N, 2))
-        got, ref = metrics.largest_component_fraction(pos, link), _old_largest_component_fraction(pos, link)
+        got, ref = metrics.largest_component_fraction(pos, link), reference.largest_component_fraction(pos, link)
         _equal(got[0], ref[0])
         _equal(got[1], ref[1])
 
 
-@pytest.mark.parametrize("compiled", [True, False])
-def test_neighbourhood_sums_equal_add_at_over_sorted_links(monkeypatch, compiled):
+def test_neighbourhood_sums_equal_add_at_over_sorted_links():
     from swarm_envs import metrics
 
-    if not compiled:
-        monkeypatch.setattr(metrics, "_HAVE_NUMBA", False)
     rng = np.random.default_rng(9)
     pos = rng.uniform(0, 2, (400, 2))
     pairs = copy_pairs(pos, 0.3, 100)

@@ -15,15 +15,14 @@ import threading
 import time
 from pathlib import Path
 
+import numba
 import numpy as np
 import pytest
 
-numba = pytest.importorskip("numba")
-
-import swarm_envs  # noqa: E402
-from swarm_envs import _first_run, _kernel_manifest  # noqa: E402
-from swarm_envs._numba import njit  # noqa: E402
-from swarm_envs._sort import argsort_quick  # noqa: E402
+import swarm_envs
+from swarm_envs import _first_run, _kernel_manifest
+from swarm_envs._numba import njit
+from swarm_envs._sort import argsort_quick
 
 ROOT = Path(__file__).resolve().parents[1]
 NOTICE = "swarm_envs: compiling the numba kernels for the first run"

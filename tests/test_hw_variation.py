@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from swarm_envs.ir import kernels, layer
+from swarm_envs.ir import layer
 from swarm_envs.ir.hardware import Hardware, draw_hardware
 from swarm_envs.ir.models import DropletLowPowerIR
 from swarm_envs.platforms import get_platform
@@ -77,12 +77,11 @@ def test_links_carry_each_robots_own_channels_serial_and_threaded(name, monkeypa
     np.testing.assert_array_equal(links.emitter_sums, _sequential_sums(links.gains))
     nominal = layer.pair_gains(links.rel_position, links.rel_heading, platform)
     assert not np.allclose(links.emitter_sums, _sequential_sums(nominal), rtol=1e-3)
-    if kernels.HAVE_NUMBA:
-        serial = layer.compute_links(pos, hd, platform, hardware=hw)
-        monkeypatch.setattr(layer, "gain_threads", lambda n_pairs: 3)
-        threaded = layer.compute_links(pos, hd, platform, hardware=hw)
-        for f in ("rx", "tx", "gains", "emitter_sums"):
-            np.testing.assert_array_equal(getattr(serial, f), getattr(threaded, f))
+    serial = layer.compute_links(pos, hd, platform, hardware=hw)
+    monkeypatch.setattr(layer, "gain_threads", lambda n_pairs: 3)
+    threaded = layer.compute_links(pos, hd, platform, hardware=hw)
+    for f in ("rx", "tx", "gains", "emitter_sums"):
+        np.testing.assert_array_equal(getattr(serial, f), getattr(threaded, f))
 
 
 def test_draws_are_per_robot_fixed_in_count_and_scaled_by_the_spreads():

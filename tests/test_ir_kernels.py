@@ -1,14 +1,14 @@
-"""The compiled IR kernels equal the numpy reference (models of swarm_envs.ir.models, docs/design.md#infrared-physical-layer)."""
+"""The compiled IR kernels equal the numpy references (models of swarm_envs.ir.models, docs/design.md#infrared-physical-layer;
+swarm_envs.reference)."""
 
 import numpy as np
 import pytest
 from scipy.spatial import cKDTree
 
+from swarm_envs import reference
 from swarm_envs.ir import kernels, layer
 from swarm_envs.ir.models import DropletLowPowerIR
 from swarm_envs.platforms import get_platform
-
-pytestmark = pytest.mark.skipif(not kernels.HAVE_NUMBA, reason="numba is not installed: only the numpy path exists")
 
 
 @pytest.mark.parametrize("name", ["droplet", "droplet_low", "epuck", "rone"])
@@ -21,12 +21,12 @@ def test_gains_kernel_equals_numpy_reference(name):
     R[:200] = rng.uniform(-1, 1, (200, 2)) * 3 * platform.radius  # close pairs, including the near fits
     psi = rng.uniform(-np.pi, np.pi, P)
     fast = layer.pair_gains(R, psi, platform, model=model)
-    reference = layer._pair_gains_numpy(R, psi, platform, model)
-    assert (reference > 0).sum() > 1000 and (reference == 0).sum() > 100
-    np.testing.assert_allclose(fast, reference, rtol=1e-9, atol=1e-12)
+    ref = layer._pair_gains_numpy(R, psi, platform, model)
+    assert (ref > 0).sum() > 1000 and (ref == 0).sum() > 100
+    np.testing.assert_allclose(fast, ref, rtol=1e-9, atol=1e-12)
     # the kernel skips rays behind a detector or an emitter without computing them: exactly the same
     # rays must be lit as in the reference
-    np.testing.assert_array_equal(fast > 0, reference > 0)
+    np.testing.assert_array_equal(fast > 0, ref > 0)
 
 
 def _occluded_pairs(platform, rng, P, dark=None):
@@ -65,9 +65,9 @@ def test_gains_kernel_compact_rows_are_the_lit_pairs(name):
     np.testing.assert_array_equal(compact, full[expected])
     np.testing.assert_array_equal(sums_full, _sequential_sums(full))
     np.testing.assert_array_equal(sums, sums_full[expected])
-    reference = layer._pair_gains_numpy(R, psi, platform, platform.ir_model) * layer._clear_rays_numpy(R, psi, platform, offsets, xy)
-    np.testing.assert_array_equal(full > 0, reference > 0)
-    np.testing.assert_allclose(full, reference, rtol=1e-9, atol=1e-12)
+    ref = layer._pair_gains_numpy(R, psi, platform, platform.ir_model) * layer._clear_rays_numpy(R, psi, platform, offsets, xy)
+    np.testing.assert_array_equal(full > 0, ref > 0)
+    np.testing.assert_allclose(full, ref, rtol=1e-9, atol=1e-12)
 
 
 @pytest.mark.parametrize("name", ["droplet", "epuck", "rone"])
@@ -140,12 +140,13 @@ def _sequential_sums(gains):
 
 @pytest.mark.parametrize("name", ["droplet", "epuck", "rone"])
 @pytest.mark.parametrize("occlusion", ["ray", "centre", "none"])
-@pytest.mark.parametrize("numba", [True, False])
-def test_emitter_sums_are_the_sequential_sums_of_the_gains(name, occlusion, numba, monkeypatch):
+@pytest.mark.parametrize("kernel", [True, False])
+def test_emitter_sums_are_the_sequential_sums_of_the_gains(name, occlusion, kernel, monkeypatch):
     """IRLinks.emitter_sums: bit for bit the emitter-order sum of each detector's gains, aligned with the
-    rows, for every platform, occlusion rule and both paths (with and without dropped pairs, and empty)."""
-    if not numba:
-        monkeypatch.setattr(kernels, "HAVE_NUMBA", False)
+    rows, for every platform, occlusion rule and both gain paths (the kernel, and numpy for a model without
+    one), with and without dropped pairs, and empty."""
+    if not kernel:
+        monkeypatch.setattr(kernels, "MODEL_IDS", {})
     platform = get_platform(name)
     rng = np.random.default_rng(14)
     pos, hd = _dense_scene(platform, 60, 1.2 * platform.ir_range, rng)
@@ -162,16 +163,15 @@ def test_emitter_sums_are_the_sequential_sums_of_the_gains(name, occlusion, numb
     assert len(far) == 0 and far.emitter_sums.shape == (0, platform.n_detectors)
 
 
-def test_centre_line_of_sight_kernel_equals_numpy_reference(monkeypatch):
+def test_centre_line_of_sight_kernel_equals_numpy_reference():
     rng = np.random.default_rng(12)
     pos = rng.uniform(0, 2.0, (150, 2))
     tree = cKDTree(pos)
     pairs = tree.query_pairs(1.0, output_type="ndarray")
     fast = layer.line_of_sight(pos, 0.035, pairs[:, 0], pairs[:, 1], tree)
-    monkeypatch.setattr(kernels, "HAVE_NUMBA", False)
-    reference = layer.line_of_sight(pos, 0.035, pairs[:, 0], pairs[:, 1], tree)
-    assert 0.05 < reference.mean() < 0.95
-    np.testing.assert_array_equal(fast, reference)
+    ref = np.diff(reference.occluder_lists(pos, pairs[:, 0], pairs[:, 1], 0.035, tree)[0]) == 0
+    assert 0.05 < ref.mean() < 0.95
+    np.testing.assert_array_equal(fast, ref)
 
 
 def _dense_scene(platform, n, side, rng):
@@ -183,9 +183,20 @@ def _dense_scene(platform, n, side, rng):
     return np.array(pos), rng.uniform(-np.pi, np.pi, n)
 
 
+def _reference_links(pos, hd, platform, pairs, tree):
+    """compute_links (per-ray occlusion, dark pairs dropped) from the numpy references: (rx, tx, gains)."""
+    rx, tx, pair_of, rel, _, rel_heading, _ = reference.ir_directed_pairs(pairs, pos, hd)
+    offsets, idx = reference.occluder_lists(pos, pairs[:, 0], pairs[:, 1], layer.occluder_width(platform), tree)
+    occ_offsets, xy = reference.occluder_frames(pos, hd, rx, pair_of, offsets, idx)
+    gains = layer._pair_gains_numpy(rel, rel_heading, platform, platform.ir_model)
+    gains = gains * layer._clear_rays_numpy(rel, rel_heading, platform, occ_offsets, xy)
+    lit = gains.reshape(len(gains), -1).max(axis=1) > 0
+    return rx[lit], tx[lit], gains[lit]
+
+
 @pytest.mark.parametrize("name", ["droplet", "epuck", "rone"])
-def test_per_ray_occlusion_kernel_equals_numpy_reference(name, monkeypatch):
-    """Occluder lists and per-ray occluded gains: compiled kernels == the numpy fallback."""
+def test_per_ray_occlusion_kernel_equals_numpy_reference(name):
+    """Occluder lists and per-ray occluded gains: compiled kernels == the numpy references."""
     platform = get_platform(name)
     rng = np.random.default_rng(13)
     pos, hd = _dense_scene(platform, 120, 1.5 * platform.ir_range, rng)
@@ -195,32 +206,33 @@ def test_per_ray_occlusion_kernel_equals_numpy_reference(name, monkeypatch):
     w = layer.occluder_width(platform)
     fast_occ = layer.pair_occluders(pos, hd, rx, tx, w, tree)
     fast_links = layer.compute_links(pos, hd, platform)
-    monkeypatch.setattr(kernels, "HAVE_NUMBA", False)
-    ref_occ = layer.pair_occluders(pos, hd, rx, tx, w, tree)
-    ref_links = layer.compute_links(pos, hd, platform)
-    np.testing.assert_array_equal(fast_occ[0], ref_occ[0])
-    np.testing.assert_array_equal(fast_occ[1], ref_occ[1])
-    np.testing.assert_allclose(fast_occ[2], ref_occ[2], rtol=0, atol=1e-15)
-    assert np.diff(ref_occ[0]).max() >= 2 and (np.diff(ref_occ[0]) == 0).any()
-    np.testing.assert_array_equal(fast_links.rx, ref_links.rx)
-    np.testing.assert_array_equal(fast_links.tx, ref_links.tx)
+    ref_offsets, ref_idx = reference.occluder_lists(pos, rx, tx, w, tree)
+    ref_xy = reference.occluder_frames(pos, hd, rx, np.arange(len(rx)), ref_offsets, ref_idx)[1]
+    ref_rx, ref_tx, ref_gains = _reference_links(pos, hd, platform, pairs, tree)
+    np.testing.assert_array_equal(fast_occ[0], ref_offsets)
+    np.testing.assert_array_equal(fast_occ[1], ref_idx)
+    np.testing.assert_allclose(fast_occ[2], ref_xy, rtol=0, atol=1e-15)
+    assert np.diff(ref_offsets).max() >= 2 and (np.diff(ref_offsets) == 0).any()
+    np.testing.assert_array_equal(fast_links.rx, ref_rx)
+    np.testing.assert_array_equal(fast_links.tx, ref_tx)
     # the same rays are lit; values to 1e-12 (numpy computes the gains from cosines with other roundings)
-    np.testing.assert_array_equal(fast_links.gains > 0, ref_links.gains > 0)
-    np.testing.assert_allclose(fast_links.gains, ref_links.gains, rtol=1e-9, atol=1e-12)
+    np.testing.assert_array_equal(fast_links.gains > 0, ref_gains > 0)
+    np.testing.assert_allclose(fast_links.gains, ref_gains, rtol=1e-9, atol=1e-12)
     free = layer.compute_links(pos, hd, platform, occlusion="none", drop_zero=False)
-    assert len(free) > len(ref_links)  # some pairs are fully occluded ...
+    assert len(free) > len(ref_rx)  # some pairs are fully occluded ...
     # ... and some kept links lose only part of their rays
     key = free.rx * len(pos) + free.tx
-    sel = np.isin(key, ref_links.rx * len(pos) + ref_links.tx)
-    lost = (free.gains[sel] > 0) & (ref_links.gains == 0)
-    assert lost.reshape(len(ref_links), -1).any(axis=1).sum() > 0
+    sel = np.isin(key, ref_rx * len(pos) + ref_tx)
+    lost = (free.gains[sel] > 0) & (ref_gains == 0)
+    assert lost.reshape(len(ref_rx), -1).any(axis=1).sum() > 0
 
 
 def test_occluder_lists_equal_the_exact_segment_test_near_the_disc_edge():
     """occluders_kernel decides candidates within 1e-6 of the width by the exact segment test: the same
     lists as _segment_hits_disc over every third robot, for third robots placed at the width (to +-1e-15
     .. 1e-3 relative) from the centre segment, inside it, beyond either end and near the ends. (The numpy
-    fallback rounds the segment differently and may disagree within ~1e-16 of the width.)"""
+    reference, swarm_envs.reference.occluder_lists, rounds the segment differently and may disagree within
+    ~1e-16 of the width.)"""
     rng = np.random.default_rng(35)
     width = 0.0686
     pos = list(rng.uniform(0, 2.0, (40, 2)))
@@ -353,14 +365,14 @@ def test_epuck_kernel_decides_grazing_rays_like_the_reference(offsets):
         psi.append(h)
     R, psi = np.array(R), np.array(psi)
     fast = layer.pair_gains(R, psi, platform)
-    reference = layer._pair_gains_numpy(R, psi, platform, platform.ir_model)
+    ref = layer._pair_gains_numpy(R, psi, platform, platform.ir_model)
     assert fast.min() >= 0.0
     if offsets[0] != 0.0:
-        np.testing.assert_array_equal(fast > 0, reference > 0)
-    np.testing.assert_allclose(fast, reference, rtol=1e-9, atol=1e-12)
+        np.testing.assert_array_equal(fast > 0, ref > 0)
+    np.testing.assert_allclose(fast, ref, rtol=1e-9, atol=1e-12)
 
 
-def test_directed_pairs_kernel_equals_numpy_reference(monkeypatch):
+def test_directed_pairs_kernel_equals_numpy_reference():
     """Both directions of the KD-tree pairs sorted by (rx, tx), and their frames: compiled == numpy, bit for bit."""
     rng = np.random.default_rng(33)
     pos = rng.uniform(0, 3.0, (300, 2))
@@ -368,16 +380,15 @@ def test_directed_pairs_kernel_equals_numpy_reference(monkeypatch):
     pairs = cKDTree(pos).query_pairs(0.5, output_type="ndarray")
     pairs = pairs[rng.permutation(len(pairs))]  # any order of the unordered pairs
     fast = layer._directed_pairs(pairs, pos, hd)
-    monkeypatch.setattr(kernels, "HAVE_NUMBA", False)
-    reference = layer._directed_pairs(pairs, pos, hd)
-    assert len(reference[0]) == 2 * len(pairs) > 1000
-    key = reference[0] * 300 + reference[1]
+    ref = reference.ir_directed_pairs(pairs, pos, hd)
+    assert len(ref[0]) == 2 * len(pairs) > 1000
+    key = ref[0] * 300 + ref[1]
     assert (np.diff(key) > 0).all()
-    for a, b in zip(fast, reference):
+    for a, b in zip(fast, ref):
         np.testing.assert_array_equal(a, b)
 
 
-def test_directed_pairs_kernel_wraps_any_heading_like_numpy(monkeypatch):
+def test_directed_pairs_kernel_wraps_any_heading_like_numpy():
     """Relative headings wrapped without fmod where possible: the same bits as numpy's wrap_angle, for
     wrapped and unwrapped headings (including exact multiples of pi)."""
     rng = np.random.default_rng(34)
@@ -386,9 +397,7 @@ def test_directed_pairs_kernel_wraps_any_heading_like_numpy(monkeypatch):
     hd = np.concatenate([rng.uniform(-np.pi, np.pi, n // 2), rng.uniform(-30, 30, n // 4), np.pi * rng.integers(-6, 7, n - n // 2 - n // 4)])
     pairs = cKDTree(pos).query_pairs(0.3, output_type="ndarray")
     fast = layer._directed_pairs(pairs, pos, hd)
-    monkeypatch.setattr(kernels, "HAVE_NUMBA", False)
-    reference = layer._directed_pairs(pairs, pos, hd)
-    np.testing.assert_array_equal(fast[5], reference[5])
+    np.testing.assert_array_equal(fast[5], reference.ir_directed_pairs(pairs, pos, hd)[5])
     assert fast[5].min() > -np.pi and fast[5].max() <= np.pi
 
 

@@ -187,7 +187,7 @@ def _reference_links(pos, hd, platform):
     + [pytest.param(name, 40, seed, marks=pytest.mark.slow) for name, seed in (("droplet", 8), ("epuck", 9), ("rone", 10))],
 )
 def test_vectorised_equals_loop_reference(name, n, seed):
-    """The compiled kernel (or the numpy path without numba) equals the per-ray loop reference."""
+    """The compiled kernels equal the per-ray loop reference."""
     platform = get_platform(name)
     rng = np.random.default_rng(seed)
     side = (6 if n <= 25 else 4) * platform.ir_range / 4

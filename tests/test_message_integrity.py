@@ -11,13 +11,10 @@ import pytest
 
 import swarm_envs
 from swarm_envs.comm.channel import recommended_relative_threshold
-from swarm_envs.comm.kernels import HAVE_NUMBA
-from swarm_envs.comm.network import Network
+from swarm_envs.comm.network import BACKENDS, Network
 from swarm_envs.ir.layer import compute_links
 from swarm_envs.platforms import get_platform
 from swarm_envs.task import Task
-
-BACKENDS = ["numpy", "numba"] if HAVE_NUMBA else ["numpy"]
 
 
 def test_frame_crc_per_platform():

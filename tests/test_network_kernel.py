@@ -5,11 +5,9 @@ import pytest
 
 from swarm_envs.comm.bch import SUPPORTED, code as bch_code
 from swarm_envs.comm.channel import ADCModel
-from swarm_envs.comm.kernels import HAVE_NUMBA, GeneratorList, _draw_copies_py, decode_words, draw_copies, draw_step
+from swarm_envs.comm.kernels import GeneratorList, _draw_copies_py, decode_words, draw_copies, draw_step
 from swarm_envs.comm.network import Network
 from swarm_envs.ir.layer import compute_links
-
-pytestmark = pytest.mark.skipif(not HAVE_NUMBA, reason="numba not installed")
 
 FIELDS = ("receiver", "origin", "sender", "seq", "detector", "kind", "length", "slot", "corrupt", "transmitter", "interference")
 
@@ -311,7 +309,6 @@ def test_send_rejects_bad_payload_lengths():
                 net.send_many(np.array([0, 1]), np.zeros((2, 8), bool), lengths=np.array(lengths))
 
 
-@pytest.mark.skipif(not HAVE_NUMBA, reason="needs numba")
 @pytest.mark.parametrize("noisy", [False, True])
 def test_compiled_detector_response_equals_the_reference(noisy):
     """The slot loop's branch-free detector response (kernels._respond) equals channel.detector_response bit

@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
-from swarm_envs import observation
-from swarm_envs.observation import _pack_nearest_numpy, pack_nearest
+from swarm_envs import reference
+from swarm_envs.observation import pack_nearest
 
 
 @pytest.mark.parametrize("P,n_rows,k", [(5000, 600, 8), (400, 10, 3), (50, 200, 1), (1, 1, 4)])
@@ -16,7 +16,7 @@ def test_pack_nearest_equals_numpy_reference(P, n_rows, k):
     key[rng.uniform(size=P) < 0.05] = np.nan  # NaN keys sort last
     values = rng.normal(size=(P, 5))
     packed, order = pack_nearest(n_rows, row, key, values, k)
-    ref_packed, ref_order = _pack_nearest_numpy(n_rows, row, key, values, k)
+    ref_packed, ref_order = reference.pack_nearest(n_rows, row, key, values, k)
     np.testing.assert_array_equal(order, ref_order)
     np.testing.assert_array_equal(packed, ref_packed)
     if P > 1:  # rows with more than k links are cut to the nearest k
@@ -34,7 +34,5 @@ def test_pack_nearest_one_dimensional_values_and_empty_input():
 
 
 def test_pack_nearest_rejects_rows_out_of_range():
-    if not observation._HAVE_NUMBA:
-        pytest.skip("numba is not installed: only the numpy path exists")
     with pytest.raises(ValueError, match="rows"):
         pack_nearest(3, np.array([0, 3]), np.array([0.1, 0.2]), np.ones((2, 1)), 2)

@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from swarm_envs import reference
 from swarm_envs.copies import CopyRandom
 from swarm_envs.ir.layer import IRLinks, compute_links, pair_gains, wrap_angle
 from swarm_envs.sensing import range_bearing as rbmod
@@ -283,7 +284,6 @@ def test_reset_of_one_copy_reseeds_its_id_stream():
     assert vec.id_rng.generators[1].random() == single.id_rng.generators[0].random()
 
 
-@pytest.mark.skipif(not rbmod.HAVE_NUMBA, reason="numba not installed")
 def test_compiled_contention_schedule_equals_the_luby_rounds():
     """The compiled greedy independent set (kernels.priority_independent_set) equals the numpy Luby rounds
     on random scenes, and is a maximal independent set of the link graph."""
@@ -295,7 +295,7 @@ def test_compiled_contention_schedule_equals_the_luby_rounds():
         links = compute_links(pos, rng.uniform(-np.pi, np.pi, n), "droplet")
         prio = rng.random(n)
         got = priority_independent_set(prio, links.rx.astype(np.int64), links.tx.astype(np.int64))
-        ref = rbmod.independent_set_numpy(prio, links.rx, links.tx)
+        ref = reference.independent_set(prio, links.rx, links.tx)
         np.testing.assert_array_equal(got, ref)
         assert not np.any(got[links.rx] & got[links.tx])  # independent
         covered = got.copy()
@@ -303,7 +303,6 @@ def test_compiled_contention_schedule_equals_the_luby_rounds():
         assert covered.all()  # maximal: every robot fires or hears one that does
 
 
-@pytest.mark.skipif(not rbmod.HAVE_NUMBA, reason="numba not installed")
 @pytest.mark.parametrize("platform", ["droplet", "epuck"])
 def test_compiled_frame_words_equal_the_numpy_reference(platform):
     """kernels.frame_words reads the same id and CRC words as range_bearing.frame_words_numpy on random
@@ -339,6 +338,6 @@ def test_group_argmax_and_membership_helpers_match_their_plain_numpy_forms():
         values = rng.integers(0, 4, int(sizes.sum())).astype(float)  # many ties: the first one wins
         labels = rng.permutation(values.size)
         ref = [labels[s + int(np.argmax(values[s : s + n]))] for s, n in zip(starts, sizes)]
-        np.testing.assert_array_equal(rbmod._group_argmax(values, starts, labels), ref)
+        np.testing.assert_array_equal(reference.group_argmax(values, starts, labels), ref)
         a, b = rng.integers(0, 30, 40), rng.integers(0, 30, int(rng.integers(0, 10)))
         np.testing.assert_array_equal(rbmod._member(a, b), np.isin(a, b))

@@ -290,7 +290,6 @@ def _corrupt(cache_dir: Path) -> int:
 
 
 def test_guarded_numba_cache_recovers(tmp_path):
-    pytest.importorskip("numba")
     (tmp_path / "kern.py").write_text(
         textwrap.dedent(
             """
@@ -315,7 +314,6 @@ def test_guarded_numba_cache_recovers(tmp_path):
 
 @pytest.mark.slow
 def test_env_reset_recovers_from_a_corrupted_ir_kernel_cache(tmp_path):
-    pytest.importorskip("numba")
     code = (
         "import warnings; warnings.simplefilter('always'); from swarm_envs import flocking_v0;"
         "e = flocking_v0.parallel_env(n_robots=4); e.reset(seed=0); print('ok')"

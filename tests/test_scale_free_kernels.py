@@ -1,19 +1,13 @@
-"""The compiled 2-hop scale-free path equals the numpy reference bit for bit (swarm_envs.sensing.kernels)."""
+"""The compiled 2-hop scale-free path (swarm_envs.sensing.kernels) equals the numpy reference
+(swarm_envs.reference.coordinates_all) bit for bit."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from swarm_envs.sensing.kernels import HAVE_NUMBA
-from swarm_envs.sensing.scale_free import (
-    NeighbourKnowledge,
-    coordinates_all,
-    coordinates_all_numpy,
-    knowledge_from_matrix,
-)
-
-pytestmark = pytest.mark.skipif(not HAVE_NUMBA, reason="numba not installed")
+from swarm_envs import reference
+from swarm_envs.sensing.scale_free import NeighbourKnowledge, coordinates_all, knowledge_from_matrix
 
 
 def _bearings(rng, n, side, quantise):
@@ -68,19 +62,27 @@ def test_compiled_equals_numpy_reference(noise_sensitivity, balance):
         if trial % 5 == 2:  # a subset of robots, with their own ids
             sel = np.sort(rng.choice(n, size=max(1, n // 2), replace=False))
             kn = NeighbourKnowledge(kn.ids[sel], kn.bearings[sel], kn.row_ids[sel], kn.row_bearings[sel], robot_ids=sel)
-        ref = coordinates_all_numpy(kn, noise_sensitivity=noise_sensitivity, angle_balance=balance)
-        got = coordinates_all(kn, noise_sensitivity=noise_sensitivity, angle_balance=balance, compiled=True)
+        ref = reference.coordinates_all(kn, noise_sensitivity=noise_sensitivity, angle_balance=balance)
+        got = coordinates_all(kn, noise_sensitivity=noise_sensitivity, angle_balance=balance)
         _assert_same(got, ref)
         checked_valid += int(ref.valid.sum())
     assert checked_valid > 200  # the comparison covered many computed lengths, not only empty outputs
 
 
-def test_compiled_is_the_default_and_handles_tiny_inputs():
+def test_defaults_and_tiny_inputs_equal_the_reference():
+    """Default options, and inputs with no robot, one slot per robot (empty or not) and two slots."""
     rng = np.random.default_rng(3)
     kn = knowledge_from_matrix(_bearings(rng, 12, 1.2, quantise=False))
-    _assert_same(coordinates_all(kn), coordinates_all_numpy(kn))
+    _assert_same(coordinates_all(kn), reference.coordinates_all(kn))
     empty = NeighbourKnowledge(np.full((2, 1), -1), np.full((2, 1), np.nan), np.full((2, 1, 1), -1), np.full((2, 1, 1), np.nan))
-    _assert_same(coordinates_all(empty, compiled=True), coordinates_all_numpy(empty))
+    one = NeighbourKnowledge(np.array([[1], [0], [-1]]), np.array([[0.3], [-2.8], [np.nan]]), np.array([[[0]], [[-1]], [[-1]]]), np.array([[[-2.8]], [[np.nan]], [[np.nan]]]))
+    none = NeighbourKnowledge(np.zeros((0, 3), np.int64), np.zeros((0, 3)), np.zeros((0, 3, 3), np.int64), np.zeros((0, 3, 3)))
+    two = knowledge_from_matrix(_bearings(rng, 3, 0.5, quantise=True))
+    two = NeighbourKnowledge(two.ids[:, :2], two.bearings[:, :2], two.row_ids[:, :2], two.row_bearings[:, :2])
+    for kn in (empty, one, none, two):
+        for noise_sensitivity in (True, False):
+            _assert_same(coordinates_all(kn, noise_sensitivity), reference.coordinates_all(kn, noise_sensitivity))
+    assert coordinates_all(one).valid[:2, 0].all() and coordinates_all(one).rigid.tolist() == [True, True, False]
 
 
 def test_segment_sum_equals_reduceat():
@@ -103,7 +105,7 @@ def test_segment_sum_equals_reduceat():
 
 
 def test_sum_last_equals_its_numpy_reference():
-    from swarm_envs.sensing.kernels import sum_last, sum_last_numpy
+    from swarm_envs.sensing.kernels import sum_last
 
     rng = np.random.default_rng(6)
     for shape in [(5,), (0, 8), (7, 1), (40, 8, 8), (3, 6, 6)]:
@@ -112,7 +114,7 @@ def test_sum_last_equals_its_numpy_reference():
             got = sum_last(view)
             assert got.shape == view.shape[:-1]
             if view.shape[-1]:
-                np.testing.assert_array_equal(got, sum_last_numpy(view))
+                np.testing.assert_array_equal(got, reference.sum_last(view))
             np.testing.assert_allclose(got, view.sum(axis=-1), rtol=1e-9, atol=1e-9 * np.abs(view).max(initial=0))
 
 

@@ -1,16 +1,14 @@
 """Compiled glue of the range & bearing sensor and the bearing exchange (swarm_envs.sensing.kernels) against
-their numpy references, bit for bit."""
+their numpy references (swarm_envs.reference, or the formulas written out here), bit for bit."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
+from swarm_envs import reference
 from swarm_envs.sensing import range_bearing as rbmod
 from swarm_envs.sensing.exchange import BearingExchange
-from swarm_envs.sensing.kernels import HAVE_NUMBA
-
-pytestmark = pytest.mark.skipif(not HAVE_NUMBA, reason="numba not installed")
 
 
 def _same_bits(a: np.ndarray, b: np.ndarray) -> None:
@@ -55,7 +53,7 @@ def test_group_brightest_equals_group_argmax_of_row_maxima():
         starts = np.r_[0, np.cumsum(sizes)[:-1]].astype(np.int64)
         gains = np.round(rng.uniform(0, 5, (L, 8)))  # rounded: ties between rows are common
         labels = rng.integers(0, 1000, L)
-        ref = rbmod._group_argmax(gains.max(axis=1), starts, labels)
+        ref = reference.group_argmax(gains.max(axis=1), starts, labels)
         np.testing.assert_array_equal(group_brightest(gains, starts, labels), ref)
 
 
@@ -72,7 +70,7 @@ def test_pick_ids_equals_the_numpy_decode_rule(id_check):
         ident = rng.integers(0, 4, H)  # few ids: agreeing and conflicting channels
         crc = np.where(rng.random(H) < 0.7, rbmod._CRC16[ident], rng.integers(0, 2**16, H))
         got = pick_ids(heard, ident, crc, rbmod._CRC16, id_check, rbmod.NOT_HEARD, rbmod.CONFLICT)
-        ref = rbmod.pick_ids_numpy(heard, ident, crc, id_check)
+        ref = reference.pick_ids(heard, ident, crc, id_check)
         np.testing.assert_array_equal(got, ref)
         outcomes.update(np.sign(ref).tolist())
     assert outcomes == {-1, 0, 1}  # not heard / conflict, id 0, ids > 0 all exercised
@@ -97,9 +95,9 @@ def test_merge_readings_equals_the_numpy_reference():
 
 
 def test_compiled_round_start_equals_the_numpy_round_start():
-    """kernels.roll_tables = the numpy path of BearingExchange.start_rounds: the started robots' filled
+    """kernels.roll_tables (BearingExchange.start_rounds) = reference.roll_tables: the started robots' filled
     tables become their published ones and are emptied, the other robots' tables are untouched."""
-    from swarm_envs.sensing.exchange import _FILL, _PUB
+    from swarm_envs.sensing.exchange import _FILL, _PUB, NEVER
 
     rng = np.random.default_rng(9)
     for _ in range(20):
@@ -118,8 +116,8 @@ def test_compiled_round_start_equals_the_numpy_round_start():
         robots = np.sort(rng.choice(exs[0].n, int(rng.integers(1, 20)), replace=False))
         filled = {name: getattr(exs[0], name)[robots].copy() for name in _FILL}
         before = {name: getattr(exs[0], name).copy() for name in _FILL + _PUB}
-        exs[0].start_rounds(robots, compiled=True)
-        exs[1].start_rounds(robots, compiled=False)
+        exs[0].start_rounds(robots)
+        reference.roll_tables(robots, *(getattr(exs[1], name) for name in _FILL + _PUB), NEVER)
         for name in _FILL + _PUB:
             np.testing.assert_array_equal(getattr(exs[0], name), getattr(exs[1], name))
         others = np.setdiff1d(np.arange(exs[0].n), robots)
@@ -153,7 +151,7 @@ def _random_tables(ex: BearingExchange, seed: int, published: bool = False) -> N
 
 
 @pytest.mark.parametrize("n, k_max", [(30, 6), (1000, 20)])  # 1000 robots, 20 slots: max_entries (17) < k_max
-def test_compiled_message_encoding_equals_encode_rows(n, k_max, monkeypatch):
+def test_compiled_message_encoding_equals_encode_rows(n, k_max):
     from swarm_envs.sensing import exchange as exmod
 
     ex = BearingExchange(n, mode="network", k_max=k_max, rng=np.random.default_rng(0), n_copies=2)
@@ -161,17 +159,17 @@ def test_compiled_message_encoding_equals_encode_rows(n, k_max, monkeypatch):
     for seed in range(10):
         _random_tables(ex, seed, published=True)
         robots = np.sort(np.random.default_rng(seed).choice(ex.n, 25, replace=False))
-        bits, lens = ex.encode(robots, compiled=True)
-        ref_bits, ref_lens = ex.encode(robots, compiled=False)
+        bits, lens = ex.encode(robots)
+        ref_bits, ref_lens = reference.encode_tables(
+            ex.pub_ids, ex.pub_bear, ex.pub_time, robots, ex.offset, ex.max_entries, ex.id_bits, ex.count_bits, ex.bearing_bits
+        )
         np.testing.assert_array_equal(bits, ref_bits)
         np.testing.assert_array_equal(lens, ref_lens)
         assert lens.min() < lens.max()
         # and back: the compiled decoding equals the numpy one, on whole rows and on rows cut at their length
         for rows in (bits, np.where(np.arange(bits.shape[1]) < lens.min(), bits, 0)[:, : max(lens.min(), 1)]):
             got = exmod.decode_rows(rows, ex.id_bits, ex.count_bits, ex.max_entries, ex.bearing_bits)
-            with monkeypatch.context() as m:
-                m.setattr(exmod, "HAVE_NUMBA", False)
-                ref = exmod.decode_rows(rows, ex.id_bits, ex.count_bits, ex.max_entries, ex.bearing_bits)
+            ref = reference.decode_rows(rows, ex.id_bits, ex.count_bits, ex.max_entries, ex.bearing_bits)
             np.testing.assert_array_equal(got[0], ref[0])
             _same_bits(got[1], ref[1])
 
@@ -198,7 +196,7 @@ def test_firing_sums_equal_the_gathered_numpy_sums():
             _same_bits(lam.reshape(-1, n_d, n_d), np.add.reduceat(g, starts, axis=0))
             _same_bits(light, sum_last(g))
             _same_bits(start, segment_sum(sum_last(g), starts))
-            np.testing.assert_array_equal(sel[best], rbmod._group_argmax(g.reshape(sel.size, -1).max(axis=1), starts, sel))
+            np.testing.assert_array_equal(sel[best], reference.group_argmax(g.reshape(sel.size, -1).max(axis=1), starts, sel))
 
 
 def test_adc_bits_equal_the_numpy_start_bit_reading():
@@ -231,7 +229,7 @@ def test_sorted_independent_set_equals_the_adjacency_version():
             got, ok = priority_independent_set_sorted(prio, u[keep], v[keep])
             assert ok
             np.testing.assert_array_equal(got, priority_independent_set(prio, u[keep], v[keep]))
-            np.testing.assert_array_equal(got, rbmod.independent_set_numpy(prio, u[keep], v[keep]))
+            np.testing.assert_array_equal(got, reference.independent_set(prio, u[keep], v[keep]))
     if u.size > 1:
         assert not priority_independent_set_sorted(prio, u[::-1].copy(), v[::-1].copy())[1]
 
@@ -260,9 +258,9 @@ def test_slot_keys_equal_the_numpy_keys():
 
 
 def test_compiled_delivery_store_equals_the_numpy_waves():
-    """kernels.store_deliveries (one delivery after the other) leaves the same tables as the numpy waves
-    (one delivery per receiver and wave), with receivers hearing several senders, a sender twice, and
-    deliveries without an own bearing."""
+    """kernels.store_deliveries (one delivery after the other) leaves the same tables as the numpy waves of
+    reference.store_deliveries (one delivery per receiver and wave), with receivers hearing several senders, a
+    sender twice, and deliveries without an own bearing."""
     from swarm_envs.sensing.kernels import store_deliveries
 
     rng = np.random.default_rng(15)
@@ -285,6 +283,6 @@ def test_compiled_delivery_store_equals_the_numpy_waves():
         recv, origin, hit, own_b, ids, th = recv[perm], origin[perm], hit[perm], own_b[perm], ids[perm], th[perm]
         a, b = exs
         store_deliveries(recv, origin, own_b, hit, ids, th, a._now, a.tab_ids, a.tab_bear, a.tab_time, a.row_ids, a.row_bear, a.row_time)
-        b._store_waves(recv, origin, own_b, hit, ids, th)
+        reference.store_deliveries(recv, origin, own_b, hit, ids, th, b._now, b.tab_ids, b.tab_bear, b.tab_time, b.row_ids, b.row_bear, b.row_time)
         for name in ("tab_ids", "tab_bear", "tab_time", "row_ids", "row_bear", "row_time"):
             np.testing.assert_array_equal(getattr(a, name), getattr(b, name))

@@ -5,9 +5,7 @@ import math
 import numpy as np
 import pytest
 
-pytest.importorskip("numba")
-
-from swarm_envs import _vecmath  # noqa: E402
+from swarm_envs import _vecmath
 
 
 def _samples(rng):

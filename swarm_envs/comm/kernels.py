@@ -1,4 +1,4 @@
-"""Compiled (numba) SwarmCom bit-slot loop, with the numpy implementation in ``network.py`` as reference.
+"""Compiled (numba) SwarmCom bit-slot loop; the numpy implementation in ``network.py`` (``backend="numpy"``) is its reference.
 
 :func:`slot_loop` runs every bit slot of one control step for all robots in one call [T20 Secs. 3, 4]:
 
@@ -24,10 +24,10 @@ all env copies in one compiled call, each copy from its own generator): the kern
 reference consume the same arrays and must give the same deliveries and counters
 (``tests/test_network_kernel.py``). The arrays are indexed by robot and their shapes do not depend on
 what the robots do, so copy b of a batch draws exactly what a single env draws. The compiled drawer gives
-bit for bit what NumPy's ``Generator`` methods give (the plain-Python fallback without numba).
+bit for bit what NumPy's ``Generator`` methods give (:func:`_draw_copies_py`, the same draws as NumPy
+calls).
 
 The flooding dedupe and relaying run once per step in numpy (``Network._finish_step``), not per slot.
-Without numba the same functions run as (slow) plain Python; ``Network`` then defaults to numpy.
 """
 
 from __future__ import annotations
@@ -35,22 +35,12 @@ from __future__ import annotations
 from typing import Any, NamedTuple
 
 import numpy as np
+from numba.typed import List as _typed_list
 
-try:  # numba is optional: an accelerator, not a requirement
-    from swarm_envs._numba import njit
+from swarm_envs._numba import njit
+from swarm_envs._vecmath import exp_moderate
 
-    from swarm_envs._vecmath import exp_moderate
-
-    HAVE_NUMBA = True
-except ImportError:  # pragma: no cover - exercised only without numba
-    HAVE_NUMBA = False
-
-    from swarm_envs._vecmath import exp_array
-
-    def exp_moderate(x: float) -> float:
-        return float(exp_array(np.array([x]))[0])
-
-__all__ = ["HAVE_NUMBA", "COUNTERS", "PER_ROBOT", "DELIVERY_FIELDS", "StepDraws", "GeneratorList", "draw_step", "draw_copies", "link_tables", "build_frames", "slot_loop", "decode_words"]
+__all__ = ["COUNTERS", "PER_ROBOT", "DELIVERY_FIELDS", "StepDraws", "GeneratorList", "draw_step", "draw_copies", "link_tables", "build_frames", "slot_loop", "decode_words"]
 
 COUNTERS = (
     "slots",
@@ -127,18 +117,18 @@ def draw_step(rng: np.random.Generator, S: int, n: int, n_det: int, noise_sigma:
 
 
 class GeneratorList:
-    """The env copies' generators in the form :func:`draw_copies` takes (a ``numba.typed.List`` with numba,
-    else a plain list), updated in place when a copy's generator is replaced (boxing a generator for numba
-    costs ~20 us, so the list is kept between steps instead of being rebuilt)."""
+    """The env copies' generators in the form :func:`draw_copies` takes (a ``numba.typed.List``), updated in
+    place when a copy's generator is replaced (boxing a generator for numba costs ~20 us, so the list is
+    kept between steps instead of being rebuilt)."""
 
     def __init__(self, generators: list[np.random.Generator]) -> None:
         self._py: list[np.random.Generator] = list(generators)
-        if HAVE_NUMBA and self._py:  # built by cached kernels (numba.typed.List's own methods compile in every process)
+        if self._py:  # built by cached kernels (numba.typed.List's own methods compile in every process)
             self._list = _generator_list(self._py[0])
             for g in self._py[1:]:
                 _append_generator(self._list, g)
         else:
-            self._list = _typed_list(self._py) if HAVE_NUMBA else list(self._py)
+            self._list = _typed_list(self._py)
 
     def sync(self, generators: list[np.random.Generator]) -> "Any":
         """The list for ``generators`` (same length as at construction; replaced entries are swapped in)."""
@@ -148,22 +138,15 @@ class GeneratorList:
         for b, g in enumerate(generators):
             if self._py[b] is not g:
                 self._py[b] = g
-                if HAVE_NUMBA:
-                    _set_generator(self._list, b, g)
-                else:
-                    self._list[b] = g
+                _set_generator(self._list, b, g)
         return self._list
 
 
-def _identity(f):  # pragma: no cover - used only without numba
-    return f
-
-
-_jit = njit(cache=True, nogil=True) if HAVE_NUMBA else _identity
+_jit = njit(cache=True, nogil=True)
 #: for loops the compiler should vectorise: numpy's error model (no ZeroDivisionError branch in the loop)
-_jit_vector = njit(cache=True, nogil=True, error_model="numpy") if HAVE_NUMBA else _identity
+_jit_vector = njit(cache=True, nogil=True, error_model="numpy")
 #: small helpers of one kernel, inlined where numba types the caller (one compile unit less each on the first run)
-_jit_inline = njit(cache=True, nogil=True, inline="always") if HAVE_NUMBA else _identity
+_jit_inline = njit(cache=True, nogil=True, inline="always")
 
 
 @_jit_inline
@@ -192,7 +175,9 @@ def _store_integers(k, backoff, access, o, n, S):
 
 
 def _draw_copies_py(gens, S, n, n_det, noise_sigma, intensity_sigma, window):
-    """Body of :func:`draw_copies` (compiled with numba; the same code runs in plain Python without)."""
+    """:func:`draw_copies` with NumPy's ``Generator`` calls, run in plain Python (the reference of the
+    compiled drawer) or compiled with numba's own ``Generator`` methods (the drawer on a numba without the
+    internals the inlined sampler uses)."""
     noise, inoise, backoff, access = _draw_buffers(len(gens), n, S, n_det, noise_sigma, intensity_sigma)
     sg = np.float32(noise_sigma)
     for b in range(len(gens)):
@@ -206,23 +191,23 @@ def _draw_copies_py(gens, S, n, n_det, noise_sigma, intensity_sigma, window):
     return noise, inoise, backoff, access
 
 
-if HAVE_NUMBA:
-    from numba.typed import List as _typed_list
+@njit(cache=True)
+def _generator_list(g):
+    """A typed list holding the generator ``g``."""
+    out = _typed_list()
+    out.append(g)
+    return out
 
-    @njit(cache=True)
-    def _generator_list(g):
-        """A typed list holding the generator ``g``."""
-        out = _typed_list()
-        out.append(g)
-        return out
 
-    @njit(cache=True)
-    def _append_generator(gens, g):
-        gens.append(g)
+@njit(cache=True)
+def _append_generator(gens, g):
+    gens.append(g)
 
-    @njit(cache=True)
-    def _set_generator(gens, b, g):
-        gens[b] = g
+
+@njit(cache=True)
+def _set_generator(gens, b, g):
+    gens[b] = g
+
 
 try:  # NumPy's float32 ziggurat, compiled inline (numba's bindings of the bit generator and NumPy's tables),
     # and numba's copy of NumPy's bounded-integer sampler
@@ -230,7 +215,7 @@ try:  # NumPy's float32 ziggurat, compiled inline (numba's bindings of the bit g
     from numba.np.random.generator_core import next_float, next_uint32
     from numba.np.random.random_methods import buffered_bounded_lemire_uint32
 
-    _FAST_NORMAL = HAVE_NUMBA
+    _FAST_NORMAL = True
 except ImportError:  # pragma: no cover - other numba versions: numba's Generator.standard_normal (same stream)
     _FAST_NORMAL = False
 

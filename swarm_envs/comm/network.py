@@ -17,7 +17,7 @@ step boundaries). In every slot, vectorised over all robots:
    detect start symbols, apply the dynamic threshold and store bits; at check points the header is
    decoded (BCH) and the frame is aborted, continued or delivered.
 
-Backends: ``backend="numba"`` (default when numba imports) runs all slots of a step in one compiled call
+Backends: ``backend="numba"`` (the default) runs all slots of a step in one compiled call
 (:func:`swarm_envs.comm.kernels.slot_loop`); ``backend="numpy"`` runs the vectorised loop below, the
 tested reference. Every random number of a step (ADC and intensity noise, CSMA access delays and backoffs)
 is drawn before the slot loop by :func:`swarm_envs.comm.kernels.draw_copies` in arrays indexed by robot, so
@@ -59,7 +59,7 @@ import numpy as np
 from swarm_envs.copies import CopyRandom
 from swarm_envs.comm.bch import BCHCode, code as bch_code
 from swarm_envs.comm.channel import ADCModel, adc_model_for, detector_response
-from swarm_envs.comm.kernels import COUNTERS, DELIVERY_FIELDS, HAVE_NUMBA, PER_ROBOT, GeneratorList, StepDraws, build_frames, draw_copies, link_tables, slot_loop
+from swarm_envs.comm.kernels import COUNTERS, DELIVERY_FIELDS, PER_ROBOT, GeneratorList, StepDraws, build_frames, draw_copies, link_tables, slot_loop
 from swarm_envs.comm.protocol import (
     CSMA,
     IDLE,
@@ -200,7 +200,7 @@ class Network:
             without error detection a corrupted copy (e.g. from a collision) has a new (origin, seq) or payload
             and is re-flooded by everyone as a new message, a broadcast storm that the paper does not report
             (validation (c) shows both).
-        backend: ``"numba"`` (default when numba imports): the compiled slot loop of
+        backend: ``"numba"`` (the default): the compiled slot loop of
             :mod:`swarm_envs.comm.kernels`; ``"numpy"``: the vectorised reference. Both consume the same
             pre-drawn random numbers (:func:`swarm_envs.comm.kernels.draw_copies`) and give the same results.
         n_copies: env copies of ``n_robots`` robots each (rows copy-major); ``rng`` is then a
@@ -228,15 +228,11 @@ class Network:
         intensity_sigma: float = 0.0,
         adc_model: ADCModel | None = None,
         crc_bits: int | None = None,
-        backend: str | None = None,
+        backend: str = "numba",
         n_copies: int = 1,
     ) -> None:
-        if backend is None:
-            backend = "numba" if HAVE_NUMBA else "numpy"
         if backend not in BACKENDS:
             raise ValueError(f"backend must be one of {BACKENDS}, got {backend!r}")
-        if backend == "numba" and not HAVE_NUMBA:
-            raise ValueError("backend='numba' needs numba (pip install numba)")
         self.backend = backend
         if comm_mode not in COMM_MODES:
             raise ValueError(f"comm_mode must be one of {COMM_MODES}, got {comm_mode!r}")

@@ -197,8 +197,9 @@ def pair_gains(
 ) -> np.ndarray:
     """Noiseless gains (P, n_detectors, n_emitters) of the platform's IR model for P pairs.
 
-    Equal to ``model.gain(*pair_geometry(...))``: a compiled kernel (:mod:`swarm_envs.ir.kernels`) when
-    numba is installed, else numpy from cosines (:func:`pair_cosines`, ``model.gain_from_cos``). Pairs whose
+    Equal to ``model.gain(*pair_geometry(...))``: a compiled kernel (:mod:`swarm_envs.ir.kernels`) for the
+    package's IR models (:data:`swarm_envs.ir.kernels.MODEL_IDS`), numpy from cosines for any other model
+    (:func:`pair_cosines`, ``model.gain_from_cos``). Pairs whose
     centre distance exceeds ``platform.ir_range`` get zero gain (the platform's "no infrared beyond"
     cut-off). ``model`` overrides the platform's IR model (e.g. the Droplet's low-power emitters,
     :class:`swarm_envs.ir.models.DropletLowPowerIR`).
@@ -246,7 +247,8 @@ def _gains(
     hardware: tuple[np.ndarray, np.ndarray, Hardware] | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, kernels.ChunkRows | None]:
     """(gains, lit, sums) of :func:`pair_gains` with checked inputs: ``lit`` the pairs with a nonzero gain,
-    ``gains`` every pair's rows, or with ``compact`` only the ``lit`` rows (compiled kernel, or numpy), and
+    ``gains`` every pair's rows, or with ``compact`` only the ``lit`` rows (compiled kernel; numpy for a model
+    without one), and
     ``sums`` (rows, n_d) the gains summed over emitters sequentially in emitter order (:class:`IRLinks`
     ``emitter_sums``). ``cos_sin`` (P, 2): cos and sin of ``psi`` if known (the kernel uses them; default
     from ``psi``). ``threads`` > 1 (with ``compact``): the compiled kernel splits the pairs over that many
@@ -255,7 +257,7 @@ def _gains(
     holds its values once its ``gather()`` has run (:func:`kernels.gains_kernel_threaded`). ``hardware``:
     optional (rx (P,), tx (P,), :class:`Hardware` of the robots they index): per-robot channel deviations
     (docs/design.md#hardware-variation)."""
-    if kernels.HAVE_NUMBA and type(model).__name__ in kernels.MODEL_IDS:
+    if type(model).__name__ in kernels.MODEL_IDS:
         hw = None if hardware is None else (hardware[0], hardware[1], *hardware[2].tables(platform))
         kind, params = kernels.model_params(model)
         if cos_sin is None:
@@ -280,7 +282,7 @@ def _gains(
 
 def _emitter_sums(gains: np.ndarray) -> np.ndarray:
     """(P, n_d) sums of ``gains`` (P, n_d, n_e) over emitters, sequentially in emitter order from 0.0
-    (:class:`IRLinks` ``emitter_sums``; numpy fallback of the kernel's sums)."""
+    (:class:`IRLinks` ``emitter_sums`` of a model without a kernel; the kernel sums in the same order)."""
     acc = np.zeros(gains.shape[:2])
     for j in range(gains.shape[2]):
         acc += gains[:, :, j]
@@ -288,8 +290,8 @@ def _emitter_sums(gains: np.ndarray) -> np.ndarray:
 
 
 def _pair_gains_numpy(R: np.ndarray, psi: np.ndarray, platform: Platform, model: object, hardware: Hardware | None = None) -> np.ndarray:
-    """The numpy reference of :func:`pair_gains` without occluders (used without numba, and to test the kernel);
-    ``hardware``: per-pair channel deviations (:meth:`Hardware.pairs`)."""
+    """The numpy reference of :func:`pair_gains` without occluders (the path of a model without a kernel, and
+    what the kernel is tested against); ``hardware``: per-pair channel deviations (:meth:`Hardware.pairs`)."""
     distance, cos_det, cos_em = pair_cosines(R, psi, platform, hardware)
     g = np.asarray(model.gain_from_cos(distance, cos_det, cos_em), dtype=float)
     if hardware is not None:
@@ -298,8 +300,9 @@ def _pair_gains_numpy(R: np.ndarray, psi: np.ndarray, platform: Platform, model:
 
 
 def _clear_rays_numpy(R: np.ndarray, psi: np.ndarray, platform: Platform, offsets: np.ndarray, xy: np.ndarray) -> np.ndarray:
-    """(P, n_d, n_e) True where the ray detector i - emitter j misses every occluding disc of its pair (numpy
-    fallback of the kernel's per-ray test; rows are (pair, occluder) combinations, no Python loop)."""
+    """(P, n_d, n_e) True where the ray detector i - emitter j misses every occluding disc of its pair: the
+    kernel's per-ray test in numpy, for :meth:`IRLinks.ray_clear` and a model without a kernel (rows are
+    (pair, occluder) combinations, no Python loop)."""
     P = R.shape[0]
     counts = np.diff(offsets)
     pair = np.repeat(np.arange(P), counts)
@@ -357,7 +360,8 @@ def pair_occluders(
 
     Vectorised over pairs: such a robot lies within ``sqrt(|rx tx|^2 / 4 + width^2)`` of one end, so the candidates
     are the neighbours of both ends within that distance (one KD-tree ``query_pairs`` in CSR form), tested
-    by a compiled kernel (numba), or as flat (pair, candidate) numpy arrays without numba.
+    by a compiled kernel (plain numpy reference: :func:`swarm_envs.reference.occluder_lists` and
+    :func:`swarm_envs.reference.occluder_frames`).
 
     Returns:
         offsets (P + 1,) int, robots (K,) int, centres (K, 2) in the receiver's body frame (m): pair p's
@@ -394,43 +398,20 @@ def _occluder_lists(
         return np.zeros(P + 1, dtype=np.int64), np.zeros(0, dtype=np.int64)
     if tree is None:
         tree = cKDTree(positions)
-    seg = length = None
-    if max_length is None or not kernels.HAVE_NUMBA:
+    if max_length is None:
         seg = positions[b] - positions[a]
-        length = np.hypot(seg[:, 0], seg[:, 1])
-        max_length = float(length.max())
+        max_length = float(np.hypot(seg[:, 0], seg[:, 1]).max())
     # a centre within width of a segment is within sqrt(length^2 / 4 + width^2) of the segment's nearer end
     # (foot point on that half, Pythagoras); + 2e-9 m^2 covers the kernel's own margin and rounding
     reach2 = 0.25 * float(max_length) ** 2 + float(width) ** 2 + 2e-9
     reach = float(np.sqrt(reach2))
-    if kernels.HAVE_NUMBA:
-        if near_pairs is not None and reach < near_range * (1.0 - 1e-9):  # lists from the pairs, no second query
-            starts, counts, nbrs = kernels.neighbour_csr_kernel(positions, np.ascontiguousarray(near_pairs, dtype=np.int64), reach2)
-        else:
-            starts, counts, nbrs = _neighbour_csr(positions, reach, tree)
-        if threads > 1:
-            return kernels.occluders_kernel_threaded(positions, float(width), a, b, starts, counts, nbrs, int(threads))
-        return kernels.occluders_kernel(positions, float(width), a, b, starts, counts, nbrs)
-    starts, counts, nbrs = _neighbour_csr(positions, reach, tree)
-    pairs, cands = [], []
-    L2 = np.where(length > 0, length * length, 1.0)
-    for end in (a, b):  # two vectorised passes: neighbours of a, then of b
-        c = counts[end]
-        pair = np.repeat(np.arange(P), c)
-        offset = np.arange(int(c.sum())) - np.repeat(np.cumsum(c) - c, c)
-        cand = nbrs[np.repeat(starts[end], c) + offset]
-        keep = (cand != a[pair]) & (cand != b[pair])
-        cand, pair = cand[keep], pair[keep]
-        ap = positions[cand] - positions[a[pair]]
-        sp = seg[pair]
-        t = np.clip((ap[:, 0] * sp[:, 0] + ap[:, 1] * sp[:, 1]) / L2[pair], 0.0, 1.0)
-        qx, qy = ap[:, 0] - t * sp[:, 0], ap[:, 1] - t * sp[:, 1]
-        near = qx * qx + qy * qy < width * width
-        pairs.append(pair[near])
-        cands.append(cand[near])
-    key = np.unique(np.concatenate(pairs).astype(np.int64) * N + np.concatenate(cands))
-    offsets = np.concatenate([[0], np.cumsum(np.bincount(key // N, minlength=P))]).astype(np.int64)
-    return offsets, (key % N).astype(np.int64)
+    if near_pairs is not None and reach < near_range * (1.0 - 1e-9):  # lists from the pairs, no second query
+        starts, counts, nbrs = kernels.neighbour_csr_kernel(positions, np.ascontiguousarray(near_pairs, dtype=np.int64), reach2)
+    else:
+        starts, counts, nbrs = _neighbour_csr(positions, reach, tree)
+    if threads > 1:
+        return kernels.occluders_kernel_threaded(positions, float(width), a, b, starts, counts, nbrs, int(threads))
+    return kernels.occluders_kernel(positions, float(width), a, b, starts, counts, nbrs)
 
 
 def _occluder_frames(
@@ -439,15 +420,7 @@ def _occluder_frames(
     """The occluders of pair ``pair_of[p]`` as centres in receiver ``rx[p]``'s frame: (offsets (P + 1,), (K, 2))."""
     rx = np.ascontiguousarray(rx, dtype=np.int64)
     pair_of = np.ascontiguousarray(pair_of, dtype=np.int64)
-    if kernels.HAVE_NUMBA:
-        return kernels.occluder_frames_kernel(positions, np.cos(headings), np.sin(headings), rx, pair_of, offsets, idx)
-    counts = np.diff(offsets)[pair_of]
-    out = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
-    row = np.repeat(np.arange(rx.shape[0]), counts)
-    k = idx[np.repeat(offsets[pair_of], counts) + np.arange(int(out[-1])) - np.repeat(out[:-1], counts)]
-    d = positions[k] - positions[rx[row]]
-    c, s = np.cos(headings[rx[row]]), np.sin(headings[rx[row]])
-    return out, np.stack([c * d[:, 0] + s * d[:, 1], -s * d[:, 0] + c * d[:, 1]], axis=-1).reshape(-1, 2)
+    return kernels.occluder_frames_kernel(positions, np.cos(headings), np.sin(headings), rx, pair_of, offsets, idx)
 
 
 def line_of_sight(
@@ -567,10 +540,7 @@ def _compute_links(
     rows = np.arange(rx.shape[0])
     if drop_zero and lit.shape[0] < rx.shape[0]:
         rows = lit
-        if kernels.HAVE_NUMBA:
-            rx, tx, rel, rel_heading, distance = kernels.select_links_kernel(lit, rx, tx, rel, rel_heading, distance)
-        else:
-            rx, tx, rel, rel_heading, distance = rx[lit], tx[lit], rel[lit], rel_heading[lit], distance[lit]
+        rx, tx, rel, rel_heading, distance = kernels.select_links_kernel(lit, rx, tx, rel, rel_heading, distance)
     links = IRLinks(rx, tx, distance, rel, rel_heading, gains, N, None if occluders is None else (*occluders, rows), sums)
     if (obstacles is not None and len(obstacles)) or (silent is not None and np.any(silent)):
         if rows_pending is not None:  # the post-pass reads and writes the gain rows
@@ -718,7 +688,7 @@ def gain_threads(n_pairs: int) -> int:
     processes instead), and only from the main Python thread (one large scene per process uses the
     helpers; envs stepped from other threads stay on their thread). The result is the same bit for bit
     either way."""
-    if n_pairs < THREADED_MIN_PAIRS or not kernels.HAVE_NUMBA or threading.current_thread() is not threading.main_thread():
+    if n_pairs < THREADED_MIN_PAIRS or threading.current_thread() is not threading.main_thread():
         return 1
     import numba
 
@@ -730,22 +700,11 @@ def _directed_pairs(
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Both directions of the unordered ``pairs`` (U, 2) sorted by (rx, tx): (rx, tx, row of ``pairs``, tx
     centre in rx's frame (P, 2) (m), (cos, sin) of tx's heading in rx's frame (P, 2) from the robots' own
-    cosines and sines, that heading (P,) (rad, wrapped), centre distance (P,) (m))."""
+    cosines and sines, that heading (P,) (rad, wrapped), centre distance (P,) (m)); compiled (plain numpy
+    reference: :func:`swarm_envs.reference.ir_directed_pairs`)."""
     c, s = np.cos(headings), np.sin(headings)  # per robot, then per pair
-    if kernels.HAVE_NUMBA:
-        pairs = np.ascontiguousarray(pairs, dtype=np.int64)
-        return kernels.directed_pairs_kernel(pairs, np.ascontiguousarray(positions), np.ascontiguousarray(headings), c, s)
-    U, N = pairs.shape[0], positions.shape[0]
-    rx = np.concatenate([pairs[:, 0], pairs[:, 1]]).astype(np.intp)
-    tx = np.concatenate([pairs[:, 1], pairs[:, 0]]).astype(np.intp)
-    order = np.argsort(rx.astype(np.int64) * N + tx)  # by (rx, tx); the keys are unique, so any sort agrees
-    rx, tx = rx[order], tx[order]
-    d = positions[tx] - positions[rx]
-    c, s = c[rx], s[rx]
-    rel = np.stack([c * d[:, 0] + s * d[:, 1], -s * d[:, 0] + c * d[:, 1]], axis=-1)
-    ct, st = np.cos(headings)[tx], np.sin(headings)[tx]
-    rel_cs = np.stack([ct * c + st * s, st * c - ct * s], axis=-1)
-    return rx, tx, order % U, rel, rel_cs, wrap_angle(headings[tx] - headings[rx]), np.sqrt(d[:, 0] * d[:, 0] + d[:, 1] * d[:, 1])
+    pairs = np.ascontiguousarray(pairs, dtype=np.int64)
+    return kernels.directed_pairs_kernel(pairs, np.ascontiguousarray(positions), np.ascontiguousarray(headings), c, s)
 
 
 def _empty_links(n_d: int, n_e: int, n_robots: int) -> IRLinks:

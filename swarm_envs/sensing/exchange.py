@@ -63,10 +63,7 @@ from typing import Any
 import numpy as np
 
 from swarm_envs.copies import CopyRandom
-from swarm_envs.sensing.kernels import HAVE_NUMBA
-
-if HAVE_NUMBA:
-    from swarm_envs.sensing.kernels import decode_bits, encode_tables, roll_tables, store_deliveries
+from swarm_envs.sensing.kernels import decode_bits, encode_tables, roll_tables, store_deliveries
 
 __all__ = ["BearingExchange", "NeighbourKnowledge", "encode_rows", "decode_rows", "thesis_round_time", "readings_table"]
 
@@ -122,12 +119,6 @@ def _uint_bits(v: np.ndarray, width: int) -> np.ndarray:
     return ((v[..., None] >> np.arange(width - 1, -1, -1)) & 1).astype(np.uint8)
 
 
-def _bits_uint(b: np.ndarray) -> np.ndarray:
-    b = np.asarray(b, dtype=np.int64)
-    w = b.shape[-1]
-    return (b << np.arange(w - 1, -1, -1)).sum(-1)
-
-
 def _quantise(theta: np.ndarray, bearing_bits: int) -> np.ndarray:
     n = 1 << bearing_bits
     return np.mod(np.rint(np.asarray(theta) / (2 * np.pi / n)).astype(np.int64), n)
@@ -156,22 +147,14 @@ def encode_rows(ids: np.ndarray, bearings: np.ndarray, id_bits: int, count_bits:
 
 
 def decode_rows(bits: np.ndarray, id_bits: int, count_bits: int, max_entries: int, bearing_bits: int = 4) -> tuple[np.ndarray, np.ndarray]:
-    """Inverse of :func:`encode_rows`: bits (R, >= needed) -> ids (R, max_entries) (-1 pad), bearings (rad)."""
-    bits = np.asarray(bits, dtype=np.uint8)
-    R = bits.shape[0]
-    if HAVE_NUMBA and bits.ndim == 2:  # integers compiled (kernels.decode_bits), the bearing formula below
-        ids, q = decode_bits(np.ascontiguousarray(bits), int(id_bits), int(count_bits), int(max_entries), int(bearing_bits))
-        return ids, np.where(ids >= 0, _dequantise(q, bearing_bits), np.nan)
-    e = id_bits + bearing_bits
-    need = count_bits + max_entries * e
-    if bits.shape[1] < need:
-        bits = np.concatenate([bits, np.zeros((R, need - bits.shape[1]), np.uint8)], 1)
-    count = np.minimum(_bits_uint(bits[:, :count_bits]), max_entries)
-    ent = bits[:, count_bits:need].reshape(R, max_entries, e)
-    ids = _bits_uint(ent[..., :id_bits])
-    th = _dequantise(_bits_uint(ent[..., id_bits:]), bearing_bits)
-    keep = np.arange(max_entries)[None, :] < count[:, None]
-    return np.where(keep, ids, -1), np.where(keep, th, np.nan)
+    """Inverse of :func:`encode_rows`: bits (R, >= needed) -> ids (R, max_entries) (-1 pad), bearings (rad).
+    The integers are read by a kernel (:func:`swarm_envs.sensing.kernels.decode_bits`; numpy reference:
+    :func:`swarm_envs.reference.decode_rows`), the bearings by the formula here."""
+    bits = np.ascontiguousarray(bits, dtype=np.uint8)
+    if bits.ndim != 2:
+        raise ValueError(f"decode_rows: bits must be (rows, bits), got shape {bits.shape}")
+    ids, q = decode_bits(bits, int(id_bits), int(count_bits), int(max_entries), int(bearing_bits))
+    return ids, np.where(ids >= 0, _dequantise(q, bearing_bits), np.nan)
 
 
 def readings_table(rx: np.ndarray, tx: np.ndarray, bearing: np.ndarray, n_robots: int, k_max: int) -> tuple[np.ndarray, np.ndarray]:
@@ -326,23 +309,17 @@ class BearingExchange:
         self.stats["bits_sent"] += int(lens.sum())
         return int(robots.size)
 
-    def encode(self, robots: np.ndarray, compiled: bool | None = None) -> tuple[np.ndarray, np.ndarray]:
+    def encode(self, robots: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Message bits (R, n_bits) uint8 (zero padded) and payload lengths (R,) of ``robots``' published
         tables (their last complete round): most recently heard first, at most ``max_entries``, ids in a
-        copy's own numbering. ``compiled=False`` forces the numpy reference (:func:`encode_rows`)."""
+        copy's own numbering, in the format of :func:`encode_rows` (compiled:
+        :func:`swarm_envs.sensing.kernels.encode_tables`; numpy reference:
+        :func:`swarm_envs.reference.encode_tables`)."""
         robots = np.asarray(robots, dtype=np.int64)
-        if HAVE_NUMBA if compiled is None else compiled:
-            return encode_tables(
-                self.pub_ids, self.pub_bear, self.pub_time, robots, self.offset.astype(np.int64), self.max_entries,
-                self.id_bits, self.count_bits, self.bearing_bits,
-            )
-        o = np.argsort(-self.pub_time[robots], axis=1, kind="stable")
-        ids = np.take_along_axis(self.pub_ids[robots], o, 1)[:, : self.max_entries]
-        th = np.take_along_axis(self.pub_bear[robots], o, 1)[:, : self.max_entries]
-        local = np.where(ids >= 0, ids - self.offset[robots][:, None], -1)  # ids in a copy's own numbering
-        bits = encode_rows(local, th, self.id_bits, self.count_bits, self.bearing_bits)
-        lens = self.count_bits + (ids >= 0).sum(1) * (self.id_bits + self.bearing_bits)
-        return bits, lens
+        return encode_tables(
+            self.pub_ids, self.pub_bear, self.pub_time, robots, self.offset.astype(np.int64), self.max_entries,
+            self.id_bits, self.count_bits, self.bearing_bits,
+        )
 
     def receive(self, deliveries: Any, readings: Any) -> None:
         """Decode this step's deliveries (network mode) and update tables.
@@ -402,51 +379,21 @@ class BearingExchange:
         hit = (key_l[pos] == key) if found else np.zeros(key.size, bool)
         own_b = np.where(hit, bear_l[pos] if found else np.nan, np.nan)
         self.stats["received"] += int(recv.size)
-        if HAVE_NUMBA and ids.shape[1] == self.row_ids.shape[2]:  # one delivery after the other, compiled
-            store_deliveries(
-                recv, origin, own_b.astype(float), hit, ids, np.asarray(th, float), self._now, self.tab_ids, self.tab_bear,
-                self.tab_time, self.row_ids, self.row_bear, self.row_time,
-            )
-            return
-        self._store_waves(recv, origin, own_b, hit, ids, th)
+        if ids.shape[1] != self.row_ids.shape[2]:  # an ideal-mode exchange keeps rows of k_max entries
+            raise ValueError(f"decoded rows of {ids.shape[1]} entries do not fit the tables' rows of {self.row_ids.shape[2]}")
+        # one delivery after the other (numpy reference: swarm_envs.reference.store_deliveries)
+        store_deliveries(
+            recv, origin, own_b.astype(float), hit, ids, np.asarray(th, float), self._now, self.tab_ids, self.tab_bear,
+            self.tab_time, self.row_ids, self.row_bear, self.row_time,
+        )
 
-    def _store_waves(self, recv, origin, own_b, hit, ids, th) -> None:
-        """Numpy reference of the compiled :func:`swarm_envs.sensing.kernels.store_deliveries`."""
-        # process in waves so that one receiver gets at most one delivery per wave
-        todo = np.arange(recv.size)
-        while todo.size:
-            _, first = np.unique(recv[todo], return_index=True)
-            wave = todo[first]
-            self._store(recv[wave], origin[wave], own_b[wave], hit[wave], ids[wave], th[wave])
-            todo = np.setdiff1d(todo, wave, assume_unique=True)
-
-    def _store(self, r, o, own_b, hit, ids, th) -> None:
-        match = self.tab_ids[r] == o[:, None]
-        has = match.any(1)
-        # slot: existing entry, else the oldest (empty slots are the oldest)
-        slot = np.where(has, np.argmax(match, 1), np.argmin(self.tab_time[r], 1))
-        # a sender we have no bearing for (link gone at delivery) only refreshes an existing entry's row
-        ok = has | hit
-        r, o, slot, own_b, hit, ids, th = r[ok], o[ok], slot[ok], own_b[ok], hit[ok], ids[ok], th[ok]
-        self.tab_ids[r, slot] = o
-        self.tab_bear[r, slot] = np.where(hit, own_b, self.tab_bear[r, slot])
-        self.tab_time[r, slot] = np.where(hit, self._now[r], self.tab_time[r, slot])
-        self.row_ids[r, slot] = ids
-        self.row_bear[r, slot] = th
-        self.row_time[r, slot] = self._now[r]
-
-    def start_rounds(self, robots: np.ndarray, compiled: bool | None = None) -> None:
+    def start_rounds(self, robots: np.ndarray) -> None:
         """Start a new round of ``robots`` [L Sec. 3.2.2]: the tables they filled during the round that ends
         become their published ones (what :meth:`knowledge` and their broadcasts read), and the tables they
-        fill next start empty: "each robot clears all prior neighbor information". ``compiled=False`` forces
-        the numpy reference of :func:`swarm_envs.sensing.kernels.roll_tables`."""
+        fill next start empty: "each robot clears all prior neighbor information" (compiled:
+        :func:`swarm_envs.sensing.kernels.roll_tables`; numpy reference: :func:`swarm_envs.reference.roll_tables`)."""
         robots = np.asarray(robots, dtype=np.int64).reshape(-1)
-        if HAVE_NUMBA if compiled is None else compiled:
-            roll_tables(robots, *(getattr(self, name) for name in _FILL + _PUB), NEVER)
-            return
-        for fill, pub, value in zip(_FILL, _PUB, _EMPTY):
-            getattr(self, pub)[robots] = getattr(self, fill)[robots]
-            getattr(self, fill)[robots] = value
+        roll_tables(robots, *(getattr(self, name) for name in _FILL + _PUB), NEVER)
 
     # ------------------------------------------------------------------ common
     def knowledge(self, copy: bool = True) -> NeighbourKnowledge:

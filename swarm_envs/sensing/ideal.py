@@ -11,7 +11,8 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import cKDTree
 
-from swarm_envs.observation import nearest_slots, wrapped_difference
+from swarm_envs._numba import njit
+from swarm_envs.observation import nearest_slots, wrap_difference_scalar, wrapped_difference
 from swarm_envs.platforms import Platform
 from swarm_envs.sensing.base import MessageReadings, NeighbourReadings, ScaleFreeReadings, SensorFrame
 
@@ -19,13 +20,6 @@ __all__ = ["IdealSensing", "candidate_pairs", "copy_pairs", "directed_pairs", "d
 
 #: robots per copy up to which :func:`copy_pairs` checks every pair of a copy; larger copies use a cell grid
 BRUTE_FORCE_MAX = 64
-
-try:  # numba is optional: compiled pair search and pair direction
-    from swarm_envs._numba import njit
-
-    _HAVE_NUMBA = True
-except ImportError:  # pragma: no cover - exercised only without numba
-    _HAVE_NUMBA = False
 
 
 def candidate_pairs(positions: np.ndarray, max_range: float, copy: np.ndarray | None = None) -> np.ndarray:
@@ -53,17 +47,18 @@ def candidate_pairs(positions: np.ndarray, max_range: float, copy: np.ndarray | 
 def copy_pairs(positions: np.ndarray, max_range: float, copy_size: int) -> np.ndarray:
     """:func:`candidate_pairs` of rows grouped in env copies of ``copy_size`` consecutive robots: the same
     (P, 2) sorted pairs i < j of one copy closer than ``max_range`` (m), squared distance ``<= max_range**2``
-    as in the KD-tree. Compiled (numba): small copies (at most :data:`BRUTE_FORCE_MAX` robots) check every
-    pair of a copy, larger ones the robots of the neighbouring cells of a grid of cells >= ``max_range``;
-    both emit the pairs already sorted. Without numba: :func:`candidate_pairs`."""
+    as in the KD-tree. Compiled: small copies (at most :data:`BRUTE_FORCE_MAX` robots) check every pair of
+    a copy, larger ones the robots of the neighbouring cells of a grid of cells >= ``max_range``; both emit
+    the pairs already sorted. Larger copies with a non-finite position or a range <= 0 (no grid):
+    :func:`candidate_pairs`."""
     positions = np.ascontiguousarray(positions, dtype=np.float64).reshape(-1, 2)
     copy_size = int(copy_size)
     if copy_size < 1 or len(positions) % copy_size:
         raise ValueError(f"copy_pairs: {len(positions)} rows are not whole copies of {copy_size} robots")
     r2 = float(max_range) * float(max_range)
-    if _HAVE_NUMBA and copy_size <= BRUTE_FORCE_MAX:
+    if copy_size <= BRUTE_FORCE_MAX:
         return _copy_pairs_kernel(positions, copy_size, r2)
-    if _HAVE_NUMBA and np.isfinite(positions).all() and max_range > 0:
+    if np.isfinite(positions).all() and max_range > 0:
         # cells a little larger than the range: a pair in range is never two cells apart despite rounding
         return _grid_pairs_kernel(positions, copy_size, r2, float(max_range) * (1.0 + 1e-6))
     n_copies = len(positions) // copy_size
@@ -73,194 +68,183 @@ def copy_pairs(positions: np.ndarray, max_range: float, copy_size: int) -> np.nd
 
 def directed_links(pairs: np.ndarray, n_rows: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Both directions of sorted (P, 2) pairs i < j as :func:`directed_pairs` gives them (sorted by
-    (rx, tx)), plus the index of each link's pair; ``n_rows`` > every robot index. O(P) when compiled."""
+    (rx, tx)), plus the index of each link's pair; ``n_rows`` > every robot index. O(P), compiled (plain
+    numpy reference: :func:`swarm_envs.reference.directed_links`)."""
     pairs = np.ascontiguousarray(pairs, dtype=np.int64).reshape(-1, 2)
     if len(pairs) == 0:
         empty = np.zeros(0, dtype=np.int64)
         return empty, empty, empty
-    if _HAVE_NUMBA:
-        return _directed_links_kernel(pairs, int(n_rows))
-    rx = np.concatenate([pairs[:, 0], pairs[:, 1]])
-    tx = np.concatenate([pairs[:, 1], pairs[:, 0]])
-    order = np.argsort(rx * int(n_rows) + tx)
-    return rx[order], tx[order], np.concatenate([np.arange(len(pairs))] * 2)[order]
+    return _directed_links_kernel(pairs, int(n_rows))
 
 
-def _link_geometry(positions: np.ndarray, headings: np.ndarray, rx: np.ndarray, tx: np.ndarray):
-    """Per link: offset ``p_tx - p_rx`` (dx, dy) (m), rx's heading and ``wrap_angle(h_tx - h_rx)`` (rad)."""
-    if _HAVE_NUMBA and len(rx):
-        return _link_geometry_kernel(positions, headings, rx, tx)
-    x, y = positions[:, 0], positions[:, 1]
-    heading_rx = headings[rx]
-    return x[tx] - x[rx], y[tx] - y[rx], heading_rx, wrapped_difference(headings[tx], heading_rx)
+@njit(cache=True, nogil=True)
+def _link_geometry_kernel(positions: np.ndarray, headings: np.ndarray, rx: np.ndarray, tx: np.ndarray):  # pragma: no cover - compiled
+    """Per link: offset ``p_tx - p_rx`` (dx, dy) (m), rx's heading and ``wrap_angle(h_tx - h_rx)`` (rad),
+    in one pass (:func:`swarm_envs.observation.wrap_difference_scalar`: the bits of ``wrap_angle``)."""
+    P = len(rx)
+    dx = np.empty(P, np.float64)
+    dy = np.empty(P, np.float64)
+    heading_rx = np.empty(P, np.float64)
+    heading = np.empty(P, np.float64)
+    for q in range(P):
+        r, t = rx[q], tx[q]
+        dx[q] = positions[t, 0] - positions[r, 0]
+        dy[q] = positions[t, 1] - positions[r, 1]
+        heading_rx[q] = headings[r]
+        heading[q] = wrap_difference_scalar(headings[t], headings[r])
+    return dx, dy, heading_rx, heading
 
 
-if _HAVE_NUMBA:
-    from swarm_envs.observation import wrap_difference_scalar
+@njit(cache=True, nogil=True)
+def _scale_free_kernel(order: np.ndarray, distance: np.ndarray, cos_sin: np.ndarray, mean_distance: np.ndarray):  # pragma: no cover - compiled
+    """Slot (r, c): ``distance * (cos, sin) / scale`` of its link, scale = robot r's mean neighbour
+    distance (1 if not positive); zero for empty slots."""
+    n, k = order.shape
+    out = np.empty((n, k, 2), np.float64)
+    out[:] = 0.0
+    for r in range(n):
+        scale = mean_distance[r] if mean_distance[r] > 0 else 1.0
+        for c in range(k):
+            o = order[r, c]
+            if o >= 0:
+                out[r, c, 0] = distance[o] * cos_sin[r, c, 0] / scale
+                out[r, c, 1] = distance[o] * cos_sin[r, c, 1] / scale
+    return out
 
-    @njit(cache=True, nogil=True)
-    def _link_geometry_kernel(positions: np.ndarray, headings: np.ndarray, rx: np.ndarray, tx: np.ndarray):  # pragma: no cover - compiled
-        """:func:`_link_geometry` in one pass (the same IEEE operations as the numpy path)."""
-        P = len(rx)
-        dx = np.empty(P, np.float64)
-        dy = np.empty(P, np.float64)
-        heading_rx = np.empty(P, np.float64)
-        heading = np.empty(P, np.float64)
-        for q in range(P):
-            r, t = rx[q], tx[q]
-            dx[q] = positions[t, 0] - positions[r, 0]
-            dy[q] = positions[t, 1] - positions[r, 1]
-            heading_rx[q] = headings[r]
-            heading[q] = wrap_difference_scalar(headings[t], headings[r])
-        return dx, dy, heading_rx, heading
 
-    @njit(cache=True, nogil=True)
-    def _scale_free_kernel(order: np.ndarray, distance: np.ndarray, cos_sin: np.ndarray, mean_distance: np.ndarray):  # pragma: no cover - compiled
-        """Slot (r, c): ``distance * (cos, sin) / scale`` of its link, scale = robot r's mean neighbour
-        distance (1 if not positive); zero for empty slots (the numpy path's operations, in its order)."""
-        n, k = order.shape
-        out = np.empty((n, k, 2), np.float64)
-        out[:] = 0.0
-        for r in range(n):
-            scale = mean_distance[r] if mean_distance[r] > 0 else 1.0
-            for c in range(k):
-                o = order[r, c]
-                if o >= 0:
-                    out[r, c, 0] = distance[o] * cos_sin[r, c, 0] / scale
-                    out[r, c, 1] = distance[o] * cos_sin[r, c, 1] / scale
-        return out
+@njit(cache=True, nogil=True)
+def _copy_pairs_kernel(positions: np.ndarray, m: int, r2: float) -> np.ndarray:  # pragma: no cover - compiled
+    """Pairs i < j of each copy of ``m`` rows with dx^2 + dy^2 <= r2, in (i, j) order (one pass into a
+    buffer of the n (m - 1) / 2 pairs the copies have at most)."""
+    n = positions.shape[0]
+    out = np.empty((n * (m - 1) // 2, 2), np.int64)
+    p = 0
+    for o in range(0, n, m):
+        for i in range(o, o + m):
+            xi, yi = positions[i, 0], positions[i, 1]
+            for j in range(i + 1, o + m):
+                dx = positions[j, 0] - xi
+                dy = positions[j, 1] - yi
+                if dx * dx + dy * dy <= r2:
+                    out[p, 0] = i
+                    out[p, 1] = j
+                    p += 1
+    return out[:p]
 
-    @njit(cache=True, nogil=True)
-    def _copy_pairs_kernel(positions: np.ndarray, m: int, r2: float) -> np.ndarray:  # pragma: no cover - compiled
-        """Pairs i < j of each copy of ``m`` rows with dx^2 + dy^2 <= r2, in (i, j) order (one pass into a
-        buffer of the n (m - 1) / 2 pairs the copies have at most)."""
-        n = positions.shape[0]
-        out = np.empty((n * (m - 1) // 2, 2), np.int64)
-        p = 0
-        for o in range(0, n, m):
-            for i in range(o, o + m):
-                xi, yi = positions[i, 0], positions[i, 1]
-                for j in range(i + 1, o + m):
-                    dx = positions[j, 0] - xi
-                    dy = positions[j, 1] - yi
-                    if dx * dx + dy * dy <= r2:
-                        out[p, 0] = i
-                        out[p, 1] = j
-                        p += 1
-        return out[:p]
 
-    @njit(cache=True, nogil=True)
-    def _grid_pairs_kernel(positions: np.ndarray, m: int, r2: float, cell: float) -> np.ndarray:  # pragma: no cover - compiled
-        """Pairs i < j of each copy of ``m`` rows with dx^2 + dy^2 <= r2, in (i, j) order: robots binned in
-        square cells of side ``cell`` (>= the range; doubled until there are at most ~4 m cells), each
-        robot's partners j > i collected from its 3 x 3 cells and sorted."""
-        n = positions.shape[0]
-        out = np.empty((max(16, 8 * n), 2), np.int64)
-        p = 0
-        buf = np.empty(m, np.int64)
-        for o in range(0, n, m):
-            xmin, ymin = positions[o, 0], positions[o, 1]
-            xmax, ymax = xmin, ymin
-            for i in range(o, o + m):
-                xmin = min(xmin, positions[i, 0])
-                xmax = max(xmax, positions[i, 0])
-                ymin = min(ymin, positions[i, 1])
-                ymax = max(ymax, positions[i, 1])
-            side = cell
+@njit(cache=True, nogil=True)
+def _grid_pairs_kernel(positions: np.ndarray, m: int, r2: float, cell: float) -> np.ndarray:  # pragma: no cover - compiled
+    """Pairs i < j of each copy of ``m`` rows with dx^2 + dy^2 <= r2, in (i, j) order: robots binned in
+    square cells of side ``cell`` (>= the range; doubled until there are at most ~4 m cells), each
+    robot's partners j > i collected from its 3 x 3 cells and sorted."""
+    n = positions.shape[0]
+    out = np.empty((max(16, 8 * n), 2), np.int64)
+    p = 0
+    buf = np.empty(m, np.int64)
+    for o in range(0, n, m):
+        xmin, ymin = positions[o, 0], positions[o, 1]
+        xmax, ymax = xmin, ymin
+        for i in range(o, o + m):
+            xmin = min(xmin, positions[i, 0])
+            xmax = max(xmax, positions[i, 0])
+            ymin = min(ymin, positions[i, 1])
+            ymax = max(ymax, positions[i, 1])
+        side = cell
+        nx = int((xmax - xmin) / side) + 1
+        ny = int((ymax - ymin) / side) + 1
+        while nx * ny > 4 * m + 16:
+            side *= 2.0
             nx = int((xmax - xmin) / side) + 1
             ny = int((ymax - ymin) / side) + 1
-            while nx * ny > 4 * m + 16:
-                side *= 2.0
-                nx = int((xmax - xmin) / side) + 1
-                ny = int((ymax - ymin) / side) + 1
-            cx = np.empty(m, np.int64)
-            cy = np.empty(m, np.int64)
-            start = np.empty(nx * ny + 1, np.int64)
-            start[:] = 0
-            for a in range(m):
-                cx[a] = int((positions[o + a, 0] - xmin) / side)
-                cy[a] = int((positions[o + a, 1] - ymin) / side)
-                start[cx[a] * ny + cy[a] + 1] += 1
-            for c in range(nx * ny):
-                start[c + 1] += start[c]
-            fill = start[:-1].copy()
-            members = np.empty(m, np.int64)
-            for a in range(m):  # counting sort: each cell lists its robots in increasing index
-                c = cx[a] * ny + cy[a]
-                members[fill[c]] = a
-                fill[c] += 1
-            for a in range(m):
-                xi, yi = positions[o + a, 0], positions[o + a, 1]
-                cnt = 0
-                for gx in range(max(cx[a] - 1, 0), min(cx[a] + 2, nx)):
-                    for gy in range(max(cy[a] - 1, 0), min(cy[a] + 2, ny)):
-                        c = gx * ny + gy
-                        for q in range(start[c + 1] - 1, start[c] - 1, -1):  # members > a, from the top
-                            b = members[q]
-                            if b <= a:
-                                break
-                            dx = positions[o + b, 0] - xi
-                            dy = positions[o + b, 1] - yi
-                            if dx * dx + dy * dy <= r2:
-                                buf[cnt] = b
-                                cnt += 1
-                if cnt == 0:
-                    continue
-                if cnt > 64:
-                    part = np.sort(buf[:cnt])
-                    for q in range(cnt):
-                        buf[q] = part[q]
-                else:  # insertion sort of the few partners
-                    for q in range(1, cnt):
-                        v = buf[q]
-                        w = q - 1
-                        while w >= 0 and buf[w] > v:
-                            buf[w + 1] = buf[w]
-                            w -= 1
-                        buf[w + 1] = v
-                if p + cnt > out.shape[0]:
-                    grown = np.empty((2 * out.shape[0] + cnt, 2), np.int64)
-                    for q in range(p):
-                        grown[q, 0], grown[q, 1] = out[q, 0], out[q, 1]
-                    out = grown
+        cx = np.empty(m, np.int64)
+        cy = np.empty(m, np.int64)
+        start = np.empty(nx * ny + 1, np.int64)
+        start[:] = 0
+        for a in range(m):
+            cx[a] = int((positions[o + a, 0] - xmin) / side)
+            cy[a] = int((positions[o + a, 1] - ymin) / side)
+            start[cx[a] * ny + cy[a] + 1] += 1
+        for c in range(nx * ny):
+            start[c + 1] += start[c]
+        fill = start[:-1].copy()
+        members = np.empty(m, np.int64)
+        for a in range(m):  # counting sort: each cell lists its robots in increasing index
+            c = cx[a] * ny + cy[a]
+            members[fill[c]] = a
+            fill[c] += 1
+        for a in range(m):
+            xi, yi = positions[o + a, 0], positions[o + a, 1]
+            cnt = 0
+            for gx in range(max(cx[a] - 1, 0), min(cx[a] + 2, nx)):
+                for gy in range(max(cy[a] - 1, 0), min(cy[a] + 2, ny)):
+                    c = gx * ny + gy
+                    for q in range(start[c + 1] - 1, start[c] - 1, -1):  # members > a, from the top
+                        b = members[q]
+                        if b <= a:
+                            break
+                        dx = positions[o + b, 0] - xi
+                        dy = positions[o + b, 1] - yi
+                        if dx * dx + dy * dy <= r2:
+                            buf[cnt] = b
+                            cnt += 1
+            if cnt == 0:
+                continue
+            if cnt > 64:
+                part = np.sort(buf[:cnt])
                 for q in range(cnt):
-                    out[p, 0] = o + a
-                    out[p, 1] = o + buf[q]
-                    p += 1
-        return out[:p].copy()
+                    buf[q] = part[q]
+            else:  # insertion sort of the few partners
+                for q in range(1, cnt):
+                    v = buf[q]
+                    w = q - 1
+                    while w >= 0 and buf[w] > v:
+                        buf[w + 1] = buf[w]
+                        w -= 1
+                    buf[w + 1] = v
+            if p + cnt > out.shape[0]:
+                grown = np.empty((2 * out.shape[0] + cnt, 2), np.int64)
+                for q in range(p):
+                    grown[q, 0], grown[q, 1] = out[q, 0], out[q, 1]
+                out = grown
+            for q in range(cnt):
+                out[p, 0] = o + a
+                out[p, 1] = o + buf[q]
+                p += 1
+    return out[:p].copy()
 
-    @njit(cache=True, nogil=True)
-    def _directed_links_kernel(pairs: np.ndarray, n_rows: int):  # pragma: no cover - compiled
-        """Row r's links in (rx, tx) order: first tx < r (pairs (tx, r), met in increasing tx), then tx > r
-        (pairs (r, tx), also increasing) -- a counting sort, no comparison sort."""
-        P = pairs.shape[0]
-        lower = np.empty(n_rows, np.int64)
-        lower[:] = 0
-        degree = np.empty(n_rows, np.int64)
-        degree[:] = 0
-        for p in range(P):
-            lower[pairs[p, 1]] += 1
-            degree[pairs[p, 0]] += 1
-            degree[pairs[p, 1]] += 1
-        low_at = np.empty(n_rows, np.int64)
-        high_at = np.empty(n_rows, np.int64)
-        start = 0
-        for r in range(n_rows):
-            low_at[r] = start
-            high_at[r] = start + lower[r]
-            start += degree[r]
-        rx = np.empty(2 * P, np.int64)
-        tx = np.empty(2 * P, np.int64)
-        link = np.empty(2 * P, np.int64)
-        for p in range(P):
-            i, j = pairs[p, 0], pairs[p, 1]
-            q = low_at[j]
-            rx[q], tx[q], link[q] = j, i, p
-            low_at[j] = q + 1
-            q = high_at[i]
-            rx[q], tx[q], link[q] = i, j, p
-            high_at[i] = q + 1
-        return rx, tx, link
+
+@njit(cache=True, nogil=True)
+def _directed_links_kernel(pairs: np.ndarray, n_rows: int):  # pragma: no cover - compiled
+    """Row r's links in (rx, tx) order: first tx < r (pairs (tx, r), met in increasing tx), then tx > r
+    (pairs (r, tx), also increasing) -- a counting sort, no comparison sort."""
+    P = pairs.shape[0]
+    lower = np.empty(n_rows, np.int64)
+    lower[:] = 0
+    degree = np.empty(n_rows, np.int64)
+    degree[:] = 0
+    for p in range(P):
+        lower[pairs[p, 1]] += 1
+        degree[pairs[p, 0]] += 1
+        degree[pairs[p, 1]] += 1
+    low_at = np.empty(n_rows, np.int64)
+    high_at = np.empty(n_rows, np.int64)
+    start = 0
+    for r in range(n_rows):
+        low_at[r] = start
+        high_at[r] = start + lower[r]
+        start += degree[r]
+    rx = np.empty(2 * P, np.int64)
+    tx = np.empty(2 * P, np.int64)
+    link = np.empty(2 * P, np.int64)
+    for p in range(P):
+        i, j = pairs[p, 0], pairs[p, 1]
+        q = low_at[j]
+        rx[q], tx[q], link[q] = j, i, p
+        low_at[j] = q + 1
+        q = high_at[i]
+        rx[q], tx[q], link[q] = i, j, p
+        high_at[i] = q + 1
+    return rx, tx, link
 
 
 def neighbour_pairs(positions: np.ndarray, max_range: float, copy: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
@@ -325,7 +309,7 @@ class IdealSensing:
         rx, tx, link = directed_links(pairs, self.n)
         # exact pose of tx seen by rx (as observation.relative_pose); the two directions of a pair have
         # opposite offsets, so one hypot per pair gives both distances bit for bit
-        dx, dy, heading_rx, heading = _link_geometry(positions, headings, rx, tx)
+        dx, dy, heading_rx, heading = _link_geometry_kernel(positions, headings, rx, tx)
         pair_link = np.flatnonzero(rx < tx)  # each pair's i -> j link (offset p_j - p_i)
         distance = np.hypot(dx[pair_link], dy[pair_link])[link]
         bearing = wrapped_difference(np.arctan2(dy, dx), heading_rx)
@@ -349,11 +333,8 @@ class IdealSensing:
         # scale-free coordinates [L]: true offsets over the mean neighbour distance, the k nearest per robot
         # (only the kept links are turned into coordinates)
         mean_distance = np.bincount(rx, distance, self.n) / np.maximum(np.bincount(rx, minlength=self.n), 1)
-        if len(rx) and _HAVE_NUMBA:
+        if len(rx):
             packed = _scale_free_kernel(order, distance, cos_sin, mean_distance)
-        elif len(rx):
-            scale = np.where(mean_distance > 0, mean_distance, 1.0)[rx[kept]]
-            packed = np.where(valid[..., None], distance[kept][..., None] * cos_sin / scale[..., None], 0.0)
         else:
             packed = np.zeros((self.n, self.k, 2))
         scale_free = ScaleFreeReadings(packed, valid, valid.any(axis=1), np.where(valid, tx[kept], -1) if len(rx) else np.full(order.shape, -1))

@@ -80,21 +80,21 @@ from swarm_envs.copies import CopyRandom, CopyStream
 from swarm_envs.ir.hardware import Hardware
 from swarm_envs.ir.layer import IRLinks, pair_gains, wrap_angle
 from swarm_envs.platforms import Platform, get_platform
-from swarm_envs.sensing.kernels import _PAIRWISE_INIT, HAVE_NUMBA, segment_sum, sum_last
-
-if HAVE_NUMBA:
-    from swarm_envs.sensing.kernels import (
-        FRAME_WORDS_MAX_GROUP,
-        adc_bits,
-        adc_pass,
-        firing_sums,
-        frame_words,
-        group_brightest,
-        merge_readings,
-        pick_ids,
-        priority_independent_set,
-        priority_independent_set_sorted,
-    )
+from swarm_envs.sensing.kernels import (
+    _PAIRWISE_INIT,
+    FRAME_WORDS_MAX_GROUP,
+    adc_bits,
+    adc_pass,
+    firing_sums,
+    frame_words,
+    group_brightest,
+    merge_readings,
+    pick_ids,
+    priority_independent_set,
+    priority_independent_set_sorted,
+    segment_sum,
+    sum_last,
+)
 
 __all__ = [
     "POWER_LADDER",
@@ -211,25 +211,14 @@ def decode_ids(
     if G == 0:
         return np.zeros(0, dtype=np.int64)
 
-    def read_bits(level: np.ndarray, rows: np.ndarray) -> np.ndarray:  # ADC + floor, as the matrix
-        counts = level * float(model.adc_scale)
-        if sigma > 0:
-            counts = counts + _noise(rng, sigma, counts.shape, None if row_copy is None else row_copy[rows])
-        counts = np.clip(np.round(counts), 0.0, float(model.adc_max))
-        return counts / float(model.adc_scale) >= float(model.no_reading_floor)
-
     # start bit (1 in every frame): which channels hear a frame at all
     if group_light is not None:
         start = np.asarray(group_light, dtype=float)
     else:
         start = segment_sum(light, starts) if G < L else light
-    if HAVE_NUMBA:  # the same ADC formula in one pass (kernels.adc_bits)
-        noise0 = _noise(rng, sigma, (G, n_d), row_copy) if sigma > 0 else np.zeros((0, n_d))
-        heard = adc_bits(
-            np.ascontiguousarray(start), noise0, float(model.adc_scale), float(model.adc_max), float(model.no_reading_floor)
-        )
-    else:
-        heard = read_bits(start[:, :, None], np.arange(G))[:, :, 0]  # (G, n_d)
+    # ADC + floor, as the matrix, in one pass (kernels.adc_bits)
+    noise0 = _noise(rng, sigma, (G, n_d), row_copy) if sigma > 0 else np.zeros((0, n_d))
+    heard = adc_bits(np.ascontiguousarray(start), noise0, float(model.adc_scale), float(model.adc_max), float(model.no_reading_floor))
     # the rest of the frame, only on channels that heard a start bit (draws: per copy, after the start bits)
     hg, hi = np.nonzero(heard)
     H = hg.size
@@ -238,35 +227,14 @@ def decode_ids(
         noise = _noise(rng, sigma, (H, n_bits), None if row_copy is None else row_copy[hg])
     else:
         noise = np.zeros((H, n_bits))
-    compiled = HAVE_NUMBA and int(np.diff(np.r_[starts, L]).max()) <= FRAME_WORDS_MAX_GROUP
+    compiled = int(np.diff(np.r_[starts, L]).max()) <= FRAME_WORDS_MAX_GROUP  # larger groups: numpy's recursive sums
     words = frame_words if compiled else frame_words_numpy
     ident_h, crc_h = words(
         light, np.asarray(frames, dtype=bool), np.asarray(starts, dtype=np.int64), heard, noise,
         float(model.adc_scale), float(model.adc_max), float(model.no_reading_floor), ID_BITS,
     )
-    if HAVE_NUMBA:
-        return pick_ids(heard, ident_h, crc_h, _CRC16, bool(id_check), NOT_HEARD, CONFLICT)
-    return pick_ids_numpy(heard, ident_h, crc_h, id_check)
-
-
-def pick_ids_numpy(heard: np.ndarray, ident_h: np.ndarray, crc_h: np.ndarray, id_check: bool = True) -> np.ndarray:
-    """The decode rule of :func:`decode_ids` (reference of the compiled
-    :func:`swarm_envs.sensing.kernels.pick_ids`): ``heard`` (G, n_d) bool, ``ident_h``/``crc_h`` (H,) the id
-    and CRC words of the heard channels in ``np.nonzero(heard)`` order. Returns (G,) the id all checking
-    channels name, :data:`NOT_HEARD` or :data:`CONFLICT`."""
-    G, n_d = heard.shape
-    hg, hi = np.nonzero(heard)
-    ident = np.zeros((G, n_d), dtype=np.int64)
-    crc = np.zeros((G, n_d), dtype=np.int64)
-    ident[hg, hi] = ident_h
-    crc[hg, hi] = crc_h
-    ok = heard
-    if id_check:
-        ok = ok & (_CRC16[ident] == crc)
-    big = np.int64(2**ID_BITS)
-    lo = np.where(ok, ident, big).min(axis=1)
-    top = np.where(ok, ident, -1).max(axis=1)
-    return np.where(lo == big, NOT_HEARD, np.where(lo == top, lo, CONFLICT))
+    # the decode rule (numpy reference: swarm_envs.reference.pick_ids)
+    return pick_ids(heard, ident_h, crc_h, _CRC16, bool(id_check), NOT_HEARD, CONFLICT)
 
 
 def frame_words_numpy(
@@ -274,7 +242,7 @@ def frame_words_numpy(
     scale: float, top: float, floor: float, id_bits: int = ID_BITS,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Id and CRC words read on the heard channels (reference of the compiled
-    :func:`swarm_envs.sensing.kernels.frame_words`).
+    :func:`swarm_envs.sensing.kernels.frame_words`, and the path of groups larger than it takes).
 
     Channel h (``np.nonzero(heard)`` order: group g, detector i) reads bit k of the frame at level
     ``sum_links frames[l, 1 + k] * light[l, i]`` over its group's links (summed as ``np.add.reduceat``),
@@ -374,16 +342,10 @@ def measure(
             break
         shape = (todo.size, *lam.shape[1:])
         noise = _noise(rng, sigma, shape, None if row_copy is None else row_copy[todo]) if sigma > 0 else None
-        if HAVE_NUMBA and lam.size:  # the same formula in one pass (kernels.adc_pass)
-            empty = np.zeros((0, flat.shape[1]))
-            counts, sat = adc_pass(flat, todo, empty if noise is None else noise.reshape(todo.size, -1), float(p), scale, top)
-            counts = counts.reshape(shape)
-        else:
-            counts = p * lam[todo] * scale
-            if noise is not None:
-                counts = counts + noise
-            counts = np.clip(np.round(counts), 0.0, top)
-            sat = counts.reshape(todo.size, -1).max(axis=1) >= top
+        # clip(round(p * lam * scale + noise), 0, top) and the saturation flags in one pass (kernels.adc_pass)
+        empty = np.zeros((0, flat.shape[1]))
+        counts, sat = adc_pass(flat, todo, empty if noise is None else noise.reshape(todo.size, -1), float(p), scale, top)
+        counts = counts.reshape(shape)
         done = ~sat if k < len(ladder) - 1 else np.ones(todo.size, dtype=bool)
         out[todo[done]] = counts[done] / scale
         power[todo[done]] = p
@@ -720,11 +682,9 @@ class RangeBearingSensor:
             self.countdown = self.countdown - self.dt + np.where(fire, self.period + self.jitter * late, 0.0)
             return fire
         prio = self.prio_rng.draw(self.copy_of)
-        if HAVE_NUMBA:
-            rx, tx = np.asarray(links.rx, np.int64), np.asarray(links.tx, np.int64)
-            fired, ok = priority_independent_set_sorted(prio, rx, tx)  # links sorted by receiver: no adjacency list
-            return fired if ok else priority_independent_set(prio, rx, tx)
-        return independent_set_numpy(prio, links.rx, links.tx)
+        rx, tx = np.asarray(links.rx, np.int64), np.asarray(links.tx, np.int64)
+        fired, ok = priority_independent_set_sorted(prio, rx, tx)  # links sorted by receiver: no adjacency list
+        return fired if ok else priority_independent_set(prio, rx, tx)
 
     # -- one control step ------------------------------------------------------------------------------
     def step(
@@ -758,7 +718,7 @@ class RangeBearingSensor:
         tx_sel = links.tx[sel]
         gains = links.gains[sel] if gain_rows is None else gain_rows(sel)  # the firing links' matrices
         n_d = gains.shape[1]
-        fused = HAVE_NUMBA and sel.size > 0 and gains.dtype == np.float64 and int(n_over.max()) <= FRAME_WORDS_MAX_GROUP
+        fused = sel.size > 0 and gains.dtype == np.float64 and int(n_over.max()) <= FRAME_WORDS_MAX_GROUP
         if fused:  # the sums and the brightest link of every group in one pass (kernels.firing_sums)
             lam, light, group_light, best = firing_sums(gains.reshape(sel.size, -1), starts.astype(np.int64), n_d, _PAIRWISE_INIT)
             lam = lam.reshape(starts.size, *gains.shape[1:])
@@ -769,10 +729,8 @@ class RangeBearingSensor:
             # ground truth: the firing TX with the brightest entry of each group
             if starts.size == sel.size:
                 true = tx_sel
-            elif HAVE_NUMBA:
-                true = group_brightest(gains.reshape(sel.size, -1), starts.astype(np.int64), tx_sel)
             else:
-                true = _group_argmax(gains.reshape(sel.size, -1).max(axis=1), starts, tx_sel)
+                true = group_brightest(gains.reshape(sel.size, -1), starts.astype(np.int64), tx_sel)
 
         if self.collisions and sel.size:
             local = np.asarray(tx_sel, dtype=np.int64) % self.copy_size
@@ -813,9 +771,9 @@ class RangeBearingSensor:
             np.stack([self._age, self._true, self._overlap]).astype(np.int64), self.max_age, new_key,
             np.stack([R, th, ph]).astype(float).reshape(3, -1), np.stack([np.zeros_like(new_over), new_true, new_over]),
         )
-        if HAVE_NUMBA and (new_key.size < 2 or bool(np.all(new_key[1:] >= new_key[:-1]))):
+        if new_key.size < 2 or bool(np.all(new_key[1:] >= new_key[:-1])):
             key, fl, it = merge_readings(*args)  # one merge of the two sorted tables
-        else:
+        else:  # new keys out of order (decoded ids): a stable sort
             key, fl, it = merge_readings_numpy(*args)
         self._key, (self._range, self._bearing, self._heading) = key, fl
         self._age, self._true, self._overlap = it
@@ -846,39 +804,6 @@ def merge_readings_numpy(
     fl = np.concatenate([old_f[:, keep], new_f], axis=1)[:, order]
     it = np.concatenate([np.stack([age[keep], old_i[1, keep], old_i[2, keep]]), np.stack([np.zeros_like(new_i[0]), new_i[1], new_i[2]])], axis=1)
     return key[order], fl, it[:, order]
-
-
-def independent_set_numpy(prio: np.ndarray, u: np.ndarray, v: np.ndarray) -> np.ndarray:
-    """(N,) bool greedy maximal independent set in decreasing priority (distinct ``prio``) of the graph with
-    edges (u[e], v[e]), by vectorised Luby rounds: an undecided node joins when its priority beats every
-    undecided neighbour's; the neighbours of the joined nodes drop out. Reference of the compiled
-    :func:`swarm_envs.sensing.kernels.priority_independent_set`."""
-    N = prio.size
-    a = np.concatenate([u, v])
-    b = np.concatenate([v, u])
-    fired = np.zeros(N, dtype=bool)
-    undecided = np.ones(N, dtype=bool)
-    while undecided.any():
-        m = undecided[a] & undecided[b]
-        nbmax = np.full(N, -1.0)
-        np.maximum.at(nbmax, a[m], prio[b[m]])
-        new = undecided & (prio > nbmax)
-        fired |= new
-        undecided &= ~new
-        blocked = np.zeros(N, dtype=bool)
-        blocked[a[new[b]]] = True
-        undecided &= ~blocked
-    return fired
-
-
-def _group_argmax(values: np.ndarray, starts: np.ndarray, labels: np.ndarray) -> np.ndarray:
-    """Per contiguous group (``starts``, sorted, non-empty groups), the label of the row with the largest
-    value (first on ties); ``values`` without NaN."""
-    n = values.size
-    group = np.repeat(np.arange(starts.size), np.diff(np.r_[starts, n]))
-    top = np.maximum.reduceat(values, starts)
-    best = np.flatnonzero(values == top[group])  # every group holds >= 1 of its maxima
-    return labels[best[np.searchsorted(best, starts)]]
 
 
 def _member(a: np.ndarray, b: np.ndarray) -> np.ndarray:

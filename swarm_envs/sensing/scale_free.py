@@ -69,15 +69,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from swarm_envs.sensing.exchange import BearingExchange, NeighbourKnowledge
-from swarm_envs.sensing.kernels import HAVE_NUMBA
-
-if HAVE_NUMBA:
-    from swarm_envs.sensing.kernels import _PAIRWISE_INIT, slot_keys, two_hop_propagate, two_hop_triangles, unit_mean_positions
+from swarm_envs.sensing.kernels import _PAIRWISE_INIT, slot_keys, two_hop_propagate, two_hop_triangles, unit_mean_positions
 
 __all__ = [
     "coordinates",
     "coordinates_all",
-    "coordinates_all_numpy",
     "ScaleFreeSensor",
     "NeighbourKnowledge",
     "ScaleFreeResult",
@@ -147,36 +143,37 @@ def coordinates_all(
     knowledge: NeighbourKnowledge,
     noise_sensitivity: bool = True,
     angle_balance: bool = True,
-    compiled: bool | None = None,
 ) -> ScaleFreeResult:
-    """2-hop scale-free coordinates for every robot at once [L Algs. 1-4].
+    """2-hop scale-free coordinates for every robot at once [L Algs. 1-4] (module docstring).
 
-    With numba (``compiled=None`` or ``True``) the slot sort, id matching, components and BFS / Prim run
-    robot by robot in :mod:`swarm_envs.sensing.kernels`, while every floating-point formula (inner angles,
-    ANGLEBALANCE, law of sines, sensitivities, normalisation) stays the numpy code below; the result equals
-    :func:`coordinates_all_numpy` (the reference, ``compiled=False``) bit for bit. Arguments and result as
-    there.
+    The slot sort, id matching, components and BFS / Prim run robot by robot in
+    :mod:`swarm_envs.sensing.kernels`, every floating-point formula (inner angles rounded to
+    1e-``ANGLE_DECIMALS`` rad, ANGLEBALANCE, law of sines, sensitivities, normalisation) in numpy here; the
+    result equals the vectorised numpy reference :func:`swarm_envs.reference.coordinates_all` bit for bit.
+
+    Args:
+        knowledge: see :class:`NeighbourKnowledge`.
+        noise_sensitivity: propagate along the minimum spanning tree of triangle sensitivities [L Alg. 4]
+            instead of the plain BFS tree [L Alg. 1].
+        angle_balance: apply ANGLEBALANCE [L Alg. 2] before the law of sines.
+
+    Returns:
+        :class:`ScaleFreeResult`.
     """
-    if compiled is None:
-        compiled = HAVE_NUMBA
-    elif compiled and not HAVE_NUMBA:
-        raise ImportError("coordinates_all(compiled=True) needs numba (pip install numba)")
     ids_in = np.asarray(knowledge.ids, dtype=np.int64)
     n, k = ids_in.shape
-    if not compiled or n == 0 or k < 2:
-        return coordinates_all_numpy(knowledge, noise_sensitivity=noise_sensitivity, angle_balance=angle_balance)
     th_in = np.asarray(knowledge.bearings, dtype=float)
     rid_in = np.asarray(knowledge.row_ids, dtype=np.int64)
     rth_in = np.asarray(knowledge.row_bearings, dtype=float)
     self_ids = (
         np.arange(n, dtype=np.int64) if knowledge.robot_ids is None else np.asarray(knowledge.robot_ids, np.int64)
     )
-    # slot validity and sort keys (bearing in [0, 2pi), then id; see coordinates_all_numpy), one pass
+    # slot validity and sort keys (bearing in [0, 2pi), then id), one pass
     slot_ok_in, key_b, key_id, cap = slot_keys(ids_in, th_in, 2.0 * np.pi, np.iinfo(np.int64).max)
     order, inv, ok, th, starts, tu, ti, tj, vals = two_hop_triangles(
         key_b, key_id, ids_in, th_in, slot_ok_in, rid_in, rth_in, self_ids, int(cap)
     )
-    # the reference's float formulas on the same triangle list (see coordinates_all_numpy)
+    # the float formulas on the triangle list
     Pij, Pji, good = _triangle_angles(vals[:, 0], vals[:, 1], vals[:, 2], vals[:, 3], vals[:, 4], vals[:, 5], angle_balance)
     tu, ti, tj, Pij, Pji = tu[good], ti[good], tj[good], Pij[good], Pji[good]
     starts = np.searchsorted(tu, np.arange(n + 1))
@@ -195,171 +192,6 @@ def coordinates_all(
     f = np.take_along_axis(f, inv, 1)
     xy = np.stack([f * np.cos(th_in), f * np.sin(th_in)], -1)
     return ScaleFreeResult(xy=xy, valid=np.take_along_axis(valid, inv, 1), rigid=rigid, ids=ids_in.copy(), length=f)
-
-
-def coordinates_all_numpy(
-    knowledge: NeighbourKnowledge,
-    noise_sensitivity: bool = True,
-    angle_balance: bool = True,
-) -> ScaleFreeResult:
-    """2-hop scale-free coordinates for every robot at once [L Algs. 1-4] (numpy reference).
-
-    Vectorised numpy over robots, no Python loop over robots: reported ids are matched to slots with one
-    sorted search (O(N K K2 log NK)); triangle angles are computed only on usable triangles; connectivity
-    is log2(K) batched (K x K) float32 matrix products; the BFS queue order [L Alg. 1] runs as at most K
-    lock-step iterations of (N, K, K) operations and Prim's MST [L Alg. 4] as K - 1 iterations of (N, K)
-    operations. Measured: ~13 ms for N = 1000, K = 16 (benchmarks/bench_scale_free.py).
-
-    Args:
-        knowledge: see :class:`NeighbourKnowledge`.
-        noise_sensitivity: propagate along the minimum spanning tree of triangle sensitivities [L Alg. 4]
-            instead of the plain BFS tree [L Alg. 1].
-        angle_balance: apply ANGLEBALANCE [L Alg. 2] before the law of sines.
-
-    Returns:
-        :class:`ScaleFreeResult`.
-    """
-    ids_in = np.asarray(knowledge.ids, dtype=np.int64)
-    th_in = np.asarray(knowledge.bearings, dtype=float)
-    rid_in = np.asarray(knowledge.row_ids, dtype=np.int64)
-    rth_in = np.asarray(knowledge.row_bearings, dtype=float)
-    n, k = ids_in.shape
-    self_ids = (
-        np.arange(n, dtype=np.int64) if knowledge.robot_ids is None else np.asarray(knowledge.robot_ids, np.int64)
-    )
-    slot_ok_in = (ids_in >= 0) & np.isfinite(th_in)
-
-    # Order slots counter-clockwise by bearing in [0, 2pi) then id; empty slots last [L Fig. 4.3].
-    key_b = np.where(slot_ok_in, np.mod(th_in, 2.0 * np.pi), np.inf)
-    key_id = np.where(slot_ok_in, ids_in, np.iinfo(np.int64).max)
-    order = np.lexsort((key_id, key_b), axis=-1) if n else np.zeros((0, k), np.int64)
-    rows = np.arange(n)[:, None]
-    ids = ids_in[rows, order]
-    th = th_in[rows, order]
-    ok = slot_ok_in[rows, order]
-    rid = rid_in[rows, order]
-    rth = rth_in[rows, order]
-    rok = (rid >= 0) & np.isfinite(rth)
-
-    # theta_z(u) for each neighbour slot z, and theta_z(w) for each pair of slots (z, w).
-    m_zu = rok & (rid == self_ids[:, None, None])  # (N, K, K2)
-    has_zu = m_zu.any(-1) & ok
-    tzu = np.where(has_zu, rth[rows, np.arange(k)[None, :], np.argmax(m_zu, -1)], 0.0)
-    # Map every reported id to u's slot holding that id with one sorted search over (u, id) keys
-    # (O(N K K2 log NK) instead of an (N, K, K, K2) comparison).
-    space = int(max(ids.max(initial=0), rid.max(initial=0), self_ids.max(initial=0))) + 1
-    own_key = np.where(ok, rows * space + ids, -1).reshape(-1)
-    o_sort = np.argsort(own_key, kind="stable")
-    sorted_key = own_key[o_sort]
-    ru, ri, rm = np.nonzero(rok & ok[:, :, None])  # reported entries of received rows
-    q = ru * space + rid[ru, ri, rm]
-    if sorted_key.size:
-        pos = np.minimum(np.searchsorted(sorted_key, q), sorted_key.size - 1)
-        hit = sorted_key[pos] == q
-        slot_j = o_sort[pos[hit]] % k
-    else:
-        hit, slot_j = np.zeros(q.size, bool), np.zeros(0, np.int64)
-    has_zw = np.zeros((n, k, k), dtype=bool)
-    tzw = np.zeros((n, k, k))
-    hu, hi, hm = ru[hit], ri[hit], rm[hit]
-    # if a row lists the same id twice, the last entry wins (explicitly: numpy leaves the winner of a
-    # repeated fancy-index assignment unspecified; this is what its in-memory-order loop has always given)
-    flat = (hu * k + hi) * k + slot_j
-    last = flat.size - 1 - np.unique(flat[::-1], return_index=True)[1]
-    tzw[hu[last], hi[last], slot_j[last]] = rth[hu[last], hi[last], hm[last]]
-    has_zw[hu, hi, slot_j] = True
-    eye = np.eye(k, dtype=bool)[None]
-    tri = has_zw & np.swapaxes(has_zw, 1, 2) & has_zu[:, :, None] & has_zu[:, None, :] & ~eye
-    tri &= ok[:, :, None] & ok[:, None, :]
-
-    # Inner angles, computed only on the usable (u, i, j) triangles (sparse): Pij = angle at neighbour i
-    # in triangle (u, i, j), Pji = angle at j, pu = angle at u.
-    # Angles are rounded to 1e-ANGLE_DECIMALS rad: quantised (sector) bearings make many triangles exactly
-    # equal, and float noise (e.g. 67.5 deg from atan2 vs from a decoded 4-bit sector) must not decide
-    # ties in the MST; ties then fall to slot (bearing) order.
-    tu, ti, tj = np.nonzero(tri)
-    Pij, Pji, good = _triangle_angles(
-        tzu[tu, ti], tzw[tu, ti, tj], tzu[tu, tj], tzw[tu, tj, ti], th[tu, ti], th[tu, tj], angle_balance
-    )  # good is symmetric in (i, j) by construction
-    tu, ti, tj, Pij, Pji = tu[good], ti[good], tj[good], Pij[good], Pji[good]
-    E = np.zeros((n, k, k), dtype=bool)
-    E[tu, ti, tj] = True
-    logratio = np.zeros((n, k, k))  # log(f_j / f_i) along i -> j (law of sines)
-    logratio[tu, ti, tj] = np.log(np.sin(Pij)) - np.log(np.sin(Pji))
-
-    # Connected components of the neighbour graph by repeated squaring of the reachability matrix
-    # (float32 batched matmul: exact for 0/1 entries with K < 2**24).
-    R = ((E | eye) & ok[:, :, None] & ok[:, None, :]).astype(np.float32)
-    for _ in range(max(1, int(np.ceil(np.log2(max(k, 2)))))):
-        R = (np.matmul(R, R) > 0).astype(np.float32)
-    R = R > 0
-    comp_size = R.sum(-1)  # (N, K) size of the component of each slot (0 for empty)
-    big = comp_size.max(-1) if k else np.zeros(n, np.int64)
-    # root: first slot (in bearing order) whose component is largest
-    root = np.argmax(comp_size == big[:, None], axis=-1)
-    deg = ok.sum(-1)
-    rigid = (deg >= 1) & (big == deg)
-
-    known = np.zeros((n, k), dtype=bool)
-    has_root = deg > 0
-    known[np.arange(n), root] = has_root
-    logf = np.zeros((n, k))
-    if noise_sensitivity:
-        W = np.full((n, k, k), np.inf)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            W[tu, ti, tj] = triangle_sensitivity(Pij, Pji)
-        # Prim's algorithm in lock-step over robots, O(K) work per robot and iteration: best[u, j] is the
-        # cheapest edge from the tree to j, par[u, j] its tree end (ties: the lower slot).
-        ar = np.arange(n)
-        r0 = root
-        best = np.where(has_root[:, None], W[ar, r0], np.inf)
-        par = np.broadcast_to(r0[:, None], (n, k)).copy()
-        for _ in range(k - 1):
-            cand = np.where(known, np.inf, best)
-            j = np.argmin(cand, axis=-1)
-            go = np.isfinite(cand[ar, j])
-            if not go.any():
-                break
-            r, jj = ar[go], j[go]
-            logf[r, jj] = logf[r, par[r, jj]] + logratio[r, par[r, jj], jj]
-            known[r, jj] = True
-            w_new = W[r, jj]  # (R, K) edges from the new tree node
-            better = (w_new < best[r]) | ((w_new == best[r]) & (jj[:, None] < par[r]) & np.isfinite(w_new))
-            best[r] = np.where(better, w_new, best[r])
-            par[r] = np.where(better, jj[:, None], par[r])
-    else:
-        # BFS of [L Alg. 1] in lock-step: discovery rank `disc`; parent = adjacent node dequeued first.
-        big_i = np.iinfo(np.int64).max
-        disc = np.where(known, 0, big_i)
-        cnt = has_root.astype(np.int64)
-        for _ in range(k - 1):
-            adj = E & known[:, :, None] & ~known[:, None, :]  # parent i known, child j new
-            new = adj.any(1)
-            if not new.any():
-                break
-            pd = np.where(adj, disc[:, :, None], big_i)
-            parent = np.argmin(pd, axis=1)  # (N, K)
-            pdisc = np.take_along_axis(disc, parent, axis=1)
-            key = np.where(new, pdisc * k + np.arange(k)[None, :], big_i)
-            rank = np.argsort(np.argsort(key, axis=1, kind="stable"), axis=1, kind="stable")
-            disc = np.where(new, cnt[:, None] + rank, disc)
-            cnt = cnt + new.sum(1)
-            lr = logratio[rows, parent, np.arange(k)[None, :]]
-            logf = np.where(new, np.take_along_axis(logf, parent, axis=1) + lr, logf)
-            known |= new
-
-    f, valid = _unit_mean_lengths(logf, known & ok)
-    xy = np.stack([f * np.cos(th), f * np.sin(th)], -1)
-
-    # undo the slot permutation
-    inv = np.argsort(order, axis=-1) if n else order
-    return ScaleFreeResult(
-        xy=xy[rows, inv],
-        valid=valid[rows, inv],
-        rigid=rigid,
-        ids=ids_in.copy(),
-        length=f[rows, inv],
-    )
 
 
 def knowledge_from_matrix(bearings: np.ndarray, robots: np.ndarray | None = None) -> NeighbourKnowledge:
@@ -610,7 +442,7 @@ def _triangle_angles(
     """Inner angles of triangles (u, i, j) from the bearings ``theta_i(u), theta_i(j), theta_j(u), theta_j(i),
     theta_u(i), theta_u(j)`` (rad): ``Pij`` at i and ``Pji`` at j, rounded to 1e-ANGLE_DECIMALS rad and
     optionally angle-balanced [L Alg. 2], and ``good``: the non-degenerate ones (both away from 0 and pi).
-    Shared by the compiled path and the numpy reference (the same float formulas)."""
+    Shared by :func:`coordinates_all` and its numpy reference (:func:`swarm_envs.reference.coordinates_all`)."""
     Pij = np.round(np.abs(_wrap(i_u - i_j)), ANGLE_DECIMALS)
     Pji = np.round(np.abs(_wrap(j_u - j_i)), ANGLE_DECIMALS)
     pu = np.round(np.abs(_wrap(u_i - u_j)), ANGLE_DECIMALS)
