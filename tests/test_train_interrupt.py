@@ -295,18 +295,23 @@ def test_ctrl_c_is_honoured_at_the_next_evaluation_step(tmp_path, monkeypatch, c
 
         return evaluate
 
-    before = signal.getsignal(signal.SIGINT)
-    monkeypatch.setattr(train, "evaluate", ctrl_c_in(check=False))
-    out = tmp_path / "run"
-    assert train.main(_quick_args(out)) == 130
-    err = capsys.readouterr().err
-    assert err.count("\n") == 1 and err.startswith("interrupted by Ctrl-C during evaluation: saved the trained model to")
-    assert (out / "model.zip").is_file() and sorted(p.name for p in tmp_path.iterdir()) == ["run"]
-    assert signal.getsignal(signal.SIGINT) is before
+    # Python's own Ctrl-C handler, whatever an earlier test or library left installed (the command installs
+    # its handler over a handler, never where Ctrl-C is ignored)
+    before = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        monkeypatch.setattr(train, "evaluate", ctrl_c_in(check=False))
+        out = tmp_path / "run"
+        assert train.main(_quick_args(out)) == 130
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and err.startswith("interrupted by Ctrl-C during evaluation: saved the trained model to")
+        assert (out / "model.zip").is_file() and sorted(p.name for p in tmp_path.iterdir()) == ["run"]
+        assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
 
-    monkeypatch.setattr(train, "evaluate", ctrl_c_in(check=True))
-    assert train.main(_quick_args(tmp_path / "second")) == 130
-    err = capsys.readouterr().err
-    assert err == "interrupted by Ctrl-C while setting up training; nothing saved\n"
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["run"]
-    assert signal.getsignal(signal.SIGINT) is before
+        monkeypatch.setattr(train, "evaluate", ctrl_c_in(check=True))
+        assert train.main(_quick_args(tmp_path / "second")) == 130
+        err = capsys.readouterr().err
+        assert err == "interrupted by Ctrl-C while setting up training; nothing saved\n"
+        assert sorted(p.name for p in tmp_path.iterdir()) == ["run"]
+        assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+    finally:
+        signal.signal(signal.SIGINT, before)
