@@ -15,7 +15,7 @@ from pathlib import Path
 
 from swarm_envs.registry import list_envs, spec, task_class
 
-__all__ = ["SHORT_NAMES", "env_id", "metric_reductions", "headline", "scripted_policy", "import_modules"]
+__all__ = ["SHORT_NAMES", "env_id", "metric_reductions", "headline", "scripted_policy", "import_modules", "import_task"]
 
 #: the suite's short task names (accepted wherever a task is named)
 SHORT_NAMES = {
@@ -80,3 +80,11 @@ def import_modules(names: list[str]) -> None:
             importlib.import_module(module_name)
         except Exception as err:
             raise ImportError(f"cannot import {name!r}: {type(err).__name__}: {err}") from err
+
+
+def import_task(imports: list[str], task: str) -> None:
+    """Import ``imports`` (:func:`import_modules`, e.g. the module that registers a task of your own), then
+    check that ``task`` is a registered env id: ``ImportError`` or ``ValueError`` with one line otherwise."""
+    import_modules(imports)
+    if task not in list_envs():
+        raise ValueError(f"--task {task!r} is not a registered env id; registered: {list_envs()} (--import registers yours)")

@@ -55,7 +55,7 @@ from ray.rllib.env.wrappers.pettingzoo_env import ParallelPettingZooEnv
 from ray.tune.registry import register_env
 
 import swarm_envs
-from swarm_envs.agents.tasks import import_modules
+from swarm_envs.agents.tasks import import_modules, import_task
 from swarm_envs.torch_threads import set_torch_threads
 
 ENV_NAME = "swarm_envs_parallel"
@@ -130,11 +130,9 @@ def main(argv: list[str] | None = None) -> list[dict[str, float]]:
     parser.add_argument("--torch-threads", type=int, default=None, help="the driver's (learner's) torch threads; default: 1 on <= 2 cores, else min(4, cores // 2)")
     args = parser.parse_args(argv)
     try:
-        import_modules(args.imports)
-    except ImportError as err:
+        import_task(args.imports, args.task)
+    except (ImportError, ValueError) as err:
         parser.error(str(err))
-    if args.task not in swarm_envs.list_envs():
-        parser.error(f"--task {args.task!r} is not a registered env id; registered: {swarm_envs.list_envs()} (--import registers yours)")
     set_torch_threads(args.torch_threads)  # Ray's env runners get OMP_NUM_THREADS = their CPUs (1) from Ray
 
     register_env(ENV_NAME, env_creator)

@@ -47,7 +47,7 @@ from torchrl.modules import MLP, ProbabilisticActor, TanhNormal
 from torchrl.objectives import ClipPPOLoss, ValueEstimators
 
 import swarm_envs
-from swarm_envs.agents.tasks import import_modules
+from swarm_envs.agents.tasks import import_task
 from swarm_envs.env import FlatInfos
 from swarm_envs.torch_threads import set_torch_threads
 
@@ -140,11 +140,9 @@ def main(argv: list[str] | None = None) -> dict[str, float]:
     parser.add_argument("--torch-threads", type=int, default=None, help="default: 1 on <= 2 cores, else min(4, cores // 2)")
     args = parser.parse_args(argv)
     try:
-        import_modules(args.imports)
-    except ImportError as err:
+        import_task(args.imports, args.task)
+    except (ImportError, ValueError) as err:
         parser.error(str(err))
-    if args.task not in swarm_envs.list_envs():
-        parser.error(f"--task {args.task!r} is not a registered env id; registered: {swarm_envs.list_envs()} (--import registers yours)")
     set_torch_threads(args.torch_threads)
     torch.manual_seed(args.seed)
 
