@@ -34,16 +34,20 @@ from swarm_envs.agents.tasks import SHORT_NAMES, headline, import_modules, metri
 from swarm_envs.env import DT
 from swarm_envs.platforms import PLATFORMS
 from swarm_envs.registry import list_envs, task_class
+from swarm_envs.render import VIEWS
 from swarm_envs.settings import Int, cli_type
 
 #: short task name -> registered env id
 TASKS = dict(SHORT_NAMES)
 
 #: per task, the settings a demo uses unless the command line gives them: scenes in which the scripted
-#: baseline visibly does its task (docs/environments/<task>.md shows the GIFs they make)
+#: baseline visibly does its task (docs/environments/<task>.md and the README show the GIFs they make;
+#: ``"env"``: further env settings). Flocking runs on Droplets, whose top speed, 2 cm/s, is the forward speed
+#: of the thesis's flocking robots (20 mm/s [L Alg. 5]), in a 1 m arena (45 body diameters: room to move as
+#: a group between walls) for 90 s, time to align.
 SHOWCASE: dict[str, dict[str, Any]] = {
-    "aggregation": {"platform": "epuck", "n_robots": 10, "steps": 300, "seed": 0, "overlay": 0},
-    "flocking": {"platform": "droplet", "n_robots": 16, "steps": 300, "seed": 0, "overlay": None},
+    "aggregation": {"platform": "epuck", "n_robots": 10, "steps": 300, "seed": 0, "overlay": 0, "frame_skip": 5},
+    "flocking": {"platform": "droplet", "n_robots": 16, "steps": 900, "seed": 0, "overlay": None, "frame_skip": 9, "env": {"arena_size": 1.0}},
     "centroid_seeking": {"platform": "rone", "n_robots": 1, "steps": 300, "seed": 0, "overlay": 0},
     "sorted_following": {"platform": "rone", "n_robots": None, "steps": 600, "seed": 0, "overlay": None},
     "parity_clustering": {"platform": "rone", "n_robots": None, "steps": 600, "seed": 0, "overlay": None, "frame_skip": 6},
@@ -204,12 +208,14 @@ def run_demo(
     frame_skip: int = 1,
     pixels: int = 480,
     overlay_agent: int | None = None,
+    view: str = "swarm",
 ) -> DemoResult:
     """One episode of ``policy`` on ``task`` from ``reset(seed=seed)``, drawn every ``frame_skip`` steps.
 
     The episode is driven as :func:`swarm_envs.agents.evaluation.run_episode` drives it (the policy sees the
     agents' named batched observations; its generator is derived from ``seed`` the same way), so the
-    reduced metrics are the same numbers. Frames: the reset, every ``frame_skip``-th step and the last step.
+    reduced metrics are the same numbers. Frames: the reset, every ``frame_skip``-th step and the last step,
+    in the renderer's ``view`` (:data:`swarm_envs.render.VIEWS`; ``"swarm"`` follows the robots).
     """
     from swarm_envs.render import Renderer, render_env
 
@@ -217,7 +223,9 @@ def run_demo(
     if overlay_agent is not None and not 0 <= overlay_agent < env.n_agents:
         env.close()
         raise ValueError(f"overlay_agent must be in [0, {env.n_agents}), got {overlay_agent}")
-    renderer = Renderer(env.arena, env.platform, pixels=pixels, fps=env.metadata["render_fps"], obstacles=env.task.obstacle_segments)
+    renderer = Renderer(
+        env.arena, env.platform, pixels=pixels, fps=env.metadata["render_fps"], obstacles=env.task.obstacle_segments, view=view
+    )
     title = (
         f"{resolve_task(task)[1].split('/')[-1]} | {env.platform.name} x {env.n_agents}, {env.config['sensing']} sensing"
         f"\n{getattr(policy, 'name', 'policy')}"
@@ -344,6 +352,8 @@ def _parser() -> argparse.ArgumentParser:
     parser.add_argument("--frame-skip", type=cli_type(Int(1, low=1, high=1_000_000), "--frame-skip"), default=None,
                         help="draw every k-th step; the GIF shows 10 frames/s, so k x real time (default 1; --all: 4)")
     # at most 4096 pixels: one frame is pixels^2 x 3 bytes (48 MB at 4096), and the GIF keeps every frame
+    parser.add_argument("--view", choices=list(VIEWS), default="swarm",
+                        help="swarm: a square that follows the robots (default); arena: the whole arena in every frame")
     parser.add_argument("--pixels", type=cli_type(Int(480, low=160, high=4096), "--pixels"), default=None,
                         help="image size, 160-4096 (default 480; --all: 320)")
     return parser
@@ -435,6 +445,7 @@ def main(argv: list[str] | None = None) -> int:
             "sensing": args.sensing,
             "n_robots": args.n_robots or preset["n_robots"],
             "max_cycles": args.steps or preset["steps"],
+            **preset.get("env", {}),
             **dict(args.env),
         }
         env_kwargs = {k: v for k, v in env_kwargs.items() if v is not None}  # None: the task's own default
@@ -451,7 +462,7 @@ def main(argv: list[str] | None = None) -> int:
             parser.error(str(err))
         finally:
             probe.close()
-        result = run_demo(task, env_kwargs, policy, seed, frame_skip, pixels, overlay)
+        result = run_demo(task, env_kwargs, policy, seed, frame_skip, pixels, overlay, args.view)
         try:
             size = write_gif(result.frames, out, 1000.0 * DT)  # one frame per 0.1 s: frame_skip x real time
         except OSError as err:  # e.g. the disk filled up, or the folder went away during the episode
@@ -465,6 +476,7 @@ def _report(result: DemoResult, out: Path, size: int, frame_skip: int, env_kwarg
     how = _reductions(result.task, result.metrics)[name]
     every = f", every {frame_skip} steps" if frame_skip > 1 else ""
     print(f"wrote {out}: {len(result.frames)} frames ({result.steps} steps{every}), {size / 1000:.0f} kB")
+    print("  settings: " + ", ".join(f"{k}={v}" for k, v in env_kwargs.items()))
     text = f"{name} ({'mean over the episode' if how == 'mean' else 'at the end'}, {'higher' if sign > 0 else 'lower'} is better), seed {seed}: "
     text += f"{result.policy} {result.metrics[name]:.3f}"
     if result.policy != "random":

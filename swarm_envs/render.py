@@ -29,6 +29,9 @@ __all__ = [
     "Renderer",
     "NeighbourOverlay",
     "PALETTE",
+    "COLOURS",
+    "VIEWS",
+    "legend_text",
     "fresh_links",
     "message_links",
     "neighbour_overlay",
@@ -36,25 +39,55 @@ __all__ = [
     "render_env",
 ]
 
-_BACKGROUND = (245, 245, 240)
-_WALL = (60, 60, 60)
-_ROBOT = (40, 110, 200)
-_ROBOT_B = (20, 140, 140)  # robots of a task's second group (Task.robot_groups)
-_STATIC = (225, 120, 20)
-_HEADING = (255, 255, 255)
-_LINK = (110, 190, 110)
-_MESSAGE = (150, 70, 190)
-_MARKER = (220, 40, 40)
-_TEXT = (30, 30, 30)
-_ESTIMATE = (235, 0, 140)
-_ERROR = (120, 120, 120)
-_FOCUS = (20, 20, 20)
+#: what the renderer draws -> (the colour's name, RGB): the one table the frames, the legend drawn in a frame
+#: and :func:`legend_text` (quoted by the README and the environment pages) take their colours from
+COLOURS: dict[str, tuple[str, tuple[int, int, int]]] = {
+    "background": ("off-white", (245, 245, 240)),
+    "wall": ("dark grey", (60, 60, 60)),
+    "robot": ("blue", (40, 110, 200)),
+    "robot_b": ("teal", (20, 140, 140)),  # robots of a task's second group (Task.robot_groups)
+    "static": ("orange", (225, 120, 20)),
+    "heading": ("white", (255, 255, 255)),
+    "link": ("green", (30, 160, 60)),
+    "message": ("purple", (150, 70, 190)),
+    "marker": ("red", (220, 40, 40)),
+    "text": ("black", (30, 30, 30)),
+    "estimate": ("magenta", (235, 0, 140)),
+    "error": ("grey", (120, 120, 120)),
+    "focus": ("black", (20, 20, 20)),
+}
+
+_BACKGROUND = COLOURS["background"][1]
+_WALL = COLOURS["wall"][1]
+_ROBOT = COLOURS["robot"][1]
+_ROBOT_B = COLOURS["robot_b"][1]
+_STATIC = COLOURS["static"][1]
+_HEADING = COLOURS["heading"][1]
+_LINK = COLOURS["link"][1]
+_MESSAGE = COLOURS["message"][1]
+_MARKER = COLOURS["marker"][1]
+_TEXT = COLOURS["text"][1]
+_ESTIMATE = COLOURS["estimate"][1]
+_ERROR = COLOURS["error"][1]
+_FOCUS = COLOURS["focus"][1]
 
 #: every colour the renderer draws (shapes and text are not antialiased), so a GIF with this palette shows the
 #: frames exactly (:func:`swarm_envs.demo.write_gif`)
-PALETTE: tuple[tuple[int, int, int], ...] = (
-    _BACKGROUND, _WALL, _ROBOT, _ROBOT_B, _STATIC, _HEADING, _LINK, _MESSAGE, _MARKER, _TEXT, _ESTIMATE, _ERROR, _FOCUS,
-)
+PALETTE: tuple[tuple[int, int, int], ...] = tuple(dict.fromkeys(rgb for _, rgb in COLOURS.values()))
+
+#: what a frame shows: ``"arena"`` the whole arena (``env.render()``), ``"swarm"`` a square around the robots
+#: and the task's markers that follows them smoothly (the documentation GIFs)
+VIEWS = ("arena", "swarm")
+
+
+def legend_text() -> str:
+    """The frames' colour key in words, with the colour names of :data:`COLOURS` (the README quotes it)."""
+    c = {key: name for key, (name, _) in COLOURS.items()}
+    return (
+        f"{c['robot']} robots with a {c['heading']} heading mark ({c['robot_b']}: a task's second group, {c['static']}: "
+        f"static robots), {c['link']} lines: IR readings decoded this step, {c['message']} lines: messages, "
+        f"{c['marker']} crosses: task markers"
+    )
 
 
 @dataclass
@@ -137,11 +170,39 @@ def overlay_of(env: Any, agent: int = 0) -> NeighbourOverlay:
 
 
 class Renderer:
-    """Draws one frame per call; ``pixels`` is the square image size."""
+    """Draws one frame per call; ``pixels`` is the square image size.
+
+    ``view="arena"`` (default) shows the whole arena in every frame; ``view="swarm"`` shows a square around
+    the robots and the task's markers with a margin of ``3 x`` the robot radius (at least ``16`` radii wide),
+    inside the arena where it fits. It grows at once when a robot would leave it; it holds still while the
+    robots fill enough of it and otherwise moves towards their square by the fraction ``follow`` per frame,
+    so it neither jitters nor cuts a robot off. Arena and obstacle walls are drawn where they are in view.
+    """
+
+    #: swarm view: margin around the robots, in robot radii (a robot and its heading mark stay whole)
+    MARGIN_RADII = 3.0
+    #: swarm view: the smallest view side, in robot radii (one robot alone is not blown up to the frame)
+    MIN_VIEW_RADII = 16.0
+    #: swarm view: it holds still until the robots' square is smaller than this fraction of it (or leaves it)
+    HOLD = 0.6
+    #: swarm view: the square it moves to is this much larger than the robots' (room for small moves)
+    SLACK = 1.15
 
     def __init__(
-        self, arena: Arena, platform: Platform, human: bool = False, pixels: int = 480, fps: int = 10, obstacles: np.ndarray | None = None
+        self,
+        arena: Arena,
+        platform: Platform,
+        human: bool = False,
+        pixels: int = 480,
+        fps: int = 10,
+        obstacles: np.ndarray | None = None,
+        view: str = "arena",
+        follow: float = 0.15,
     ) -> None:
+        if view not in VIEWS:
+            raise ValueError(f"view must be one of {list(VIEWS)}, got {view!r}")
+        if not 0.0 < follow <= 1.0:
+            raise ValueError(f"follow must be in (0, 1], got {follow!r}")
         self.obstacles = np.zeros((0, 2, 2)) if obstacles is None else np.asarray(obstacles, dtype=float).reshape(-1, 2, 2)
         if not human:
             os.environ.setdefault("SDL_VIDEODRIVER", "dummy")
@@ -150,10 +211,14 @@ class Renderer:
 
         self.pygame = pygame
         self.arena, self.platform, self.human, self.pixels, self.fps = arena, platform, human, int(pixels), fps
+        self.view, self.follow = view, float(follow)
         self.surface = pygame.Surface((self.pixels, self.pixels))
         self.font_size = max(14, self.pixels // 30)
         self._font = None
         self._text_cache: dict[str, Any] = {}
+        self.view_centre, self.view_half = np.zeros(2), self.arena.half  # m: the square of the world shown
+        self._followed: int | None = None  # swarm view: the number of points it follows (None: start anew)
+        self._moving = False  # swarm view: moving towards the robots' square
         self._layout(0, 0)
         self.window = None
         self.clock = None
@@ -166,14 +231,60 @@ class Renderer:
 
     # -- geometry ------------------------------------------------------------------------------------
     def _layout(self, top: int, bottom: int) -> None:
-        """Fit the arena between a caption band of ``top`` and a legend band of ``bottom`` pixels."""
+        """Fit the view between a caption band of ``top`` and a legend band of ``bottom`` pixels."""
         self.top, self.bottom = top, bottom
         height = self.pixels - top - bottom
-        self.scale = (min(self.pixels, height) - 20) / self.arena.size  # pixels per metre
+        self.side = min(self.pixels, height) - 20  # pixels of the shown square
         self.centre = np.array([self.pixels / 2, top + height / 2])
+        self.scale = self.side / (2.0 * self.view_half)  # pixels per metre
+
+    def reset_view(self) -> None:
+        """Start the swarm view anew at the next frame (a new episode): it jumps to the robots."""
+        self._followed = None
+
+    def _swarm_square(self, points: np.ndarray) -> tuple[np.ndarray, float]:
+        """(centre (2,) m, half side m) of the square around ``points`` (k, 2) with the margin and slack."""
+        r = self.platform.radius
+        lo, hi = points.min(axis=0), points.max(axis=0)
+        half = max(self.SLACK * (0.5 * float((hi - lo).max()) + self.MARGIN_RADII * r), 0.5 * self.MIN_VIEW_RADII * r)
+        return 0.5 * (lo + hi), half
+
+    def _inside_arena(self, centre: np.ndarray, half: float) -> tuple[np.ndarray, float]:
+        """The square moved inside the arena (plus a wall's margin) where it fits, else the whole arena."""
+        edge = self.arena.half + 0.5 * self.platform.radius
+        if half >= edge:
+            return np.zeros(2), edge
+        return np.clip(centre, -edge + half, edge - half), half
+
+    def _update_view(self, points: np.ndarray) -> None:
+        """Move the swarm view towards the square around ``points`` (k, 2) m; every point stays inside.
+
+        The view holds still while it holds every point and is at most ``1 / HOLD`` times the square's
+        size; otherwise it moves (``follow`` of the way per frame) until it is within 2 % of the square."""
+        points = points[np.all(np.isfinite(points), axis=1)]
+        if self.view != "swarm" or not len(points):
+            self.view_centre, self.view_half = np.zeros(2), self.arena.half
+            return
+        target_centre, target_half = self._swarm_square(points)
+        margin = self.MARGIN_RADII * self.platform.radius
+        if self._followed != len(points):  # first frame: jump there
+            centre, half, self._moving = target_centre, target_half, False
+        else:
+            centre, half = self.view_centre, self.view_half
+            holds = float(np.abs(points - centre).max()) + margin <= half
+            if not self._moving and (not holds or target_half < self.HOLD * half):
+                self._moving = True
+            if self._moving:
+                centre = centre + self.follow * (target_centre - centre)
+                half = half + self.follow * (target_half - half)
+                close = 0.02 * target_half
+                self._moving = bool(np.abs(centre - target_centre).max() > close or abs(half - target_half) > close)
+        half = max(half, float(np.abs(points - centre).max()) + margin)  # grows at once: no robot leaves the view
+        self.view_centre, self.view_half = self._inside_arena(centre, half)
+        self._followed = len(points)
 
     def _px(self, xy: np.ndarray) -> np.ndarray:
-        xy = np.asarray(xy, dtype=float)
+        xy = np.asarray(xy, dtype=float) - self.view_centre
         return np.stack([self.centre[0] + xy[..., 0] * self.scale, self.centre[1] - xy[..., 1] * self.scale], -1)
 
     # -- text ----------------------------------------------------------------------------------------
@@ -308,13 +419,15 @@ class Renderer:
                 self._draw_swatch(kind, colour, x, y + (line_height - self.font_size) // 2)
                 surf.blit(self._text(label), (x + self.font_size + 3, y))
 
-        corner = self._px(np.array([-self.arena.half, self.arena.half]))
-        side = int(np.ceil(self.arena.size * self.scale)) + 3
-        surf.set_clip(pg.Rect(int(corner[0]) - 1, int(corner[1]) - 1, side, side))  # the scene stays inside the arena
+        marker_points = np.asarray(list((markers or {}).values()), dtype=float).reshape(-1, 2)
+        self._update_view(np.concatenate([np.asarray(positions, dtype=float).reshape(-1, 2), marker_points]))
+        self.scale = self.side / (2.0 * self.view_half)
+        corner = self.centre - self.side / 2
+        surf.set_clip(pg.Rect(int(corner[0]) - 1, int(corner[1]) - 1, self.side + 3, self.side + 3))  # the scene stays in its square
         for a, b in np.concatenate([self.arena.wall_segments(), self.obstacles]):
             pg.draw.line(surf, _WALL, self._px(a), self._px(b), 2)
         centres = self._px(positions)
-        for pairs, colour, width in ((links, _LINK, 1), (messages, _MESSAGE, 2)):
+        for pairs, colour, width in ((links, _LINK, 2), (messages, _MESSAGE, 2)):
             if pairs is not None and len(pairs[0]):
                 rx, tx = np.asarray(pairs[0]), np.asarray(pairs[1])
                 keep = (rx != tx) & (rx < len(positions)) & (tx < len(positions))

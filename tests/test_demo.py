@@ -73,7 +73,7 @@ def test_default_policy_is_the_tasks_scripted_baseline(task, tmp_path, capsys):
     text = capsys.readouterr().out
     assert name in text and "random" in text
     # the printed numbers are run_episode's for the same seed (the evaluator's reduction of the metrics)
-    kwargs = {"platform": SHOWCASE[task]["platform"] or "epuck", "sensing": "ideal", "n_robots": 3, "max_cycles": 6}
+    kwargs = {"platform": SHOWCASE[task]["platform"] or "epuck", "sensing": "ideal", "n_robots": 3, "max_cycles": 6, **SHOWCASE[task].get("env", {})}
     env = make_env(task, **kwargs)
     scripted = run_episode(env, make_scripted(scripted_policy(task), env), 3, task)
     random = run_episode(env, RandomPolicy(env.platform, env.layout), 3, task)
