@@ -43,7 +43,7 @@ TASKS = dict(SHORT_NAMES)
 #: per task, the settings a demo uses unless the command line gives them: scenes in which the scripted
 #: baseline visibly does its task (docs/environments/<task>.md and the README show the GIFs they make;
 #: ``"env"``: further env settings). Flocking runs on Droplets, whose top speed, 2 cm/s, is the forward speed
-#: of the thesis's flocking robots (20 mm/s [L Alg. 5]), in a 1 m arena (45 body diameters: room to move as
+#: of the thesis's flocking robots (20 mm/s [L Alg. 5]), in a 1 m arena (23 body diameters: room to move as
 #: a group between walls) for 90 s, time to align.
 SHOWCASE: dict[str, dict[str, Any]] = {
     "aggregation": {"platform": "epuck", "n_robots": 10, "steps": 300, "seed": 0, "overlay": 0, "frame_skip": 5},

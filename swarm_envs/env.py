@@ -379,7 +379,11 @@ class SwarmEnv(ParallelEnv):
         }
 
     # -- rendering -----------------------------------------------------------------------------------
-    def render(self):
+    def render(self) -> np.ndarray | None:
+        """Draw the whole arena: robots with headings, the IR links that carried a reading this step, task markers.
+
+        ``render_mode="rgb_array"``: returns a (480, 480, 3) uint8 RGB image; ``"human"``: draws in a window and
+        returns None (:mod:`swarm_envs.render`; ``swarm-demo`` draws GIFs with a view that follows the robots)."""
         if self.render_mode is None:
             import gymnasium
 

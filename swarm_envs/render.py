@@ -1,6 +1,8 @@
 """Top-down rendering with pygame: arena and obstacle walls, robots with heading, IR links, task markers, a caption and a legend.
 
-``rgb_array`` draws on an off-screen surface (no display needed); ``human`` opens a window.
+``rgb_array`` draws on an off-screen surface (no display needed); ``human`` opens a window. A frame shows the
+whole arena (``view="arena"``, ``env.render()``) or a square that follows the robots (``view="swarm"``, the
+documentation GIFs). :data:`COLOURS` names every colour drawn; :func:`legend_text` is the colour key in words.
 
 :meth:`Renderer.draw` takes plain arrays. :func:`render_env` draws a frame of a running env with what makes
 the suite different: the IR links that delivered a decoded reading this step (:func:`fresh_links`, range &

@@ -147,3 +147,16 @@ def test_readme_environments_table_names_what_each_gif_shows():
         gif = re.search(rf"!\[([^\]]*)\]\(docs/img/envs/{task}\.gif\)", README)
         assert gif and words[env.platform.name].lower() in gif.group(1).lower(), f"{task}: the GIF's alt text names another platform"
         env.close()
+
+
+def test_environment_pages_name_only_the_renderers_colours():
+    """The GIF captions of docs/environments/*.md name colours the frames use (red, green, teal, ...)."""
+    names = {name for name, _ in render.COLOURS.values()}
+    common = {"red", "orange", "yellow", "green", "teal", "cyan", "blue", "purple", "violet", "magenta", "pink", "grey",
+              "gray", "brown", "black", "white"}
+    pages = sorted((Path(__file__).resolve().parents[1] / "docs" / "environments").glob("*.md"))
+    assert pages
+    for page in pages:
+        caption = page.read_text(encoding="utf-8").split("\n\n")[:3]  # title, GIF, the paragraph about it
+        used = {w for w in re.findall(r"[a-z]+", " ".join(caption).lower()) if w in common}
+        assert used <= names, f"{page.name} names {sorted(used - names)}, which the frames do not use"
