@@ -30,11 +30,9 @@ from swarm_envs.copies import CopyStream
 from swarm_envs.observation import ObservationLayout, id_rows, nearest_slots, own_id_rows, pack_nearest, range_bearing_rows
 from swarm_envs.sensing.base import SensorFrame
 from swarm_envs.task import BatchState, Task
-from swarm_envs.world import N_BUMP_SECTORS, World, motion_error, step_worlds, wheel_gains
+from swarm_envs.world import DT, N_BUMP_SECTORS, World, motion_error, step_worlds, wheel_gains
 
 __all__ = ["SwarmCore", "DT"]
-
-DT = 0.1  # s, one control step = the Droplet R&B update rate [F14 Sec. V]
 
 
 class SwarmCore:
