@@ -94,7 +94,7 @@ class SwarmCore:
     def start(self, copies: Sequence[int], poses: Sequence[tuple[np.ndarray | None, np.ndarray | None]] | None = None) -> None:
         """Begin new episodes in ``copies``: fresh physics and sensing state, robots spawned by the task or
         placed from ``poses[k] = (positions (n_world, 2) m or None, headings (n_world,) rad or None)``
-        (checked by :func:`swarm_envs.env.check_reset_options`). Given positions skip the task's spawner
+        (checked by :func:`swarm_envs.views.check_reset_options`). Given positions skip the task's spawner
         (headings then come from the spawn stream unless given); given headings alone replace the spawned
         ones. The copies' first observation comes from the next :meth:`step` (which does not move them).
         """
