@@ -72,7 +72,7 @@ from swarm_envs.geometry import wrap_angle
 from swarm_envs.platforms import Platform
 
 __all__ = [
-    "Arena", "World", "step_worlds", "spawn_positions", "check_capacity", "lattice_lower_bound", "as_real_array", "wrap_angle",
+    "Arena", "World", "step_worlds", "spawn_positions", "check_capacity", "lattice_lower_bound", "as_real_array",
     "N_BUMP_SECTORS", "DT", "default_substeps", "min_substeps", "motor_limits", "fit_count", "lattice_positions",
     "check_obstacles", "obstacle_points", "distance_to_segments", "wheel_gains", "motion_error", "push_force",
 ]
