@@ -311,7 +311,6 @@ class SwarmEnv(ParallelEnv):
         return f"{type(self).__name__}(n_robots={self.n_agents}, platform={self.platform.name!r}, sensing={self.config['sensing']!r})"
 
 
-
 def _snake_case(name: str) -> str:
     """``"MyTask"`` -> ``"my_task"`` (the PettingZoo ``metadata["name"]`` of a task's env)."""
     return "".join(f"_{c.lower()}" if c.isupper() and i else c.lower() for i, c in enumerate(name))
