@@ -27,13 +27,12 @@ from swarm_envs._task_checks import checked_markers
 from swarm_envs.core import DT, SwarmCore
 from swarm_envs.platforms import Platform, get_platform
 from swarm_envs.sensing.base import SensorFrame
-from swarm_envs.settings import COMMON_DEFAULTS
 from swarm_envs.task import Task
 from swarm_envs.views import check_finite_actions, check_reset_options, check_seed, info_arrays, make_layout, real_actions, resolve_config
 from swarm_envs.world import World
 
 __all__ = [
-    "SwarmEnv", "DT", "COMMON_DEFAULTS", "INFO_GROUPS", "STATE_ROBOT_FIELDS", "info_group", "flat_info", "FlatInfos",
+    "SwarmEnv", "DT", "INFO_GROUPS", "STATE_ROBOT_FIELDS", "info_group", "flat_info", "FlatInfos",
 ]
 
 #: The groups of ``infos[agent]``, in order: ``infos[agent][group][name]``.
