@@ -22,12 +22,7 @@ import numpy as np
 from swarm_envs.observation import ObservationLayout
 from swarm_envs.platforms import Platform
 
-__all__ = ["Policy", "RandomPolicy", "flatten_batch", "named_batch", "wrap_angle"]
-
-
-def wrap_angle(angle: np.ndarray) -> np.ndarray:
-    """Wrap angles (rad) to [-pi, pi)."""
-    return np.mod(np.asarray(angle) + np.pi, 2 * np.pi) - np.pi
+__all__ = ["Policy", "RandomPolicy", "flatten_batch", "named_batch"]
 
 
 def flatten_batch(layout: ObservationLayout, parts: dict[str, np.ndarray]) -> np.ndarray:

@@ -36,8 +36,9 @@ import inspect
 
 import numpy as np
 
-from swarm_envs.agents.base import Policy, wrap_angle
+from swarm_envs.agents.base import Policy
 from swarm_envs.env import DT
+from swarm_envs.geometry import wrap_angle
 from swarm_envs.observation import ObservationLayout
 from swarm_envs.platforms import Platform
 from swarm_envs.settings import Choice, Flag, Int, Real, Setting, SettingsError
@@ -72,6 +73,13 @@ def circular_mean(cos: np.ndarray, sin: np.ndarray, valid: np.ndarray) -> tuple[
     c, s = (cos * w).sum(axis=1), (sin * w).sum(axis=1)
     has = (w.sum(axis=1) > 0) & (np.hypot(c, s) > 1e-9)
     return np.where(has, np.arctan2(s, c), 0.0), has
+
+
+def _wrap_below_pi(angle: np.ndarray) -> np.ndarray:
+    """Angles (rad) wrapped to [-pi, pi), the mirror of :func:`swarm_envs.geometry.wrap_angle`'s (-pi, pi],
+    bit for bit ``mod(angle + pi, 2 pi) - pi``: the baselines turn clockwise (by -pi) away from a bump dead
+    ahead and read a bearing of exactly pi as -pi, as their recorded results do."""
+    return -wrap_angle(-np.asarray(angle, dtype=float)) + 0.0  # + 0.0: a zero comes out as +0.0
 
 
 def bump_direction(proprio: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -121,7 +129,7 @@ class _Stateful(Policy):
         since it was measured (its ``age``): an r-one reading refreshes only when a frame of that
         neighbour is decoded, and a stale body-frame bearing is off by however much the robot turned."""
         age = np.clip(np.rint(rb[..., 6]).astype(np.int64), 0, since.shape[1] - 1)
-        return wrap_angle(np.arctan2(rb[..., 3], rb[..., 2]) - np.take_along_axis(since, age, axis=1))
+        return _wrap_below_pi(np.arctan2(rb[..., 3], rb[..., 2]) - np.take_along_axis(since, age, axis=1))
 
     # -- [T20] Alg. 1 --------------------------------------------------------------------------------
     def _random_walk(self, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -162,7 +170,7 @@ class _Stateful(Policy):
             # only contacts on the front half stop the robot (a push from behind does not block it)
             start = bumped & (np.cos(direction) > 0) & (np.abs(self._escape) < 1e-9)
             # turn so that the bump direction ends up at pi (behind): rotate by direction - pi (wrapped)
-            self._escape[start] = wrap_angle(direction[start] - np.pi)
+            self._escape[start] = _wrap_below_pi(direction[start] - np.pi)
         escaping = np.abs(self._escape) >= 1e-9
         delta = np.clip(self._escape, -step_turn, step_turn)
         ang = np.where(escaping, delta / step_turn, 0.0)

@@ -6,6 +6,9 @@
   subpackage, so the API pages show the names users import.
 - :class:`SphinxRoles`: the docstrings use Sphinx roles (``:class:`~pkg.Name```); MkDocs renders them
   as inline code (``Name``) instead of showing the role markup.
+- :class:`TaskModules`: a task module makes its env class, ``parallel_env`` and ``env`` when it is imported
+  (``swarm_envs.factories.task_module``), so static analysis sees only an assignment; this takes those
+  members, with their generated signatures and docstrings, from the imported module.
 """
 
 from __future__ import annotations
@@ -31,6 +34,20 @@ class SphinxRoles(griffe.Extension):
     def on_instance(self, *, obj: griffe.Object, **kwargs: Any) -> None:
         if obj.docstring is not None:
             obj.docstring.value = _ROLE.sub(_inline, obj.docstring.value)
+
+
+class TaskModules(griffe.Extension):
+    """Replace the members a task module assigns from ``task_module(...)`` by the imported objects."""
+
+    def on_module_members(self, *, mod: griffe.Module, **kwargs: Any) -> None:
+        imported = mod.members.get("task_module")
+        if imported is None or not imported.is_alias:  # griffe does not follow ``a, b, c = call()``
+            return
+        runtime = griffe.inspect(mod.path)
+        env_class = runtime.members["raw_env"].name  # the class as named in its module ("AggregationEnv")
+        for name in ("parallel_env", "env", env_class):
+            if name in runtime.members:
+                mod.set_member(name, runtime.members[name])
 
 
 class AgentsSubpackage(griffe.Extension):

@@ -19,6 +19,7 @@ from __future__ import annotations
 from typing import Any
 
 from swarm_envs import env, task  # noqa: F401  (swarm_envs.env.info_group, swarm_envs.task.Task)
+from swarm_envs.ir import models as _ir_models  # noqa: F401  (registers the IR models with swarm_envs.platforms)
 from swarm_envs.env import SwarmEnv
 from swarm_envs.platforms import PLATFORMS, Platform, get_platform
 from swarm_envs.registry import ENV_IDS, EnvSpec, list_envs, make, make_vec, register, spec

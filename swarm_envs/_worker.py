@@ -3,7 +3,7 @@
 A large single scene (one env copy of hundreds of robots, numba on more than one thread) has stages that
 do not depend on each other: range & bearing and SwarmCom read the same IR links; the task's rewards
 read only the ground truth. :class:`swarm_envs.sensing.full.FullSensing` runs range & bearing here while
-the channel is simulated on the calling thread, and :class:`swarm_envs.core.BatchCore` the rewards while
+the channel is simulated on the calling thread, and :class:`swarm_envs.core.SwarmCore` the rewards while
 the sensing runs. Work submitted here draws from its own random streams and touches state nothing else
 touches in the meantime, and the compiled kernels release the GIL (``nogil``), so results are the same
 bit for bit either way. One thread, in submission order; it also draws SwarmCom's random numbers and

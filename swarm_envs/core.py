@@ -30,11 +30,9 @@ from swarm_envs.copies import CopyStream
 from swarm_envs.observation import ObservationLayout, id_rows, nearest_slots, own_id_rows, pack_nearest, range_bearing_rows
 from swarm_envs.sensing.base import SensorFrame
 from swarm_envs.task import BatchState, Task
-from swarm_envs.world import N_BUMP_SECTORS, World, motion_error, step_worlds, wheel_gains
+from swarm_envs.world import DT, N_BUMP_SECTORS, World, motion_error, step_worlds, wheel_gains
 
 __all__ = ["SwarmCore", "DT"]
-
-DT = 0.1  # s, one control step = the Droplet R&B update rate [F14 Sec. V]
 
 
 class SwarmCore:
@@ -96,7 +94,7 @@ class SwarmCore:
     def start(self, copies: Sequence[int], poses: Sequence[tuple[np.ndarray | None, np.ndarray | None]] | None = None) -> None:
         """Begin new episodes in ``copies``: fresh physics and sensing state, robots spawned by the task or
         placed from ``poses[k] = (positions (n_world, 2) m or None, headings (n_world,) rad or None)``
-        (checked by :func:`swarm_envs.env.check_reset_options`). Given positions skip the task's spawner
+        (checked by :func:`swarm_envs.views.check_reset_options`). Given positions skip the task's spawner
         (headings then come from the spawn stream unless given); given headings alone replace the spawned
         ones. The copies' first observation comes from the next :meth:`step` (which does not move them).
         """

@@ -15,7 +15,6 @@ one tensor per info key and reads flat dicts only: wrap the env in :class:`FlatI
 from __future__ import annotations
 
 import functools
-import numbers
 from collections.abc import Iterable, Mapping
 from typing import Any
 
@@ -26,88 +25,20 @@ from pettingzoo.utils import BaseParallelWrapper
 
 from swarm_envs._task_checks import checked_markers
 from swarm_envs.core import DT, SwarmCore
-from swarm_envs.observation import ObservationLayout
 from swarm_envs.platforms import Platform, get_platform
 from swarm_envs.sensing.base import SensorFrame
-from swarm_envs.sensing.full import reading_max_age
-from swarm_envs.settings import COMMON_DEFAULTS, validate_settings
 from swarm_envs.task import Task
-from swarm_envs.world import World, as_real_array
+from swarm_envs.views import check_finite_actions, check_reset_options, check_seed, info_arrays, make_layout, real_actions, resolve_config
+from swarm_envs.world import World
 
 __all__ = [
-    "SwarmEnv", "DT", "COMMON_DEFAULTS", "INFO_GROUPS", "STATE_ROBOT_FIELDS", "info_group", "flat_info", "FlatInfos",
-    "resolve_config", "make_layout", "check_seed", "check_reset_options",
+    "SwarmEnv", "DT", "INFO_GROUPS", "STATE_ROBOT_FIELDS", "info_group", "flat_info", "FlatInfos",
 ]
 
 #: The groups of ``infos[agent]``, in order: ``infos[agent][group][name]``.
 INFO_GROUPS = ("ground_truth", "reward_terms", "metrics", "sensing")
 #: Per-robot fields of :meth:`SwarmEnv.state`, in order (arena frame, SI units).
 STATE_ROBOT_FIELDS = ("x", "y", "cos_heading", "sin_heading", "vx", "vy", "angular_velocity")
-
-
-def resolve_config(task: Any, kwargs: dict[str, Any]) -> dict[str, Any]:
-    """Every setting of ``task`` (a ``Task`` subclass, env class or registered id) filled in and checked
-    (:func:`swarm_envs.settings.validate_settings`): unknown names raise ``TypeError``, bad values
-    ``SettingsError`` (a ``ValueError``) naming the key."""
-    return validate_settings(task, kwargs)
-
-
-def make_layout(cfg: dict[str, Any], platform: Platform, n_world: int = 1) -> ObservationLayout:
-    """One robot's observation layout for resolved settings ``cfg`` and ``n_world`` robots per copy."""
-    return ObservationLayout(
-        n_neighbours=cfg["n_neighbours"],
-        n_messages=cfg["n_messages"],
-        message_bits=cfg["message_bits"],
-        max_range=platform.ir_range,
-        max_age=reading_max_age(cfg, platform),
-        flatten=cfg["flatten"],
-        observe_ids=cfg["observe_ids"],
-        n_world=n_world,
-    )
-
-
-def check_seed(seed: Any) -> int | None:
-    """``seed`` as an int (or None); ``ValueError`` for a negative, ``TypeError`` for a non-integer seed."""
-    if seed is None:
-        return None
-    if isinstance(seed, (bool, np.bool_)) or not isinstance(seed, numbers.Integral):
-        raise TypeError(f"seed must be a non-negative integer or None, got {seed!r} ({type(seed).__name__})")
-    if seed < 0:
-        raise ValueError(f"seed must be a non-negative integer or None, got {seed}")
-    return int(seed)
-
-
-def check_reset_options(options: Any, world: World) -> tuple[np.ndarray | None, np.ndarray | None]:
-    """Validated (positions (n, 2) m, headings (n,) rad) from reset ``options`` (None where not given).
-
-    Raises ``TypeError``/``ValueError`` for anything wrong (not a dict, shapes, non-finite values, overlap,
-    outside the arena); changes nothing. Unknown keys only warn (PettingZoo's API test passes some).
-    """
-    if options is None:
-        return None, None
-    if not isinstance(options, Mapping):
-        raise TypeError(
-            f"reset options must be a dict (keys 'positions', 'headings') or None, got {type(options).__name__}: {options!r:.80}"
-        )
-    unknown = sorted((k for k in options if k not in ("positions", "headings")), key=str)
-    if unknown:
-        import gymnasium
-
-        gymnasium.logger.warn(f"ignoring unknown reset option(s) {unknown}; allowed: ['headings', 'positions']")
-    n = world.n
-    positions = headings = None
-    if "headings" in options:
-        headings = as_real_array(options["headings"], "options['headings']")
-        if headings.shape != (n,):
-            raise ValueError(f"options['headings'] must have shape ({n},) radians, got {headings.shape}")
-        if not np.all(np.isfinite(headings)):
-            raise ValueError("options['headings'] must be finite")
-    if "positions" in options:
-        positions = as_real_array(options["positions"], "options['positions']")
-        if positions.shape != (n, 2):
-            raise ValueError(f"options['positions'] must have shape ({n}, 2) metres, got {positions.shape}")
-        positions, _ = world.check_placement(positions, np.zeros(n) if headings is None else headings)
-    return positions, headings
 
 
 class SwarmEnv(ParallelEnv):
@@ -268,35 +199,14 @@ class SwarmEnv(ParallelEnv):
         # which also names the agent in an error
         values = [actions[a] for a in self.agents]
         if all(type(v) is np.ndarray and v.dtype.kind in "iuf" and v.shape == (size,) for v in values) and values:
-            arr = np.stack(values)
+            arr = np.stack(values).astype(np.float64)
         else:
-            arr = np.stack([self._one_action(a, v, size) for a, v in zip(self.agents, values)]) if values else np.zeros((0, size))
-        arr = arr.astype(np.float64)
-        finite = np.isfinite(arr).all(axis=1)
-        if not finite.all():
-            first = int(np.argmin(finite))
-            raise ValueError(f"action for {self.agents[first]} contains NaN or inf: {arr[first]}")
+            bits = self.layout.message_bits
+            expected = f"({size},) = (linear, angular" + (f", {bits} message bits)" if bits else ")")
+            arr = np.stack([real_actions(v, (size,), f"action for {a}", expected) for a, v in zip(self.agents, values)]) if values else np.zeros((0, size))
         out = np.zeros((self.n_world, size))
-        out[self.agent_robots[[self._agent_index[a] for a in self.agents]]] = arr
-        return np.clip(out, -1.0, 1.0)
-
-    def _one_action(self, agent: str, action: Any, size: int) -> np.ndarray:
-        """One agent's action as a float array of shape (size,); ``TypeError``/``ValueError`` naming the agent."""
-        try:
-            arr = np.asarray(action)
-        except (TypeError, ValueError):
-            arr = np.asarray(None)
-        if arr.dtype.kind not in "iuf":  # not bool, complex, strings (even of digits) or objects
-            raise TypeError(
-                f"action for {agent} must be a real-valued numeric array of shape ({size},) "
-                f"(int or float dtype), got {action!r:.80} of dtype {arr.dtype}"
-            )
-        if arr.shape != (size,):
-            raise ValueError(
-                f"action for {agent} has shape {arr.shape}; expected ({size},) = (linear, angular"
-                + (f", {self.layout.message_bits} message bits)" if self.layout.message_bits else ")")
-            )
-        return arr.astype(np.float64)
+        out[self.agent_robots[[self._agent_index[a] for a in self.agents]]] = check_finite_actions(arr, self.agents.__getitem__)
+        return out
 
     def step(self, actions: dict[str, Any]):
         if not self.agents:
@@ -359,20 +269,16 @@ class SwarmEnv(ParallelEnv):
 
         Built column by column over all agents (one array operation and one ``tolist`` per name), then one
         small dict per agent and group."""
-        core, world = self.core, self.world
         agents = self.agents
         index = [self._agent_index[a] for a in agents]
-        rows = self.agent_robots[index]
-        stats = core.frame.stats if core.frame is not None else {}
-        n = len(agents)
+        arrays = info_arrays(self.core, self.agent_robots[None, index])  # one copy: (1, n, ...) arrays
+        truth, n = arrays["ground_truth"], len(agents)
         ground_truth = _row_dicts(
-            ("position", "heading", "velocity"),
-            [_pairs(world.positions[rows]), world.headings[rows].tolist(), _pairs(world.velocities[rows])],
-            n,
+            ("position", "heading", "velocity"), [_pairs(truth["position"][0]), truth["heading"][0].tolist(), _pairs(truth["velocity"][0])], n
         )
-        terms = _row_dicts(core.terms, [np.asarray(v[0], dtype=float)[index].tolist() for v in core.terms.values()], n)
-        sensing = _row_dicts(stats, [np.asarray(v)[rows].tolist() for v in stats.values()], n)
-        metrics = {name: float(v[0]) for name, v in core.metrics.items()}  # one value per copy: the same for every agent
+        terms = _row_dicts(arrays["reward_terms"], [v[0, index].tolist() for v in arrays["reward_terms"].values()], n)
+        sensing = _row_dicts(arrays["sensing"], [v[0].tolist() for v in arrays["sensing"].values()], n)
+        metrics = {name: float(v[0]) for name, v in arrays["metrics"].items()}  # one value per copy: the same for every agent
         return {
             agent: {"ground_truth": g, "reward_terms": t, "metrics": dict(metrics), "sensing": s}
             for agent, g, t, s in zip(agents, ground_truth, terms, sensing)
@@ -406,7 +312,6 @@ class SwarmEnv(ParallelEnv):
 
     def __repr__(self) -> str:
         return f"{type(self).__name__}(n_robots={self.n_agents}, platform={self.platform.name!r}, sensing={self.config['sensing']!r})"
-
 
 
 def _snake_case(name: str) -> str:

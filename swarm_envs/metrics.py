@@ -3,28 +3,10 @@
 from __future__ import annotations
 
 import numpy as np
-from scipy.sparse import coo_matrix
-from scipy.sparse.csgraph import connected_components
-from scipy.spatial import cKDTree
 
 from swarm_envs._numba import njit
 
-__all__ = [
-    "components",
-    "cluster_stats",
-    "largest_component_fraction",
-    "mean_distance_to_centroid",
-    "neighbourhood_sums",
-    "polarisation",
-]
-
-
-def components(positions: np.ndarray, link_distance: float) -> np.ndarray:
-    """Connected-component label per robot, linking centres closer than ``link_distance`` (m), chained."""
-    n = len(positions)
-    pairs = cKDTree(positions).query_pairs(link_distance, output_type="ndarray")
-    graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(n, n)) if len(pairs) else coo_matrix((n, n))
-    return connected_components(graph, directed=False)[1]
+__all__ = ["largest_component_fraction", "neighbourhood_sums"]
 
 
 def largest_component_fraction(
@@ -107,22 +89,3 @@ def neighbourhood_sums(values: np.ndarray, pairs: np.ndarray) -> tuple[np.ndarra
     values = np.ascontiguousarray(values, dtype=np.float64)
     pairs = np.ascontiguousarray(pairs, dtype=np.int64).reshape(-1, 2)
     return _neighbourhood_sums_kernel(values, pairs)
-
-
-def cluster_stats(positions: np.ndarray, link_distance: float) -> tuple[float, int]:
-    """(largest-cluster fraction, number of clusters) for clusters chained at ``link_distance`` (m)."""
-    labels = components(positions, link_distance)
-    sizes = np.bincount(labels)
-    return float(sizes.max() / len(positions)), int(len(sizes))
-
-
-def mean_distance_to_centroid(positions: np.ndarray) -> float:
-    """Mean distance (m) of the robots to their centroid (the swarm's spread)."""
-    return float(np.linalg.norm(positions - positions.mean(axis=0), axis=1).mean())
-
-
-def polarisation(headings: np.ndarray, speeds: np.ndarray, max_speed: float) -> float:
-    """Norm of the mean unit heading weighted by speed / max speed, in [0, 1]."""
-    weight = np.clip(speeds / max_speed, 0.0, 1.0)
-    vec = np.stack([np.cos(headings), np.sin(headings)], -1) * weight[:, None]
-    return float(np.linalg.norm(vec.mean(axis=0)))

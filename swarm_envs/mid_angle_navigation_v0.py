@@ -29,17 +29,17 @@ from __future__ import annotations
 import heapq
 import math
 from dataclasses import dataclass
-from typing import Any, Literal
+from typing import Any
 
 import numpy as np
 from scipy.spatial import cKDTree
-from pettingzoo import AECEnv
-from pettingzoo.utils.conversions import parallel_to_aec
 
-from swarm_envs.env import DT, SwarmEnv
-from swarm_envs.factories import reports_unknown_kwargs
-from swarm_envs.platforms import Platform, get_platform
+from swarm_envs.factories import task_module
 from swarm_envs.task import (
+    DT,
+    Default,
+    Platform,
+    get_platform,
     Arena,
     BatchState,
     Int,
@@ -246,13 +246,14 @@ class MidAngleNavigationTask(Task):
     """Mid-angle navigation rewards, metrics, corridor and relay firmware over all env copies (module docstring)."""
 
     SETTINGS = {
-        "n_robots": 1,
+        "n_robots": Default(1, help="number of seekers (agents)"),
         "platform": "rone",
         "observe_ids": True,
         "message_bits": Int(
             4, "payload bits; the static robots broadcast their hop count to the goal in them", low=1, high=MAX_HOP_BITS,
             why=f"at least 1: the relays' hop counts travel in the payload; at most {MAX_HOP_BITS}: a hop count, and 2**b - 1 "
             "for 'unknown', is a signed 64-bit integer",
+            help="payload bits b of every robot's messages: the static robots' hop counts (1 to 63: a hop count is a 64-bit integer); a seeker sends its action's bits",
         ),
         "arena_size": Real(
             None, low=0.0, low_open=True, high=10_000.0, allow_none=True, unit="of metres",
@@ -261,12 +262,16 @@ class MidAngleNavigationTask(Task):
             f"square beyond the goal's arrival radius; {_SIZE_RANGES['low']}), lanes x 4.5 diameters with more; at most "
             f"the side whose corridor holds {MAX_STATIC_ROBOTS:,} static robots ({_SIZE_RANGES['high']} with one lane; "
             "1/lanes of that with more), where make() + reset() take ~1-2 s and the relays' hop-count memory 96 MB per copy",
+            help='side (m); ``None``: 2.5 message ranges (r-one 2.5 m), or ``lanes`` x 6 robot diameters if larger; only ``"square"`` arenas; at least 10.2 robot diameters with one lane (no seeker starts within the arrival radius), ``lanes`` x 4.5 diameters with more, and at most the side whose corridor holds 2,000 static robots (one lane: r-one 401 m; ``arena_size_range(platform, lanes)``)',
         ),
         "max_cycles": 600,
         "lanes": Int(1, "corridor lanes (1: a straight corridor)", low=1, high=12,
-                     why="each lane is 6 robot diameters wide and the default arena grows with the lanes; 12 lanes already make a 7.9 m r-one arena"),
-        "arrival_bonus": Real(1.0, "reward of a seeker's arrival at the goal", low=0.0, high=1000.0, why="a reward weight; rewards stay within +-1000 per step"),
-        "collision_penalty": Real(0.01, "weight of a seeker's contact per step", low=0.0, high=1000.0, why="a reward weight; rewards stay within +-1000 per step"),
+                     why="each lane is 6 robot diameters wide and the default arena grows with the lanes; 12 lanes already make a 7.9 m r-one arena",
+                     help="corridor lanes: 1 a straight corridor, more a winding one (each lane turns into the next behind a wall)"),
+        "arrival_bonus": Real(1.0, "reward of a seeker's arrival at the goal", low=0.0, high=1000.0, why="a reward weight; rewards stay within +-1000 per step",
+                              help="reward of a seeker's arrival"),
+        "collision_penalty": Real(0.01, "weight of a seeker's contact per step", low=0.0, high=1000.0, why="a reward weight; rewards stay within +-1000 per step",
+                                  help="reward subtracted per step a seeker is in contact"),
     }
     METRICS = {"success_rate": "final", "time_to_goal": "final", "path_ratio": "final", "collision_fraction": "mean"}
     HEADLINE = ("success_rate", +1)
@@ -448,173 +453,44 @@ class MidAngleNavigationTask(Task):
         return rewards, terms, metrics
 
 
-class MidAngleNavigationEnv(SwarmEnv):
-    """Mid-angle navigation task; see the module docstring and :func:`parallel_env` for the kwargs."""
+_DOC = """Create the mid-angle navigation environment (a native PettingZoo ``ParallelEnv``).
 
-    metadata = {**SwarmEnv.metadata, "name": "mid_angle_navigation_v0"}
-    TASK = MidAngleNavigationTask
+## Description
 
+Mid-angle navigation ([L] Sec. 6.4.4, Algorithm 8, Fig. 6.10): ``n_robots`` seekers (the agents,
+``robot_0`` ..) start at one end of a winding corridor of ``lanes`` lanes and should reach the goal
+robot at the other end. The corridor's walls stop robots and block infrared light, so the goal is out
+of sight at the start. Static relays stand in gates (pairs across the corridor) along its centre line
+and broadcast their hop count to the goal over SwarmCom (goal 0, "unknown" = 2**b - 1); the goal is
+static robot 0. Static robots are not agents.
 
-raw_env = MidAngleNavigationEnv
+## Rewards
 
+Per seeker: its progress this step along the shortest path to the goal (around the walls' ends) over
+that path's length at the start, ``arrival_bonus`` when it arrives (centre within 2.5 radii of the
+goal's), nothing after that, minus ``collision_penalty`` while it is in contact. ``reward_mode="global"``:
+the mean over seekers; ``"local"``: each its own. Terms in ``infos[agent]["reward_terms"][name]``:
+``progress``, ``arrived``, ``collision``. Metrics in ``infos[agent]["metrics"][name]``:
+``success_rate`` (headline: share of seekers that arrived), ``time_to_goal`` (s; the elapsed time for a
+seeker not there yet), ``path_ratio`` (path driven until arrival over the shortest path; NaN while no
+seeker arrived), ``collision_fraction``.
 
-@reports_unknown_kwargs
-def parallel_env(
-    *,
-    n_robots: int = 1,
-    lanes: int = 1,
-    arrival_bonus: float = 1.0,
-    collision_penalty: float = 0.01,
-    platform: Literal["droplet", "epuck", "rone"] | Platform = "rone",
-    sensing: Literal["full", "ideal"] = "full",
-    max_cycles: int = 600,
-    render_mode: Literal["rgb_array", "human"] | None = None,
-    arena: Literal["square", "circle"] = "square",
-    arena_size: float | None = None,
-    reward_mode: Literal["global", "local"] = "global",
-    flatten: bool = False,
-    n_neighbours: int = 8,
-    n_messages: int = 8,
-    message_bits: int = 4,
-    observe_ids: bool = True,
-    bitrate: Literal[310, 650, 1080, 1160, 1250, 1670, 1800] | None = None,
-    relative_threshold: float | None = None,
-    code: tuple[int, int] = (15, 15),
-    comm_mode: Literal["broadcast", "flooding"] = "broadcast",
-    rb_schedule: Literal["timer", "contention", "every_step"] = "timer",
-    rb_period: float = 1.0,
-    rb_jitter: float = 0.2,
-    rb_max_age: int | None = None,
-    rb_noise: float | None = None,
-    rb_near_model: bool = False,
-    hw_variation: bool = True,
-    hw_emitter_spread: float = 0.1,
-    hw_detector_spread: float = 0.1,
-    hw_angle_spread: float = 3.0,
-    bearing_source: Literal["sectors", "range_bearing"] | None = None,
-    bearing_noise: bool = True,
-    exchange: Literal["network", "ideal"] = "network",
-    scale_free_method: Literal["two_hop", "null_space"] = "two_hop",
-    scale_free_k: int = 1,
-    motion_noise: bool = True,
-    physics_substeps: int | None = None,
-) -> MidAngleNavigationEnv:
-    """Create the mid-angle navigation environment (a native PettingZoo ``ParallelEnv``).
+## Starting State
 
-    ## Description
+The relays stand at their gate positions with a uniform jitter of +-10 % of the gate spacing, the goal
+at the corridor's end; the seekers are placed uniformly at random without overlap in the lane-wide
+start square at the other end. Headings are uniform in [-pi, pi). ``reset(seed=..., options={"positions":
+(n_world, 2) m, "headings": (n_world,) rad})`` places every robot exactly (static robots first).
 
-    Mid-angle navigation ([L] Sec. 6.4.4, Algorithm 8, Fig. 6.10): ``n_robots`` seekers (the agents,
-    ``robot_0`` ..) start at one end of a winding corridor of ``lanes`` lanes and should reach the goal
-    robot at the other end. The corridor's walls stop robots and block infrared light, so the goal is out
-    of sight at the start. Static relays stand in gates (pairs across the corridor) along its centre line
-    and broadcast their hop count to the goal over SwarmCom (goal 0, "unknown" = 2**b - 1); the goal is
-    static robot 0. Static robots are not agents.
+## Episode End
 
-    ## Action Space
+No termination (an arrived seeker may stay or leave). Truncation: every agent is truncated after
+``max_cycles`` steps (default 600 = 60 s); ``env.agents`` is then empty.
 
-    Per agent ``Box(-1, 1, (2 + message_bits,), float32)``: linear and angular velocity as fractions of
-    the platform's maxima (``Platform.max_speed`` m/s and ``Platform.max_angular_speed`` rad/s; the
-    wheel speeds are then limited to ``max_speed`` and carry the platform's motion error, ``motion_noise``),
-    followed by ``message_bits`` payload bits (each entry above 0 is a 1-bit),
-    broadcast over SwarmCom whenever the robot's transmit queue is empty.
-    Finite values outside [-1, 1] are clipped; NaN/inf, wrong shapes and actions for unknown or missing
-    agents raise. Zero actions keep a robot still (also with the motion error).
+## Version History
 
-    ## Observation Space
+- v0: initial release (swarm_envs 0.1.0).
+"""
 
-    Per agent a ``Dict`` of ``float32`` boxes, built only from the modelled infrared sensing stack
-    (never from ground truth), with K = ``n_neighbours``, M = ``n_messages``, b = ``message_bits``:
-
-    | key | shape | columns |
-    |---|---|---|
-    | ``range_bearing`` | (K, 7) | valid, range (m), cos bearing, sin bearing, cos heading, sin heading, age (steps) [F14] (r-one: sector bearings, range 0) |
-    | ``messages`` | (M, 2 + b) | valid, sender bearing / pi, payload bits (a static robot's hop count to the goal, LSB first): SwarmCom messages decoded since the last step [T20] |
-    | ``scale_free`` | (K, 3) | valid, x, y of neighbours in the robot's frame, mean neighbour distance 1, clipped to +-10 [L] |
-    | ``rigid`` | (1,) | 1 when the scale-free coordinates are determined [L Sec. 5.5.1] |
-    | ``proprio`` | (8 + 2 + b,) | bump flags of 8 45-degree sectors (sector 0 ahead, counter-clockwise), last action |
-    | ``own_id`` | (2,) | own id / (N - 1), own id parity (``observe_ids``) |
-    | ``range_bearing_ids``, ``scale_free_ids`` | (K, 4) | per row: an id was decoded, decoded id / (N - 1), id < own id, same parity |
-    | ``message_ids`` | (M, 4) | the same per message row (the header's decoded origin) |
-
-    Rows are sorted nearest first by *estimated* range; empty rows are all zero. The ids are those the
-    sensing decoded (a corrupted frame names the wrong robot); ``observe_ids=False`` drops the id parts.
-    ``flatten=True`` gives one ``Box`` instead (keys in sorted order; ``env.layout.unflatten(flat)`` gives
-    the parts back).
-
-    ## Rewards
-
-    Per seeker: its progress this step along the shortest path to the goal (around the walls' ends) over
-    that path's length at the start, ``arrival_bonus`` when it arrives (centre within 2.5 radii of the
-    goal's), nothing after that, minus ``collision_penalty`` while it is in contact. ``reward_mode="global"``:
-    the mean over seekers; ``"local"``: each its own. Terms in ``infos[agent]["reward_terms"][name]``:
-    ``progress``, ``arrived``, ``collision``. Metrics in ``infos[agent]["metrics"][name]``:
-    ``success_rate`` (headline: share of seekers that arrived), ``time_to_goal`` (s; the elapsed time for a
-    seeker not there yet), ``path_ratio`` (path driven until arrival over the shortest path; NaN while no
-    seeker arrived), ``collision_fraction``.
-
-    ## Starting State
-
-    The relays stand at their gate positions with a uniform jitter of +-10 % of the gate spacing, the goal
-    at the corridor's end; the seekers are placed uniformly at random without overlap in the lane-wide
-    start square at the other end. Headings are uniform in [-pi, pi). ``reset(seed=..., options={"positions":
-    (n_world, 2) m, "headings": (n_world,) rad})`` places every robot exactly (static robots first).
-
-    ## Episode End
-
-    No termination (an arrived seeker may stay or leave). Truncation: every agent is truncated after
-    ``max_cycles`` steps (default 600 = 60 s); ``env.agents`` is then empty.
-
-    ## Arguments
-
-    Keyword-only, SI units. Unknown names raise ``TypeError``; bad values raise ``ValueError``.
-
-    | argument | default | meaning |
-    |---|---|---|
-    | ``n_robots`` | 1 | number of seekers (agents) |
-    | ``lanes`` | 1 | corridor lanes: 1 a straight corridor, more a winding one (each lane turns into the next behind a wall) |
-    | ``arrival_bonus`` | 1.0 | reward of a seeker's arrival |
-    | ``collision_penalty`` | 0.01 | reward subtracted per step a seeker is in contact |
-    | ``platform`` | ``"rone"`` | ``"droplet"`` (4.4 cm, 6 IR channels), ``"epuck"`` (7 cm, 8 sensors), ``"rone"`` (11 cm, 8 RX + 8 TX), or a ``Platform`` |
-    | ``sensing`` | ``"full"`` | ``"full"``: the modelled IR stack; ``"ideal"``: exact, noiseless, lossless values (true ids) in the same layout |
-    | ``max_cycles`` | 600 | control steps of 0.1 s per episode |
-    | ``render_mode`` | ``None`` | ``"rgb_array"`` (headless) or ``"human"`` (window) |
-    | ``arena`` | ``"square"`` | ``"square"`` or ``"circle"`` |
-    | ``arena_size`` | ``None`` | side (m); ``None``: 2.5 message ranges (r-one 2.5 m), or ``lanes`` x 6 robot diameters if larger; only ``"square"`` arenas; at least 10.2 robot diameters with one lane (no seeker starts within the arrival radius), ``lanes`` x 4.5 diameters with more, and at most the side whose corridor holds 2,000 static robots (one lane: r-one 401 m; ``arena_size_range(platform, lanes)``) |
-    | ``reward_mode`` | ``"global"`` | ``"global"`` (one team reward) or ``"local"`` (each robot its own term) |
-    | ``flatten`` | ``False`` | one flat ``Box`` observation instead of the ``Dict`` |
-    | ``n_neighbours`` | 8 | rows K of ``range_bearing`` and ``scale_free`` |
-    | ``n_messages`` | 8 | rows M of ``messages`` |
-    | ``message_bits`` | 4 | payload bits b of every robot's messages: the static robots' hop counts (1 to 63: a hop count is a 64-bit integer); a seeker sends its action's bits |
-    | ``observe_ids`` | ``True`` | the robot's own id and the neighbour and sender ids its sensing decoded (``own_id``, ``*_ids`` parts) |
-    | ``bitrate`` | ``None`` | SwarmCom bit rate (bps): ``None`` the platform's (e-puck 310 [T20], r-one 1250 [L Sec. 3.2.1], Droplet 310), or 310, 650, 1080, 1160, 1250, 1670, 1800 |
-    | ``relative_threshold`` | ``None`` | detector threshold m_tr (ADC counts); ``None``: 5 on e-puck and r-one [T20], 8 on the Droplet |
-    | ``code`` | ``(15, 15)`` | BCH code (n, k): ``(15, 15)`` uncoded, ``(15, 11)``, ``(15, 7)``, ``(15, 5)``, ``(15, 1)`` |
-    | ``comm_mode`` | ``"broadcast"`` | ``"broadcast"`` or ``"flooding"`` [T20 Sec. 5] |
-    | ``rb_schedule`` | ``"timer"`` | range & bearing firing: ``"timer"`` (each robot on its own timer, as the Droplet firmware: robots that see each other can collide), ``"contention"`` (oracle ablation: no two linked robots fire in one step) or ``"every_step"`` (idealised) |
-    | ``rb_period`` | 1.0 | s between a robot's range & bearing firings (``"timer"``) |
-    | ``rb_jitter`` | 0.2 | s, largest late start of a firing after its timer expires (uniform) |
-    | ``rb_max_age`` | ``None`` | steps a range & bearing reading persists; ``None``: until the neighbour's next timer firing is due (13 at the defaults) |
-    | ``rb_noise`` | ``None`` | ADC noise sigma (counts); ``None``: 2 on the Droplet, sqrt(2.5) on the e-puck |
-    | ``rb_near_model`` | ``False`` | Droplet only: the firmware's low-power near-range fit instead of the power ladder |
-    | ``hw_variation`` | ``True`` | droplet / epuck: each robot's emitter powers, detector gains and axis angles drawn at reset (the range & bearing estimator keeps the nominal calibration) |
-    | ``hw_emitter_spread`` | 0.1 | standard deviation of ln(emitter power multiplier) (an assumption) |
-    | ``hw_detector_spread`` | 0.1 | standard deviation of ln(detector gain multiplier) (an assumption) |
-    | ``hw_angle_spread`` | 3.0 | degrees, standard deviation of each emitter's and detector's axis angle (an assumption) |
-    | ``bearing_source`` | ``None`` | ``"sectors"`` (r-one) or ``"range_bearing"``; ``None``: sectors on the r-one, R&B elsewhere |
-    | ``bearing_noise`` | ``True`` | r-one: sector readings with the measured 63-74 degree receiver-arc spread [L Sec. 3.2.1] |
-    | ``exchange`` | ``"network"`` | bearing lists for scale-free coordinates over SwarmCom (``"network"``) or ``"ideal"`` |
-    | ``scale_free_method`` | ``"two_hop"`` | ``"two_hop"`` [L Algs. 1-4] or ``"null_space"`` [L Eq. (5.1)] (slow) |
-    | ``scale_free_k`` | 1 | hops k of the null-space method |
-    | ``motion_noise`` | ``True`` | the platform's motion error: per-wheel speed gains drawn per episode, per-step wheel-speed noise, the r-one's 15 mm/s dead zone [L Sec. 3.1] (``docs/design.md#motion-error``); ``False``: exact differential-drive kinematics |
-    | ``physics_substeps`` | ``None`` | pymunk sub-steps per control step; ``None``: the platform's (8 Droplet, 21 e-puck, 32 r-one), at which robots overlap by at most 2 % of a diameter at the default arena size |
-
-    ## Version History
-
-    - v0: initial release (swarm_envs 0.1.0).
-    """
-    return MidAngleNavigationEnv(**locals())  # every argument above, by name
-
-
-def env(**kwargs: Any) -> AECEnv:
-    """The AEC (turn-based) view of :func:`parallel_env` (PettingZoo ``parallel_to_aec``); same keyword arguments."""
-    return parallel_to_aec(parallel_env(**kwargs))
+raw_env, parallel_env, env = task_module(MidAngleNavigationTask, _DOC, payload="payload bits (a static robot's hop count to the goal, LSB first)")
+MidAngleNavigationEnv = raw_env

@@ -44,7 +44,6 @@ __all__ = [
     "ID_FIELDS",
     "ID_PARTS",
     "SCALE_FREE_CLIP",
-    "relative_pose",
     "wrapped_difference",
 ]
 
@@ -80,19 +79,6 @@ def id_rows(ids: np.ndarray, own: np.ndarray, n_world: int) -> np.ndarray:
     out[..., 3] = decoded & (ids % 2 == own % 2)
     return out
 
-
-def relative_pose(
-    positions: np.ndarray, headings: np.ndarray, rx: np.ndarray, tx: np.ndarray
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Exact pose of robot ``tx`` seen by ``rx``: (distance (P,) m, bearing (P,) rad, heading (P,) rad).
-
-    Bearing = angle of (p_tx - p_rx) in rx's body frame; heading = tx's forward direction in rx's frame.
-    """
-    delta = positions[tx] - positions[rx]
-    distance = np.hypot(delta[:, 0], delta[:, 1])
-    bearing = wrapped_difference(np.arctan2(delta[:, 1], delta[:, 0]), headings[rx])
-    heading = wrapped_difference(headings[tx], headings[rx])
-    return distance, bearing, heading
 
 
 def wrapped_difference(a: np.ndarray, b: np.ndarray) -> np.ndarray:

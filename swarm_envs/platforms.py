@@ -39,13 +39,25 @@ from typing import Any
 import numpy as np
 
 from swarm_envs._text import shown
-from swarm_envs.comm.protocol import CRC_WIDTHS
-from swarm_envs.ir.models import MODEL_CLASSES
 
 __all__ = [
     "Platform", "PLATFORMS", "get_platform", "model_for", "MAX_RADIUS", "MAX_SPEED", "MAX_MASS", "MAX_IR_RANGE", "MAX_CHANNELS",
-    "MAX_WHEEL_ERROR", "MAX_BITRATE",
+    "MAX_WHEEL_ERROR", "MAX_BITRATE", "CRC_WIDTHS", "IR_MODELS", "register_ir_model",
 ]
+
+#: CRC widths (bits) a message frame can carry: 0 (no CRC), 8, 16 (SwarmCom's frames, :mod:`swarm_envs.comm.protocol`)
+CRC_WIDTHS = (0, 8, 16)
+
+#: IR model class of each kind of IR hardware (:func:`model_for`): :mod:`swarm_envs.ir.models` registers
+#: ``"droplet"``, ``"epuck"`` and ``"rone"`` when it is imported, as ``import swarm_envs`` does
+#: (:func:`register_ir_model`); the models know no platform presets, the presets no model code.
+IR_MODELS: dict[str, type] = {}
+
+
+def register_ir_model(kind: str, cls: type) -> None:
+    """Make ``cls`` (called with a :class:`Platform`, returning its IR model) the model of the IR hardware
+    ``kind``: of the platform named ``kind``, and of a custom platform with ``extras["ir_model"] = kind``."""
+    IR_MODELS[kind] = cls
 
 #: bps: the fastest messaging rate a platform may declare (ten times the e-puck's fastest measured rate)
 MAX_BITRATE = 20_000
@@ -325,8 +337,7 @@ def model_for(platform: Any) -> Any:
     (a model reads its platform's fields, so a custom platform never shares a preset's model).
 
     The model class is the one named by the platform's name, or by ``platform.extras["ir_model"]``
-    (``"droplet"``, ``"epuck"`` or ``"rone"``, see :data:`swarm_envs.ir.models.MODEL_CLASSES`) for a
-    custom platform.
+    (``"droplet"``, ``"epuck"`` or ``"rone"``, see :data:`IR_MODELS`) for a custom platform.
     """
     if isinstance(platform, str):
         platform = get_platform(platform)
@@ -335,10 +346,10 @@ def model_for(platform: Any) -> Any:
         name = platform.name
         kind = (getattr(platform, "extras", None) or {}).get("ir_model", name)
         try:
-            cls = MODEL_CLASSES[kind]
+            cls = IR_MODELS[kind]
         except (KeyError, TypeError):
             raise ValueError(
-                f"no IR model for platform {name!r}; allowed: {sorted(MODEL_CLASSES)} "
+                f"no IR model for platform {name!r}; allowed: {sorted(IR_MODELS)} "
                 "(or set platform.extras['ir_model'])"
             ) from None
         model = cls(platform)

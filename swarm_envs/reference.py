@@ -135,7 +135,7 @@ def occluder_lists(
     segment a[p]-b[p], as CSR (offsets (P + 1,), robots (K,) sorted per pair). The candidates are the
     KD-tree neighbours of both ends within ``sqrt(longest^2 / 4 + width^2)``, tested as flat (pair,
     candidate) arrays."""
-    from swarm_envs.ir.layer import _neighbour_csr
+    from swarm_envs.ir.layer import neighbour_csr
 
     positions = np.ascontiguousarray(positions, dtype=float).reshape(-1, 2)
     a = np.ascontiguousarray(a, dtype=np.int64).reshape(-1)
@@ -148,7 +148,7 @@ def occluder_lists(
     seg = positions[b] - positions[a]
     length = np.hypot(seg[:, 0], seg[:, 1])
     reach = float(np.sqrt(0.25 * float(length.max()) ** 2 + float(width) ** 2 + 2e-9))
-    starts, counts, nbrs = _neighbour_csr(positions, reach, tree)
+    starts, counts, nbrs = neighbour_csr(positions, reach, tree)
     pairs, cands = [], []
     L2 = np.where(length > 0, length * length, 1.0)
     for end in (a, b):  # two vectorised passes: neighbours of a, then of b
@@ -200,7 +200,7 @@ def coordinates_all(knowledge: NeighbourKnowledge, noise_sensitivity: bool = Tru
     lock-step iterations of (N, K, K) operations and Prim's MST [L Alg. 4] as K - 1 iterations of (N, K)
     operations. Arguments and result as in :func:`swarm_envs.sensing.scale_free.coordinates_all`.
     """
-    from swarm_envs.sensing.scale_free import ScaleFreeResult, _triangle_angles, _unit_mean_lengths, triangle_sensitivity
+    from swarm_envs.sensing.scale_free import ScaleFreeResult, triangle_angles, unit_mean_lengths, triangle_sensitivity
 
     ids_in = np.asarray(knowledge.ids, dtype=np.int64)
     th_in = np.asarray(knowledge.bearings, dtype=float)
@@ -261,7 +261,7 @@ def coordinates_all(knowledge: NeighbourKnowledge, noise_sensitivity: bool = Tru
     # equal, and float noise (e.g. 67.5 deg from atan2 vs from a decoded 4-bit sector) must not decide
     # ties in the MST; ties then fall to slot (bearing) order.
     tu, ti, tj = np.nonzero(tri)
-    Pij, Pji, good = _triangle_angles(
+    Pij, Pji, good = triangle_angles(
         tzu[tu, ti], tzw[tu, ti, tj], tzu[tu, tj], tzw[tu, tj, ti], th[tu, ti], th[tu, tj], angle_balance
     )  # good is symmetric in (i, j) by construction
     tu, ti, tj, Pij, Pji = tu[good], ti[good], tj[good], Pij[good], Pji[good]
@@ -331,7 +331,7 @@ def coordinates_all(knowledge: NeighbourKnowledge, noise_sensitivity: bool = Tru
             logf = np.where(new, np.take_along_axis(logf, parent, axis=1) + lr, logf)
             known |= new
 
-    f, valid = _unit_mean_lengths(logf, known & ok)
+    f, valid = unit_mean_lengths(logf, known & ok)
     xy = np.stack([f * np.cos(th), f * np.sin(th)], -1)
 
     # undo the slot permutation
@@ -398,7 +398,7 @@ def pick_ids(heard: np.ndarray, ident_h: np.ndarray, crc_h: np.ndarray, id_check
     the id and CRC words of the heard channels in ``np.nonzero(heard)`` order. Returns (G,) the id all
     checking channels name, :data:`~swarm_envs.sensing.range_bearing.NOT_HEARD` or
     :data:`~swarm_envs.sensing.range_bearing.CONFLICT`."""
-    from swarm_envs.sensing.range_bearing import _CRC16, CONFLICT, ID_BITS, NOT_HEARD
+    from swarm_envs.sensing.range_bearing import CRC16, CONFLICT, ID_BITS, NOT_HEARD
 
     G, n_d = heard.shape
     hg, hi = np.nonzero(heard)
@@ -408,7 +408,7 @@ def pick_ids(heard: np.ndarray, ident_h: np.ndarray, crc_h: np.ndarray, id_check
     crc[hg, hi] = crc_h
     ok = heard
     if id_check:
-        ok = ok & (_CRC16[ident] == crc)
+        ok = ok & (CRC16[ident] == crc)
     big = np.int64(2**ID_BITS)
     lo = np.where(ok, ident, big).min(axis=1)
     top = np.where(ok, ident, -1).max(axis=1)
@@ -427,7 +427,7 @@ def decode_rows(bits: np.ndarray, id_bits: int, count_bits: int, max_entries: in
     """Reference of :func:`swarm_envs.sensing.exchange.decode_rows` (kernel
     :func:`swarm_envs.sensing.kernels.decode_bits`): bits (R, >= needed, zero padded to that) -> ids (R,
     max_entries) (-1 pad), bearings (rad), by reshaping the entries and weighting their bits."""
-    from swarm_envs.sensing.exchange import _dequantise
+    from swarm_envs.sensing.exchange import dequantise
 
     bits = np.asarray(bits, dtype=np.uint8)
     R = bits.shape[0]
@@ -438,7 +438,7 @@ def decode_rows(bits: np.ndarray, id_bits: int, count_bits: int, max_entries: in
     count = np.minimum(_bits_uint(bits[:, :count_bits]), max_entries)
     ent = bits[:, count_bits:need].reshape(R, max_entries, e)
     ids = _bits_uint(ent[..., :id_bits])
-    th = _dequantise(_bits_uint(ent[..., id_bits:]), bearing_bits)
+    th = dequantise(_bits_uint(ent[..., id_bits:]), bearing_bits)
     keep = np.arange(max_entries)[None, :] < count[:, None]
     return np.where(keep, ids, -1), np.where(keep, th, np.nan)
 

@@ -26,7 +26,9 @@ rewards and ``infos``, never as observations. The suite's own tasks are written 
     swarm_envs.register("my_lab/Spread-v0", Spread)     # then make / make_vec / pettingzoo.make / train.py
 
 Everything a task needs is exported here: the base class, the state, the setting rules
-(:class:`Int`, :class:`Real`, :class:`Choice`, :class:`Flag`, :class:`SettingsError`), spawn and fit
+(:class:`Int`, :class:`Real`, :class:`Choice`, :class:`Flag`, :class:`SettingsError`; :class:`Default` for
+another default of a common setting), the platform (:class:`Platform`, :func:`get_platform`), the control
+step :data:`DT` (s), spawn and fit
 helpers (:func:`spawn_positions`, :func:`check_capacity`, :func:`lattice_positions`, :class:`Arena`,
 :func:`obstacle_points`, :func:`distance_to_segments`, :func:`segments_crossed`) and metric helpers over copies
 (:func:`pairs_within`, :func:`largest_component_fraction`, :func:`neighbourhood_sums`,
@@ -43,9 +45,10 @@ from scipy.spatial import cKDTree
 
 from swarm_envs._task_checks import REDUCTIONS, check_declarations, checked_count, checked_length
 from swarm_envs.metrics import largest_component_fraction, neighbourhood_sums
-from swarm_envs.platforms import Platform
-from swarm_envs.settings import MAX_ROBOTS, Choice, Flag, Int, Real, Setting, SettingsError, task_settings
+from swarm_envs.platforms import Platform, get_platform
+from swarm_envs.settings import MAX_ROBOTS, Choice, Default, Flag, Int, Real, Setting, SettingsError, task_settings
 from swarm_envs.world import (
+    DT,
     N_BUMP_SECTORS,
     Arena,
     check_capacity,
@@ -67,7 +70,11 @@ __all__ = [
     "Real",
     "Choice",
     "Flag",
+    "Default",
     "SettingsError",
+    "Platform",
+    "get_platform",
+    "DT",
     "Arena",
     "N_BUMP_SECTORS",
     "spawn_positions",

@@ -31,10 +31,10 @@ from gymnasium.vector import AutoresetMode, VectorEnv
 
 from swarm_envs._task_checks import checked_markers
 from swarm_envs.core import SwarmCore
-from swarm_envs.env import check_reset_options, check_seed, make_layout, resolve_config
 from swarm_envs.platforms import get_platform
 from swarm_envs.settings import SettingsError
 from swarm_envs.task import Task
+from swarm_envs.views import check_finite_actions, check_reset_options, check_seed, info_arrays, make_layout, real_actions, resolve_config
 from swarm_envs.world import COPY_LOG_BYTES
 
 #: copies of one batched core at most, and robots over all its copies at most (memory grows with both)
@@ -258,16 +258,10 @@ class SwarmVectorEnv(VectorEnv):
         raise TypeError(f"seed must be an int, a list of ints (one per copy) or None, got {type(seed).__name__}")
 
     def _check_actions(self, actions: Any) -> np.ndarray:
-        shape = (self.num_envs, self.n_agents, self.layout.action_size)
-        arr = np.asarray(actions)
-        if arr.dtype.kind not in "iuf":  # not bool, complex, strings or objects
-            raise TypeError(f"actions must be a real numeric array of shape {shape}, got dtype {arr.dtype}")
-        if arr.shape != shape:
-            raise ValueError(f"actions must have shape (num_envs, n_agents, action_size) = {shape}, got {arr.shape}")
-        arr = arr.astype(np.float64)
-        if not np.all(np.isfinite(arr)):
-            raise ValueError("actions contain NaN or inf")
-        return np.clip(arr, -1.0, 1.0)
+        B, N, size = shape = (self.num_envs, self.n_agents, self.layout.action_size)
+        arr = real_actions(actions, shape, "actions", f"(num_envs, n_agents, action_size) = {shape}")
+        names = self.possible_agents
+        return check_finite_actions(arr.reshape(B * N, size), lambda row: f"{names[row % N]} of copy {row // N}").reshape(shape)
 
     def _observations(self) -> dict[str, np.ndarray] | np.ndarray:
         parts = self.core.observations()  # fresh arrays every step
@@ -282,19 +276,7 @@ class SwarmVectorEnv(VectorEnv):
         return np.concatenate(flat, axis=2).astype(np.float32)
 
     def _infos(self) -> dict[str, Any]:
-        core, rows = self.core, self._rows
-        stats = core.frame.stats if core.frame is not None else {}
-        return {
-            "metrics": {k: np.asarray(v, dtype=np.float64).copy() for k, v in core.metrics.items()},
-            "reward_terms": {k: np.asarray(v, dtype=np.float64).copy() for k, v in core.terms.items()},
-            "ground_truth": {
-                "position": core.positions[rows].copy(),
-                "heading": core.headings[rows].copy(),
-                "velocity": core.velocities[rows].copy(),
-            },
-            "sensing": {k: np.asarray(v)[rows] for k, v in stats.items()},
-            "episode_step": core.num_cycles.copy(),
-        }
+        return {**info_arrays(self.core, self._rows), "episode_step": self.core.num_cycles.copy()}
 
 
 class AgentsAsEnvs(VectorEnv):

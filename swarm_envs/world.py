@@ -72,8 +72,8 @@ from swarm_envs.geometry import wrap_angle
 from swarm_envs.platforms import Platform
 
 __all__ = [
-    "Arena", "World", "step_worlds", "spawn_positions", "check_capacity", "lattice_lower_bound", "as_real_array", "wrap_angle",
-    "N_BUMP_SECTORS", "CONTROL_STEP", "default_substeps", "min_substeps", "motor_limits", "fit_count", "lattice_positions",
+    "Arena", "World", "step_worlds", "spawn_positions", "check_capacity", "lattice_lower_bound", "as_real_array",
+    "N_BUMP_SECTORS", "DT", "default_substeps", "min_substeps", "motor_limits", "fit_count", "lattice_positions",
     "check_obstacles", "obstacle_points", "distance_to_segments", "wheel_gains", "motion_error", "push_force",
 ]
 
@@ -84,8 +84,8 @@ N_BUMP_SECTORS = 8  # bump sensor: one flag per 45-degree sector of the body (se
 _ROBOT, _WALL = 1, 2
 #: straight walls of a circular arena (a regular polygon around the circle)
 WALL_SEGMENTS = 64
-#: s: the control step the physics defaults are sized for (the env's step, ``swarm_envs.core.DT``)
-CONTROL_STEP = 0.1
+#: s, one control step of the envs = the Droplet R&B update rate [F14 Sec. V]; the physics defaults are sized for it
+DT = 0.1
 #: fraction of a diameter two robots driving head-on at full speed close per sub-step at the default count
 DEFAULT_CLOSING = 0.0175
 #: the fewest sub-steps a platform gets by default
@@ -206,13 +206,13 @@ class Arena:
 
 def closing_per_substep(platform: Platform, substeps: int) -> float:
     """Distance (m) two robots driving head-on at full speed close within one sub-step of the control step."""
-    return 2.0 * platform.max_speed * CONTROL_STEP / substeps
+    return 2.0 * platform.max_speed * DT / substeps
 
 
 def default_substeps(platform: Platform) -> int:
     """The platform's default sub-steps per control step: the fewest (at least :data:`MIN_DEFAULT_SUBSTEPS`)
     at which two robots close at most :data:`DEFAULT_CLOSING` of a diameter per sub-step."""
-    need = 2.0 * platform.max_speed * CONTROL_STEP / (DEFAULT_CLOSING * platform.diameter)
+    need = 2.0 * platform.max_speed * DT / (DEFAULT_CLOSING * platform.diameter)
     return max(MIN_DEFAULT_SUBSTEPS, math.ceil(need - 1e-9))
 
 
@@ -220,7 +220,7 @@ def min_substeps(platform: Platform) -> int:
     """The fewest sub-steps per control step the platform may use: two robots close at most
     :data:`MAX_CLOSING` of a diameter per sub-step, and at least 3 (the motors then keep every robot on its
     exact arc, :func:`motor_limits`)."""
-    need = 2.0 * platform.max_speed * CONTROL_STEP / (MAX_CLOSING * platform.diameter)
+    need = 2.0 * platform.max_speed * DT / (MAX_CLOSING * platform.diameter)
     return max(3, math.ceil(need - 1e-9))
 
 
@@ -233,8 +233,8 @@ def motor_limits(platform: Platform, substeps: int) -> tuple[float, float]:
     A control velocity is ``c = (D - h u) / (dt - h)`` with ``|D| <= v dt`` and ``u`` the previous one, so
     ``|c| <= v dt / (dt - 2 h)`` however the commands alternate, and a change ``c - u`` is at most twice
     that (3 or more sub-steps; with 2 the bound grows without limit, with 1 the motors act a step late)."""
-    h = CONTROL_STEP / substeps
-    reach = 2.0 * CONTROL_STEP / (CONTROL_STEP - 2 * h) if substeps >= 3 else 2.0 * substeps
+    h = DT / substeps
+    reach = 2.0 * DT / (DT - 2 * h) if substeps >= 3 else 2.0 * substeps
     moment = pymunk.moment_for_circle(platform.mass, 0.0, platform.radius)
     force = MOTOR_MARGIN * platform.mass * reach * platform.max_speed / h
     torque = MOTOR_MARGIN * moment * reach * platform.max_angular_speed / h

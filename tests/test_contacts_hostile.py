@@ -15,7 +15,8 @@ from scipy.spatial import cKDTree
 
 from swarm_envs.platforms import PLATFORMS
 from swarm_envs.task import SPACING
-from swarm_envs.world import MAX_OVERLAP, Arena, World, spawn_positions, wrap_angle
+from swarm_envs.world import MAX_OVERLAP, Arena, World, spawn_positions
+from swarm_envs.geometry import wrap_angle
 
 SCENES = ("centre", "corner", "walls", "pairs")
 STEPS = 600

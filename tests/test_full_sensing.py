@@ -5,8 +5,17 @@ import pytest
 
 import swarm_envs
 from swarm_envs.sensing.full import BEACON_PERIOD
-from swarm_envs.observation import relative_pose
+from swarm_envs.observation import wrapped_difference
 from tests.conftest import assert_tree_equal
+
+
+def relative_pose(positions, headings, rx, tx):
+    """Exact pose of robot ``tx`` seen by ``rx`` (ground truth): distance (m), bearing of tx in rx's frame
+    and tx's heading in rx's frame (rad)."""
+    delta = positions[tx] - positions[rx]
+    distance = np.hypot(delta[:, 0], delta[:, 1])
+    bearing = wrapped_difference(np.arctan2(delta[:, 1], delta[:, 0]), headings[rx])
+    return distance, bearing, wrapped_difference(headings[tx], headings[rx])
 
 
 def fresh_readings(env):

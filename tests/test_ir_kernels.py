@@ -111,14 +111,14 @@ def test_compute_links_on_threads_equals_one_thread(monkeypatch):
     monkeypatch.setattr(layer, "THREADED_MIN_PAIRS", 1)
     monkeypatch.setattr(layer, "gain_threads", lambda n_pairs: 3)
     on_three = layer.compute_links(positions, headings, platform)
-    background, rows = layer._compute_links(positions, headings, platform, deferred=True)
+    background, rows = layer.compute_links_with_rows(positions, headings, platform, deferred=True)
     assert rows is not None
     monkeypatch.setattr(layer, "gain_threads", lambda n_pairs: 1)
     serial = layer.compute_links(positions, headings, platform)
     some = np.arange(0, len(serial), 7)
     np.testing.assert_array_equal(rows.take(some), serial.gains[some])  # the sensing's path: rows before the gather
     rows.gather()
-    assert layer._compute_links(positions, headings, platform, deferred=True)[1] is None  # one thread: nothing deferred
+    assert layer.compute_links_with_rows(positions, headings, platform, deferred=True)[1] is None  # one thread: nothing deferred
     for links in (threaded, on_three, background):
         for name in ("rx", "tx", "distance", "rel_position", "rel_heading", "gains", "emitter_sums"):
             np.testing.assert_array_equal(getattr(links, name), getattr(serial, name))
@@ -302,7 +302,7 @@ def test_neighbour_lists_from_the_candidate_pairs_give_the_same_occluders(name):
     np.testing.assert_array_equal(via_pairs[1], via_tree[1])
     reach2 = 0.25 * length**2 + w**2 + 2e-9
     starts, counts, nbrs = kernels.neighbour_csr_kernel(pos, pairs.astype(np.int64), reach2)
-    ref = layer._neighbour_csr(pos, np.sqrt(reach2), tree)
+    ref = layer.neighbour_csr(pos, np.sqrt(reach2), tree)
     np.testing.assert_array_equal(counts, ref[1])
     for r in range(len(pos)):
         assert sorted(nbrs[starts[r] : starts[r] + counts[r]]) == sorted(ref[2][ref[0][r] : ref[0][r] + ref[1][r]])

@@ -195,14 +195,14 @@ def test_a_switched_off_robot_stands_still_and_leaves_the_sensing(sensing, platf
     import swarm_envs.sensing.full as full
 
     links_of_step = []
-    original = full._compute_links
+    original = full.compute_links_with_rows
 
     def recording(*args, **kwargs):
         out = original(*args, **kwargs)
         links_of_step.append((out[0].rx.copy(), out[0].tx.copy()))
         return out
 
-    monkeypatch.setattr(full, "_compute_links", recording)
+    monkeypatch.setattr(full, "compute_links_with_rows", recording)
     env = swarm_envs.make(SwitchOff, n_robots=5, sensing=sensing, platform=platform, observe_ids=True, message_bits=1, arena_size=0.6)
     env.reset(seed=1)
     stopped_at = None

@@ -68,8 +68,8 @@ def test_pick_ids_equals_the_numpy_decode_rule(id_check):
         heard = rng.random((G, n_d)) < 0.4
         H = int(heard.sum())
         ident = rng.integers(0, 4, H)  # few ids: agreeing and conflicting channels
-        crc = np.where(rng.random(H) < 0.7, rbmod._CRC16[ident], rng.integers(0, 2**16, H))
-        got = pick_ids(heard, ident, crc, rbmod._CRC16, id_check, rbmod.NOT_HEARD, rbmod.CONFLICT)
+        crc = np.where(rng.random(H) < 0.7, rbmod.CRC16[ident], rng.integers(0, 2**16, H))
+        got = pick_ids(heard, ident, crc, rbmod.CRC16, id_check, rbmod.NOT_HEARD, rbmod.CONFLICT)
         ref = reference.pick_ids(heard, ident, crc, id_check)
         np.testing.assert_array_equal(got, ref)
         outcomes.update(np.sign(ref).tolist())
@@ -177,7 +177,7 @@ def test_compiled_message_encoding_equals_encode_rows(n, k_max):
 def test_firing_sums_equal_the_gathered_numpy_sums():
     """kernels.firing_sums = segment_sum / sum_last / brightest row of the firing links' gains, bit for bit, for groups of
     1 to 40 links (reduceat's short and pairwise branches)."""
-    from swarm_envs.sensing.kernels import _PAIRWISE_INIT, firing_sums, segment_sum, sum_last
+    from swarm_envs.sensing.kernels import PAIRWISE_INIT, firing_sums, segment_sum, sum_last
 
     rng = np.random.default_rng(11)
     for n_d in (6, 8):
@@ -192,7 +192,7 @@ def test_firing_sums_equal_the_gathered_numpy_sums():
             sel = sel[: int(sizes.sum())]
             starts = np.r_[0, np.cumsum(sizes)[:-1]].astype(np.int64)
             g = gains[sel]
-            lam, light, start, best = firing_sums(g.reshape(sel.size, -1), starts, n_d, _PAIRWISE_INIT)
+            lam, light, start, best = firing_sums(g.reshape(sel.size, -1), starts, n_d, PAIRWISE_INIT)
             _same_bits(lam.reshape(-1, n_d, n_d), np.add.reduceat(g, starts, axis=0))
             _same_bits(light, sum_last(g))
             _same_bits(start, segment_sum(sum_last(g), starts))

@@ -72,3 +72,28 @@ def test_arguments_reach_the_env(module):
         module.parallel_env(3)  # keyword-only
     aec = module.env(n_robots=2, sensing="ideal")
     assert aec.possible_agents == ["robot_0", "robot_1"]
+
+
+def test_task_module_builds_the_entry_points_from_a_task():
+    from swarm_envs.factories import task_module
+    from swarm_envs.task import Default, Real, Task
+
+    class GainTask(Task):
+        SETTINGS = {"gain": Real(2.0, low=0.0, help="the gain of the test"), "n_robots": Default(3, help="three robots")}
+
+        def rewards(self, state, first):
+            raise NotImplementedError
+
+    doc = "Make it.\n\n## Description\n\nA test.\n\n## Rewards\n\nNone.\n\n## Version History\n\n- v0: a test.\n"
+    raw_env, parallel_env, env = task_module(GainTask, doc)
+    assert raw_env.__name__ == "GainEnv" and raw_env.TASK is GainTask
+    params = inspect.signature(parallel_env).parameters
+    assert list(params)[:2] == ["n_robots", "gain"] and params["gain"].default == 2.0 and params["n_robots"].default == 3
+    text = inspect.getdoc(parallel_env)
+    assert re.findall(r"^## (.+)$", text, flags=re.M) == SECTIONS
+    assert "| ``gain`` | 2.0 | the gain of the test |" in text and "| ``n_robots`` | 3 | three robots |" in text
+    assert "default 500 = 50 s" in text  # the default truncation section
+    with pytest.raises(ValueError, match=r"missing \['Rewards'\]"):
+        task_module(GainTask, "Make it.\n\n## Description\n\nA test.\n\n## Version History\n\n- v0.\n")
+    with pytest.raises(ValueError, match=r"unknown \['Reward'\]"):
+        task_module(GainTask, doc.replace("## Rewards", "## Reward"))

@@ -75,8 +75,19 @@ def test_centroid_seeker_approaching_raises_reward():
 
 
 def test_batched_components_equal_one_graph_per_copy():
-    """largest_component_fraction over B copies at once equals cluster_stats copy by copy."""
-    from swarm_envs.metrics import cluster_stats, largest_component_fraction
+    """largest_component_fraction over B copies at once equals scipy's components of each copy's own graph."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+    from scipy.spatial import cKDTree
+
+    from swarm_envs.metrics import largest_component_fraction
+
+    def cluster_stats(positions, link_distance):  # one copy: (largest-cluster fraction, number of clusters)
+        n = len(positions)
+        pairs = cKDTree(positions).query_pairs(link_distance, output_type="ndarray").reshape(-1, 2)
+        graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(n, n))
+        sizes = np.bincount(connected_components(graph, directed=False)[1])
+        return sizes.max() / n, len(sizes)
 
     rng = np.random.default_rng(0)
     for B, N in [(1, 5), (7, 10), (3, 50)]:

@@ -4,7 +4,8 @@ import numpy as np
 import pytest
 
 from swarm_envs.platforms import PLATFORMS
-from swarm_envs.world import Arena, World, spawn_positions, wrap_angle
+from swarm_envs.world import Arena, World, spawn_positions
+from swarm_envs.geometry import wrap_angle
 
 
 @pytest.mark.parametrize("platform", sorted(PLATFORMS))

@@ -81,8 +81,6 @@ BITRATES = (310, 650, 1080, 1160, 1670, 1800)  # bps offered by the e-puck hardw
 COMM_MODES = ("broadcast", "flooding")
 BACKENDS = ("numpy", "numba")
 
-_COUNTERS = COUNTERS  # statistics counters (documented in comm/kernels.py)
-_PER_ROBOT = PER_ROBOT  # ... also kept per robot
 
 
 @dataclass
@@ -314,8 +312,8 @@ class Network:
         self.seen_slot = np.zeros(0, dtype=np.int64)
         self.det.reset(self._startup_ambient(np.arange(n)))
         self.csma.reset()
-        self.stats: dict[str, Any] = {c: 0 for c in _COUNTERS}
-        for c in _PER_ROBOT:
+        self.stats: dict[str, Any] = {c: 0 for c in COUNTERS}
+        for c in PER_ROBOT:
             self.stats[c + "_per_robot"] = np.zeros(n, dtype=np.int64)
         self._step_stats = self._new_step_stats()
 
@@ -354,12 +352,12 @@ class Network:
         receiver = self.seen_keys // (1 << SEQ_BITS) // self.n
         keep = ~np.isin(self.copy_of[receiver], copies) if self.seen_keys.size else np.zeros(0, bool)
         self.seen_keys, self.seen_slot = self.seen_keys[keep], self.seen_slot[keep]
-        for c in _PER_ROBOT:
+        for c in PER_ROBOT:
             self.stats[c + "_per_robot"][rows] = 0
 
     def _new_step_stats(self) -> dict[str, Any]:
-        s: dict[str, Any] = {c: 0 for c in _COUNTERS}
-        for c in _PER_ROBOT:
+        s: dict[str, Any] = {c: 0 for c in COUNTERS}
+        for c in PER_ROBOT:
             s[c + "_per_robot"] = np.zeros(self.n, dtype=np.int64)
         return s
 
@@ -374,7 +372,7 @@ class Network:
         tot = int(vals.sum())
         self.stats[name] += tot
         self._step_stats[name] += tot
-        if name in _PER_ROBOT and robots.size:
+        if name in PER_ROBOT and robots.size:
             np.add.at(self.stats[name + "_per_robot"], robots, vals)
             np.add.at(self._step_stats[name + "_per_robot"], robots, vals)
 
@@ -487,7 +485,7 @@ class Network:
     def prepare_step(self) -> PreparedStep:
         """This step's slot count and every random number of it (:meth:`draw_step`), drawn ahead: they depend
         on neither the links nor the queues, so they can be drawn while the physics runs (another thread;
-        :class:`swarm_envs.core.BatchCore`). Pass the result to the next :meth:`step`; a prepared step that
+        :class:`swarm_envs.core.SwarmCore`). Pass the result to the next :meth:`step`; a prepared step that
         is never used leaves the streams advanced by one step's draws."""
         total = self.carry + self.bitrate * self.dt
         S = int(np.floor(total + 1e-9))
@@ -578,8 +576,8 @@ class Network:
         dcap = self.n * (1 + S // (fmt.header_blocks * c.n + 1))  # completions per robot and step are bounded
         d_int = np.zeros((dcap, len(DELIVERY_FIELDS)), dtype=np.int64)
         d_pay = np.zeros((dcap, MAX_PAYLOAD), dtype=bool)
-        counts = np.zeros(len(_COUNTERS), dtype=np.int64)
-        per_robot = np.zeros((len(_PER_ROBOT), self.n), dtype=np.int64)
+        counts = np.zeros(len(COUNTERS), dtype=np.int64)
+        per_robot = np.zeros((len(PER_ROBOT), self.n), dtype=np.int64)
         fc = np.array([self.frame_counter], dtype=np.int64)
         state = det.state.view(np.int8)
         D = slot_loop(
@@ -597,10 +595,10 @@ class Network:
         )  # fmt: skip
         self.frame_counter = int(fc[0])
         self.slot += S
-        for i, name in enumerate(_COUNTERS):
+        for i, name in enumerate(COUNTERS):
             if counts[i]:
                 self._count(name, values=int(counts[i]))
-        for i, name in enumerate(_PER_ROBOT):
+        for i, name in enumerate(PER_ROBOT):
             self.stats[name + "_per_robot"] += per_robot[i]
             self._step_stats[name + "_per_robot"] += per_robot[i]
         if D == 0:

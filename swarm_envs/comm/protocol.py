@@ -62,6 +62,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from swarm_envs.comm.bch import BCHCode, code as bch_code
+from swarm_envs.platforms import CRC_WIDTHS  # the allowed ``crc_bits`` of a frame (0: no CRC)
 
 __all__ = [
     "FrameFormat",
@@ -104,8 +105,6 @@ def bits_to_uint(bits: np.ndarray) -> np.ndarray:
 #: CRC generator polynomials by width: CRC-8 x^8 + x^2 + x + 1 (CRC-8/ATM; ours, for flooding) and CRC-16
 #: x^16 + x^15 + x^2 + 1, the polynomial of the r-one's and the Droplet's message CRCs (module docstring)
 CRC_POLYS = {8: 0x107, 16: 0x18005}
-#: allowed ``crc_bits`` of a frame (0: no CRC)
-CRC_WIDTHS = (0, 8, 16)
 _CRC_TABLES: dict[int, np.ndarray] = {}
 
 

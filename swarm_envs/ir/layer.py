@@ -43,8 +43,8 @@ from swarm_envs.ir.hardware import Hardware
 from swarm_envs.platforms import Platform, get_platform
 
 __all__ = [
-    "IRLinks", "compute_links", "pair_geometry", "pair_cosines", "pair_gains", "pair_occluders", "line_of_sight",
-    "occluder_width", "wrap_angle", "gain_threads", "THREADED_MIN_PAIRS", "block_links", "rays_blocked", "no_obstacles",
+    "IRLinks", "compute_links", "compute_links_with_rows", "neighbour_csr", "pair_geometry", "pair_cosines", "pair_gains", "pair_occluders", "line_of_sight",
+    "occluder_width", "gain_threads", "THREADED_MIN_PAIRS", "block_links", "rays_blocked", "no_obstacles",
 ]
 
 OCCLUSION_RULES = ("ray", "centre", "none")
@@ -334,7 +334,7 @@ def occluder_width(platform: Platform | str) -> float:
     return float(platform.radius + rho)
 
 
-def _neighbour_csr(positions: np.ndarray, reach: float, tree: cKDTree) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def neighbour_csr(positions: np.ndarray, reach: float, tree: cKDTree) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Neighbour lists within ``reach`` (m) of every robot from one KD-tree ``query_pairs``, as CSR
     (starts, counts, neighbours)."""
     near = tree.query_pairs(reach, output_type="ndarray")
@@ -408,7 +408,7 @@ def _occluder_lists(
     if near_pairs is not None and reach < near_range * (1.0 - 1e-9):  # lists from the pairs, no second query
         starts, counts, nbrs = kernels.neighbour_csr_kernel(positions, np.ascontiguousarray(near_pairs, dtype=np.int64), reach2)
     else:
-        starts, counts, nbrs = _neighbour_csr(positions, reach, tree)
+        starts, counts, nbrs = neighbour_csr(positions, reach, tree)
     if threads > 1:
         return kernels.occluders_kernel_threaded(positions, float(width), a, b, starts, counts, nbrs, int(threads))
     return kernels.occluders_kernel(positions, float(width), a, b, starts, counts, nbrs)
@@ -481,10 +481,10 @@ def compute_links(
     Returns:
         :class:`IRLinks` with both directions (u, w) and (w, u) of every candidate pair, sorted by (rx, tx).
     """
-    return _compute_links(positions, headings, platform, max_range, drop_zero, occlusion, copy, obstacles=obstacles, silent=silent, hardware=hardware)[0]
+    return compute_links_with_rows(positions, headings, platform, max_range, drop_zero, occlusion, copy, obstacles=obstacles, silent=silent, hardware=hardware)[0]
 
 
-def _compute_links(
+def compute_links_with_rows(
     positions: np.ndarray,
     headings: np.ndarray,
     platform: Platform | str,

@@ -65,7 +65,7 @@ import numpy as np
 from swarm_envs.copies import CopyRandom
 from swarm_envs.sensing.kernels import decode_bits, encode_tables, roll_tables, store_deliveries
 
-__all__ = ["BearingExchange", "NeighbourKnowledge", "encode_rows", "decode_rows", "thesis_round_time", "readings_table"]
+__all__ = ["BearingExchange", "NeighbourKnowledge", "encode_rows", "decode_rows", "thesis_round_time", "readings_table", "dequantise"]
 
 MAX_PAYLOAD_BITS = 255  # the SwarmCom frame's 8-bit length field (swarm_envs.comm.protocol)
 NEVER = -(10**9)  # the time of an empty slot
@@ -124,7 +124,8 @@ def _quantise(theta: np.ndarray, bearing_bits: int) -> np.ndarray:
     return np.mod(np.rint(np.asarray(theta) / (2 * np.pi / n)).astype(np.int64), n)
 
 
-def _dequantise(q: np.ndarray, bearing_bits: int) -> np.ndarray:
+def dequantise(q: np.ndarray, bearing_bits: int) -> np.ndarray:
+    """Bearings (rad, in (-pi, pi]) of the ``bearing_bits``-bit codes ``q`` of :func:`encode_rows`."""
     n = 1 << bearing_bits
     a = np.asarray(q, dtype=float) * (2 * np.pi / n)
     return np.pi - np.mod(np.pi - a, 2 * np.pi)
@@ -154,7 +155,7 @@ def decode_rows(bits: np.ndarray, id_bits: int, count_bits: int, max_entries: in
     if bits.ndim != 2:
         raise ValueError(f"decode_rows: bits must be (rows, bits), got shape {bits.shape}")
     ids, q = decode_bits(bits, int(id_bits), int(count_bits), int(max_entries), int(bearing_bits))
-    return ids, np.where(ids >= 0, _dequantise(q, bearing_bits), np.nan)
+    return ids, np.where(ids >= 0, dequantise(q, bearing_bits), np.nan)
 
 
 def readings_table(rx: np.ndarray, tx: np.ndarray, bearing: np.ndarray, n_robots: int, k_max: int) -> tuple[np.ndarray, np.ndarray]:

@@ -53,7 +53,7 @@ from swarm_envs.comm.channel import recommended_relative_threshold
 from swarm_envs.comm.network import Network, PreparedStep
 from swarm_envs.copies import CopyRandom
 from swarm_envs.ir.hardware import Hardware, draw_hardware
-from swarm_envs.ir.layer import _compute_links, gain_threads
+from swarm_envs.ir.layer import compute_links_with_rows, gain_threads
 from swarm_envs.ir.models import RoneIR
 from swarm_envs.observation import nearest_slots, pack_nearest, range_bearing_rows
 from swarm_envs.platforms import Platform
@@ -223,7 +223,7 @@ class FullSensing:
         """The part of a step that reads nothing the physics changes: the application ``payloads`` (N, b)
         bool or None are queued (robots with an empty transmit queue, among ``sending`` (N,) bool, default
         all), then the bearing exchange's messages or the beacons, and the channel's random numbers of the
-        step are drawn (:meth:`Network.prepare_step`). :class:`swarm_envs.core.BatchCore` runs it on the
+        step are drawn (:meth:`Network.prepare_step`). :class:`swarm_envs.core.SwarmCore` runs it on the
         worker thread while the physics of a large scene runs; pass the result to :meth:`step`."""
         net = self.network
         if payloads is not None and self.message_bits > 0:
@@ -259,7 +259,7 @@ class FullSensing:
         # the IR links; in a large scene the gain matrices stay where the gain kernel's chunks left them
         # (swarm_envs.ir.kernels.ChunkRows): range & bearing reads the rows it needs from there, SwarmCom
         # reads only the emitter sums, and nothing here reads links.gains before gain_rows.gather()
-        links, gain_rows = _compute_links(
+        links, gain_rows = compute_links_with_rows(
             positions, headings, self.platform, copy=self.copy_of if self.n_copies > 1 else None, deferred=True, obstacles=self.obstacles,
             silent=silent, hardware=self.hardware,
         )

@@ -307,7 +307,7 @@ class IdealSensing:
 
             pairs = pairs[~rays_blocked(positions[pairs[:, 0]], positions[pairs[:, 1]], self.obstacles)]
         rx, tx, link = directed_links(pairs, self.n)
-        # exact pose of tx seen by rx (as observation.relative_pose); the two directions of a pair have
+        # exact pose of tx seen by rx (its distance, bearing and heading in rx's frame); the two directions of a pair have
         # opposite offsets, so one hypot per pair gives both distances bit for bit
         dx, dy, heading_rx, heading = _link_geometry_kernel(positions, headings, rx, tx)
         pair_link = np.flatnonzero(rx < tx)  # each pair's i -> j link (offset p_j - p_i)

@@ -36,7 +36,7 @@ __all__ = [
     "two_hop_triangles", "two_hop_propagate", "segment_sum", "sum_last", "priority_independent_set",
     "priority_independent_set_sorted", "frame_words", "firing_sums", "adc_bits", "adc_pass", "pick_ids",
     "merge_readings", "encode_tables", "decode_bits", "roll_tables", "store_deliveries", "slot_keys",
-    "unit_mean_positions",
+    "unit_mean_positions", "PAIRWISE_INIT",
 ]
 
 
@@ -304,12 +304,13 @@ def segment_sum(a: np.ndarray, starts: np.ndarray) -> np.ndarray:
     if a.dtype != np.float64 or starts.size == 0 or starts.min() < 0 or starts.max() >= a.shape[0]:
         return np.add.reduceat(a, starts, axis=0)
     flat = np.ascontiguousarray(a).reshape(a.shape[0], -1)
-    return _segment_sum(flat, starts, _PAIRWISE_INIT).reshape((starts.size, *a.shape[1:]))
+    return _segment_sum(flat, starts, PAIRWISE_INIT).reshape((starts.size, *a.shape[1:]))
 
 
-# numpy >= 2 starts a short pairwise sum from -0.0 (the additive identity: a sum of -0.0 stays -0.0),
-# older numpy from 0.0; ask the installed numpy (an argument, not a global: numba's cache would freeze it)
-_PAIRWISE_INIT = -0.0 if np.signbit(np.add.reduceat(np.full((3, 1), -0.0), [0], axis=0)[0, 0]) else 0.0
+#: the start value of numpy's short pairwise sums: -0.0 under numpy >= 2 (the additive identity: a sum of
+#: -0.0 stays -0.0), 0.0 before; asked of the installed numpy. Kernels that repeat numpy's summation take it
+#: as an argument, not a global (numba's cache would freeze it).
+PAIRWISE_INIT = -0.0 if np.signbit(np.add.reduceat(np.full((3, 1), -0.0), [0], axis=0)[0, 0]) else 0.0
 
 
 @njit(cache=True, nogil=True)
@@ -442,7 +443,7 @@ def frame_words(light, frames, starts, heard, noise, scale, top, floor, id_bits)
         np.ascontiguousarray(light, dtype=np.float64), np.ascontiguousarray(frames, dtype=np.bool_),
         np.ascontiguousarray(starts, dtype=np.int64), np.ascontiguousarray(heard, dtype=np.bool_),
         np.ascontiguousarray(noise, dtype=np.float64), float(scale), float(top), float(floor), int(id_bits),
-        _PAIRWISE_INIT,
+        PAIRWISE_INIT,
     )
 
 

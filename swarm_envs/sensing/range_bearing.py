@@ -78,10 +78,11 @@ import numpy as np
 
 from swarm_envs.copies import CopyRandom, CopyStream
 from swarm_envs.ir.hardware import Hardware
-from swarm_envs.ir.layer import IRLinks, pair_gains, wrap_angle
+from swarm_envs.geometry import wrap_angle
+from swarm_envs.ir.layer import IRLinks, pair_gains
 from swarm_envs.platforms import Platform, get_platform
 from swarm_envs.sensing.kernels import (
-    _PAIRWISE_INIT,
+    PAIRWISE_INIT,
     FRAME_WORDS_MAX_GROUP,
     adc_bits,
     adc_pass,
@@ -98,6 +99,7 @@ from swarm_envs.sensing.kernels import (
 
 __all__ = [
     "POWER_LADDER",
+    "CRC16",
     "brightness",
     "measure",
     "estimate",
@@ -150,7 +152,8 @@ def _crc16_table() -> np.ndarray:
     return crc.astype(np.int64)
 
 
-_CRC16 = _crc16_table()
+#: the CRC-16 of every ``ID_BITS``-bit robot id (indexed by id), the check an id frame carries
+CRC16 = _crc16_table()
 _WEIGHTS = 1 << np.arange(ID_BITS, dtype=np.int64)
 
 
@@ -165,7 +168,7 @@ def id_frames(ids: np.ndarray) -> np.ndarray:
         raise ValueError(f"robot ids must be in [0, {2**ID_BITS}) to fit the {ID_BITS}-bit id field")
     bits = np.arange(ID_BITS)
     return np.concatenate(
-        [np.ones((ids.size, 1), bool), (ids[:, None] >> bits) & 1 == 1, (_CRC16[ids][:, None] >> bits) & 1 == 1], axis=1
+        [np.ones((ids.size, 1), bool), (ids[:, None] >> bits) & 1 == 1, (CRC16[ids][:, None] >> bits) & 1 == 1], axis=1
     )
 
 
@@ -234,7 +237,7 @@ def decode_ids(
         float(model.adc_scale), float(model.adc_max), float(model.no_reading_floor), ID_BITS,
     )
     # the decode rule (numpy reference: swarm_envs.reference.pick_ids)
-    return pick_ids(heard, ident_h, crc_h, _CRC16, bool(id_check), NOT_HEARD, CONFLICT)
+    return pick_ids(heard, ident_h, crc_h, CRC16, bool(id_check), NOT_HEARD, CONFLICT)
 
 
 def frame_words_numpy(
@@ -720,7 +723,7 @@ class RangeBearingSensor:
         n_d = gains.shape[1]
         fused = sel.size > 0 and gains.dtype == np.float64 and int(n_over.max()) <= FRAME_WORDS_MAX_GROUP
         if fused:  # the sums and the brightest link of every group in one pass (kernels.firing_sums)
-            lam, light, group_light, best = firing_sums(gains.reshape(sel.size, -1), starts.astype(np.int64), n_d, _PAIRWISE_INIT)
+            lam, light, group_light, best = firing_sums(gains.reshape(sel.size, -1), starts.astype(np.int64), n_d, PAIRWISE_INIT)
             lam = lam.reshape(starts.size, *gains.shape[1:])
             true = tx_sel[best]  # ground truth: the firing TX with the brightest entry of each group
         else:

@@ -69,7 +69,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from swarm_envs.sensing.exchange import BearingExchange, NeighbourKnowledge
-from swarm_envs.sensing.kernels import _PAIRWISE_INIT, slot_keys, two_hop_propagate, two_hop_triangles, unit_mean_positions
+from swarm_envs.geometry import wrap_angle
+from swarm_envs.sensing.kernels import PAIRWISE_INIT, slot_keys, two_hop_propagate, two_hop_triangles, unit_mean_positions
 
 __all__ = [
     "coordinates",
@@ -80,6 +81,8 @@ __all__ = [
     "knowledge_from_matrix",
     "null_space_lengths",
     "triangle_sensitivity",
+    "triangle_angles",
+    "unit_mean_lengths",
     "angle_balance",
     "DEGENERATE_ANGLE",
     "NULL_RTOL",
@@ -91,10 +94,6 @@ NULL_RTOL = 1e-9  # relative singular-value tolerance for the null space of A
 RESTRICT_TOL = 1e-6  # singular-value tolerance for the rank of N' (rows of an orthonormal basis)
 ANGLE_DECIMALS = 10  # 2-hop inner angles are rounded to 1e-10 rad (tie-breaking, see coordinates_all)
 
-
-def _wrap(a: np.ndarray) -> np.ndarray:
-    """Wrap angles to (-pi, pi]."""
-    return np.pi - np.mod(np.pi - a, 2.0 * np.pi)
 
 
 # --------------------------------------------------------------------------------------------------
@@ -174,7 +173,7 @@ def coordinates_all(
         key_b, key_id, ids_in, th_in, slot_ok_in, rid_in, rth_in, self_ids, int(cap)
     )
     # the float formulas on the triangle list
-    Pij, Pji, good = _triangle_angles(vals[:, 0], vals[:, 1], vals[:, 2], vals[:, 3], vals[:, 4], vals[:, 5], angle_balance)
+    Pij, Pji, good = triangle_angles(vals[:, 0], vals[:, 1], vals[:, 2], vals[:, 3], vals[:, 4], vals[:, 5], angle_balance)
     tu, ti, tj, Pij, Pji = tu[good], ti[good], tj[good], Pij[good], Pji[good]
     starts = np.searchsorted(tu, np.arange(n + 1))
     logratio = np.log(np.sin(Pij)) - np.log(np.sin(Pji))
@@ -185,9 +184,9 @@ def coordinates_all(
         weight = np.zeros(0)
     logf, known, rigid = two_hop_propagate(ok, starts, ti, tj, logratio, weight, noise_sensitivity)
     if k <= 128:  # normalisation, slot order and positions in one pass (kernels.unit_mean_positions)
-        f, valid, xy = unit_mean_positions(np.exp(logf), known & ok, inv, np.cos(th_in), np.sin(th_in), _PAIRWISE_INIT)
+        f, valid, xy = unit_mean_positions(np.exp(logf), known & ok, inv, np.cos(th_in), np.sin(th_in), PAIRWISE_INIT)
         return ScaleFreeResult(xy=xy, valid=valid, rigid=rigid, ids=ids_in.copy(), length=f)
-    f, valid = _unit_mean_lengths(logf, known & ok)
+    f, valid = unit_mean_lengths(logf, known & ok)
     # undo the slot permutation before the (element-wise) positions
     f = np.take_along_axis(f, inv, 1)
     xy = np.stack([f * np.cos(th_in), f * np.sin(th_in)], -1)
@@ -423,10 +422,9 @@ def coordinates(
     raise ValueError(f"unknown method {method!r}; allowed: 'two_hop', 'null_space'")
 
 
-_angle_balance = angle_balance  # module-level alias: the keyword argument of coordinates_all shadows it
 
 
-def _unit_mean_lengths(logf: np.ndarray, valid: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def unit_mean_lengths(logf: np.ndarray, valid: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(N, K) neighbour lengths ``exp(logf)`` where ``valid`` (NaN elsewhere), scaled so that each robot's
     valid lengths have mean 1; returns them with ``valid``."""
     f = np.where(valid, np.exp(logf), np.nan)
@@ -436,18 +434,18 @@ def _unit_mean_lengths(logf: np.ndarray, valid: np.ndarray) -> tuple[np.ndarray,
     return f / np.where(nv > 0, mean_f, 1.0)[:, None], valid
 
 
-def _triangle_angles(
-    i_u: np.ndarray, i_j: np.ndarray, j_u: np.ndarray, j_i: np.ndarray, u_i: np.ndarray, u_j: np.ndarray, angle_balance: bool
+def triangle_angles(
+    i_u: np.ndarray, i_j: np.ndarray, j_u: np.ndarray, j_i: np.ndarray, u_i: np.ndarray, u_j: np.ndarray, balance: bool
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Inner angles of triangles (u, i, j) from the bearings ``theta_i(u), theta_i(j), theta_j(u), theta_j(i),
     theta_u(i), theta_u(j)`` (rad): ``Pij`` at i and ``Pji`` at j, rounded to 1e-ANGLE_DECIMALS rad and
-    optionally angle-balanced [L Alg. 2], and ``good``: the non-degenerate ones (both away from 0 and pi).
+    angle-balanced [L Alg. 2] when ``balance``, and ``good``: the non-degenerate ones (both away from 0 and pi).
     Shared by :func:`coordinates_all` and its numpy reference (:func:`swarm_envs.reference.coordinates_all`)."""
-    Pij = np.round(np.abs(_wrap(i_u - i_j)), ANGLE_DECIMALS)
-    Pji = np.round(np.abs(_wrap(j_u - j_i)), ANGLE_DECIMALS)
-    pu = np.round(np.abs(_wrap(u_i - u_j)), ANGLE_DECIMALS)
-    if angle_balance:
-        _, Pij, Pji = _angle_balance(pu, Pij, Pji)
+    Pij = np.round(np.abs(wrap_angle(i_u - i_j)), ANGLE_DECIMALS)
+    Pji = np.round(np.abs(wrap_angle(j_u - j_i)), ANGLE_DECIMALS)
+    pu = np.round(np.abs(wrap_angle(u_i - u_j)), ANGLE_DECIMALS)
+    if balance:
+        _, Pij, Pji = angle_balance(pu, Pij, Pji)
     good = (
         (np.minimum(Pij, np.pi - Pij) > DEGENERATE_ANGLE)
         & (np.minimum(Pji, np.pi - Pji) > DEGENERATE_ANGLE)

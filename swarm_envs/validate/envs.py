@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 
 from swarm_envs.core import SwarmCore
-from swarm_envs.env import check_reset_options, make_layout, resolve_config
+from swarm_envs.views import check_reset_options, make_layout, resolve_config
 from swarm_envs.platforms import get_platform
 from swarm_envs.registry import task_class
 from swarm_envs.sensing.exchange import NeighbourKnowledge

@@ -41,7 +41,8 @@ from typing import Any
 import numpy as np
 
 from swarm_envs.copies import CopyRandom
-from swarm_envs.ir.layer import IRLinks, compute_links, pair_gains, wrap_angle
+from swarm_envs.geometry import wrap_angle
+from swarm_envs.ir.layer import IRLinks, compute_links, pair_gains
 from swarm_envs.platforms import get_platform
 from swarm_envs.sensing.range_bearing import RangeBearingSensor, brightness, read
 from swarm_envs.validate.report import Row, print_rows, rows_json

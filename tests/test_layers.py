@@ -1,0 +1,24 @@
+"""The package's layers hold (pyproject.toml ``[tool.importlinter]``): `lint-imports` finds no import from a
+lower layer to a higher one (no package cycle, e.g. platforms -> comm -> platforms), none between the two
+adapters, and no task module importing an adapter."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parent.parent
+
+pytest.importorskip("importlinter", reason="import-linter is not installed (the test extra installs it)")
+
+
+def test_import_contracts_are_kept():
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")])}
+    code = "import sys; from importlinter.cli import lint_imports; sys.exit(lint_imports(config_filename='pyproject.toml', no_cache=True))"
+    result = subprocess.run([sys.executable, "-c", code], cwd=ROOT, env=env, capture_output=True, text=True, timeout=600)
+    assert result.returncode == 0, result.stdout[-4000:] + result.stderr[-2000:]
+    assert "Contracts: 2 kept, 0 broken." in result.stdout
