@@ -203,7 +203,7 @@ def test_rank_rows_matches_the_simulators_selection(built):
 
 def test_full_synthetic_tables_match_the_simulators_packing(built):
     """Tables fuller than the rows (more neighbours and scale-free entries than K, M messages, ties, values
-    outside the Box): the C vector equals what the simulator's own packing gives for the same readings
+    outside the Box, stale readings and malformed messages): the C vector equals what the simulator's own packing gives for the same readings
     (the observation builder of swarm_envs.core on a sensor frame holding them, and FullSensing's
     scale-free ranking), so truncation and clipping are covered whatever the random runs reached."""
     from swarm_envs.observation import pack_nearest
@@ -227,8 +227,8 @@ def test_full_synthetic_tables_match_the_simulators_packing(built):
         rng_range = rng.uniform(-0.01, 1.2 * env.platform.ir_range, ids.size) if c["has_range"] else np.zeros(ids.size)
         rng_range[1::3] = rng_range[0] if ids.size else 0.0
         bearing, heading = rng.uniform(-np.pi, np.pi, (2, ids.size))
-        age = rng.integers(0, c["high"][c["offsets"]["range_bearing"] + 6] + 5, ids.size)
-        n_msg = int(rng.integers(0, c["M"] + 1)) if b else 0
+        age = rng.integers(0, c["max_age"] + 1, ids.size)
+        n_msg = int(rng.integers(0, c["M"] + 1)) if b else 0  # (the firmware's buffer keeps the first M)
         sender = rng.integers(0, n_world, n_msg)
         detector = rng.integers(0, len(c["detector_bearing"]), n_msg)
         payload = rng.integers(0, 2, (n_msg, b))
@@ -261,6 +261,15 @@ def test_full_synthetic_tables_match_the_simulators_packing(built):
             "messages": [{"sender": int(s_), "detector": int(d), "n_bits": b, "payload": p.tolist()} for s_, d, p in zip(sender, detector, payload)],
             "scale_free": {"rigid": rigid, "entries": [{"id": int(i), "x": float(x), "y": float(y)} for i, (x, y) in zip(sf_ids, sf_xy)]},
         }  # fmt: skip
+        # entries the simulator never holds, which the C leaves out: a reading older than max_age (the
+        # simulator drops it), a message whose length or sender is not this swarm's (dropped on receipt)
+        spare = np.setdiff1d(others, ids)
+        if spare.size and len(tab["neighbours"]) < c["neighbour_capacity"]:
+            tab["neighbours"].insert(int(rng.integers(0, len(tab["neighbours"]) + 1)),
+                                     {"id": int(spare[0]), "range": 0.0, "bearing": 0.0, "heading": 0.0, "age": c["max_age"] + 1})  # fmt: skip
+        if b and len(tab["messages"]) < c["message_capacity"]:
+            bad = {"sender": n_world, "detector": 0, "n_bits": b, "payload": [1] * b} if trial % 2 else {"sender": 0, "detector": 0, "n_bits": b + 1, "payload": [1] * b}
+            tab["messages"].insert(int(rng.integers(0, len(tab["messages"]) + 1)), bad)
         lib.obs_build(ctypes.byref(_fill(Tables, tab)), out)
         got = np.frombuffer(out, np.float32)
         np.testing.assert_allclose(got, want, rtol=0, atol=1e-5, err_msg=f"{name} trial {trial}")

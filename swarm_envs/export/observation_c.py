@@ -50,7 +50,8 @@ def builder_constants(env: Any) -> dict[str, Any]:
     Keys: ``K``, ``M``, ``message_bits``, ``action_size``, ``n_world``, ``observe_ids``, ``size`` (length
     of the flat vector), ``offsets`` (part -> first index), ``low`` / ``high`` (float32 bounds of the flat
     vector), ``neighbour_capacity`` (entries of the neighbour table), ``message_capacity``,
-    ``scale_free_capacity``, ``detector_bearing`` (rad, body frame, per detector), ``platform``.
+    ``scale_free_capacity``, ``detector_bearing`` (rad, body frame, per detector), ``platform``,
+    ``has_range`` (the platform measures range), ``max_age`` (steps, the oldest observed reading).
     """
     if env.config["sensing"] != "full":
         raise ValueError(f"the C observation builder reproduces sensing='full' only, got sensing={env.config['sensing']!r}")
@@ -82,6 +83,7 @@ def builder_constants(env: Any) -> dict[str, Any]:
         "detector_bearing": np.asarray(env.platform.detector_directions, np.float64),
         "platform": env.platform.name,
         "has_range": bool(env.sensing.has_range),
+        "max_age": int(layout.max_age),
     }
 
 
@@ -208,6 +210,7 @@ def _header(c: dict[str, Any], env_id: str) -> str:
 #define OBS_N_BUMP_SECTORS {N_BUMP_SECTORS}
 #define OBS_N_WORLD {c['n_world']}               /* robots in the swarm (ids 0 .. OBS_N_WORLD - 1) */
 #define OBS_OBSERVE_IDS {int(c['observe_ids'])}           /* 1: the id parts are in the vector */
+#define OBS_MAX_AGE {c['max_age']}             /* steps: older neighbour readings are not observed */
 #define OBS_N_DETECTORS {len(c['detector_bearing'])}
 #define OBS_NEIGHBOUR_CAPACITY {c['neighbour_capacity']}    /* entries of obs_neighbour_table_t */
 #define OBS_MESSAGE_CAPACITY {c['message_capacity']}      /* entries of obs_message_buffer_t */
@@ -347,15 +350,18 @@ void obs_build(const obs_tables_t *t, float out[OBS_SIZE])
     (void)own;
     for (i = 0; i < OBS_SIZE; ++i) out[i] = 0.0f;
 
-    /* range_bearing: the K readings nearest by estimated range */
+    /* range_bearing: the K readings nearest by estimated range (readings older than OBS_MAX_AGE: NaN keys,
+     * ranked last and left out below) */
     n = t->neighbours.count < OBS_NEIGHBOUR_CAPACITY ? t->neighbours.count : OBS_NEIGHBOUR_CAPACITY;
-    for (i = 0; i < n; ++i) key[i] = (double)t->neighbours.entry[i].range_m;
+    for (i = 0; i < n; ++i)
+        key[i] = t->neighbours.entry[i].age_steps > OBS_MAX_AGE ? NAN : (double)t->neighbours.entry[i].range_m;
     obs_rank_rows(key, n, OBS_N_NEIGHBOURS, order);
     for (c = 0; c < OBS_N_NEIGHBOURS; ++c) {{
         const obs_neighbour_t *e;
         float *row;
         if (order[c] < 0) break;
         e = &t->neighbours.entry[order[c]];
+        if (e->age_steps > OBS_MAX_AGE) break;
         row = out + OBS_OFFSET_RANGE_BEARING + 7 * c;
         row[0] = 1.0f;
         row[1] = e->range_m;
