@@ -331,6 +331,19 @@ int obs_rank_rows(const double *key, int n, int k, int *order)
     for (c = count; c < k; ++c) order[c] = -1;
     return count;
 }}
+
+/* The ranking keys: range_bearing rows are the K neighbour-table entries with the smallest key (the estimated
+ * range; NaN, never observed, for a reading older than OBS_MAX_AGE), scale_free rows the K entries nearest in
+ * scale-free distance. Equal keys keep table order (neighbour table: ascending id). */
+static double obs_neighbour_key(const obs_neighbour_t *e)
+{{
+    return e->age_steps > OBS_MAX_AGE ? NAN : (double)e->range_m;
+}}
+
+static double obs_scale_free_key(const obs_scale_free_entry_t *e)
+{{
+    return hypot((double)e->x, (double)e->y);
+}}
 {if_ids('''
 /* [decoded, id / (n_world - 1), id < own id, same parity as own id] */
 static void obs_id_row(float *dst, int id, int own)
@@ -350,18 +363,16 @@ void obs_build(const obs_tables_t *t, float out[OBS_SIZE])
     (void)own;
     for (i = 0; i < OBS_SIZE; ++i) out[i] = 0.0f;
 
-    /* range_bearing: the K readings nearest by estimated range (readings older than OBS_MAX_AGE: NaN keys,
-     * ranked last and left out below) */
+    /* range_bearing: the K neighbour readings ranked first (obs_neighbour_key) */
     n = t->neighbours.count < OBS_NEIGHBOUR_CAPACITY ? t->neighbours.count : OBS_NEIGHBOUR_CAPACITY;
-    for (i = 0; i < n; ++i)
-        key[i] = t->neighbours.entry[i].age_steps > OBS_MAX_AGE ? NAN : (double)t->neighbours.entry[i].range_m;
+    for (i = 0; i < n; ++i) key[i] = obs_neighbour_key(&t->neighbours.entry[i]);
     obs_rank_rows(key, n, OBS_N_NEIGHBOURS, order);
     for (c = 0; c < OBS_N_NEIGHBOURS; ++c) {{
         const obs_neighbour_t *e;
         float *row;
         if (order[c] < 0) break;
         e = &t->neighbours.entry[order[c]];
-        if (e->age_steps > OBS_MAX_AGE) break;
+        if (e->age_steps > OBS_MAX_AGE) break; /* too old: not observed (NaN keys rank last) */
         row = out + OBS_OFFSET_RANGE_BEARING + 7 * c;
         row[0] = 1.0f;
         row[1] = e->range_m;
@@ -387,9 +398,9 @@ void obs_build(const obs_tables_t *t, float out[OBS_SIZE])
 ''')}        ++c;
     }}
 
-    /* scale_free: the K computed neighbours nearest in scale-free distance */
+    /* scale_free: the K computed neighbours ranked first (obs_scale_free_key) */
     n = t->scale_free.count < OBS_SCALE_FREE_CAPACITY ? t->scale_free.count : OBS_SCALE_FREE_CAPACITY;
-    for (i = 0; i < n; ++i) key[i] = hypot((double)t->scale_free.entry[i].x, (double)t->scale_free.entry[i].y);
+    for (i = 0; i < n; ++i) key[i] = obs_scale_free_key(&t->scale_free.entry[i]);
     obs_rank_rows(key, n, OBS_N_NEIGHBOURS, order);
     for (c = 0; c < OBS_N_NEIGHBOURS; ++c) {{
         const obs_scale_free_entry_t *e;
