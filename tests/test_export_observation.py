@@ -25,7 +25,6 @@ from swarm_envs.registry import make
 
 CONFIGS = Path(__file__).resolve().parents[1] / "configs"
 CC = shutil.which("cc")
-pytestmark = pytest.mark.skipif(CC is None, reason="no C compiler (`cc`) on PATH to build the generated observation.c")
 
 
 def _config_env(name: str, **override) -> dict:
@@ -108,6 +107,8 @@ def _fill(Tables: type[ctypes.Structure], tab: dict) -> ctypes.Structure:
 
 @pytest.fixture(scope="module", params=sorted(CASES))
 def built(request, tmp_path_factory):
+    if CC is None:
+        pytest.skip("no C compiler (`cc`) on PATH to build the generated observation.c")
     env_id, kwargs = CASES[request.param]
     out = tmp_path_factory.mktemp(f"obs_{request.param}")
     paths = write_observation_builder(env_id, kwargs, out)
@@ -276,3 +277,10 @@ def test_full_synthetic_tables_match_the_simulators_packing(built):
         got = np.frombuffer(out, np.float32)
         np.testing.assert_allclose(got, want, rtol=0, atol=1e-5, err_msg=f"{name} trial {trial}")
     env.close()
+
+
+def test_only_full_sensing_is_exported(tmp_path):
+    """The builder reproduces the modelled stack; the ideal ablation (true values) has no firmware tables."""
+    with pytest.raises(ValueError, match="sensing='full'"):
+        write_observation_builder("swarm_envs/Aggregation-v0", {"n_robots": 3, "sensing": "ideal"}, tmp_path)
+    assert not (tmp_path / "observation.c").exists()
