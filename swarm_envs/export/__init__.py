@@ -1,0 +1,1 @@
+"""Export of trained policies and their observation builder as dependency-free C for robot firmware."""
