@@ -262,11 +262,14 @@ class FullSensing:
         sending: np.ndarray | None = None,
         prepared: PreparedStep | None = None,
         silent: np.ndarray | None = None,
+        emit_off: np.ndarray | None = None,
+        detect_off: np.ndarray | None = None,
     ) -> SensorFrame:
         """One control step of sensing (module docstring) at the robots' ``positions`` (N, 2) m and
         ``headings`` (N,) rad: :meth:`prepare_step` with ``payloads`` and ``sending``, or its result
         ``prepared`` when it has run already (then ``payloads`` must be None), then the links and sensors.
-        ``silent`` (N,) bool: switched-off robots, in no IR link (they neither emit nor detect)."""
+        ``silent`` (N,) bool: switched-off robots, in no IR link (they neither emit nor detect);
+        ``emit_off`` / ``detect_off`` (N,) bool: robots in no link as transmitter / as receiver."""
         if prepared is None:
             prepared = self.prepare_step(payloads, sending)
         elif payloads is not None:
@@ -276,7 +279,7 @@ class FullSensing:
         # reads only the emitter sums, and nothing here reads links.gains before gain_rows.gather()
         links, gain_rows = _compute_links(
             positions, headings, self.platform, copy=self.copy_of if self.n_copies > 1 else None, deferred=True, obstacles=self.obstacles,
-            silent=silent, hardware=self.hardware,
+            silent=silent, hardware=self.hardware, emit_off=emit_off, detect_off=detect_off,
         )
         take = None if gain_rows is None else gain_rows.take
 
