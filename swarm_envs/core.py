@@ -150,7 +150,8 @@ class SwarmCore:
         if self.layout.message_bits:
             # static robots send what their firmware says (Task.static_messages), by default nothing
             payloads = np.where(self.static[:, None], self._static_payloads, act[:, 2:] > 0)
-        sending = row_moving & ~off if payloads is not None else None
+        emit_off, detect_off = self._switch_mask("transmit_off", starting), self._switch_mask("receive_off", starting)
+        sending = row_moving & ~off & ~emit_off if payloads is not None else None
         linear, angular = act[row_moving, 0] * p.max_speed, act[row_moving, 1] * p.max_angular_speed
         if self._motion is not None and moving.any():  # two draws per robot of every moving copy, whatever its command
             draws = self._motion.draw(self.copy_of_robot[row_moving], (2,))
@@ -172,11 +173,12 @@ class SwarmCore:
         # and the rewards, from the ground truth only, on the worker thread while the sensing runs here
         rewards = worker().submit(self.task.rewards, state, starting) if large else None
         silent = off if off.any() else None
+        switches = {"emit_off": emit_off if emit_off.any() else None, "detect_off": detect_off if detect_off.any() else None}
         try:
             if prepared is None:
-                self.frame = self.sensing.step(self.positions, self.headings, payloads, sending, silent=silent)
+                self.frame = self.sensing.step(self.positions, self.headings, payloads, sending, silent=silent, **switches)
             else:
-                self.frame = self.sensing.step(self.positions, self.headings, prepared=prepared.result(), silent=silent)
+                self.frame = self.sensing.step(self.positions, self.headings, prepared=prepared.result(), silent=silent, **switches)
         finally:  # never leave the worker running on the task's state
             if rewards is not None:
                 rewards.exception()  # waits
@@ -194,6 +196,16 @@ class SwarmCore:
             mask = checked_mask(self.task, "switched_off", mask, (self.B, self.n_world), "(copies, world robots)")
             self.switched_off = mask.reshape(-1).copy()
         return self.switched_off
+
+    def _switch_mask(self, hook: str, starting: np.ndarray) -> np.ndarray:
+        """(n_total,) bool robots whose infrared ``hook`` (``Task.transmit_off`` or ``Task.receive_off``)
+        switches off during the coming step; ``starting`` (B,) marks the reset steps."""
+        if getattr(type(self.task), hook) is getattr(Task, hook):
+            return np.zeros(self.n_total, dtype=bool)
+        mask = getattr(self.task, hook)(np.where(starting, 0, self.num_cycles + 1))
+        if mask is None:
+            return np.zeros(self.n_total, dtype=bool)
+        return checked_mask(self.task, hook, mask, (self.B, self.n_world), "(copies, world robots)").reshape(-1).copy()
 
     def _run_firmware(self, first: np.ndarray) -> None:
         """The static robots' payloads for the next step, from their observation of this one."""

@@ -3,11 +3,14 @@
 Every robot observes a ``Dict``:
 
 - ``range_bearing`` (K, 7): ``[valid, range (m), cos bearing, sin bearing, cos heading, sin heading, age (steps)]``
-  for the K neighbours nearest by *estimated* range;
+  for the K neighbours nearest by *estimated* range; on a platform without a range sensor (``rone``) the K
+  most recently decoded (:func:`ranked_slots`);
 - ``messages`` (M, 2 + b): ``[valid, sender bearing / pi, payload bit 0 .. b-1]`` for messages decoded since
-  the last step (nearest senders first when more than M arrived);
+  the last step (``sensing="ideal"``: nearest senders first; ``sensing="full"``: in the order the channel
+  delivered them, the first M kept, when more than M arrived);
 - ``scale_free`` (K, 3): ``[valid, x, y]`` neighbour positions in the robot's frame, scaled so the mean
-  neighbour distance is 1 (clipped to +-``SCALE_FREE_CLIP``), nearest first;
+  neighbour distance is 1 (clipped to +-``SCALE_FREE_CLIP``), nearest first by these coordinates (on ``rone``,
+  equal distances in a random order, :func:`ranked_slots`);
 - ``rigid`` (1,): 1 when the robot's scale-free coordinates are determined (rigid neighbourhood);
 - ``proprio`` (8 + 2 + b): ``[bump sector 0..7, last action]``.
 
@@ -37,6 +40,7 @@ from swarm_envs.world import N_BUMP_SECTORS
 __all__ = [
     "ObservationLayout",
     "nearest_slots",
+    "ranked_slots",
     "pack_nearest",
     "id_rows",
     "own_id_rows",
@@ -133,6 +137,24 @@ def nearest_slots(n_rows: int, row: np.ndarray, key: np.ndarray, k: int) -> np.n
         return np.full((n_rows, k), -1, dtype=np.int64)
     row = _checked_rows(n_rows, row)
     return _nearest_slots_kernel(int(n_rows), row, np.ascontiguousarray(key, dtype=np.float64).reshape(-1), int(k))
+
+
+def ranked_slots(n_rows: int, row: np.ndarray, key: np.ndarray, tie: np.ndarray, k: int) -> np.ndarray:
+    """(n_rows, k) link index of each row's ``k`` first links ranked by ascending ``key`` (NaN last), equal
+    keys by ascending ``tie``, equal ties by link index (-1 where a row has fewer links).
+
+    The observation-row ranking of the platforms without a range sensor (``rone``, ``sensing="full"``), whose
+    readings would otherwise all tie: ``range_bearing`` rows with ``key`` = the reading's age (steps since the
+    frame that carried it was decoded, so the most recently heard neighbours come first and are the ones
+    kept when more than ``k`` are heard), ``scale_free`` rows with ``key`` = the distance of the scale-free
+    coordinates; ``tie`` = one uniform [0, 1) draw per link and step from the env copy's own ranking stream.
+    Neither key nor tie depends on the decoded id, so a row's position tells nothing about it.
+    """
+    if len(row) == 0 or k == 0:
+        return np.full((n_rows, k), -1, dtype=np.int64)
+    perm = np.argsort(np.asarray(tie, dtype=np.float64).reshape(-1), kind="stable")
+    slots = nearest_slots(n_rows, np.asarray(row)[perm], np.asarray(key, dtype=np.float64).reshape(-1)[perm], k)
+    return np.where(slots >= 0, perm[np.maximum(slots, 0)], -1)
 
 
 def _checked_rows(n_rows: int, row: np.ndarray) -> np.ndarray:

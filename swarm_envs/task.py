@@ -255,6 +255,20 @@ class Task:
         still stops robots and blocks light. Its agent stays in the env, observing nothing new."""
         return None
 
+    def transmit_off(self, num_cycles: np.ndarray) -> np.ndarray | None:
+        """(B, n_world) bool robots whose infrared emitters are off during the control step about to run,
+        ``num_cycles`` (B,) (0 = a copy's reset step), or None (none; the default): receive-only robots.
+        Such a robot moves and senses as usual, but no robot detects it: no range & bearing of it, and none
+        of its frames (its messages are not queued; its bearing beacons and exchange lists reach no one)."""
+        return None
+
+    def receive_off(self, num_cycles: np.ndarray) -> np.ndarray | None:
+        """(B, n_world) bool robots whose infrared detectors are off during the control step about to run,
+        ``num_cycles`` (B,), or None (none; the default): transmit-only robots. Such a robot moves and
+        emits as usual (others sense it and decode its messages), but detects nothing: no range & bearing
+        readings, no messages, no bearings."""
+        return None
+
     def rewards(self, state: BatchState, first: np.ndarray) -> tuple[np.ndarray, dict[str, np.ndarray], dict[str, np.ndarray]]:
         """(rewards (B, n_agents), reward terms {name: (B, n_agents)}, metrics {name: (B,)}).
 

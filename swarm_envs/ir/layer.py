@@ -455,6 +455,8 @@ def compute_links(
     obstacles: np.ndarray | None = None,
     silent: np.ndarray | None = None,
     hardware: Hardware | None = None,
+    emit_off: np.ndarray | None = None,
+    detect_off: np.ndarray | None = None,
 ) -> IRLinks:
     """All directed IR links of a scene (docs/design.md#infrared-physical-layer), vectorised.
 
@@ -477,11 +479,16 @@ def compute_links(
         silent: (N,) bool switched-off robots: no light from or to them (their bodies still occlude).
         hardware: (N rows) each robot's channel deviations (docs/design.md#hardware-variation): the links'
             gains (and emitter sums) are those of the robots' own channels. None: the nominal platform.
+        emit_off: (N,) bool robots whose emitters are off (receive-only): no link from them.
+        detect_off: (N,) bool robots whose detectors are off (transmit-only): no link to them.
 
     Returns:
         :class:`IRLinks` with both directions (u, w) and (w, u) of every candidate pair, sorted by (rx, tx).
     """
-    return compute_links_with_rows(positions, headings, platform, max_range, drop_zero, occlusion, copy, obstacles=obstacles, silent=silent, hardware=hardware)[0]
+    return compute_links_with_rows(
+        positions, headings, platform, max_range, drop_zero, occlusion, copy, obstacles=obstacles, silent=silent, hardware=hardware,
+        emit_off=emit_off, detect_off=detect_off,
+    )[0]
 
 
 def compute_links_with_rows(
@@ -496,6 +503,8 @@ def compute_links_with_rows(
     obstacles: np.ndarray | None = None,
     silent: np.ndarray | None = None,
     hardware: Hardware | None = None,
+    emit_off: np.ndarray | None = None,
+    detect_off: np.ndarray | None = None,
 ) -> tuple[IRLinks, kernels.ChunkRows | None]:
     """:func:`compute_links`, and with ``deferred`` (for :class:`swarm_envs.sensing.full.FullSensing`), when
     the scene uses threads (:func:`gain_threads`; else None), the gain rows as the kernel's chunks left them
@@ -522,12 +531,25 @@ def compute_links_with_rows(
     if occlusion == "centre":
         pairs = pairs[line_of_sight(positions, platform.radius, pairs[:, 0], pairs[:, 1], tree)]
     rx, tx, pair_of, rel, rel_cs, rel_heading, distance = _directed_pairs(pairs, positions, headings)
+    longest = float(distance.max())
+    if emit_off is not None or detect_off is not None:  # no gains for the links from / to switched-off sides
+        dead = np.zeros(rx.shape[0], dtype=bool)
+        if emit_off is not None:
+            dead |= np.asarray(emit_off, dtype=bool)[tx]
+        if detect_off is not None:
+            dead |= np.asarray(detect_off, dtype=bool)[rx]
+        if dead.all():
+            return _empty_links(n_d, n_e, N), None
+        if dead.any():
+            live = ~dead
+            rx, tx, pair_of, rel, rel_cs, rel_heading, distance = (v[live] for v in (rx, tx, pair_of, rel, rel_cs, rel_heading, distance))
     threads = gain_threads(rx.shape[0]) if copy is None else 1
     occluders = None
     if occlusion == "ray":
-        # occluders once per unordered pair, then in each receiver's frame
+        # occluders once per unordered pair (every candidate pair: a pair's occluders are found among its
+        # neighbours'), then in each receiver's frame
         a, b = (np.ascontiguousarray(pairs[:, k], dtype=np.int64) for k in (0, 1))
-        offsets, idx = _occluder_lists(positions, a, b, occluder_width(platform), tree, float(distance.max()), pairs, r, threads)
+        offsets, idx = _occluder_lists(positions, a, b, occluder_width(platform), tree, longest, pairs, r, threads)
         occluders = _occluder_frames(positions, headings, rx, pair_of, offsets, idx)
     if occluders is None:
         offsets, xy = np.zeros(rx.shape[0] + 1, dtype=np.int64), np.zeros((0, 2))
@@ -542,11 +564,12 @@ def compute_links_with_rows(
         rows = lit
         rx, tx, rel, rel_heading, distance = kernels.select_links_kernel(lit, rx, tx, rel, rel_heading, distance)
     links = IRLinks(rx, tx, distance, rel, rel_heading, gains, N, None if occluders is None else (*occluders, rows), sums)
-    if (obstacles is not None and len(obstacles)) or (silent is not None and np.any(silent)):
+    switched = any(m is not None and np.any(m) for m in (silent, emit_off, detect_off))
+    if (obstacles is not None and len(obstacles)) or switched:
         if rows_pending is not None:  # the post-pass reads and writes the gain rows
             rows_pending.gather()
             rows_pending = None
-        links = block_links(links, positions, headings, platform, obstacles, silent, drop_zero)
+        links = block_links(links, positions, headings, platform, obstacles, silent, drop_zero, emit_off=emit_off, detect_off=detect_off)
     return links, rows_pending
 
 
@@ -586,6 +609,8 @@ def block_links(
     obstacles: np.ndarray | None = None,
     silent: np.ndarray | None = None,
     drop_zero: bool = True,
+    emit_off: np.ndarray | None = None,
+    detect_off: np.ndarray | None = None,
 ) -> IRLinks:
     """``links`` with the light of static ``obstacles`` and switched-off robots taken out (a numpy pass
     after the gains).
@@ -600,6 +625,8 @@ def block_links(
             order, as the kernel sums them).
         silent: (N,) bool robots that neither emit nor detect: their links are dropped.
         drop_zero: drop links left without light.
+        emit_off: (N,) bool robots that do not emit: the links from them are dropped.
+        detect_off: (N,) bool robots that do not detect: the links to them are dropped.
 
     Returns: the new :class:`IRLinks` (``obstacle_clear`` set when a ray was tested), or ``links`` itself
     when nothing changes.
@@ -610,6 +637,10 @@ def block_links(
     if silent is not None:
         silent = np.asarray(silent, dtype=bool)
         keep &= ~(silent[links.rx] | silent[links.tx])
+    if emit_off is not None:
+        keep &= ~np.asarray(emit_off, dtype=bool)[links.tx]
+    if detect_off is not None:
+        keep &= ~np.asarray(detect_off, dtype=bool)[links.rx]
     obstacle_clear = None
     gains, sums = links.gains, links.emitter_sums
     segments = no_obstacles() if obstacles is None else np.asarray(obstacles, dtype=float).reshape(-1, 2, 2)

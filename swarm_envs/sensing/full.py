@@ -30,7 +30,9 @@ Each control step, in this order (data flows one way):
    exchange's), otherwise a header-only beacon.
    ``bearing_noise`` (default on, r-one) draws each frame's receiver arcs and transmitter cones from the
    measured 63-74 degree spread [L Sec. 3.2.1]. The ``rone`` has no range sensor: its ``range_bearing``
-   rows hold these readings with range 0, in neighbour-id order.
+   rows hold these readings with range 0, most recently decoded first (ties in a random order drawn each step
+   from the copy's ranking stream, :func:`swarm_envs.observation.ranked_slots`): the K kept are the K heard
+   last, and a row's position carries nothing of the decoded id.
 4. **Bearing exchange and scale-free coordinates** [L] (:class:`swarm_envs.sensing.exchange.BearingExchange`,
    :func:`swarm_envs.sensing.scale_free.coordinates_all`): bearings from ``bearing_source``
    (``"sectors"`` default on ``rone``, ``"range_bearing"`` elsewhere) travel as SwarmCom system traffic
@@ -55,7 +57,7 @@ from swarm_envs.copies import CopyRandom
 from swarm_envs.ir.hardware import Hardware, draw_hardware
 from swarm_envs.ir.layer import compute_links_with_rows, gain_threads
 from swarm_envs.ir.models import RoneIR
-from swarm_envs.observation import nearest_slots, pack_nearest, range_bearing_rows
+from swarm_envs.observation import nearest_slots, pack_nearest, range_bearing_rows, ranked_slots
 from swarm_envs.platforms import Platform
 from swarm_envs.sensing.base import MessageReadings, NeighbourReadings, ScaleFreeReadings, SensorFrame
 from swarm_envs.sensing.bearing_sensor import RONE_ARC_RANGE_DEG, MessageBearings
@@ -118,6 +120,15 @@ def _observation_rows(neighbours: NeighbourReadings, n: int, k: int) -> None:
     neighbours.slots = slots
 
 
+def _ranked_observation_rows(neighbours: NeighbourReadings, n: int, k: int, tie: np.ndarray) -> None:
+    """Each robot's k most recently decoded readings (``neighbours.slots``, :func:`ranked_slots` by age, ties
+    by ``tie`` (P,)) and their observation rows (``neighbours.rows``): the rows of a platform without a
+    range sensor, whose readings all have range 0."""
+    slots = ranked_slots(n, neighbours.rx, neighbours.age, tie, k)
+    neighbours.rows = range_bearing_rows(slots, neighbours.range, neighbours.bearing, neighbours.heading, neighbours.age)
+    neighbours.slots = slots
+
+
 class FullSensing:
     """Physically modelled sensing for ``n_robots`` robots of one platform (module docstring)."""
 
@@ -142,7 +153,9 @@ class FullSensing:
         #: whether the last step's scene was large enough for the worker thread (:func:`rb_on_worker_thread`)
         self.large_scene = False
         # one stack for all copies; each module keeps one generator per copy (placeholders until reset)
-        streams = [CopyRandom([np.random.default_rng(0) for _ in range(self.n_copies)]) for _ in range(4)]
+        streams = [CopyRandom([np.random.default_rng(0) for _ in range(self.n_copies)]) for _ in range(5)]
+        #: the ties of the observation-row ranking on a platform without range (:func:`ranked_slots`)
+        self._rank_rng = streams[4]
         #: each robot's channel deviations (:mod:`swarm_envs.ir.hardware`; rows drawn at reset), or None:
         #: the nominal platform (``hw_variation=False``, or a platform without range & bearing)
         self.hardware: Hardware | None = None
@@ -200,10 +213,12 @@ class FullSensing:
 
     def reset(self, copies: np.ndarray, rngs: list[np.random.Generator]) -> None:
         """Fresh sensor, channel and exchange state of env ``copies``, from independent child streams
-        (range & bearing, channel, exchange, sector bearings, hardware variation) of each copy's generator
-        ``rngs[k]``; other copies untouched."""
+        (range & bearing, channel, exchange, sector bearings, hardware variation, row-ranking ties) of each
+        copy's generator ``rngs[k]``; other copies untouched."""
         copies = np.asarray(copies, dtype=np.int64).reshape(-1)
-        children = [g.spawn(5) for g in rngs]
+        children = [g.spawn(6) for g in rngs]
+        for b, c in zip(copies, children):
+            self._rank_rng.generators[int(b)] = c[5]
         if self.hardware is not None:  # each robot's channels, from the copy's own child stream
             for b, c in zip(copies, children):
                 rows = np.arange(int(b) * self.copy_size, (int(b) + 1) * self.copy_size)
@@ -247,11 +262,14 @@ class FullSensing:
         sending: np.ndarray | None = None,
         prepared: PreparedStep | None = None,
         silent: np.ndarray | None = None,
+        emit_off: np.ndarray | None = None,
+        detect_off: np.ndarray | None = None,
     ) -> SensorFrame:
         """One control step of sensing (module docstring) at the robots' ``positions`` (N, 2) m and
         ``headings`` (N,) rad: :meth:`prepare_step` with ``payloads`` and ``sending``, or its result
         ``prepared`` when it has run already (then ``payloads`` must be None), then the links and sensors.
-        ``silent`` (N,) bool: switched-off robots, in no IR link (they neither emit nor detect)."""
+        ``silent`` (N,) bool: switched-off robots, in no IR link (they neither emit nor detect);
+        ``emit_off`` / ``detect_off`` (N,) bool: robots in no link as transmitter / as receiver."""
         if prepared is None:
             prepared = self.prepare_step(payloads, sending)
         elif payloads is not None:
@@ -261,7 +279,7 @@ class FullSensing:
         # reads only the emitter sums, and nothing here reads links.gains before gain_rows.gather()
         links, gain_rows = compute_links_with_rows(
             positions, headings, self.platform, copy=self.copy_of if self.n_copies > 1 else None, deferred=True, obstacles=self.obstacles,
-            silent=silent, hardware=self.hardware,
+            silent=silent, hardware=self.hardware, emit_off=emit_off, detect_off=detect_off,
         )
         take = None if gain_rows is None else gain_rows.take
 
@@ -301,6 +319,7 @@ class FullSensing:
         sectors = self.bearings.step(deliveries, links) if self.bearings is not None else None
         if not self.has_range:
             neighbours = sectors
+            _ranked_observation_rows(neighbours, self.n, self.k, self._rank_rng.random(self.copy_of[neighbours.rx]))
         bearing_readings = sectors if self.bearing_source == "sectors" else neighbours
         if self.bearing_source == "sectors" and self.exchange.mode == "network":
             bearing_readings = self.bearings.fresh  # a received list pairs with the bearing measured on its own frame
@@ -351,7 +370,14 @@ class FullSensing:
             xy, valid, rigid = self._null_space(knowledge)
         row, slot = np.nonzero(valid)
         points = xy[row, slot]
-        packed, order = pack_nearest(self.n, row, np.hypot(points[:, 0], points[:, 1]), points, self.k)
+        distance = np.hypot(points[:, 0], points[:, 1])
+        if self.has_range:
+            packed, order = pack_nearest(self.n, row, distance, points, self.k)
+        else:  # bearing-only: equal scale-free distances (one neighbour, symmetric triangles) in a random order
+            order = ranked_slots(self.n, row, distance, self._rank_rng.random(self.copy_of[row]), self.k)
+            packed = np.zeros((self.n, self.k, 2))
+            if len(row):
+                packed = np.where((order >= 0)[..., None], points[np.maximum(order, 0)], 0.0)
         ids = np.where(order >= 0, knowledge.ids[row, slot][np.maximum(order, 0)] if len(row) else -1, -1)  # decoded ids
         return ScaleFreeReadings(packed, order >= 0, np.asarray(rigid, bool), ids)
 

@@ -293,10 +293,13 @@ class IdealSensing:
         payloads: np.ndarray | None,
         sending: np.ndarray | None = None,
         silent: np.ndarray | None = None,
+        emit_off: np.ndarray | None = None,
+        detect_off: np.ndarray | None = None,
     ) -> SensorFrame:
         """One step for all robots; ``payloads`` (N, b) bool or None, ``sending`` (N,) bool robots whose
         payload goes out this step (default: all when payloads are given); ``silent`` (N,) bool switched-off
-        robots (no neighbours, not a neighbour)."""
+        robots (no neighbours, not a neighbour); ``emit_off`` (N,) bool robots no one senses (receive-only),
+        ``detect_off`` (N,) bool robots that sense no one (transmit-only)."""
         positions = np.asarray(positions, dtype=np.float64)
         headings = np.asarray(headings, dtype=np.float64)
         pairs = copy_pairs(positions, self.platform.ir_range, self.copy_size)
@@ -313,6 +316,13 @@ class IdealSensing:
         pair_link = np.flatnonzero(rx < tx)  # each pair's i -> j link (offset p_j - p_i)
         distance = np.hypot(dx[pair_link], dy[pair_link])[link]
         bearing = wrapped_difference(np.arctan2(dy, dx), heading_rx)
+        one_way = np.zeros(len(rx), dtype=bool)
+        if emit_off is not None:
+            one_way |= np.asarray(emit_off, dtype=bool)[tx]
+        if detect_off is not None:
+            one_way |= np.asarray(detect_off, dtype=bool)[rx]
+        if one_way.any():  # the links from robots that do not emit and to robots that do not detect
+            rx, tx, distance, bearing, heading = (v[~one_way] for v in (rx, tx, distance, bearing, heading))
         # the k nearest links of every robot, for the scale-free coordinates and (reused) the observations
         order = nearest_slots(self.n, rx, distance, self.k)
         valid = order >= 0

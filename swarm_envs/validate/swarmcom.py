@@ -42,7 +42,6 @@ import functools
 import json
 import os
 import time
-from types import SimpleNamespace
 from typing import Any
 
 import numpy as np
@@ -102,7 +101,11 @@ def run_pairs(
     pos[1::2, 0] = SEP * np.arange(K)  # receivers at the origin of their scene
     head = np.zeros(2 * K)
     head[0::2] = np.pi  # transmitters face the receivers
-    links = compute_links(pos, head, PLATFORM)
+    # the one-way pair of [T20 Fig. 12a]: the receivers' emitters are off (receive-only robots, as
+    # Task.transmit_off makes them in the env), so no light goes from a receiver to its transmitter
+    receivers = np.zeros(2 * K, dtype=bool)
+    receivers[1::2] = True
+    links = compute_links(pos, head, PLATFORM, emit_off=receivers)
     net = Network(PLATFORM, 2 * K, rng, bitrate=bitrate, relative_threshold=relative_threshold, code=code, adc_model=adc_model)
     txs = np.arange(0, 2 * K, 2)
     lo, hi = payload_range
@@ -320,7 +323,8 @@ def detector_channels(
     Each scene ``(positions (n, 2) m, headings (n,) rad)`` with the centre as robot 0 is one env copy of a
     bit-level :class:`swarm_envs.comm.network.Network` (310 bps, uncoded, m_tr = ``relative_threshold``).
     Only the centre transmits (a random 8-bit payload whenever its queue is empty; the last steps drain),
-    over the links of :func:`centre_links`; every other robot receives with the full detector model: ADC
+    over the links of :func:`swarm_envs.ir.layer.compute_links` with the centre transmit-only and the
+    others receive-only (``emit_off`` / ``detect_off``; the links of :func:`centre_links`); every other robot receives with the full detector model: ADC
     noise, the detector response, the minimum over its 8 detectors, start detection below
     m_t = m_max - m_tr and the dynamic threshold of [T20 Eq. (36)]. "Intact" compares the decoded frame
     with the one sent (ground truth, used for counting only). Scenes may differ in size; smaller ones are
@@ -331,13 +335,19 @@ def detector_channels(
     """
     S = len(scenes)
     size = max(q.shape[0] for q, _ in scenes)
-    rx_parts, gain_parts = [], []
-    for b, (pos, head) in enumerate(scenes):
-        others, g = centre_links(pos, head, max_range, occlusion)
-        rx_parts.append(b * size + others)
-        gain_parts.append(g)
-    rx = np.concatenate(rx_parts).astype(np.int64)
-    links = SimpleNamespace(rx=rx, tx=(rx // size) * size, gains=np.concatenate(gain_parts))
+    # Fig. 21's set-up: one sender among listeners. The centre's detectors are off (transmit-only), every
+    # other robot's emitters are off (receive-only), as Task.transmit_off / receive_off make them in the env;
+    # padding robots sit far outside their scene with both off. All pairs within max_range are kept
+    # (drop_zero=False): a listener with no light still runs its detector on noise.
+    pos = np.zeros((S * size, 2))
+    head = np.zeros(S * size)
+    pos[:] = 1000.0 + 10.0 * np.arange(S * size)[:, None] * np.array([1.0, 0.0])
+    for b, (q, h) in enumerate(scenes):
+        pos[b * size : b * size + q.shape[0]] = q
+        head[b * size : b * size + q.shape[0]] = h
+    centre = np.arange(S * size) % size == 0
+    links = compute_links(pos, head, PLATFORM, max_range=max_range, drop_zero=False, occlusion=occlusion,
+                          copy=np.arange(S * size) // size, emit_off=~centre, detect_off=centre)
     streams = CopyRandom(list(rng.spawn(S)))
     net = Network(PLATFORM, size, streams, bitrate=310, relative_threshold=relative_threshold, n_copies=S)
     centres = np.arange(S) * size
