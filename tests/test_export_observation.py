@@ -20,7 +20,7 @@ import yaml
 from gymnasium import spaces
 
 from swarm_envs.export.observation_c import builder_constants, firmware_tables, write_observation_builder
-from swarm_envs.observation import nearest_slots
+from swarm_envs.observation import nearest_slots, range_bearing_rows, ranked_slots
 from swarm_envs.registry import make
 
 CONFIGS = Path(__file__).resolve().parents[1] / "configs"
@@ -245,6 +245,9 @@ def test_full_synthetic_tables_match_the_simulators_packing(built):
 
         # the simulator's packing of these readings
         neighbours = NeighbourReadings(np.full(ids.size, row), ids.astype(np.int64), rng_range, bearing, heading, age.astype(float))
+        if not c["has_range"]:  # ranked by age, equal ages by the tie draw: here the table order, as the C breaks ties
+            neighbours.slots = ranked_slots(N, neighbours.rx, neighbours.age, np.arange(ids.size, dtype=float), K)
+            neighbours.rows = range_bearing_rows(neighbours.slots, rng_range, bearing, heading, neighbours.age)
         messages = MessageReadings(np.full(n_msg, row), sender.astype(np.int64), c["detector_bearing"][detector], payload.astype(float))
         packed, order = pack_nearest(N, np.full(n_sf, row), np.hypot(sf_xy[:, 0], sf_xy[:, 1]), sf_xy, K)
         sf_row_ids = np.where(order >= 0, np.r_[sf_ids, -1][np.where(order >= 0, order, n_sf)], -1)
