@@ -263,3 +263,23 @@ def test_a_prepared_step_takes_no_payloads_and_equals_the_inline_step():
     assert isinstance(b.sensing, full.FullSensing)
     with pytest.raises(ValueError, match="either payloads or prepared"):
         b.sensing.step(b.positions, b.headings, payloads, prepared=b.sensing.prepare_step(None))
+
+
+@pytest.mark.parametrize("platform", ["droplet", "rone", "epuck"])
+def test_message_bearing_is_the_detector_axis_wrapped_to_minus_pi_pi(platform):
+    """A message's bearing column is its detector's axis / pi in (-1, 1]: detectors whose axis lies past pi
+    (Droplet, r-one axes run over [0, 2 pi)) stay distinct instead of clipping to 1."""
+    env = swarm_envs.make("swarm_envs/Aggregation-v0", n_robots=10, platform=platform, sensing="full", message_bits=1)
+    env.reset(seed=0)
+    axes = np.angle(np.exp(1j * env.platform.detector_directions)) / np.pi
+    axes[np.isclose(axes, -1.0)] = 1.0
+    seen = []
+    for _ in range(40):
+        obs, *_ = env.step({a: env.action_space(a).sample() for a in env.agents})
+        for a in env.agents:
+            m = obs[a]["messages"]
+            seen.extend(m[m[:, 0] > 0, 1].tolist())
+    seen = np.asarray(seen)
+    assert seen.size > 0
+    assert np.all(np.min(np.abs(seen[:, None] - axes[None, :]), axis=1) < 1e-6)  # every value is one detector's axis
+    assert np.unique(np.round(seen, 5)).size > len(axes) // 2  # not clipped onto a few values

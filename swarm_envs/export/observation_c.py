@@ -19,6 +19,7 @@ from typing import Any
 
 import numpy as np
 
+from swarm_envs.geometry import wrap_angle
 from swarm_envs.world import N_BUMP_SECTORS
 
 __all__ = ["write_observation_builder", "builder_constants", "firmware_tables", "PART_MACROS"]
@@ -50,7 +51,7 @@ def builder_constants(env: Any) -> dict[str, Any]:
     Keys: ``K``, ``M``, ``message_bits``, ``action_size``, ``n_world``, ``observe_ids``, ``size`` (length
     of the flat vector), ``offsets`` (part -> first index), ``low`` / ``high`` (float32 bounds of the flat
     vector), ``neighbour_capacity`` (entries of the neighbour table), ``message_capacity``,
-    ``scale_free_capacity``, ``detector_bearing`` (rad, body frame, per detector), ``platform``,
+    ``scale_free_capacity``, ``detector_bearing`` (rad in (-pi, pi], body frame, per detector), ``platform``,
     ``has_range`` (the platform measures range), ``max_age`` (steps, the oldest observed reading).
     """
     if env.config["sensing"] != "full":
@@ -80,7 +81,7 @@ def builder_constants(env: Any) -> dict[str, Any]:
         "neighbour_capacity": max(int(env.n_world) - 1, 1),
         "message_capacity": layout.n_messages,
         "scale_free_capacity": int(env.sensing.exchange.k_max),
-        "detector_bearing": np.asarray(env.platform.detector_directions, np.float64),
+        "detector_bearing": wrap_angle(np.asarray(env.platform.detector_directions, np.float64)),
         "platform": env.platform.name,
         "has_range": bool(env.sensing.has_range),
         "max_age": int(layout.max_age),

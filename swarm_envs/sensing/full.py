@@ -54,6 +54,7 @@ from swarm_envs._worker import worker
 from swarm_envs.comm.channel import recommended_relative_threshold
 from swarm_envs.comm.network import Network, PreparedStep
 from swarm_envs.copies import CopyRandom
+from swarm_envs.geometry import wrap_angle
 from swarm_envs.ir.hardware import Hardware, draw_hardware
 from swarm_envs.ir.layer import compute_links_with_rows, gain_threads
 from swarm_envs.ir.models import RoneIR
@@ -332,7 +333,8 @@ class FullSensing:
             payload = np.zeros((len(app), self.message_bits))
             width = min(self.message_bits, app.payload.shape[1])
             payload[:, :width] = app.payload[:, :width]
-            sender_bearing = self.platform.detector_directions[app.detector]
+            # the detector's axis as a bearing in (-pi, pi] (the axes of the Droplet and r-one run over [0, 2 pi))
+            sender_bearing = wrap_angle(self.platform.detector_directions[app.detector])
             messages = MessageReadings(
                 app.receiver[well_formed], app.origin[well_formed], sender_bearing[well_formed], payload[well_formed]
             )
