@@ -1,0 +1,6 @@
+"""Export a trained policy to dependency-free C99 for the robot (``swarm-export``, docs/export.md)."""
+
+from swarm_envs.export.export import export_run
+from swarm_envs.export.run import ExportError
+
+__all__ = ["export_run", "ExportError"]
