@@ -17,6 +17,8 @@ def _parser() -> argparse.ArgumentParser:
     group.add_argument("--fixed", choices=("q15", "int8"), help="integer build: int16 (q15) or int8 weights, integer arithmetic")
     group.add_argument("--int8", action="store_true", help="same as --fixed int8")
     parser.add_argument("--no-onnx", action="store_true", help="do not write policy.onnx")
+    parser.add_argument("--evaluate", action="store_true", help="then compile the C on this machine and evaluate it and the torch "
+                        "policy in the loop over the run's evaluation seeds (needs a C compiler)")
     return parser
 
 
@@ -33,4 +35,21 @@ def main(argv: list[str] | None = None) -> int:
         print(f"swarm-export: error: {err}", file=sys.stderr)
         return 2
     print(f"wrote {len(files)} files to {args.output}: {', '.join(f.name for f in files)}")
+    if args.evaluate:
+        from pathlib import Path
+
+        from swarm_envs.export.compare import action_difference, evaluate_export
+        from swarm_envs.export.host import compile_shared, compiler, object_sizes
+        from swarm_envs.export.run import load_run
+
+        if compiler() is None:
+            print("swarm-export: error: --evaluate needs a C compiler (cc, gcc or clang)", file=sys.stderr)
+            return 2
+        run, folder = load_run(args.run_dir), Path(args.output)
+        sizes = object_sizes(folder)
+        print(f"policy.o (host, -Os): text {sizes['text']} B, data {sizes['data']} B, bss {sizes['bss']} B")
+        ev = run.cfg["eval"]
+        worst, _ = action_difference(run, compile_shared(folder), [ev["seed_start"]], 50)
+        print(f"largest |C - torch| action difference over 50 steps of seed {ev['seed_start']}: {worst:.3g}")
+        print(evaluate_export(run, folder).text())
     return 0

@@ -24,6 +24,32 @@ def observation_bound(run: LoadedRun) -> float:
     return float(max(np.abs(box.low).max(), np.abs(box.high).max()))
 
 
+def calibration_observations(run: LoadedRun, seeds: tuple[int, ...] = (0, 1), steps: int = 100) -> np.ndarray:
+    """Flat observations (N, D) the policy sees driving the env (the torch policy, ``steps`` steps of each
+    seed; after odometry when the policy has it): the ReLU layers' fixed-point ranges come from them."""
+    from swarm_envs.agents.base import flatten_batch
+    from swarm_envs.agents.evaluation import make_env
+    from swarm_envs.agents.policies import Odometry, TrainedPolicy
+
+    env = make_env(run.cfg["task"], **run.env_kwargs)
+    rows = []
+    try:
+        for seed in seeds:
+            env.reset(seed=seed)
+            policy = TrainedPolicy(run.model, env.platform, env.layout, run.spec)
+            policy.reset(env.n_agents)
+            odometry = Odometry(env.layout, env.platform) if run.spec.odometry else None
+            for _ in range(min(steps, run.max_cycles)):
+                parts = {k: v[env.agent_robots] for k, v in env.batched_observations().items()}
+                flat = flatten_batch(run.layout, parts)
+                rows.append(flat if odometry is None else odometry(flat))
+                a = policy.act_batch(parts)
+                env.step({agent: a[i] for i, agent in enumerate(env.possible_agents)})
+    finally:
+        env.close()
+    return np.concatenate(rows)
+
+
 def layout_table(run: LoadedRun) -> str:
     """Markdown rows: part, flat offset, shape, columns (the flat order of ``gymnasium.spaces.flatten``)."""
     from swarm_envs.observation import ID_FIELDS, RB_FIELDS
@@ -114,7 +140,10 @@ def export_run(run_dir: str | Path, out_dir: str | Path, fixed: str | None = Non
         layers = actor_layers(run.model)
     except ValueError as err:
         raise ExportError(f"run '{run.run_dir}': {err}") from None
-    net = quantize(layers, observation_bound(run), fixed) if fixed is not None else None
+    net = None
+    if fixed is not None:
+        relu = any(layer.activation == "relu" for layer in layers[:-1])
+        net = quantize(layers, observation_bound(run), fixed, calibration_observations(run) if relu else None)
     summary = f"{run.env_id} on the {run.platform.name}, {run.spec.name}, {'float32' if net is None else net.mode}"
     files = write_policy(layers, run.layout, run.platform, run.spec.odometry, out, fixed=net, summary=summary)
     files += write_actions(run.platform, run.action_size, out, summary=summary)

@@ -5,8 +5,9 @@ Formats (``Qf``: an integer ``q`` stands for ``q / 2**f``): the observation ente
 (``int8``) with one power-of-two scale per layer, the largest that fits the layer's largest weight; products
 are summed in int64 with the bias at the accumulator's scale. A ``tanh`` layer rounds its sum to Q12 and looks
 tanh up in a 513-entry Q15 table over [0, 8) (step 1/64, linear interpolation; 1 beyond 8), giving Q15; a
-``relu`` layer keeps a format whose range covers the layer's worst-case output (interval arithmetic from the
-input bound); the last layer rounds to Q15 and saturates at +-32767 (the action clip to [-1, 1]).
+``relu`` layer keeps a format whose range covers twice the largest output seen on calibration observations
+(the simulator's, when given), else the worst case by interval arithmetic from the input bound (saturating
+at the format's end); the last layer rounds to Q15 and saturates at +-32767 (the action clip to [-1, 1]).
 Rounding is to nearest, ties away from zero for the shifts' ``+ half`` and ties to even for the input
 (``lrintf``), the same in the C code and here.
 """
@@ -57,13 +58,15 @@ def input_frac(bound: float) -> int:
     return min(15, 14 - math.floor(math.log2(max(bound, 2.0**-8))))
 
 
-def quantize(layers: list[Layer], obs_bound: float, mode: str = "q15") -> FixedNet:
-    """:class:`FixedNet` of float ``layers`` for observations within ``[-obs_bound, obs_bound]``."""
+def quantize(layers: list[Layer], obs_bound: float, mode: str = "q15", calibration: np.ndarray | None = None) -> FixedNet:
+    """:class:`FixedNet` of float ``layers`` for observations within ``[-obs_bound, obs_bound]``;
+    ``calibration``: observations (N, D) whose activations set the ReLU layers' formats."""
     if mode not in WEIGHT_MAX:
         raise ValueError(f"fixed-point mode {mode!r} unknown; allowed: {sorted(WEIGHT_MAX)}")
     qmax = WEIGHT_MAX[mode]
     frac = input_frac(obs_bound)
     bound = float(obs_bound)
+    x = None if calibration is None else np.asarray(calibration, np.float64)
     out: list[FixedLayer] = []
     for i, layer in enumerate(layers):
         w = layer.weight.astype(np.float64)
@@ -75,11 +78,17 @@ def quantize(layers: list[Layer], obs_bound: float, mode: str = "q15") -> FixedN
         if last or layer.activation == "tanh":
             o_frac, bound = 15, 1.0
         elif layer.activation == "relu":
-            bound = float((np.abs(w).sum(axis=1) * bound + np.abs(layer.bias)).max())
+            if x is not None:
+                bound = 2.0 * float(np.maximum(x @ w.T + layer.bias, 0.0).max())
+            else:
+                bound = float((np.abs(w).sum(axis=1) * bound + np.abs(layer.bias)).max())
             o_frac = input_frac(bound)
         else:
             raise ValueError(f"layer {i}: a hidden layer without activation is not quantised")
         out.append(FixedLayer(wq, bq, layer.activation, frac, w_frac, o_frac))
+        if x is not None:
+            x = x @ w.T + layer.bias
+            x = np.tanh(x) if layer.activation == "tanh" else np.maximum(x, 0.0)
         frac = o_frac
     return FixedNet(mode, out[0].in_frac, out)
 
