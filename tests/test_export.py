@@ -180,7 +180,6 @@ def test_fixed_point_policy(exported, mode, tmp_path):
 
 
 @needs_cc
-@pytest.mark.slow
 def test_in_the_loop_metric(exported):
     """The compiled C policy and the torch policy in the loop, 3 evaluation seeds of 60 steps: the headline
     metric per seed agrees within 1e-4 (actions equal up to ~1e-6, and the physics carries such differences on
