@@ -77,6 +77,13 @@ def _readme(run: LoadedRun, fixed: FixedNet | None, files: list[Path], observati
     layers = actor_layers(run.model)
     arch = " -> ".join([str(run.obs_size)] + [f"{layer.weight.shape[0]} {layer.activation}" for layer in layers[:-1]] + [f"{run.action_size}"])
     params = sum(layer.weight.size + layer.bias.size for layer in layers)
+    if fixed is None:
+        weight_bytes = 4 * params
+    else:
+        per_weight = 2 if fixed.mode == "q15" else 1
+        weight_bytes = sum(per_weight * layer.weight.size + 8 * layer.bias.size for layer in fixed.layers) + 2 * 513
+    width = max(layer.weight.shape[0] for layer in layers)
+    state_bytes = (8 * (run.layout.max_age + 1) + 8 + 4 * 3 * run.layout.n_neighbours) if spec.odometry else 4
     kind = "float32" if fixed is None else (f"fixed point ({fixed.mode}: {'int16' if fixed.mode == 'q15' else 'int8'} weights, "
                                             f"int16 activations, int64 sums; observation input Q{fixed.in_frac})")
     settings = ", ".join(f"{k}={v!r}" for k, v in sorted(run.env_kwargs.items())) or "defaults"
@@ -90,6 +97,8 @@ Made by `swarm-export` from the run `{run.run_dir}` (task `{run.cfg['task']}`, e
 message rows, {run.layout.message_bits} message bits, max age {run.layout.max_age} steps).
 
 - Policy: {spec.name}, actor {arch} ({params} parameters), {kind}.
+- Sizes: {weight_bytes} bytes of constant weights and tables; {state_bytes} bytes of `policy_state_t` per robot
+  (about; `sizeof` is exact); stack of one `policy_step` about {4 * run.obs_size + 8 * width} bytes.
 - Control step: 0.1 s; an episode of the env is {run.max_cycles} steps.
 - Files: {', '.join(f'`{f.name}`' for f in files)}.
 

@@ -1,10 +1,12 @@
 """Write ``policy.h`` / ``policy.c``: the actor's deterministic forward pass as dependency-free C99.
 
-The C is generated here from the layers' arrays (:mod:`swarm_envs.export.network`) rather than by an
-ONNX-to-C compiler: the actor is a chain of dense layers with tanh/ReLU, a few dozen lines of C, and the
-policy's own pre-processing (:class:`swarm_envs.agents.policies.Odometry`, a per-robot state) and the
-fixed-point build (:mod:`swarm_envs.export.quantize`) are not ONNX operators. No dynamic memory: weights
-are ``const`` arrays, the per-robot state is a caller-owned ``policy_state_t``.
+The C is generated here from the layers' arrays (:mod:`swarm_envs.export.network`). An ONNX-to-C compiler
+(emx-onnx-cgen 1.4 compiles the exported ``policy.onnx`` of these actors) covers the network alone: the
+policy's own pre-processing (:class:`swarm_envs.agents.policies.Odometry`, a per-robot state) is no ONNX
+graph, and the integer build (:mod:`swarm_envs.export.quantize`) must follow one arithmetic that a numpy
+model reproduces bit for bit. One generator writes both builds with the same structure: a chain of dense
+layers (tanh / ReLU), weights as ``const`` arrays, no dynamic memory, the per-robot state a caller-owned
+``policy_state_t``.
 """
 
 from __future__ import annotations
