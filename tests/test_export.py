@@ -143,8 +143,9 @@ def test_action_decoder(exported):
 @needs_cc
 @pytest.mark.parametrize("mode", ["q15", "int8"])
 def test_fixed_point_policy(exported, mode, tmp_path):
-    """The integer build equals its numpy model bit for bit on recorded observations, stays near torch
-    (q15 within 2e-3, int8 within 0.1 per component on these weights), and compiles smaller than float32."""
+    """The integer build equals its numpy model bit for bit on recorded observations (after the numpy
+    odometry, for the r-one run), stays near torch (q15 within 2e-3, int8 within 0.1 per component on these
+    weights), and compiles smaller than float32."""
     from swarm_envs.agents.base import flatten_batch
     from swarm_envs.agents.evaluation import make_env
     from swarm_envs.export import export_run
@@ -153,9 +154,9 @@ def test_fixed_point_policy(exported, mode, tmp_path):
     from swarm_envs.export.network import actor_layers
     from swarm_envs.export.quantize import fixed_forward, quantize
 
+    from swarm_envs.agents.policies import Odometry
+
     platform, run, float_folder = exported
-    if run.spec.odometry:
-        pytest.skip("the bit-exact model takes the observation after odometry; the r-one run's float check covers odometry")
     export_run(run.run_dir, tmp_path, fixed=mode, onnx=False)
     layers = actor_layers(run.model)
     relu = any(layer.activation == "relu" for layer in layers[:-1])
@@ -164,10 +165,13 @@ def test_fixed_point_policy(exported, mode, tmp_path):
     env = make_env(run.cfg["task"], **run.env_kwargs)
     env.reset(seed=5)
     c.reset(env.n_agents)
+    odometry = Odometry(run.layout, run.platform) if run.spec.odometry else None
     exact, near = 0.0, 0.0
     for _ in range(30):
         parts = {k: v[env.agent_robots] for k, v in env.batched_observations().items()}
         flat = flatten_batch(run.layout, parts)
+        if odometry is not None:
+            flat = odometry(flat)
         a = c.act_batch(parts)
         exact = max(exact, float(np.abs(a - fixed_forward(net, flat) / 32768.0).max()))
         torch_a, _ = run.model.predict(flat, deterministic=True)
