@@ -262,3 +262,34 @@ def test_cli_writes_folder(tmp_path, capsys):
     assert "int16_t W0" in source and "float" not in source.split("static void forward(")[0]
     done = subprocess.run([sys.executable, "-m", "swarm_envs.export", "--help"], capture_output=True, text=True, cwd=ROOT)
     assert done.returncode == 0 and "--fixed" in done.stdout
+
+
+#: cross compilers the C is also built with when present: compiler -> (flags, platforms). The Droplet's
+#: ATxmega is an AVR (an object there is at most 32 KiB: the r-one's float32 first layer is larger).
+CROSS = {
+    "arm-none-eabi-gcc": (["-std=c99", "-mcpu=cortex-m3", "-mthumb"], ("epuck", "rone", "droplet")),
+    "avr-gcc": (["-std=gnu99", "-mmcu=atxmega128a3u", "-DPOLICY_ROM=__flash"], ("droplet",)),  # weights in flash on the Harvard AVR
+}
+
+
+@pytest.mark.parametrize("cross", sorted(CROSS))
+def test_cross_compiles(exported, cross, tmp_path):
+    """policy.c and actions.c compile for a microcontroller (Cortex-M3, the r-one's core; the Droplet's
+    ATxmega) without warnings, with no writable data (every table constant)."""
+    import shutil
+    import subprocess
+
+    if shutil.which(cross) is None:
+        pytest.skip(f"{cross} is not installed (apt-get install gcc-arm-none-eabi libnewlib-arm-none-eabi / gcc-avr avr-libc)")
+    platform, _, folder = exported
+    flags, platforms = CROSS[cross]
+    if platform not in platforms:
+        pytest.skip(f"{cross} targets {', '.join(platforms)}")
+    for source in ("policy.c", "actions.c"):
+        obj = tmp_path / (source + ".o")
+        done = subprocess.run([cross, *flags, "-Os", "-Wall", "-Wextra", "-Werror", "-c", str(folder / source), "-o", str(obj)],
+                              capture_output=True, text=True)
+        assert done.returncode == 0, done.stderr
+        sections = subprocess.run([cross.replace("gcc", "objdump"), "-h", str(obj)], capture_output=True, text=True).stdout
+        sizes = {f[1]: int(f[2], 16) for f in (line.split() for line in sections.splitlines()) if len(f) > 3 and f[0].isdigit()}
+        assert sizes.get(".data", 0) == 0 and sizes.get(".bss", 0) == 0, sizes

@@ -67,10 +67,10 @@ def _odometry_c(layout: ObservationLayout, platform: Platform) -> str:
 /* Odometry: every stale body-frame reading turned back by the robot's own rotation since it was measured
  * (swarm_envs.agents.policies.Odometry), from the last (linear, angular) command in proprio, wheel-limited
  * as the motors take it. Double precision, as the Python pipeline. */
-static const int16_t RB_INDEX[{k}][7] = {{
+static const POLICY_ROM int16_t RB_INDEX[{k}][7] = {{
 {_rows(idx["rb"])}
 }};
-static const int16_t SF_INDEX[{k}][3] = {{
+static const POLICY_ROM int16_t SF_INDEX[{k}][3] = {{
 {_rows(idx["sf"])}
 }};
 #define ACTION_LINEAR {int(idx["action"][0])}
@@ -101,9 +101,8 @@ static void odometry(policy_state_t *state, float *obs)
     since[0] = 0.0;
     for (a = 0; a < POLICY_ODOMETRY_HISTORY; ++a) since[a + 1] = since[a] + state->turned[a];
     for (i = 0; i < {k}; ++i) {{
-        const int16_t *r = RB_INDEX[i];
-        double age_f = rint((double)obs[r[6]]);
-        int age = age_f < 0.0 ? 0 : (age_f > POLICY_ODOMETRY_HISTORY ? POLICY_ODOMETRY_HISTORY : (int)age_f);
+        const POLICY_ROM int16_t *r = RB_INDEX[i];
+        int age = (int)lrint(clampd((double)obs[r[6]], 0.0, POLICY_ODOMETRY_HISTORY)); /* ties to even, as numpy's rint */
         double angle = obs[r[0]] > 0.5f ? since[age] : 0.0;
         rotate(&obs[r[2]], &obs[r[3]], angle);
         rotate(&obs[r[4]], &obs[r[5]], angle);
@@ -113,7 +112,7 @@ static void odometry(policy_state_t *state, float *obs)
     if (state->has_sf_last) state->sf_since = changed ? 0 : (state->sf_since + 1 < POLICY_ODOMETRY_HISTORY ? state->sf_since + 1 : POLICY_ODOMETRY_HISTORY);
     state->has_sf_last = 1;
     for (i = 0; i < {k}; ++i) {{
-        const int16_t *r = SF_INDEX[i];
+        const POLICY_ROM int16_t *r = SF_INDEX[i];
         for (a = 0; a < 3; ++a) state->sf_last[i][a] = obs[r[a]];
         rotate(&obs[r[1]], &obs[r[2]], obs[r[0]] > 0.5f ? since[state->sf_since] : 0.0);
     }}
@@ -169,8 +168,8 @@ def _float_net(layers: list[Layer]) -> tuple[str, str]:
     width = max(layer.weight.shape[0] for layer in layers)
     for i, layer in enumerate(layers):
         out, inp = layer.weight.shape
-        data.append(f"static const float W{i}[{out * inp}] = {{\n{_wrap(_f32(layer.weight))}\n}};")
-        data.append(f"static const float B{i}[{out}] = {{\n{_wrap(_f32(layer.bias))}\n}};")
+        data.append(f"static const POLICY_ROM float W{i}[{out * inp}] = {{\n{_wrap(_f32(layer.weight))}\n}};")
+        data.append(f"static const POLICY_ROM float B{i}[{out}] = {{\n{_wrap(_f32(layer.bias))}\n}};")
         act = {"tanh": "ACT_TANH", "relu": "ACT_RELU", "none": "ACT_NONE"}[layer.activation]
         src = "x" if i == 0 else ("h0" if i % 2 == 1 else "h1")
         dst = "action" if i == len(layers) - 1 else ("h0" if i % 2 == 0 else "h1")
@@ -179,12 +178,12 @@ def _float_net(layers: list[Layer]) -> tuple[str, str]:
 enum {{ ACT_NONE, ACT_TANH, ACT_RELU }};
 
 /* y = act(W x + b), W row-major (n_out, n_in) */
-static void dense(const float *w, const float *b, const float *x, float *y, int n_out, int n_in, int act)
+static void dense(const POLICY_ROM float *w, const POLICY_ROM float *b, const float *x, float *y, int n_out, int n_in, int act)
 {{
     int i, j;
     for (i = 0; i < n_out; ++i) {{
         float acc = b[i];
-        const float *row = w + (size_t)i * n_in;
+        const POLICY_ROM float *row = w + (size_t)i * n_in;
         for (j = 0; j < n_in; ++j) acc += row[j] * x[j];
         y[i] = act == ACT_TANH ? tanhf(acc) : (act == ACT_RELU ? (acc > 0.0f ? acc : 0.0f) : acc);
     }}
@@ -204,14 +203,14 @@ static void forward(const float *x, float *action)
 
 def _fixed_net(net: FixedNet) -> tuple[str, str]:
     wtype = "int16_t" if net.mode == "q15" else "int8_t"
-    data = [f"/* tanh(i / 64) in Q15, i = 0 .. 512 */\nstatic const int16_t TANH_Q15[513] = {{\n{_wrap(_ints(TANH_TABLE))}\n}};"]
+    data = [f"/* tanh(i / 64) in Q15, i = 0 .. 512 */\nstatic const POLICY_ROM int16_t TANH_Q15[513] = {{\n{_wrap(_ints(TANH_TABLE))}\n}};"]
     calls = []
     width = max(layer.weight.shape[0] for layer in net.layers)
     for i, layer in enumerate(net.layers):
         out, inp = layer.weight.shape
         data.append(f"/* layer {i}: input Q{layer.in_frac}, weights Q{layer.w_frac}, output Q{layer.out_frac}, {layer.activation} */")
-        data.append(f"static const {wtype} W{i}[{out * inp}] = {{\n{_wrap(_ints(layer.weight))}\n}};")
-        data.append(f"static const int64_t B{i}[{out}] = {{\n{_wrap(','.join(f'INT64_C({int(v)})' for v in layer.bias))}\n}};")
+        data.append(f"static const POLICY_ROM {wtype} W{i}[{out * inp}] = {{\n{_wrap(_ints(layer.weight))}\n}};")
+        data.append(f"static const POLICY_ROM int64_t B{i}[{out}] = {{\n{_wrap(','.join(f'INT64_C({int(v)})' for v in layer.bias))}\n}};")
         last = i == len(net.layers) - 1
         kind = "OUT_ACTION" if last else {"tanh": "OUT_TANH", "relu": "OUT_RELU"}[layer.activation]
         src = "x" if i == 0 else ("h0" if i % 2 == 1 else "h1")
@@ -243,12 +242,12 @@ static int16_t tanh_q15(int64_t z)
 }}
 
 /* y = out(W x + b): x at Q(in), W at Q(w), the int64 sum at Q(acc_frac = in + w), y at Q(out_frac) */
-static void dense_q(const {wtype} *w, const int64_t *b, const int16_t *x, int16_t *y, int n_out, int n_in, int acc_frac, int out_frac, int kind)
+static void dense_q(const POLICY_ROM {wtype} *w, const POLICY_ROM int64_t *b, const int16_t *x, int16_t *y, int n_out, int n_in, int acc_frac, int out_frac, int kind)
 {{
     int i, j;
     for (i = 0; i < n_out; ++i) {{
         int64_t acc = b[i];
-        const {wtype} *row = w + (size_t)i * n_in;
+        const POLICY_ROM {wtype} *row = w + (size_t)i * n_in;
         for (j = 0; j < n_in; ++j) acc += (int32_t)row[j] * (int32_t)x[j];
         if (kind == OUT_TANH) {{
             int64_t z = shift_round(acc, acc_frac - {TANH_IN_FRAC});
@@ -307,6 +306,12 @@ void policy_step_q(policy_state_t *state, const int16_t obs_q[POLICY_OBS_SIZE], 
 #include <math.h>
 #include <string.h>
 #include "policy.h"
+
+/* The address space of the constant tables: empty (the default) for a von Neumann MCU or the host; on a
+ * Harvard MCU define it so they stay in flash, e.g. -DPOLICY_ROM=__flash with avr-gcc (-std=gnu99). */
+#ifndef POLICY_ROM
+#define POLICY_ROM
+#endif
 
 {data}
 {body}
