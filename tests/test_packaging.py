@@ -41,7 +41,7 @@ def test_pyproject_lists_every_package_and_maps_agents():
 
 
 def test_console_scripts_declared():
-    assert set(SCRIPTS) == {"swarm-train", "swarm-validate", "swarm-benchmark", "swarm-demo"}
+    assert set(SCRIPTS) == {"swarm-train", "swarm-validate", "swarm-benchmark", "swarm-demo", "swarm-export"}
     for target in SCRIPTS.values():
         module, _, function = target.partition(":")
         assert module.startswith("swarm_envs.") and function in ("main", "train")

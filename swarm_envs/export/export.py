@@ -1,0 +1,176 @@
+"""Export a trained run to a folder of C sources for the robot: policy, action decoder, observation
+builder (when available) and a README describing them."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from swarm_envs.export.actions_c import native_factor, write_actions
+from swarm_envs.export.network import actor_layers, write_onnx
+from swarm_envs.export.policy_c import write_policy
+from swarm_envs.export.quantize import FixedNet, quantize
+from swarm_envs.export.run import ExportError, LoadedRun, load_run
+
+__all__ = ["export_run", "observation_bound", "layout_table"]
+
+
+def observation_bound(run: LoadedRun) -> float:
+    """The largest magnitude the observation space allows (the fixed-point input range)."""
+    from gymnasium import spaces
+
+    box = spaces.flatten_space(run.layout.dict_space())
+    return float(max(np.abs(box.low).max(), np.abs(box.high).max()))
+
+
+def calibration_observations(run: LoadedRun, seeds: tuple[int, ...] = (0, 1), steps: int = 100) -> np.ndarray:
+    """Flat observations (N, D) the policy sees driving the env (the torch policy, ``steps`` steps of each
+    seed; after odometry when the policy has it): the ReLU layers' fixed-point ranges come from them."""
+    from swarm_envs.agents.base import flatten_batch
+    from swarm_envs.agents.evaluation import make_env
+    from swarm_envs.agents.policies import Odometry, TrainedPolicy
+
+    env = make_env(run.cfg["task"], **run.env_kwargs)
+    rows = []
+    try:
+        for seed in seeds:
+            env.reset(seed=seed)
+            policy = TrainedPolicy(run.model, env.platform, env.layout, run.spec)
+            policy.reset(env.n_agents)
+            odometry = Odometry(env.layout, env.platform) if run.spec.odometry else None
+            for _ in range(min(steps, run.max_cycles)):
+                parts = {k: v[env.agent_robots] for k, v in env.batched_observations().items()}
+                flat = flatten_batch(run.layout, parts)
+                rows.append(flat if odometry is None else odometry(flat))
+                a = policy.act_batch(parts)
+                env.step({agent: a[i] for i, agent in enumerate(env.possible_agents)})
+    finally:
+        env.close()
+    return np.concatenate(rows)
+
+
+def layout_table(run: LoadedRun) -> str:
+    """Markdown rows: part, flat offset, shape, columns (the flat order of ``gymnasium.spaces.flatten``)."""
+    from swarm_envs.observation import ID_FIELDS, RB_FIELDS
+
+    columns = {
+        "range_bearing": ", ".join(RB_FIELDS) + " (range m, age control steps)",
+        "messages": "valid, sender bearing / pi, payload bit 0 .. b-1",
+        "scale_free": "valid, x, y (scale-free, clipped to +-10)",
+        "rigid": "1 when the scale-free coordinates are determined",
+        "proprio": "bump sector 0..7, last action (linear, angular, message bits)",
+        "own_id": "own id / (n_world - 1), own id parity",
+    }
+    rows, offset = ["| part | offset | shape | columns |", "|---|---|---|---|"], 0
+    for name, box in run.layout.dict_space().spaces.items():
+        size = int(np.prod(box.shape))
+        cols = columns.get(name, ", ".join(ID_FIELDS))
+        rows.append(f"| `{name}` | {offset} | {'x'.join(map(str, box.shape))} | {cols} |")
+        offset += size
+    return "\n".join(rows)
+
+
+def _readme(run: LoadedRun, fixed: FixedNet | None, files: list[Path], observation: bool) -> str:
+    p, spec = run.platform, run.spec
+    unit, factor, what = native_factor(p)
+    layers = actor_layers(run.model)
+    arch = " -> ".join([str(run.obs_size)] + [f"{layer.weight.shape[0]} {layer.activation}" for layer in layers[:-1]] + [f"{run.action_size}"])
+    params = sum(layer.weight.size + layer.bias.size for layer in layers)
+    if fixed is None:
+        weight_bytes = 4 * params
+    else:
+        per_weight = 2 if fixed.mode == "q15" else 1
+        weight_bytes = sum(per_weight * layer.weight.size + 8 * layer.bias.size for layer in fixed.layers) + 2 * 513
+    width = max(layer.weight.shape[0] for layer in layers)
+    state_bytes = (8 * (run.layout.max_age + 1) + 8 + 4 * 3 * run.layout.n_neighbours) if spec.odometry else 4
+    kind = "float32" if fixed is None else (f"fixed point ({fixed.mode}: {'int16' if fixed.mode == 'q15' else 'int8'} weights, "
+                                            f"int16 activations, int64 sums; observation input Q{fixed.in_frac})")
+    settings = ", ".join(f"{k}={v!r}" for k, v in sorted(run.env_kwargs.items())) or "defaults"
+    obs_line = ("`observation.h` / `observation.c` build the flat observation from the robot's sensing."
+                if observation else "The observation builder is not part of this folder: the firmware fills the flat observation "
+                                    "below from its own sensing (docs/export.md).")
+    return f"""# Exported policy: {run.env_id} on the {p.name}
+
+Made by `swarm-export` from the run `{run.run_dir}` (task `{run.cfg['task']}`, env `{run.env_id}`, settings
+{settings}; swarm_envs observation layout with {run.layout.n_neighbours} neighbour rows, {run.layout.n_messages}
+message rows, {run.layout.message_bits} message bits, max age {run.layout.max_age} steps).
+
+- Policy: {spec.name}, actor {arch} ({params} parameters), {kind}.
+- Sizes: {weight_bytes} bytes of constant weights and tables; {state_bytes} bytes of `policy_state_t` per robot
+  (about; `sizeof` is exact); stack of one `policy_step` about {4 * run.obs_size + 8 * width} bytes.
+- Control step: 0.1 s; an episode of the env is {run.max_cycles} steps.
+- Files: {', '.join(f'`{f.name}`' for f in files)}.
+
+## Control loop
+
+```c
+#include "policy.h"
+#include "actions.h"
+
+static policy_state_t state;            /* one per robot; no dynamic memory */
+float obs[POLICY_OBS_SIZE], action[POLICY_ACTION_SIZE];
+actions_command_t cmd;
+
+policy_reset(&state);                   /* at the start of every run */
+every 0.1 s:
+    fill obs (layout below) from this step's sensing, with proprio's last action = the previous `action`
+    policy_step(&state, obs, action);
+    actions_decode(action, &cmd);       /* cmd.left_native, cmd.right_native: {unit}; cmd.message: bits */
+    set the wheels and the outgoing message
+```
+
+{obs_line}
+{"The policy keeps odometry state: it turns stale bearings back by the robot's own rotation since they were measured, from the last action in `proprio`; reset it with `policy_reset` when the robot starts." if spec.odometry else "The policy keeps no state between steps (`policy_reset` is still the call to make at the start)."}
+
+## Observation ({run.obs_size} floats)
+
+{layout_table(run)}
+
+## Actions ({run.action_size} floats in [-1, 1])
+
+`action[0]` linear speed as a fraction of {p.max_speed} m/s, `action[1]` angular speed as a fraction of
+{p.max_angular_speed:.4g} rad/s (counter-clockwise), then {run.layout.message_bits} message bits (1 where > 0).
+`actions_decode` gives the wheel speeds (left = v - w b/2, right = v + w b/2, b = {p.wheel_base} m, each
+limited to +-{p.max_speed} m/s) in m/s and in {unit} ({factor:g} per m/s: {what}).
+{"The motors do not turn below " + str(p.min_wheel_speed) + " m/s; the env models that dead zone, the decoder leaves it to the motors." if p.min_wheel_speed > 0 else ""}
+"""
+
+
+def export_run(run_dir: str | Path, out_dir: str | Path, fixed: str | None = None, onnx: bool = True) -> list[Path]:
+    """Write the export folder of the run in ``run_dir`` into ``out_dir``; ``fixed``: ``None`` (float32),
+    ``"q15"`` or ``"int8"``. Returns the files written; :class:`ExportError` for a run it cannot export."""
+    run = load_run(run_dir)
+    out = Path(out_dir)
+    if out.exists() and not out.is_dir():
+        raise ExportError(f"output '{out}' exists and is not a folder")
+    out.mkdir(parents=True, exist_ok=True)
+    try:
+        layers = actor_layers(run.model)
+    except ValueError as err:
+        raise ExportError(f"run '{run.run_dir}': {err}") from None
+    net = None
+    if fixed is not None:
+        relu = any(layer.activation == "relu" for layer in layers[:-1])
+        net = quantize(layers, observation_bound(run), fixed, calibration_observations(run) if relu else None)
+    summary = f"{run.env_id} on the {run.platform.name}, {run.spec.name}, {'float32' if net is None else net.mode}"
+    files = write_policy(layers, run.layout, run.platform, run.spec.odometry, out, fixed=net, summary=summary)
+    files += write_actions(run.platform, run.action_size, out, summary=summary)
+    if onnx:
+        try:
+            import onnx as _onnx  # noqa: F401  (the exporter needs the package)
+        except ImportError:
+            pass
+        else:
+            files.append(write_onnx(run.model, out / "policy.onnx"))
+    observation = False
+    try:
+        from swarm_envs.export.observation_c import write_observation_builder
+    except ImportError:
+        pass
+    else:
+        files += write_observation_builder(run.env_id, run.env_kwargs, out)
+        observation = True
+    readme = out / "README.md"
+    readme.write_text(_readme(run, net, files, observation), encoding="utf-8")
+    return files + [readme]
