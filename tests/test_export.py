@@ -254,7 +254,7 @@ def test_cli_writes_folder(tmp_path, capsys):
     run_dir = make_run(tmp_path / "run", "configs/aggregation.yaml", ["env.n_robots=4", "agent.net_arch=[8]"])
     out = tmp_path / "c"
     assert main([str(run_dir), "--output", str(out), "--fixed", "q15", "--no-onnx"]) == 0
-    assert "wrote 5 files" in capsys.readouterr().out
+    assert "wrote 7 files" in capsys.readouterr().out  # policy, actions, observation (.h, .c) and README.md
     assert {p.name for p in out.iterdir()} >= {"policy.h", "policy.c", "actions.h", "actions.c", "README.md"}
     readme = (out / "README.md").read_text()
     assert "swarm_envs/Aggregation-v0" in readme and "| `messages` | 0 |" in readme and "epuck" in readme
@@ -293,3 +293,44 @@ def test_cross_compiles(exported, cross, tmp_path):
         sections = subprocess.run([cross.replace("gcc", "objdump"), "-h", str(obj)], capture_output=True, text=True).stdout
         sizes = {f[1]: int(f[2], 16) for f in (line.split() for line in sections.splitlines()) if len(f) > 3 and f[0].isdigit()}
         assert sizes.get(".data", 0) == 0 and sizes.get(".bss", 0) == 0, sizes
+
+
+@needs_cc
+def test_firmware_tables_through_observation_builder_and_policy_match_torch(exported):
+    """The whole exported chain, as the firmware runs it: the firmware-side tables (filled from the
+    simulator's sensing state) -> ``obs_build`` -> ``policy_step`` gives torch's deterministic actions on
+    the env's own observations (within 1e-5), over an episode with a reset."""
+    import ctypes
+
+    from swarm_envs.agents.evaluation import make_env
+    from swarm_envs.export.compare import _torch_policy
+    from swarm_envs.export.host import CPolicyLibrary, compile_shared
+    from swarm_envs.export.observation_c import builder_constants, firmware_tables
+    from tests.test_export_observation import _ctypes_tables, _fill
+
+    platform, run, folder = exported
+    library = compile_shared(folder, sources=("policy.c", "actions.c", "observation.c"), name="libchain.so")
+    chain = CPolicyLibrary(library, run.obs_size, run.action_size)
+    env = make_env(run.cfg["task"], **run.env_kwargs)
+    Tables = _ctypes_tables(builder_constants(env))
+    reference = _torch_policy(run, env)
+    flat = (ctypes.c_float * run.obs_size)()
+    worst = 0.0
+    try:
+        for seed in (5, 6):
+            env.reset(seed=seed)
+            reference.reset(env.n_agents)
+            chain.reset(env.n_agents)
+            for _ in range(25):
+                parts = {k: v[env.agent_robots] for k, v in env.batched_observations().items()}
+                want = reference.act_batch(parts)
+                built = np.zeros((env.n_agents, run.obs_size), np.float32)
+                for i, agent in enumerate(env.possible_agents):
+                    chain.lib.obs_build(ctypes.byref(_fill(Tables, firmware_tables(env, agent))), flat)
+                    built[i] = np.frombuffer(flat, np.float32)
+                got = chain.step(built)
+                worst = max(worst, float(np.abs(got - want).max()))
+                env.step({agent: want[i] for i, agent in enumerate(env.possible_agents)})
+    finally:
+        env.close()
+    assert worst <= TOLERANCE, f"{platform}: tables -> C observation -> C policy vs torch: {worst}"

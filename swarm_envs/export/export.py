@@ -1,5 +1,5 @@
 """Export a trained run to a folder of C sources for the robot: policy, action decoder, observation
-builder (when available) and a README describing them."""
+builder (for runs with the modelled sensing) and a README describing them."""
 
 from __future__ import annotations
 
@@ -9,9 +9,12 @@ import numpy as np
 
 from swarm_envs.export.actions_c import native_factor, write_actions
 from swarm_envs.export.network import actor_layers, write_onnx
+from swarm_envs.export.observation_c import write_observation_builder
 from swarm_envs.export.policy_c import write_policy
 from swarm_envs.export.quantize import FixedNet, quantize
 from swarm_envs.export.run import ExportError, LoadedRun, load_run
+from swarm_envs.registry import task_class
+from swarm_envs.views import resolve_config
 
 __all__ = ["export_run", "observation_bound", "layout_table"]
 
@@ -88,8 +91,8 @@ def _readme(run: LoadedRun, fixed: FixedNet | None, files: list[Path], observati
                                             f"int16 activations, int64 sums; observation input Q{fixed.in_frac})")
     settings = ", ".join(f"{k}={v!r}" for k, v in sorted(run.env_kwargs.items())) or "defaults"
     obs_line = ("`observation.h` / `observation.c` build the flat observation from the robot's sensing."
-                if observation else "The observation builder is not part of this folder: the firmware fills the flat observation "
-                                    "below from its own sensing (docs/export.md).")
+                if observation else "The observation builder is not part of this folder (it rebuilds sensing='full' with the two-hop "
+                                    "scale-free method only): the firmware fills the flat observation below itself.")
     return f"""# Exported policy: {run.env_id} on the {p.name}
 
 Made by `swarm-export` from the run `{run.run_dir}` (task `{run.cfg['task']}`, env `{run.env_id}`, settings
@@ -163,14 +166,12 @@ def export_run(run_dir: str | Path, out_dir: str | Path, fixed: str | None = Non
             pass
         else:
             files.append(write_onnx(run.model, out / "policy.onnx"))
-    observation = False
-    try:
-        from swarm_envs.export.observation_c import write_observation_builder
-    except ImportError:
-        pass
-    else:
+    # the builder rebuilds the modelled stack's observation; an ideal-sensing run (exact values) has no
+    # firmware-side tables to build from
+    env_cfg = resolve_config(task_class(run.env_id), run.env_kwargs)
+    observation = env_cfg["sensing"] == "full" and env_cfg["scale_free_method"] == "two_hop"
+    if observation:
         files += write_observation_builder(run.env_id, run.env_kwargs, out)
-        observation = True
     readme = out / "README.md"
     readme.write_text(_readme(run, net, files, observation), encoding="utf-8")
     return files + [readme]

@@ -1,4 +1,4 @@
-"""C99 observation builder for robot firmware (docs/export_observation.md).
+"""C99 observation builder for robot firmware (docs/export.md, "The observation builder").
 
 :func:`write_observation_builder` writes ``observation.h`` / ``observation.c`` for one env config: from the
 tables a robot's firmware keeps (its range & bearing or sector-bearing neighbour table, the SwarmCom
