@@ -21,6 +21,7 @@ from typing import Any
 
 import numpy as np
 
+from swarm_envs.agents.config import progress_bar_on
 from swarm_envs.agents.evaluation import evaluate, markdown_table, random_factory, summarise
 from swarm_envs.agents.scripted import make_scripted, scripted_class
 from swarm_envs.agents.tasks import SHORT_NAMES, env_id, headline, import_modules, metric_reductions, scripted_policy
@@ -59,7 +60,7 @@ def run_benchmark(
         results, seconds = {}, {}
         for name, (kw, factory) in candidates.items():
             t0 = time.perf_counter()
-            results[name] = evaluate(task, kw, factory, seeds, progress=True, desc=f"{task}/{name}")
+            results[name] = evaluate(task, kw, factory, seeds, progress=progress_bar_on("auto"), desc=f"{task}/{name}")
             seconds[name] = time.perf_counter() - t0
         out[task] = {"rows": summarise(results), "seconds": seconds, "env": kwargs,
                      "per_seed": {p: {m: v.tolist() for m, v in r.items()} for p, r in results.items()}}

@@ -28,6 +28,7 @@ from __future__ import annotations
 import copy
 import math
 import numbers
+import sys
 from pathlib import Path
 from typing import Any
 
@@ -36,7 +37,7 @@ import yaml
 
 from swarm_envs._text import shown
 
-__all__ = ["ConfigError", "DEFAULTS", "BOUNDS", "load_config", "apply_overrides", "validate", "resolve", "bounds_table", "run_config_path"]
+__all__ = ["ConfigError", "DEFAULTS", "BOUNDS", "load_config", "apply_overrides", "validate", "resolve", "bounds_table", "run_config_path", "progress_bar_on"]
 
 
 class ConfigError(ValueError):
@@ -112,7 +113,7 @@ DEFAULTS: dict[str, Any] = {
         "n_workers": 1,  # worker processes the copies are split over (one batched core each); <= n_envs
         "torch_threads": 1,  # benchmarks/bench_torch_threads.py: 2 is <=5 % faster idle, 4-8x slower with a busy core
         "checkpoint_freq": 50_000,  # robot-steps between checkpoints (0 = only the final model)
-        "progress_bar": True,
+        "progress_bar": "auto",  # tqdm bars: "auto" only when stderr is a terminal, or true / false
     },
     "eval": {
         "n_seeds": 20,
@@ -155,6 +156,8 @@ BOUNDS: dict[str, tuple[float, float, str]] = {
 }
 _OPEN_LOW = {"agent.learning_rate", "agent.clip_range", "agent.max_grad_norm", "agent.reward_scale"}
 #: keys whose default is null and otherwise take a value of this type
+#: keys that are true, false or "auto" (decided when used, e.g. :func:`progress_bar_on`)
+_BOOL_OR_AUTO = {"train.progress_bar"}
 _NULLABLE = {"eval.max_cycles": 1, "agent.scripted": ""}
 #: agent.net_arch: layers and units per layer at most (memory of the policy and value networks)
 MAX_LAYERS, MAX_UNITS = 16, 4096
@@ -242,6 +245,10 @@ def validate(cfg: dict[str, Any]) -> dict[str, Any]:
                 walk(value, default, dotted + ".")
                 continue
             if dotted in _NULLABLE and value is None:
+                continue
+            if dotted in _BOOL_OR_AUTO:
+                if not (value is True or value is False or value == "auto"):
+                    raise ConfigError(f"config key {dotted!r}={shown(value)} not allowed; allowed values: [true, false, 'auto']")
                 continue
             example = _NULLABLE.get(dotted, default)
             if not _type_ok(value, example):
@@ -430,6 +437,17 @@ def apply_overrides(cfg: dict[str, Any], overrides: list[str]) -> dict[str, Any]
             value = _merge(node[last], value, key.strip() + ".")
         node[last] = value
     return cfg
+
+
+def progress_bar_on(setting: bool | str) -> bool:
+    """Whether to draw tqdm progress bars for ``train.progress_bar``: ``true`` / ``false`` as given, ``"auto"``
+    only when stderr (where tqdm draws) is a terminal, so logs and CI output carry no bar redraws."""
+    if setting == "auto":
+        try:
+            return sys.stderr.isatty()
+        except (AttributeError, ValueError):  # a replaced or closed stderr
+            return False
+    return bool(setting)
 
 
 def load_config(path: str | Path | None, overrides: list[str] | None = None) -> dict[str, Any]:

@@ -81,7 +81,7 @@ import numpy as np
 import yaml
 
 from swarm_envs.agents.base import Policy
-from swarm_envs.agents.config import DEFAULTS, ConfigError, load_config, resolve
+from swarm_envs.agents.config import DEFAULTS, ConfigError, load_config, progress_bar_on, resolve
 from swarm_envs.agents.tasks import env_id, headline, metric_reductions
 from swarm_envs.agents.evaluation import (
     evaluate,
@@ -523,7 +523,7 @@ def _progress_writer(total: int, repeat: int = 1):
             self.next_fraction = math.floor(done / total * 10 + 1) / 10
             parts = [f"PPO {done * repeat}/{total * repeat} robot-steps ({100 * done / total:.0f}%)"]
             for key, label, fmt in (("rollout/ep_rew_mean", "ep_rew_mean", ".4g"), ("rollout/ep_len_mean", "ep_len", ".4g"),
-                                    ("time/fps", "fps", ".0f"), ("train/loss", "loss", ".3g")):
+                                    (RATE_KEY, "robot-steps/s", ".0f"), ("train/loss", "loss", ".3g")):
                 if key in key_values:
                     parts.append(f"{label} {key_values[key]:{fmt}}")
             _say("  ".join(parts))
@@ -532,6 +532,39 @@ def _progress_writer(total: int, repeat: int = 1):
             pass
 
     return ProgressLine()
+
+
+#: the progress.csv column of the training rate (robot-steps/s) from the end of the first env step on
+RATE_KEY = "time/robot_steps_per_s"
+
+
+def rate_callback(repeat: int = 1):
+    """An SB3 callback that logs :data:`RATE_KEY` at the end of every rollout: robot-steps (PPO timesteps x
+    ``repeat``) per second of wall time since the end of the first env step, PPO updates included. The start
+    lies after the env's first reset and step, where a cold numba cache compiles the kernels, so unlike
+    SB3's ``time/fps`` (from the start of ``learn``) the rate does not count the one-off compile."""
+    from stable_baselines3.common.callbacks import BaseCallback
+
+    class RateCallback(BaseCallback):
+        start: tuple[float, int] | None = None  # (perf_counter s, num_timesteps) at the end of the first step
+
+        def _on_training_start(self) -> None:
+            self.start = None
+
+        def _on_step(self) -> bool:
+            if self.start is None:
+                self.start = (time.perf_counter(), self.num_timesteps)
+            return True
+
+        def _on_rollout_end(self) -> None:
+            if self.start is None:
+                return
+            seconds = time.perf_counter() - self.start[0]
+            steps = (self.num_timesteps - self.start[1]) * repeat
+            if seconds > 0 and steps > 0:
+                self.logger.record(RATE_KEY, steps / seconds)
+
+    return RateCallback()
 
 
 def make_logger(out: Path, total: int, progress_lines: bool, repeat: int = 1):
@@ -556,7 +589,7 @@ def make_callbacks(cfg: dict[str, Any], out: Path, num_envs: int, total: int):
     freq = cfg["train"]["checkpoint_freq"]
     if freq > 0:
         callbacks.append(CheckpointCallback(save_freq=max(1, freq // num_envs), save_path=str(out / "checkpoints"), name_prefix="ppo"))
-    if cfg["train"]["progress_bar"]:
+    if progress_bar_on(cfg["train"]["progress_bar"]):
 
         class TqdmCallback(BaseCallback):
             """Progress bar over robot-steps with the latest mean episode return."""
@@ -620,6 +653,7 @@ def train(cfg: dict[str, Any], stage: Staging, ctrl_c: _CtrlC | None = None,
         logger = make_logger(out, total, progress_lines=True, repeat=repeat)
         model.set_logger(logger)
         callbacks = make_callbacks(cfg, out, venv.num_envs * repeat, total * repeat)
+        callbacks.callbacks.append(rate_callback(repeat))
         callbacks.callbacks.append(ctrl_c.callback())
         with ctrl_c.installed() if own else contextlib.nullcontext():
             t0 = time.perf_counter()
@@ -1231,7 +1265,7 @@ def _staged_run(args: argparse.Namespace, cfg: dict[str, Any], eval_kwargs: dict
     results = {}
     for name, factory in factories.items():
         ctrl_c.check()
-        results[name] = evaluate(task, eval_kwargs, factory, seeds, progress=cfg["train"]["progress_bar"], desc=f"eval {name}")
+        results[name] = evaluate(task, eval_kwargs, factory, seeds, progress=progress_bar_on(cfg["train"]["progress_bar"]), desc=f"eval {name}")
     timing["eval_s"] = time.perf_counter() - t0
     rows = summarise(results, seed=cfg["seed"])
     header, table = report_text(cfg, eval_kwargs, list(factories), seeds, rows, source)

@@ -3,9 +3,8 @@
 import numpy as np
 import pettingzoo
 import pytest
-from pettingzoo.test import api_test, parallel_api_test
-
 import swarm_envs
+from tests.conftest import aec_api_check, parallel_api_check
 
 SENSING = ["ideal", "full"]
 
@@ -16,20 +15,20 @@ SENSING = ["ideal", "full"]
 def test_parallel_api(env_id, platform, sensing):
     for n in (1, 4):
         env = pettingzoo.make("parallel", env_id, n_robots=n, platform=platform, sensing=sensing, max_cycles=30)
-        parallel_api_test(env, num_cycles=40)
+        parallel_api_check(env, num_cycles=40)
 
 
 @pytest.mark.parametrize("env_id", swarm_envs.list_envs())
 @pytest.mark.parametrize("sensing", SENSING)
 def test_aec_api(env_id, sensing):
     env = pettingzoo.make("aec", env_id, n_robots=3, sensing=sensing, max_cycles=20)
-    api_test(env, num_cycles=30)
+    aec_api_check(env, num_cycles=30)
 
 
 @pytest.mark.parametrize("env_id", swarm_envs.list_envs())
 def test_flatten_and_messages_layout(env_id):
     env = swarm_envs.make(env_id, n_robots=3, sensing="ideal", flatten=True, message_bits=4, max_cycles=10)
-    parallel_api_test(env, num_cycles=15)
+    parallel_api_check(env, num_cycles=15)
     obs, _ = env.reset(seed=0)
     agent = env.agents[0]
     space = env.observation_space(agent)

@@ -70,6 +70,7 @@ def test_t_plus_one_errors_not_silently_fixed_for_imperfect_codes():
     assert (~ok).any()
 
 
+@pytest.mark.slow  # galois compiles its own numba code in each process (~10 s)
 @pytest.mark.parametrize("nk", [nk for nk in CODES if nk[1] < 15])
 def test_cross_check_galois(nk):
     galois = pytest.importorskip("galois")

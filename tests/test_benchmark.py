@@ -41,6 +41,7 @@ def test_module_runs_with_one_episode():
            "--sensing", "ideal", "--json"]
     proc = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True, timeout=300)
     assert proc.returncode == 0, proc.stderr
+    assert "centroid_seeking/" not in proc.stderr, proc.stderr  # no evaluation bars: stderr is not a terminal
     res = json.loads(proc.stdout)
     assert list(res) == ["centroid_seeking"]
     assert all(r["n"] == 1 and r["ci_low"] is None and r["ci_high"] is None for r in res["centroid_seeking"]["rows"])

@@ -12,13 +12,13 @@ from pathlib import Path
 import numpy as np
 import pettingzoo
 import pytest
-from pettingzoo.test import parallel_api_test
 
 import swarm_envs
 from swarm_envs.env import SwarmEnv
 from swarm_envs.registry import spec, task_class
 from swarm_envs.settings import SettingsError
 from swarm_envs.task import Int, Real, Task
+from tests.conftest import parallel_api_check
 
 ROOT = Path(__file__).resolve().parent.parent
 DISPERSION = "swarm_examples/Dispersion-v0"
@@ -58,7 +58,7 @@ def test_example_task_settings_are_checked(example):
 
 
 def test_example_passes_the_parallel_api_test(example):
-    parallel_api_test(swarm_envs.make(DISPERSION, n_robots=5, max_cycles=40), num_cycles=40)
+    parallel_api_check(swarm_envs.make(DISPERSION, n_robots=5, max_cycles=40), num_cycles=40)
 
 
 @pytest.mark.parametrize("sensing", ["ideal", "full"])
@@ -99,8 +99,10 @@ def test_example_trains_with_train_py(example, tmp_path, monkeypatch):
     assert "ppo,mean_spacing" in results and "random,mean_spacing" in results and "scripted" not in results
 
 
-def test_benchmark_command_takes_a_user_task(example, capsys):
+def test_benchmark_command_takes_a_user_task(example, capsys, unregistered):
     from swarm_envs.agents.benchmark import main
+
+    unregistered(DISPERSION)  # registered by examples.custom_task; --import registers it from module custom_task
 
     assert main(["--import", str(ROOT / "examples" / "custom_task.py"), "--task", DISPERSION,
                  "--episodes", "1", "--max-cycles", "5", "--n-robots", "3", "--sensing", "ideal"]) == 0

@@ -18,6 +18,7 @@ def snippet(page: str, marker: str) -> str:
     return found[0]
 
 
+@pytest.mark.slow  # 20,480 PPO steps in two worker processes; tests/test_vector_wrappers.py trains the same SuperSuit path briefly
 def test_supersuit_snippet_runs(tmp_path, monkeypatch):
     """docs/training.md's SuperSuit + SB3 snippet: two worker processes, 20,480 PPO steps (about 15 s idle)."""
     pytest.importorskip("supersuit", reason="supersuit is not installed: pip install -e '.[test]'")

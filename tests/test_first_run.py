@@ -76,6 +76,7 @@ def _checksum_here(steps: int) -> float:
     return total
 
 
+@pytest.mark.slow  # compiles every kernel of a scenario from an empty cache, in two processes (~25 s idle)
 def test_compiling_line_on_an_empty_cache_only_and_background_compile_fills_it(tmp_path):
     """An empty cache: one "compiling" line, and the background process compiles the rest of the
     scenario's kernels; once it is done, a second run prints nothing and compiles nothing; both runs

@@ -55,9 +55,15 @@ def check_reused_equals_fresh(env_id: str, kwargs: dict, steps: int = 300, dirty
     assert_tree_equal(again, fresh)
 
 
-@pytest.mark.parametrize("platform", sorted(PLATFORMS))
-@pytest.mark.parametrize("env_id", swarm_envs.list_envs())
+@pytest.mark.parametrize(
+    "env_id, platform",
+    [
+        (e, p) if p == "epuck" or e == "swarm_envs/Aggregation-v0" else pytest.param(e, p, marks=pytest.mark.slow)
+        for e in swarm_envs.list_envs() for p in sorted(PLATFORMS)
+    ],
+)
 def test_reused_env_equals_fresh_env(env_id, platform):
+    """Every task on the e-puck and aggregation on every platform; the other pairs with `-m slow`."""
     check_reused_equals_fresh(env_id, {**dense_kwargs(env_id, platform, 10), "sensing": "ideal"})
 
 

@@ -42,10 +42,11 @@ def test_one_ppo_iteration_with_two_env_runners():
     assert math.isfinite(row["episode_return_mean"])
 
 
-def test_env_runners_import_a_task_of_your_own(forget_registered_ids):
+def test_env_runners_import_a_task_of_your_own(unregistered):
     """``--import`` reaches every env runner (a separate process), which registers the id before making the env."""
     import sys
 
+    unregistered("swarm_examples/Dispersion-v0")
     sys.modules.pop("custom_task", None)
     try:
         history = load_example().main(

@@ -21,6 +21,11 @@ STEPS = {"mid_angle_navigation": 600, "centroid_seeking": 300, "parity_clusterin
 TASK_SEEDS = {"mid_angle_navigation": list(range(12))}
 
 
+#: the tasks whose evaluations take longest (600 and 500 steps, 12 and 5 seeds): their cases run with `-m slow`
+LONG = {"mid_angle_navigation", "parity_clustering"}
+TASKS = [pytest.param(t, marks=pytest.mark.slow) if t in LONG else t for t in SHORT_NAMES]
+
+
 class Still(Policy):
     """Every robot stands still (its message bits silent)."""
 
@@ -49,7 +54,7 @@ def _run(task: str, cache: dict) -> dict[str, dict[str, np.ndarray]]:
     return cache[task]
 
 
-@pytest.mark.parametrize("task", list(SHORT_NAMES))
+@pytest.mark.parametrize("task", TASKS)
 def test_headline_separates_the_scripted_baseline_from_random(task, results):
     metric, sign = headline(task)
     runs = _run(task, results)
@@ -59,7 +64,7 @@ def test_headline_separates_the_scripted_baseline_from_random(task, results):
     assert p < 0.05, f"{task}: {metric} scripted {scripted} vs random {random} (p = {p:.3f})"
 
 
-@pytest.mark.parametrize("task", list(SHORT_NAMES))
+@pytest.mark.parametrize("task", TASKS)
 def test_no_metric_is_the_same_under_every_policy(task, results):
     runs = _run(task, results)
     for metric in runs["scripted"]:

@@ -81,7 +81,8 @@ def _load_mappo_example():
     return example
 
 
-def test_mappo_example_takes_an_imported_id(forget_registered_ids):
+def test_mappo_example_takes_an_imported_id(unregistered):
+    unregistered(DISPERSION)
     sys.modules.pop("custom_task", None)  # imported anew through --import: the id it registers is forgotten after
     try:
         log = _load_mappo_example().main(

@@ -147,14 +147,17 @@ def test_train_end_to_end(trained):
 def test_learning_curve_csv_and_progress(trained):
     out, stdout, stderr = trained
     header, rows = _read_csv(out / "progress.csv")
-    for key in ("time/total_timesteps", "rollout/ep_rew_mean", "rollout/ep_len_mean", "time/fps", "train/loss", "train/value_loss"):
+    for key in ("time/total_timesteps", "rollout/ep_rew_mean", "rollout/ep_len_mean", "time/fps", train.RATE_KEY, "train/loss",
+                "train/value_loss"):
         assert key in header, key
+    assert all(float(r[header.index(train.RATE_KEY)]) > 0 for r in rows)
     steps = [int(r[header.index("time/total_timesteps")]) for r in rows]
     assert steps == [256, 512, 768, 1024]  # one row per rollout of 64 steps x 4 robots, up to the real total
     lengths = {float(r[header.index("rollout/ep_len_mean")]) for r in rows}
     assert lengths == {20.0}  # max_cycles=20 episodes
     assert "the budget 1000 rounded up to 4 whole rollouts" in stdout
-    assert "PPO 1024/1024 robot-steps (100%)" in stdout and "ep_rew_mean" in stdout
+    assert "PPO 1024/1024 robot-steps (100%)" in stdout and "ep_rew_mean" in stdout and "robot-steps/s" in stdout
+    assert " fps " not in stdout  # SB3's time/fps counts the compile: the lines show the rate of rate_callback
     # the progress bar's total is what really runs, and it ends there
     assert "1024/1024" in stderr and "/1000 " not in stderr
 
@@ -335,3 +338,59 @@ def test_eval_only_without_a_run_config_checks_the_sizes(trained, tmp_path, caps
     assert train.main(["--config", FLOCKING, "--eval-only", str(model)] + _tiny("eval.n_seeds=1")) == 0
     (results,) = (tmp_path / "bare").glob("eval-*/results.csv")
     assert "ppo,polarisation," in results.read_text()
+
+
+def test_training_rate_starts_after_the_first_step(monkeypatch):
+    """The logged rate (train.RATE_KEY) counts from the end of the first env step, where a cold numba cache
+    compiles: 30 s of reset + first step (4 robots), then 63 steps in 0.63 s, action_repeat 2."""
+    from stable_baselines3.common.logger import Logger
+
+    now = [0.0]
+    monkeypatch.setattr(train.time, "perf_counter", lambda: now[0])
+
+    class Model:
+        num_timesteps = 0
+        logger = Logger(folder=None, output_formats=[])
+
+        def get_env(self):
+            return None
+
+    model = Model()
+    cb = train.rate_callback(repeat=2)
+    cb.init_callback(model)
+    cb.on_training_start({}, {})
+    now[0], model.num_timesteps = 30.0, 4  # reset and first step, compiling
+    cb.on_step()
+    for _ in range(63):
+        now[0] += 0.01
+        model.num_timesteps += 4
+        cb.on_step()
+    cb.on_rollout_end()
+    rate = model.logger.name_to_value[train.RATE_KEY]
+    assert rate == pytest.approx(252 * 2 / 0.63)  # robot-steps after the first step / seconds after it
+    assert rate > 40 * (256 * 2 / now[0])  # SB3's time/fps definition (from the start of learn) gives ~17
+
+
+def test_progress_bar_setting(monkeypatch, tmp_path):
+    """train.progress_bar: "auto" (the default) draws bars only when stderr is a terminal; true/false as given."""
+    from swarm_envs.agents.config import progress_bar_on
+
+    assert DEFAULTS["train"]["progress_bar"] == "auto"
+
+    class Stream:
+        def __init__(self, tty):
+            self.tty = tty
+
+        def isatty(self):
+            return self.tty
+
+    monkeypatch.setattr("sys.stderr", Stream(False))
+    assert progress_bar_on("auto") is False and progress_bar_on(True) is True
+    monkeypatch.setattr("sys.stderr", Stream(True))
+    assert progress_bar_on("auto") is True and progress_bar_on(False) is False
+    monkeypatch.undo()
+    for value in ("auto", "true", "false"):
+        assert load_config(AGG, [f"train.progress_bar={value}"])["train"]["progress_bar"] in ("auto", True, False)
+    for value in ("sometimes", "1", "0"):
+        with pytest.raises(ConfigError, match="'train.progress_bar'"):
+            load_config(AGG, [f"train.progress_bar={value}"])

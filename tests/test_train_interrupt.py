@@ -106,6 +106,7 @@ def test_ctrl_c_saves_model_and_config(tmp_path, n_workers, over_old_run):
     assert not (saved / "results.csv").exists()
 
 
+@pytest.mark.slow  # three train.py starts, each interrupted at a timed moment
 @pytest.mark.skipif(sys.platform == "win32", reason="SIGINT to a child process is POSIX")
 def test_ctrl_c_while_the_modules_load_is_one_line(tmp_path):
     """SIGINT at several moments of the start (imports of numpy, the package, torch): one line, exit 130."""

@@ -13,9 +13,10 @@ DISPERSION = "swarm_examples/Dispersion-v0"
 
 
 @pytest.fixture(autouse=True)
-def _fresh_import(forget_registered_ids):
-    """Each test imports examples/custom_task.py anew through ``--import`` (module ``custom_task``), and the
-    id it registers is removed afterwards."""
+def _fresh_import(unregistered):
+    """Each test imports examples/custom_task.py anew through ``--import`` (module ``custom_task``) and
+    registers its id afresh; the id is removed (or its earlier entry restored) afterwards."""
+    unregistered(DISPERSION)
     sys.modules.pop("custom_task", None)
     yield
     sys.modules.pop("custom_task", None)

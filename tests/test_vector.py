@@ -66,10 +66,11 @@ def _check_copies_equal_singles(env_id, sensing, platform, steps):
     assert trunc.all()
 
 
-@pytest.mark.parametrize("sensing", ["ideal", "full"])
+@pytest.mark.parametrize("sensing", [pytest.param("ideal", marks=pytest.mark.slow), "full"])
 @pytest.mark.parametrize("env_id", swarm_envs.list_envs())
 def test_each_copy_equals_a_single_env_bit_for_bit(env_id, sensing):
-    """Copy b of a 3-copy vector env reset with seed s_b equals a single env reset with s_b, 300 steps."""
+    """Copy b of a 3-copy vector env reset with seed s_b equals a single env reset with s_b, 300 steps
+    (ideal sensing with `-m slow`; it is also a case of the slow every-task-platform-and-mode test)."""
     _check_copies_equal_singles(env_id, sensing, "epuck", STEPS)
 
 
