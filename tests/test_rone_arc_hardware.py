@@ -101,3 +101,13 @@ def test_sector_error_from_the_arcs_is_unbiased_and_bounded_by_one_sector():
     assert e.size > 5000
     assert abs(e.mean()) < 4 * e.std() / np.sqrt(e.size)
     assert np.abs(e).max() <= 22.5 + 11.25 + 1e-6
+
+
+def test_the_env_draws_each_robots_arcs_from_its_seed():
+    from tests.test_rone_bearings import full_stack
+
+    a = full_stack(4, seed=3).bearings.half_arcs
+    np.testing.assert_array_equal(a, full_stack(4, seed=3).bearings.half_arcs)
+    assert not np.array_equal(a, full_stack(4, seed=4).bearings.half_arcs)
+    assert a.shape == (4, 16)
+    assert full_stack(4, seed=3, bearing_noise=False).bearings.half_arcs is None
