@@ -368,7 +368,7 @@ COMMON_SETTINGS: dict[str, Setting] = {
     ),
     # bearing-only sensing and scale-free coordinates [L]
     "bearing_source": Choice(None, choices=(None, "sectors", "range_bearing"), help='``"sectors"`` (r-one) or ``"range_bearing"``; ``None``: sectors on the r-one, R&B elsewhere'),
-    "bearing_noise": Flag(True, help="r-one: sector readings with the measured 63-74 degree receiver-arc spread [L Sec. 3.2.1]"),
+    "bearing_noise": Flag(True, help="r-one: sector readings with each robot's own receiver arcs, drawn at reset from the measured 63-74 degree spread, mean 68 [L Sec. 3.2.1]"),
     "exchange": Choice("network", choices=("network", "ideal"), help='bearing lists for scale-free coordinates over SwarmCom (``"network"``) or ``"ideal"``'),
     "scale_free_method": Choice("two_hop", choices=("two_hop", "null_space"), help='``"two_hop"`` [L Algs. 1-4] or ``"null_space"`` [L Eq. (5.1)] (slow)'),
     "scale_free_k": Int(1, "hops of the null-space method", low=1, high=4, why="a robot's k-hop neighbourhood, and the null-space method's work, grow with degree^k", help="hops k of the null-space method"),

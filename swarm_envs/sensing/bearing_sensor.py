@@ -54,16 +54,39 @@ __all__ = [
     "RONE_RX_ANGLES",
     "RONE_TX_ANGLES",
     "RONE_ARC_RANGE_DEG",
+    "RONE_ARC_MEAN_DEG",
+    "arc_widths_deg",
     "link_masks",
     "draw_half_arcs",
+    "pair_half_arcs",
     "MessageBearings",
 ]
 
 RONE_RX_ANGLES = np.deg2rad(22.5 + 45.0 * np.arange(8))  # receiver axes [L Sec. 3.2.1]
 RONE_TX_ANGLES = np.deg2rad(45.0 * np.arange(8))  # transmitter axes
 #: measured spread of a receiver's detection arc (deg) [L Sec. 3.2.1, Fig. 3.9(b)]: "varies from 63 to 74
-#: with a mean of 68 over 10 trials"; the hardware bearing-noise model draws arcs from it (MessageBearings)
+#: with a mean of 68 over 10 trials", the shield's "geometric tolerances"; the hardware bearing-noise model
+#: gives every robot's receivers and transmitters their own arcs from it (MessageBearings)
 RONE_ARC_RANGE_DEG = (63.0, 74.0)
+#: the measured mean arc (deg) [L Sec. 3.2.1, Fig. 3.9(b)]: "a mean of 68"
+RONE_ARC_MEAN_DEG = 68.0
+
+
+def arc_widths_deg(u: np.ndarray, arc_range: tuple[float, float], mean: float | None = None) -> np.ndarray:
+    """Arc widths (deg) from uniform [0, 1) draws ``u``: with ``mean`` None uniform on ``arc_range``; else the
+    triangular law on ``arc_range`` with that mean (mode ``3 mean - min - max``), the law that has the
+    thesis's three reported numbers, 63 / 74 / mean 68 [L Sec. 3.2.1], as its minimum, maximum and mean."""
+    lo, hi = (float(a) for a in arc_range)
+    u = np.asarray(u, dtype=float)
+    if mean is None or hi <= lo:
+        return lo + (hi - lo) * u
+    mode = 3.0 * float(mean) - lo - hi
+    if not lo <= mode <= hi:
+        raise ValueError(f"an arc mean of {mean} deg needs a triangular mode in {arc_range}, got {mode}")
+    fc = (mode - lo) / (hi - lo)
+    left = lo + np.sqrt(u * (hi - lo) * (mode - lo))
+    right = hi - np.sqrt((1.0 - u) * (hi - lo) * (hi - mode))
+    return np.where(u < fc, left, right)
 
 
 def run_mask(mask: int, n: int = 8) -> int:
@@ -234,13 +257,26 @@ def sense_bearings(
 
 
 def draw_half_arcs(
-    rng: np.random.Generator, n: int, platform: Platform | str = "rone", arc_range: tuple[float, float] = RONE_ARC_RANGE_DEG
+    rng: np.random.Generator, n: int, platform: Platform | str = "rone", arc_range: tuple[float, float] = RONE_ARC_RANGE_DEG,
+    arc_mean: float | None = RONE_ARC_MEAN_DEG,
 ) -> np.ndarray:
-    """(n, n_d + n_e) half-widths (rad) of receiver arcs and transmitter cones, each uniform in ``arc_range``
-    (deg; default the r-one's measured 63-74 degrees [L Sec. 3.2.1, Fig. 3.9(b)]): one draw per reading."""
+    """(n, n_d + n_e) half-widths (rad) of receiver arcs and transmitter cones, each drawn from ``arc_range``
+    with mean ``arc_mean`` (deg, :func:`arc_widths_deg`; default the r-one's measured 63-74 degrees, mean 68
+    [L Sec. 3.2.1, Fig. 3.9(b)]): one row per robot (its hardware, :func:`pair_half_arcs`) or per reading."""
     platform = get_platform(platform)
-    lo, hi = arc_range
-    return 0.5 * np.deg2rad(lo + (hi - lo) * rng.random((int(n), platform.n_detectors + platform.n_emitters)))
+    u = rng.random((int(n), platform.n_detectors + platform.n_emitters))
+    return 0.5 * np.deg2rad(arc_widths_deg(u, arc_range, arc_mean))
+
+
+def pair_half_arcs(robot_arcs: np.ndarray, rx: np.ndarray, tx: np.ndarray, platform: Platform | str = "rone") -> np.ndarray:
+    """(P, n_d + n_e) half-widths (rad) for links ``rx[p] <- tx[p]``: the receiver's own detector arcs and the
+    transmitter's own emitter cones, from per-robot arcs ``robot_arcs`` (N, n_d + n_e) (:func:`draw_half_arcs`
+    with one row per robot)."""
+    platform = get_platform(platform)
+    nd = platform.n_detectors
+    robot_arcs = np.asarray(robot_arcs, dtype=float)
+    rx, tx = np.asarray(rx, dtype=np.int64), np.asarray(tx, dtype=np.int64)
+    return np.concatenate([robot_arcs[rx, :nd], robot_arcs[tx, nd:]], axis=1)
 
 
 _TABLE_FIELDS = ("rx", "tx", "bearing", "tx_bearing", "heading", "time")
@@ -302,14 +338,19 @@ class MessageBearings:
     a frame of it was measured: losses, collisions and range reach the readings, and no reading is older
     than 2 rounds less a step.
 
-    Hardware noise (``arc_range``, default on in the env's ``bearing_noise``): for every measured frame
-    each of the receiver's 8 arcs and each of the sender's 8 cones is drawn uniformly from ``arc_range``
-    (deg; [L Sec. 3.2.1, Fig. 3.9(b)]: 63 to 74 degrees over 10 trials, mean 68) instead of the nominal 68
-    degrees, so directions near a sector boundary fall into the neighbouring sector. The thesis's bearing
-    and orientation error histogram [L Fig. 3.13(a)] has no numbers in the text we have; the arc spread
-    is the only measured hardware figure we found, so it is the whole noise model (an assumption: the
-    uniform law, per-frame draws, and the same spread for the transmitters, whose cone RoneIR already
-    assumes equal to the receivers' arc).
+    Hardware noise (``arc_range``, default on in the env's ``bearing_noise``): each robot's 8 receiver arcs
+    and 8 transmitter cones are its own, drawn from ``arc_range`` (with mean ``arc_mean``,
+    :func:`arc_widths_deg`) when its env copy is reset
+    (deg; [L Sec. 3.2.1, Fig. 3.9(b)]: the arc "varies from 63 to 74 with a mean of 68 over 10 trials", a
+    "physical model of the IR receivers' geometric tolerances", i.e. of the shield, fixed on a robot)
+    instead of the nominal 68 degrees, so directions near a sector boundary fall into the neighbouring
+    sector, the same way on every frame of that pair in that geometry. The thesis's bearing and orientation
+    error histogram [L Fig. 3.13(a)] has no numbers in the text we have, and of the other source it names,
+    "the transmitter power" [L Sec. 3.2.1], it gives no magnitude; the arc spread is the only measured
+    hardware figure, so it is the whole noise model (assumptions: the triangular law, the one with the
+    reported minimum, maximum and mean, arcs symmetric about
+    the channel axis, and the same spread for the transmitters, whose cone RoneIR already assumes equal to
+    the receivers' arc).
 
     Beacons (:meth:`send_beacons`): every robot broadcasts a header-only frame (its id, no payload) as
     system traffic at the start of each of its rounds, for stacks whose bearing exchange does not already
@@ -323,6 +364,8 @@ class MessageBearings:
         n_copies: env copies (rows copy-major).
         period: round (beacon) period (steps).
         arc_range: (min, max) arc width (deg) for the noise model, or None (nominal gains, noiseless).
+        arc_mean: mean arc width (deg) of the triangular law on ``arc_range`` (:func:`arc_widths_deg`), or
+            None for the uniform law.
     """
 
     def __init__(
@@ -333,6 +376,7 @@ class MessageBearings:
         n_copies: int = 1,
         period: int = 24,
         arc_range: tuple[float, float] | None = None,
+        arc_mean: float | None = None,
     ) -> None:
         self.platform = get_platform(platform)
         if int(period) < 1:
@@ -343,6 +387,9 @@ class MessageBearings:
                 raise ValueError(f"arc_range must be (min, max) degrees with 0 < min <= max < 360, got {arc_range!r}")
             arc_range = (lo, hi)
         self.arc_range = arc_range
+        self.arc_mean = None if arc_mean is None else float(arc_mean)
+        if arc_range is not None:
+            arc_widths_deg(np.zeros(1), arc_range, self.arc_mean)  # checks the mean fits the range
         self.copy_size = int(n_robots)
         self.n_copies = int(n_copies)
         self.n = self.copy_size * self.n_copies
@@ -354,6 +401,9 @@ class MessageBearings:
         self.t = 0  # steps since construction: ages are differences, so copies need no own clock
         self.clock = np.zeros(self.n_copies, np.int64)  # steps since each copy's reset (round schedule)
         self.phase = np.zeros(self.n, np.int64)
+        #: (N, n_d + n_e) each robot's receiver-arc and transmitter-cone half-widths (rad), drawn at reset
+        #: (None: the nominal gains)
+        self.half_arcs = None if arc_range is None else np.zeros((self.n, self.platform.n_detectors + self.platform.n_emitters))
         self.stats = {"measured": 0, "unmeasured": 0, "rejected": 0, "interfered": 0}
         self.fill = _empty_table()  # the current round's measurements, newest per (receiver, decoded sender)
         self.pub = _empty_table()  # the last complete round's: the readings
@@ -362,7 +412,7 @@ class MessageBearings:
 
     def reset(self, copies: np.ndarray | None = None, rngs: list[np.random.Generator] | None = None) -> None:
         """Forget the readings of env ``copies`` (all if None), give them the generators ``rngs`` and draw
-        new round phases from them."""
+        new round phases (and, with ``arc_range``, their robots' arcs) from them."""
         copies = np.arange(self.n_copies) if copies is None else np.asarray(copies, dtype=np.int64).reshape(-1)
         if rngs is not None:
             for b, g in zip(copies, rngs):
@@ -374,6 +424,9 @@ class MessageBearings:
         rows = np.flatnonzero(np.isin(self.copy_of, copies))
         self.clock[copies] = 0
         self.phase[rows] = self.rng.integers(0, self.period, self.copy_of[rows])
+        if self.half_arcs is not None:
+            u = self.rng.random(self.copy_of[rows], (self.half_arcs.shape[1],))
+            self.half_arcs[rows] = 0.5 * np.deg2rad(arc_widths_deg(u, self.arc_range, self.arc_mean))
 
     def round_starts(self) -> np.ndarray:
         """(N,) bool: the robots whose round starts this step (their beacon step)."""
@@ -421,11 +474,7 @@ class MessageBearings:
         sel = np.flatnonzero(lit)
         sel = sel[np.argsort(self.copy_of[recv[sel]], kind="stable")]  # rows grouped by copy, canonical order within
         rows = lorder[pos[sel]]
-        half = None
-        if self.arc_range is not None and sel.size:
-            lo, hi = self.arc_range
-            u = self.rng.random(self.copy_of[recv[sel]], (self.platform.n_detectors + self.platform.n_emitters,))
-            half = 0.5 * np.deg2rad(lo + (hi - lo) * u)
+        half = None if self.half_arcs is None else pair_half_arcs(self.half_arcs, recv[sel], light[sel], self.platform)
         hits = _link_hits(links, self.platform, rows, half)
         clean = ((interference[sel][:, None] >> np.arange(self.platform.n_detectors)) & 1) == 0
         heard = hits.any(axis=2)

@@ -28,11 +28,12 @@ Each control step, in this order (data flows one way):
    beacon ([L Sec. 3.2.3]: the announcement message carries the encoded orientation bit; [L Sec. 5.2.2]
    step 1 "broadcast id, record bearings" and step 2 share it, and the rounds of the bearings are the
    exchange's), otherwise a header-only beacon.
-   ``bearing_noise`` (default on, r-one) draws each frame's receiver arcs and transmitter cones from the
-   measured 63-74 degree spread [L Sec. 3.2.1]. The ``rone`` has no range sensor: its ``range_bearing``
-   rows hold these readings with range 0, most recently decoded first (ties in a random order drawn each step
-   from the copy's ranking stream, :func:`swarm_envs.observation.ranked_slots`): the K kept are the K heard
-   last, and a row's position carries nothing of the decoded id.
+   ``bearing_noise`` (default on, r-one) gives each robot, at reset, its own receiver arcs and transmitter
+   cones from the measured 63-74 degree spread, mean 68 [L Sec. 3.2.1, Fig. 3.9(b)]. The ``rone`` has no
+   range sensor: its ``range_bearing`` rows hold these readings with range 0, most recently decoded first
+   (ties in a random order drawn each step from the copy's ranking stream,
+   :func:`swarm_envs.observation.ranked_slots`): the K kept are the K heard last, and a row's position
+   carries nothing of the decoded id.
 4. **Bearing exchange and scale-free coordinates** [L] (:class:`swarm_envs.sensing.exchange.BearingExchange`,
    :func:`swarm_envs.sensing.scale_free.coordinates_all`): bearings from ``bearing_source``
    (``"sectors"`` default on ``rone``, ``"range_bearing"`` elsewhere) travel as SwarmCom system traffic
@@ -61,7 +62,7 @@ from swarm_envs.ir.models import RoneIR
 from swarm_envs.observation import nearest_slots, pack_nearest, range_bearing_rows, ranked_slots
 from swarm_envs.platforms import Platform
 from swarm_envs.sensing.base import MessageReadings, NeighbourReadings, ScaleFreeReadings, SensorFrame
-from swarm_envs.sensing.bearing_sensor import RONE_ARC_RANGE_DEG, MessageBearings
+from swarm_envs.sensing.bearing_sensor import RONE_ARC_MEAN_DEG, RONE_ARC_RANGE_DEG, MessageBearings
 from swarm_envs.sensing.exchange import BearingExchange, thesis_round_time
 from swarm_envs.sensing.range_bearing import RangeBearingSensor
 from swarm_envs.sensing.scale_free import coordinates, coordinates_all
@@ -200,6 +201,7 @@ class FullSensing:
                 n_copies=self.n_copies,
                 period=BEACON_PERIOD,
                 arc_range=RONE_ARC_RANGE_DEG if noisy else None,
+                arc_mean=RONE_ARC_MEAN_DEG,
             )
             extra["period"] = BEACON_PERIOD  # the exchange's broadcasts are the beacons
         self.exchange = BearingExchange(

@@ -22,7 +22,7 @@ error (``motion_noise``, the env's default: per-wheel gains, per-step speed nois
    the seeker can occlude anchor-anchor links) (:func:`swarm_envs.ir.layer.compute_links`);
 2. the firmware sector rule turns them into 22.5-degree bearings (:mod:`swarm_envs.sensing.bearing_sensor`),
    noiseless (nominal 68-degree arcs) or with the hardware noise model of the env's ``bearing_noise``
-   (every reading's receiver arcs and transmitter cones drawn from the thesis' measured 63-74 degrees
+   (each robot's own receiver arcs and transmitter cones drawn once per trial from the thesis' measured 63-74 degrees
    [L Sec. 3.2.1]; :func:`swarm_envs.sensing.bearing_sensor.draw_half_arcs`);
 3. an ideal exchange round (:class:`swarm_envs.sensing.exchange.BearingExchange`, ``mode="ideal"``);
 4. the seeker computes 2-hop scale-free coordinates with ANGLEBALANCE and the noise-sensitivity MST
@@ -52,7 +52,7 @@ import numpy as np
 
 from swarm_envs.ir.layer import compute_links
 from swarm_envs.platforms import get_platform
-from swarm_envs.sensing.bearing_sensor import BearingReadings, draw_half_arcs, sense_bearings
+from swarm_envs.sensing.bearing_sensor import BearingReadings, draw_half_arcs, pair_half_arcs, sense_bearings
 from swarm_envs.sensing.exchange import BearingExchange
 from swarm_envs.sensing.scale_free import coordinates_all
 from swarm_envs.validate.report import Row, print_rows, rows_json
@@ -97,6 +97,7 @@ def run_trial(
     cen = poly.mean(0)
     ex = BearingExchange(5, "ideal", k_max=5)
     dists, ins, fallback, rigid = [], [], 0, 0
+    arcs = None if noise_rng is None else draw_half_arcs(noise_rng, len(pos), plat)  # each robot's own arcs and cones
     for _ in range(rounds):
         links = compute_links(pos, hd, plat, drop_zero=noise_rng is None)  # wider arcs may light a dark pair
         if exact:
@@ -104,7 +105,7 @@ def run_trial(
             z = np.zeros(P)
             rd = BearingReadings(links.rx, links.tx, links.bearing, z, z, z.astype(np.uint16), z.astype(np.uint16), np.ones(P, bool))
         elif noise_rng is not None:
-            rd = sense_bearings(links, plat, half_arcs=draw_half_arcs(noise_rng, len(links.rx), plat))
+            rd = sense_bearings(links, plat, half_arcs=pair_half_arcs(arcs, links.rx, links.tx, plat))
         else:
             rd = sense_bearings(links, plat)
         res = coordinates_all(ex.step(rd))
@@ -459,7 +460,7 @@ def main(argv: list[str]) -> int:
     print(f"Centroid seeking [L Sec. 6.2.2, Fig. 6.4]: {args.polygons} polygons x {args.starts} starts x {args.rounds} rounds, "
           f"d_step = 11 cm, 2-hop Alg. 4 coordinates")
     print("kinematic (no physics, exact turns and steps, ideal exchange, IR-layer sector bearings): 'sectors' nominal 68-degree")
-    print(f"arcs, '+ hw noise' arcs and cones drawn from 63-74 deg per reading [L Sec. 3.2.1]; motion noise: heading "
+    print(f"arcs, '+ hw noise' arcs and cones drawn from 63-74 deg per robot [L Sec. 3.2.1]; motion noise: heading "
           f"{args.heading_noise_deg} deg, step {args.step_noise * 100:.0f}%")
     if env is not None:
         print(f"in the env: swarm_envs/CentroidSeeking-v0, r-one, full sensing, motion error {'on' if env['motion_noise'] else 'off'}; "
