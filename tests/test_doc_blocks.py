@@ -44,9 +44,13 @@ INSTALL = re.compile(r"^(python3 -m venv|pip install)")
 TINY_TRAIN = ["--set", "train.total_timesteps=320", "--set", "train.n_envs=2", "--set", "eval.n_seeds=1",
               "--set", "env.max_cycles=10", "--set", "agent.n_steps=16", "--set", "agent.batch_size=64",
               "--set", "train.progress_bar=false"]
+SUITE_TRIM = ["--jobs", "1", "--seeds", "0", "--set", "train.total_timesteps=320",
+              "--set", "eval.n_seeds=1", "--set", "env.max_cycles=10"]
 TRIM: list[tuple[str, list[str]]] = [
     (r"^(python train\.py|swarm-train) --config", TINY_TRAIN),
-    (r"^python -m swarm_envs\.agents\.suite(?!.*--report-only)", ["--jobs", "1", "--seeds", "0", *TINY_TRAIN[:2], "--set", "train.n_envs=2"]),
+    # the whole suite is every task's long config x variants x seeds: one task of it, one seed
+    (r"^python -m swarm_envs\.agents\.suite(?!.*--report-only)(?!.*--tasks)", ["--tasks", "aggregation", *SUITE_TRIM]),
+    (r"^python -m swarm_envs\.agents\.suite(?!.*--report-only)", SUITE_TRIM),
     (r"^(swarm-benchmark|python -m swarm_envs\.agents\.benchmark)", ["--episodes", "1", "--max-cycles", "10"]),
     (r"^swarm-demo", ["--steps", "5"]),
     (r"^python benchmarks/bench_vec\.py.*--interleave", ["--interleave", "1", "--vmas-steps", "1"]),
