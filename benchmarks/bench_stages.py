@@ -48,7 +48,7 @@ def main() -> None:
         setattr(obj, name, call)
 
     timed(core_mod, "step_worlds", "physics")
-    vec = swarm_envs.make_vec(f"swarm_envs/{args.task}-v0", args.copies, n_robots=args.n, sensing=args.sensing, max_cycles=10**6)
+    vec = swarm_envs.make_vec(f"swarm_envs/{args.task}-v0", args.copies, n_robots=args.n, sensing=args.sensing, max_cycles=args.steps + 4)  # every step run here
     timed(vec.core.sensing, "step", "sensing")
     timed(vec.core, "observations", "observations")
     timed(vec.core.task, "rewards", "rewards")

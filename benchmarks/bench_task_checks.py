@@ -43,7 +43,8 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--steps", type=int, default=20, help="timed steps per round and variant")
     args = parser.parse_args(argv)
 
-    vec = swarm_envs.make_vec(args.env, args.copies, n_robots=args.n, sensing=args.sensing, max_cycles=10**6)
+    steps = 3 + 2 * args.rounds * args.steps  # every step this run takes: no copy resets while timed
+    vec = swarm_envs.make_vec(args.env, args.copies, n_robots=args.n, sensing=args.sensing, max_cycles=steps + 1)
     vec.reset(seed=0)
     rng = np.random.default_rng(0)
     step_times(vec, rng, 3)  # warm-up

@@ -36,7 +36,9 @@ GRID = [(10, 1), (10, 16), (10, 64), (10, 256), (100, 1), (100, 16), (100, 64), 
 
 def time_swarm(n: int, copies: int, sensing: str, min_steps: int, min_seconds: float, env_id: str = "swarm_envs/Flocking-v0") -> tuple[float, float]:
     """Median (wall-clock, process CPU) seconds per vector step (B copies of N robots of ``env_id``)."""
-    vec = swarm_envs.make_vec(env_id, copies, n_robots=n, sensing=sensing, max_cycles=10**6)
+    # episodes longer than the at most 203 steps run here (no copy resets while timed), short enough for
+    # make_vec's memory check (a copy's command log grows with max_cycles)
+    vec = swarm_envs.make_vec(env_id, copies, n_robots=n, sensing=sensing, max_cycles=1_000)
     vec.reset(seed=0)
     rng = np.random.default_rng(0)
     shape = (copies, n, vec.layout.action_size)
