@@ -5,7 +5,7 @@
 Checks that the installed package (not a source tree) works with what the wheel brought: every registered
 environment is made with full sensing, reset and stepped a few times with observations inside their
 spaces; ``make_vec`` steps two copies; the console commands run (``swarm-demo`` writes a GIF,
-``swarm-validate --help``, ``swarm-benchmark --help``, ``swarm-train --help``: the wheel is installed
+``swarm-validate --help``, ``swarm-benchmark --help``, ``swarm-train --help``, ``swarm-export --help``: the wheel is installed
 without the ``rl`` extra, so no torch, and the commands' help must not need it). Exits non-zero with a
 one-line reason on the first failure.
 """
@@ -63,6 +63,7 @@ def main() -> int:
         ["swarm-validate", "--help"],
         ["swarm-benchmark", "--help"],
         ["swarm-train", "--help"],  # its help needs no torch; training itself needs the 'rl' extra
+        ["swarm-export", "--help"],  # likewise: exporting a run needs the 'rl' extra
     ]
     for command in commands:
         proc = subprocess.run([str(bin_dir / command[0]), *command[1:]], capture_output=True, text=True)

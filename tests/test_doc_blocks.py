@@ -21,7 +21,8 @@ import yaml
 
 ROOT = Path(__file__).resolve().parent.parent
 PAGES = [ROOT / "README.md", *sorted((ROOT / "docs").rglob("*.md"))]
-LANGUAGES = {"python", "bash", "sh", "console", "text", "yaml", "json", "toml", "mermaid"}
+#: ``c``: firmware fragments that call the robot's own functions (tests/test_export*.py compile the exported C)
+LANGUAGES = {"python", "bash", "sh", "console", "text", "yaml", "json", "toml", "mermaid", "c"}
 SHELL = {"bash", "sh", "console"}
 
 #: commands (their text as documented, without trailing comment) that no test runs, with the reason
@@ -134,7 +135,16 @@ def test_not_run_lists_only_documented_commands():
     assert not set(NOT_RUN) - documented, "NOT_RUN names a command no page documents any more"
 
 
-@pytest.mark.parametrize("page, line, code", [(p, n, b) for p, n, lang, b in BLOCKS if lang == "python"],
+#: pages whose shell commands together take more than ~10 s even trimmed (trainings, validations, benchmarks), and
+#: python blocks that train: marked slow, so the default test run stays short; .ci/run runs them with `-m slow`
+SLOW_PAGES = {"README.md", "docs/training.md", "docs/performance.md", "docs/custom_tasks.md", "docs/validation.md"}
+
+
+def _slow_if(condition: bool, *values):
+    return pytest.param(*values, marks=pytest.mark.slow) if condition else pytest.param(*values)
+
+
+@pytest.mark.parametrize("page, line, code", [_slow_if(".learn(" in b, p, n, b) for p, n, lang, b in BLOCKS if lang == "python"],
                          ids=lambda v: v if isinstance(v, (str, int)) and "\n" not in str(v) else "")
 def test_python_block_runs(page, line, code, tmp_path):
     _skip_without_extras(code)
@@ -147,7 +157,7 @@ def _pages_with_shell() -> list[str]:
     return sorted({page for page, *_ in COMMANDS})
 
 
-@pytest.mark.parametrize("page", _pages_with_shell())
+@pytest.mark.parametrize("page", [_slow_if(p in SLOW_PAGES, p) for p in _pages_with_shell()])
 def test_shell_commands_run(page, tmp_path):
     """Every command of the page's shell blocks, in order, in one scratch folder, budgets trimmed by ``TRIM``."""
     scratch = _scratch(tmp_path)
