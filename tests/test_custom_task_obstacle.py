@@ -9,10 +9,10 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from pettingzoo.test import parallel_api_test
 
 import swarm_envs
 from swarm_envs.settings import SettingsError
+from tests.conftest import parallel_api_check
 
 ROOT = Path(__file__).resolve().parent.parent
 ENV_ID = "swarm_examples/GatherBeyondWall-v0"
@@ -26,7 +26,7 @@ def _registered(monkeypatch):
 
 def test_parallel_env_passes_the_api_test_and_starts_left_of_the_wall():
     env = swarm_envs.make(ENV_ID, n_robots=8, max_cycles=30)
-    parallel_api_test(env, num_cycles=30)
+    parallel_api_check(env, num_cycles=30)
     env.reset(seed=3)
     task = env.task
     positions = np.asarray(env.world.positions).reshape(-1, 2)  # (n_world, 2) m of the one copy

@@ -6,6 +6,7 @@ diagonal Gaussian, clipped to the ``Box(-1, 1)`` action space as ``predict`` doe
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -73,6 +74,11 @@ def write_onnx(model: Any, path: Path) -> Path:
             return torch.clamp(self.head(self.mlp(self.features(obs))), -1.0, 1.0)
 
     size = int(np.prod(model.observation_space.shape))
-    torch.onnx.export(Actor().eval(), (torch.zeros(1, size),), str(path), input_names=["observation"], output_names=["action"],
-                      dynamic_axes={"observation": {0: "batch"}, "action": {0: "batch"}}, dynamo=False)
+    # the TorchScript exporter (dynamo=False) writes this plain graph without the onnxscript package the newer
+    # exporter needs; torch marks it deprecated with two DeprecationWarnings, which say nothing about this export
+    with warnings.catch_warnings():
+        warnings.filterwarnings("ignore", category=DeprecationWarning, module=r"torch\.onnx")
+        warnings.filterwarnings("ignore", message="You are using the legacy TorchScript-based ONNX export", category=DeprecationWarning)
+        torch.onnx.export(Actor().eval(), (torch.zeros(1, size),), str(path), input_names=["observation"], output_names=["action"],
+                          dynamic_axes={"observation": {0: "batch"}, "action": {0: "batch"}}, dynamo=False)
     return path
