@@ -137,7 +137,7 @@ def test_not_run_lists_only_documented_commands():
 
 #: pages whose shell commands together take more than ~10 s even trimmed (trainings, validations, benchmarks), and
 #: python blocks that train: marked slow, so the default test run stays short; .ci/run runs them with `-m slow`
-SLOW_PAGES = {"README.md", "docs/training.md", "docs/performance.md", "docs/custom_tasks.md", "docs/validation.md"}
+SLOW_PAGES = {"README.md", "docs/training.md", "docs/performance.md", "docs/custom_tasks.md", "docs/validation.md", "docs/export.md"}
 
 
 def _slow_if(condition: bool, *values):

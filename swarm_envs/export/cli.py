@@ -50,6 +50,6 @@ def main(argv: list[str] | None = None) -> int:
         print(f"policy.o (host, -Os): text {sizes['text']} B, data {sizes['data']} B, bss {sizes['bss']} B")
         ev = run.cfg["eval"]
         worst, _ = action_difference(run, compile_shared(folder), [ev["seed_start"]], 50)
-        print(f"largest |C - torch| action difference over 50 steps of seed {ev['seed_start']}: {worst:.3g}")
+        print(f"largest |C - torch| action difference over the first 50 steps (or the whole episode) of seed {ev['seed_start']}: {worst:.3g}")
         print(evaluate_export(run, folder).text())
     return 0

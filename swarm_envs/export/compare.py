@@ -27,7 +27,7 @@ def _c_policy(run: LoadedRun, library: Path, env: Any) -> CPolicy:
 
 def action_difference(run: LoadedRun, library: Path, seeds: list[int], steps: int) -> tuple[float, int]:
     """(largest |C action - torch action|, empty observation rows seen) over ``steps`` control steps of
-    each seed's episode, both policies fed the same observations (the env driven by the torch actions;
+    each seed's episode (fewer if it ends first), both policies fed the same observations (the env driven by the torch actions;
     both reset at every episode start)."""
     from swarm_envs.agents.evaluation import make_env
 
@@ -44,7 +44,9 @@ def action_difference(run: LoadedRun, library: Path, seeds: list[int], steps: in
                 empty += int((parts["range_bearing"][..., 0] < 0.5).all(axis=1).sum())
                 a, b = reference.act_batch(parts), c.act_batch(parts)
                 worst = max(worst, float(np.abs(a - b).max()))
-                env.step({agent: a[i] for i, agent in enumerate(env.possible_agents)})
+                *_, terminations, truncations, _ = env.step({agent: a[i] for i, agent in enumerate(env.possible_agents)})
+                if all(terminations.values()) or all(truncations.values()):
+                    break  # the episode ended before ``steps``
     finally:
         env.close()
     return worst, empty
