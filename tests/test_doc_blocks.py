@@ -69,7 +69,7 @@ TRIM: list[tuple[str, list[str]]] = [
     (r"^python -m swarm_envs\.validate behaviours", ["--seeds", "1", "--max-cycles", "10", "--only", "flocking"]),
 ]
 #: optional packages (extras) a block needs: the test skips when they are not installed
-EXTRAS = {"torchrl": "torchrl", "benchmarl": "benchmarl", "ray": "ray", "supersuit": "supersuit", "bench_torchrl": "torchrl",
+EXTRAS = {"torchrl": "torchrl", "make_torchrl": "torchrl", "benchmarl": "benchmarl", "ray": "ray", "supersuit": "supersuit", "bench_torchrl": "torchrl",
           "benchmarl_mappo": "benchmarl", "vmas": "vmas"}
 
 
