@@ -50,6 +50,7 @@ from __future__ import annotations
 import argparse
 import tempfile
 import time
+from pathlib import Path
 from typing import Any
 
 import torch
@@ -199,6 +200,7 @@ def run(
     episode = swarm_task.max_steps(None)
     with tempfile.TemporaryDirectory() as scratch:
         folder = scratch if log_dir is None else log_dir
+        Path(folder).mkdir(parents=True, exist_ok=True)  # BenchMARL makes only the run's own folder inside it
         experiment = Experiment(
             task=swarm_task,
             algorithm_config=ALGORITHMS[algorithm].get_from_yaml(),
