@@ -60,6 +60,16 @@ def assert_tree_equal(a, b, path: str = "") -> None:
 UNKNOWN_OPTION_WARNING = r"ignoring unknown reset option\(s\) \['options'\]"
 
 
+def dotted_keys(node: dict, prefix: str = "") -> list[str]:
+    """Every key of a nested config dict as a dotted path (``"train.n_envs"``), parents included."""
+    keys = []
+    for key, value in node.items():
+        keys.append(prefix + key)
+        if isinstance(value, dict) and value:
+            keys += dotted_keys(value, prefix + key + ".")
+    return keys
+
+
 def parallel_api_check(env: Any, num_cycles: int) -> None:
     """PettingZoo's ``parallel_api_test``, expecting exactly the env's :data:`UNKNOWN_OPTION_WARNING` (any
     other warning is reported)."""

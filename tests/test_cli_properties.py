@@ -27,6 +27,7 @@ from swarm_envs.agents import benchmark, train  # noqa: E402
 from swarm_envs.agents.config import DEFAULTS  # noqa: E402
 from swarm_envs.agents.tasks import SHORT_NAMES  # noqa: E402
 from swarm_envs.settings import COMMON_SETTINGS  # noqa: E402
+from tests.conftest import dotted_keys
 
 ROOT = Path(__file__).resolve().parents[1]
 #: examples per command in the default run, and with ``pytest -m slow`` (SWARM_ENVS_CLI_EXAMPLES sets it)
@@ -121,17 +122,8 @@ YAML_VALUE = st.one_of(
 )
 
 
-def _dotted(node: dict, prefix: str = "") -> list[str]:
-    keys = []
-    for key, value in node.items():
-        keys.append(prefix + key)
-        if isinstance(value, dict) and value:
-            keys += _dotted(value, prefix + key + ".")
-    return keys
-
-
 CONFIG_KEY = st.one_of(
-    st.sampled_from(sorted(set(_dotted(DEFAULTS)) | {f"env.{k}" for k in COMMON_SETTINGS}
+    st.sampled_from(sorted(set(dotted_keys(DEFAULTS)) | {f"env.{k}" for k in COMMON_SETTINGS}
                            | {"", ".", "train.", ".seed", "a..b", "bogus", "train.bogus", "env.bogus", "task.x", "seed.x"})),
     st.text(max_size=10),
 )

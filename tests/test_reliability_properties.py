@@ -18,7 +18,7 @@ from hypothesis import HealthCheck, event, given, settings  # noqa: E402
 from hypothesis import strategies as st  # noqa: E402
 
 from swarm_envs import flocking_v0  # noqa: E402
-from tests.conftest import assert_tree_equal  # noqa: E402
+from tests.conftest import assert_tree_equal, dotted_keys  # noqa: E402
 
 CONFIGS = [
     {"n_robots": 3, "sensing": "ideal", "max_cycles": 8},
@@ -296,17 +296,8 @@ from swarm_envs.agents.tasks import SHORT_NAMES  # noqa: E402
 ROOT = Path(__file__).resolve().parents[1]
 
 
-def _dotted(node: dict, prefix: str = "") -> list[str]:
-    keys = []
-    for key, value in node.items():
-        keys.append(prefix + key)
-        if isinstance(value, dict) and value:
-            keys += _dotted(value, prefix + key + ".")
-    return keys
-
-
 CONFIG_KEYS = sorted(
-    set(_dotted(DEFAULTS))
+    set(dotted_keys(DEFAULTS))
     | {f"env.{k}" for k in COMMON_SETTINGS if k != "render_mode"}
     | {f"env.{k}" for name in SHORT_NAMES for k in task_class(SHORT_NAMES[name]).settings()}
     | {f"agent.scripted_kwargs.{k}" for k in KWARG_RULES}
@@ -400,7 +391,7 @@ def valid_text(key: str) -> st.SearchStrategy:
         return st.sampled_from(sorted(SHORT_NAMES))
     if key.startswith("agent.scripted_kwargs.") and key.rsplit(".", 1)[1] in KWARG_RULES:
         return st.just(json.dumps(KWARG_RULES[key.rsplit(".", 1)[1]].default))
-    default = _leaf(key) if key in set(_dotted(DEFAULTS)) else None
+    default = _leaf(key) if key in set(dotted_keys(DEFAULTS)) else None
     if isinstance(default, bool) or default is None or isinstance(default, (str, list, dict)):
         return st.just(json.dumps(default))
     if isinstance(default, int):
