@@ -27,7 +27,7 @@ from swarm_envs.agents import benchmark, train  # noqa: E402
 from swarm_envs.agents.config import DEFAULTS  # noqa: E402
 from swarm_envs.agents.tasks import SHORT_NAMES  # noqa: E402
 from swarm_envs.settings import COMMON_SETTINGS  # noqa: E402
-from tests.conftest import dotted_keys
+from tests.conftest import dotted_keys  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 #: examples per command in the default run, and with ``pytest -m slow`` (SWARM_ENVS_CLI_EXAMPLES sets it)

@@ -155,8 +155,8 @@ def firmware_tables(env: Any, agent: str) -> dict[str, Any]:
     result = coordinates_all(sensing.exchange.knowledge())  # the robot's scale-free localisation on what it knows
     slots = np.flatnonzero(result.valid[row])
     if not const["has_range"] and frame.scale_free.ids is not None:  # the stack's ranking order first (see _table_order)
-        ranked = [int(i) for i in frame.scale_free.ids[row] if i >= 0]
-        slots = np.array(sorted(slots, key=lambda s: ranked.index(int(result.ids[row, s])) if int(result.ids[row, s]) in ranked else len(ranked)), dtype=np.int64)
+        rank = {int(i): r for r, i in enumerate(frame.scale_free.ids[row]) if i >= 0}  # id -> observation slot
+        slots = np.array(sorted(slots, key=lambda s: rank.get(int(result.ids[row, s]), len(rank))), dtype=np.int64)
     entries = [
         {"id": int(result.ids[row, s] % n_world), "x": float(result.xy[row, s, 0]), "y": float(result.xy[row, s, 1])}
         for s in slots
