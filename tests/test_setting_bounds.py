@@ -110,8 +110,9 @@ def test_the_largest_accepted_arena_resets(env_id, platform, shape):
 @pytest.mark.parametrize("platform", ["rone", "epuck", "droplet"])
 @pytest.mark.parametrize("size", [0.4, 0.45, 0.5, 0.6, 0.7, 0.8])
 def test_mid_angle_arenas_too_small_for_its_corridor_are_refused_at_make(platform, size):
-    """Before: these sides built, then every reset failed with "robots overlap" (the seeker on the goal) or the
-    seeker started within the arrival radius (success 1.0 after one step)."""
+    """A side below the corridor's minimum is refused at make (otherwise every reset would fail with "robots
+    overlap", the seeker on the goal, or the seeker would start within the arrival radius: success 1.0 after
+    one step); a side at or above it resets."""
     low, high = mid.arena_size_range(get_platform(platform), 1)
     if size >= low:
         env = swarm_envs.make(MID, platform=platform, arena_size=size)
