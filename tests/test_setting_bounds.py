@@ -143,7 +143,8 @@ def test_mid_angle_arena_range_is_what_the_corridor_builds(platform, lanes):
 
 @pytest.mark.parametrize("platform", PLATFORMS)
 def test_mid_angle_at_the_common_arena_bound_is_refused_at_once(platform):
-    """Before: arena_size=10000 (the common rule's bound) did not return from make() in 300 s."""
+    """arena_size=10000 (the common rule's bound) is refused within seconds by the task's own, tighter bound
+    (building such an arena would not return for minutes)."""
     with time_limit(10.0), pytest.raises(SettingsError, match=r"arena_size=10000 m is out of range .* allowed \[") as err:
         swarm_envs.make(MID, platform=platform, arena_size=10_000.0)
     assert err.value.key == "arena_size" and "\n" not in str(err.value)
@@ -183,7 +184,8 @@ def message_rule(env_id: str):
 @pytest.mark.parametrize("env_id", BUILT_IN)
 @pytest.mark.parametrize("platform", PLATFORMS)
 def test_the_narrowest_and_widest_accepted_messages_run(env_id, platform):
-    """Before: MidAngleNavigation accepted 64-255 bits, then reset() raised OverflowError."""
+    """Both ends of each task's message_bits range build, reset and step (a range wider than the payload a
+    task can hold would fail at reset with OverflowError)."""
     rule = message_rule(env_id)
     for bits in (rule.low, rule.high):
         env = swarm_envs.make(env_id, platform=platform, message_bits=bits)
