@@ -226,7 +226,8 @@ def test_onnx_matches_c(exported, tmp_path):
 
 
 def test_cli_errors(tmp_path, capsys):
-    """A missing folder, a folder without model.zip and an unsupported policy variant: exit 2, one clear line."""
+    """A missing folder, a folder without model.zip and a fixed-point build of a set-encoder or recurrent
+    policy (float32 only): exit 2, one clear line, nothing written."""
     from swarm_envs.export.cli import main
 
     assert main([str(tmp_path / "nope"), "--output", str(tmp_path / "out")]) == 2
@@ -237,9 +238,14 @@ def test_cli_errors(tmp_path, capsys):
     cfg = {"task": "aggregation", "agent": {"encoder": "deepsets"}, "env": {"n_robots": 4}}
     (tmp_path / "run" / "config.yaml").write_text(yaml.safe_dump(cfg))
     (tmp_path / "run" / "model.zip").write_bytes(b"")
-    assert main([str(tmp_path / "run"), "--output", str(tmp_path / "out")]) == 2
+    assert main([str(tmp_path / "run"), "--output", str(tmp_path / "out"), "--fixed", "q15"]) == 2
     err = capsys.readouterr().err
-    assert "encoder deepsets" in err and "supports" in err
+    assert "encoder deepsets with --fixed q15" in err and "supports" in err and len(err.strip().splitlines()) == 1
+    cfg["agent"] = {"algorithm": "recurrent_ppo"}
+    (tmp_path / "run" / "config.yaml").write_text(yaml.safe_dump(cfg))
+    assert main([str(tmp_path / "run"), "--output", str(tmp_path / "out"), "--int8"]) == 2
+    err = capsys.readouterr().err
+    assert "algorithm recurrent_ppo with --fixed int8" in err and len(err.strip().splitlines()) == 1
     assert not (tmp_path / "out").exists()
 
 

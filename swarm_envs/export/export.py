@@ -4,11 +4,12 @@ builder (for runs with the modelled sensing) and a README describing them."""
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from swarm_envs.export.actions_c import native_factor, write_actions
-from swarm_envs.export.network import actor_layers, write_onnx
+from swarm_envs.export.network import Actor, actor_network, write_onnx
 from swarm_envs.export.observation_c import write_observation_builder
 from swarm_envs.export.policy_c import write_policy
 from swarm_envs.export.quantize import FixedNet, quantize
@@ -27,30 +28,38 @@ def observation_bound(run: LoadedRun) -> float:
     return float(max(np.abs(box.low).max(), np.abs(box.high).max()))
 
 
+class _Recorder:
+    """A model whose ``predict`` records the network inputs it is given, then asks the real model."""
+
+    def __init__(self, model: Any) -> None:
+        self.model, self.rows = model, []
+
+    def predict(self, observation: np.ndarray, **kwargs: Any):
+        self.rows.append(np.array(observation, np.float32))
+        return self.model.predict(observation, **kwargs)
+
+
 def calibration_observations(run: LoadedRun, seeds: tuple[int, ...] = (0, 1), steps: int = 100) -> np.ndarray:
-    """Flat observations (N, D) the policy sees driving the env (the torch policy, ``steps`` steps of each
-    seed; after odometry when the policy has it): the ReLU layers' fixed-point ranges come from them."""
-    from swarm_envs.agents.base import flatten_batch
+    """The network inputs (N, input size) of the torch policy driving the env, ``steps`` steps of each seed,
+    through the policy's own pipeline (after odometry, at decisions, stacked): the ReLU layers' fixed-point
+    ranges come from them."""
     from swarm_envs.agents.evaluation import make_env
-    from swarm_envs.agents.policies import Odometry, TrainedPolicy
+    from swarm_envs.agents.policies import TrainedPolicy
 
     env = make_env(run.cfg["task"], **run.env_kwargs)
-    rows = []
+    recorder = _Recorder(run.model)
     try:
         for seed in seeds:
             env.reset(seed=seed)
-            policy = TrainedPolicy(run.model, env.platform, env.layout, run.spec)
+            policy = TrainedPolicy(recorder, env.platform, env.layout, run.spec)
             policy.reset(env.n_agents)
-            odometry = Odometry(env.layout, env.platform) if run.spec.odometry else None
             for _ in range(min(steps, run.max_cycles)):
                 parts = {k: v[env.agent_robots] for k, v in env.batched_observations().items()}
-                flat = flatten_batch(run.layout, parts)
-                rows.append(flat if odometry is None else odometry(flat))
                 a = policy.act_batch(parts)
                 env.step({agent: a[i] for i, agent in enumerate(env.possible_agents)})
     finally:
         env.close()
-    return np.concatenate(rows)
+    return np.concatenate(recorder.rows)
 
 
 def layout_table(run: LoadedRun) -> str:
@@ -74,19 +83,61 @@ def layout_table(run: LoadedRun) -> str:
     return "\n".join(rows)
 
 
-def _readme(run: LoadedRun, fixed: FixedNet | None, files: list[Path], observation: bool) -> str:
+def _architecture(run: LoadedRun, actor: Actor) -> str:
+    """``D -> ... -> A`` of the actor, with its set encoder and LSTM."""
+    steps = [str(actor.input_size) + (f" ({run.spec.frame_stack} stacked observations of {run.obs_size})" if run.spec.frame_stack > 1 else "")]
+    if actor.features is not None:
+        f = actor.features
+        blocks = ", ".join(f"{b.index.shape[0]}x{b.index.shape[1]} rows -> phi {'-'.join(str(layer.weight.shape[0]) for layer in b.phi)}"
+                           for b in f.blocks)
+        steps.append(f"DeepSets per frame [{blocks}; masked mean + valid share; {len(f.rest)} other values] = {f.n_stack * f.frame_out}")
+    if actor.lstm:
+        steps.append(f"LSTM {actor.lstm[0].hidden}" + (f" x {len(actor.lstm)} layers" if len(actor.lstm) > 1 else ""))
+    steps += [f"{layer.weight.shape[0]} {layer.activation}" for layer in actor.layers[:-1]] + [f"{run.action_size}"]
+    return " -> ".join(steps)
+
+
+def _parameters(actor: Actor) -> int:
+    layers = list(actor.layers) + ([layer for b in actor.features.blocks for layer in b.phi] if actor.features else [])
+    return (sum(layer.weight.size + layer.bias.size for layer in layers)
+            + sum(layer.w_ih.size + layer.w_hh.size + layer.bias.size for layer in actor.lstm))
+
+
+def _state_text(run: LoadedRun, actor: Actor) -> str:
+    spec, parts = run.spec, []
+    if spec.odometry:
+        parts.append("odometry (it turns stale bearings back by the robot's own rotation since they were measured, from the last "
+                     "action in `proprio`)")
+    if spec.action_repeat > 1:
+        parts.append(f"the held action (the policy decides every {spec.action_repeat} control steps: the first `policy_step` "
+                     f"after `policy_reset` decides, the next {spec.action_repeat - 1} return that action)")
+    if spec.frame_stack > 1:
+        parts.append(f"the last {spec.frame_stack} decision observations (the network sees them oldest first, zeros in place of "
+                     "those before the episode's first decision)")
+    if actor.lstm:
+        parts.append("the actor LSTM's hidden and cell states (zero at the episode start, as sb3-contrib's `episode_start`)")
+    if not parts:
+        return "The policy keeps no state between steps (`policy_reset` is still the call to make at the start)."
+    return ("`policy_state_t` holds " + "; ".join(parts) + ". `policy_reset` clears it: call it when the robot starts and at "
+            "every episode start, and call `policy_step` every control step.")
+
+
+def _readme(run: LoadedRun, actor: Actor, fixed: FixedNet | None, files: list[Path], observation: bool) -> str:
     p, spec = run.platform, run.spec
     unit, factor, what = native_factor(p)
-    layers = actor_layers(run.model)
-    arch = " -> ".join([str(run.obs_size)] + [f"{layer.weight.shape[0]} {layer.activation}" for layer in layers[:-1]] + [f"{run.action_size}"])
-    params = sum(layer.weight.size + layer.bias.size for layer in layers)
+    arch = _architecture(run, actor)
+    params = _parameters(actor)
     if fixed is None:
         weight_bytes = 4 * params
     else:
         per_weight = 2 if fixed.mode == "q15" else 1
         weight_bytes = sum(per_weight * layer.weight.size + 8 * layer.bias.size for layer in fixed.layers) + 2 * 513
-    width = max(layer.weight.shape[0] for layer in layers)
-    state_bytes = (8 * (run.layout.max_age + 1) + 8 + 4 * 3 * run.layout.n_neighbours) if spec.odometry else 4
+    width = max([layer.weight.shape[0] for layer in actor.layers] + ([4 * actor.lstm[0].hidden] if actor.lstm else []))
+    state_bytes = ((8 * (run.layout.max_age + 1) + 8 + 4 * 3 * run.layout.n_neighbours) if spec.odometry else 0)
+    state_bytes += (4 + 4 * run.action_size if spec.action_repeat > 1 else 0) + (4 * actor.input_size if spec.frame_stack > 1 else 0)
+    state_bytes += sum(8 * layer.hidden for layer in actor.lstm)
+    state_bytes = max(state_bytes, 4)
+    stack_bytes = 4 * run.obs_size + 8 * width + (4 * spec.frame_stack * actor.features.frame_out if actor.features else 0)
     kind = "float32" if fixed is None else (f"fixed point ({fixed.mode}: {'int16' if fixed.mode == 'q15' else 'int8'} weights, "
                                             f"int16 activations, int64 sums; observation input Q{fixed.in_frac})")
     settings = ", ".join(f"{k}={v!r}" for k, v in sorted(run.env_kwargs.items())) or "defaults"
@@ -101,7 +152,7 @@ message rows, {run.layout.message_bits} message bits, max age {run.layout.max_ag
 
 - Policy: {spec.name}, actor {arch} ({params} parameters), {kind}.
 - Sizes: {weight_bytes} bytes of constant weights and tables; {state_bytes} bytes of `policy_state_t` per robot
-  (about; `sizeof` is exact); stack of one `policy_step` about {4 * run.obs_size + 8 * width} bytes.
+  (about; `sizeof` is exact); stack of one `policy_step` about {stack_bytes} bytes.
 - Control step: 0.1 s; an episode of the env is {run.max_cycles} steps.
 - Files: {', '.join(f'`{f.name}`' for f in files)}.
 
@@ -115,7 +166,7 @@ static policy_state_t state;            /* one per robot; no dynamic memory */
 float obs[POLICY_OBS_SIZE], action[POLICY_ACTION_SIZE];
 actions_command_t cmd;
 
-policy_reset(&state);                   /* at the start of every run */
+policy_reset(&state);                   /* at the start of every run (episode) */
 every 0.1 s:
     fill obs (layout below) from this step's sensing, with proprio's last action = the previous `action`
     policy_step(&state, obs, action);
@@ -124,7 +175,7 @@ every 0.1 s:
 ```
 
 {obs_line}
-{"The policy keeps odometry state: it turns stale bearings back by the robot's own rotation since they were measured, from the last action in `proprio`; reset it with `policy_reset` when the robot starts." if spec.odometry else "The policy keeps no state between steps (`policy_reset` is still the call to make at the start)."}
+{_state_text(run, actor)}
 
 ## Observation ({run.obs_size} floats)
 
@@ -143,21 +194,22 @@ limited to +-{p.max_speed} m/s) in m/s and in {unit} ({factor:g} per m/s: {what}
 def export_run(run_dir: str | Path, out_dir: str | Path, fixed: str | None = None, onnx: bool = True) -> list[Path]:
     """Write the export folder of the run in ``run_dir`` into ``out_dir``; ``fixed``: ``None`` (float32),
     ``"q15"`` or ``"int8"``. Returns the files written; :class:`ExportError` for a run it cannot export."""
-    run = load_run(run_dir)
+    run = load_run(run_dir, fixed)
     out = Path(out_dir)
     if out.exists() and not out.is_dir():
         raise ExportError(f"output '{out}' exists and is not a folder")
-    out.mkdir(parents=True, exist_ok=True)
     try:
-        layers = actor_layers(run.model)
+        actor = actor_network(run.model)
     except ValueError as err:
         raise ExportError(f"run '{run.run_dir}': {err}") from None
+    out.mkdir(parents=True, exist_ok=True)
     net = None
     if fixed is not None:
-        relu = any(layer.activation == "relu" for layer in layers[:-1])
-        net = quantize(layers, observation_bound(run), fixed, calibration_observations(run) if relu else None)
+        relu = any(layer.activation == "relu" for layer in actor.layers[:-1])
+        net = quantize(actor.layers, observation_bound(run), fixed, calibration_observations(run) if relu else None)
     summary = f"{run.env_id} on the {run.platform.name}, {run.spec.name}, {'float32' if net is None else net.mode}"
-    files = write_policy(layers, run.layout, run.platform, run.spec.odometry, out, fixed=net, summary=summary)
+    files = write_policy(actor, run.layout, run.platform, out, odometry=run.spec.odometry, action_repeat=run.spec.action_repeat,
+                         fixed=net, summary=summary)
     files += write_actions(run.platform, run.action_size, out, summary=summary)
     if onnx:
         try:
@@ -173,5 +225,5 @@ def export_run(run_dir: str | Path, out_dir: str | Path, fixed: str | None = Non
     if observation:
         files += write_observation_builder(run.env_id, run.env_kwargs, out)
     readme = out / "README.md"
-    readme.write_text(_readme(run, net, files, observation), encoding="utf-8")
+    readme.write_text(_readme(run, actor, net, files, observation), encoding="utf-8")
     return files + [readme]

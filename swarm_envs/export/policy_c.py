@@ -6,7 +6,10 @@ policy's own pre-processing (:class:`swarm_envs.agents.policies.Odometry`, a per
 graph, and the integer build (:mod:`swarm_envs.export.quantize`) must follow one arithmetic that a numpy
 model reproduces bit for bit. One generator writes both builds with the same structure: a chain of dense
 layers (tanh / ReLU), weights as ``const`` arrays, no dynamic memory, the per-robot state a caller-owned
-``policy_state_t``.
+``policy_state_t``. The float build also takes the DeepSets encoder and the LSTM of the recurrent policy;
+both builds take the pipeline :class:`swarm_envs.agents.policies.TrainedPolicy` runs around the network:
+odometry every control step, a decision every ``action_repeat`` steps (the action held in between) and the
+last ``frame_stack`` decision observations, oldest first, zeros before the first.
 """
 
 from __future__ import annotations
@@ -16,7 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from swarm_envs.env import DT
-from swarm_envs.export.network import Layer
+from swarm_envs.export.network import Actor, Layer, LstmLayer, SetFeatures
 from swarm_envs.export.quantize import TANH_IN_FRAC, TANH_TABLE, FixedNet
 from swarm_envs.observation import ObservationLayout
 from swarm_envs.platforms import Platform
@@ -120,23 +123,50 @@ static void odometry(policy_state_t *state, float *obs)
 """
 
 
-def _header(obs_size: int, action_size: int, odometry: bool, k: int, history: int, fixed: FixedNet | None, summary: str) -> str:
-    state = (f"""typedef struct {{
-    double turned[POLICY_ODOMETRY_HISTORY]; /* own rotation (rad) per control step, newest first */
-    int sf_since;                          /* steps since the scale_free block changed */
-    int has_sf_last;
-    float sf_last[{k}][3];                  /* the scale_free block of the previous step */
-}} policy_state_t;""" if odometry else """typedef struct {
-    int unused; /* this policy keeps no state between steps */
-} policy_state_t;""")
+def _state_struct(odometry: bool, k: int, action_repeat: int, frame_stack: int, lstm: list[LstmLayer]) -> str:
+    fields = []
+    if odometry:
+        fields += ["    double turned[POLICY_ODOMETRY_HISTORY]; /* own rotation (rad) per control step, newest first */",
+                   "    int sf_since;                          /* steps since the scale_free block changed */",
+                   "    int has_sf_last;",
+                   f"    float sf_last[{k}][3];                  /* the scale_free block of the previous step */"]
+    if action_repeat > 1:
+        fields += ["    int held_steps;                        /* calls left that return the held action */",
+                   "    float held[POLICY_ACTION_SIZE];        /* the action of the last decision */"]
+    if frame_stack > 1:
+        fields += ["    float frames[POLICY_FRAME_STACK][POLICY_OBS_SIZE]; /* the last decision observations, oldest first */"]
+    if lstm:
+        fields += ["    float lstm_h[POLICY_LSTM_LAYERS][POLICY_LSTM_HIDDEN]; /* the actor LSTM's hidden state */",
+                   "    float lstm_c[POLICY_LSTM_LAYERS][POLICY_LSTM_HIDDEN]; /* and cell state */"]
+    if not fields:
+        fields = ["    int unused; /* this policy keeps no state between steps */"]
+    return "typedef struct {\n" + "\n".join(fields) + "\n} policy_state_t;"
+
+
+def _header(obs_size: int, action_size: int, odometry: bool, k: int, history: int, fixed: FixedNet | None, summary: str,
+            action_repeat: int = 1, frame_stack: int = 1, lstm: list[LstmLayer] | None = None) -> str:
+    lstm = lstm or []
+    state = _state_struct(odometry, k, action_repeat, frame_stack, lstm)
+    stateless = not odometry and action_repeat == 1 and frame_stack == 1 and not lstm
     fixed_api = ""
-    if fixed is not None and not odometry:
+    if fixed is not None and stateless:
         fixed_api = f"""
 /* Integer-only step: obs_q[i] = observation * 2^POLICY_INPUT_FRAC (int16, round to nearest, saturated);
  * action_q15[i] = action * 32768 (in [-32767, 32767]). */
 #define POLICY_INPUT_FRAC {fixed.in_frac}
 void policy_step_q(policy_state_t *state, const int16_t obs_q[POLICY_OBS_SIZE], int16_t action_q15[POLICY_ACTION_SIZE]);
 """
+    defines = [f"#define POLICY_OBS_SIZE {obs_size}", f"#define POLICY_ACTION_SIZE {action_size}",
+               f"#define POLICY_ODOMETRY {int(odometry)}",
+               f"#define POLICY_FIXED_POINT {0 if fixed is None else (15 if fixed.mode == 'q15' else 8)}",
+               f"#define POLICY_ACTION_REPEAT {action_repeat} /* control steps per decision */",
+               f"#define POLICY_FRAME_STACK {frame_stack} /* decision observations the network sees */",
+               f"#define POLICY_INPUT_SIZE {obs_size * frame_stack} /* the network's input */",
+               f"#define POLICY_LSTM_LAYERS {len(lstm)}"]
+    if lstm:
+        defines.append(f"#define POLICY_LSTM_HIDDEN {lstm[0].hidden}")
+    if odometry:
+        defines.append(f"#define POLICY_ODOMETRY_HISTORY {history}")
     return f"""/* Generated by swarm-export: {summary}. */
 #ifndef SWARM_POLICY_H
 #define SWARM_POLICY_H
@@ -144,18 +174,16 @@ void policy_step_q(policy_state_t *state, const int16_t obs_q[POLICY_OBS_SIZE], 
 #include <stddef.h>
 #include <stdint.h>
 
-#define POLICY_OBS_SIZE {obs_size}
-#define POLICY_ACTION_SIZE {action_size}
-#define POLICY_ODOMETRY {int(odometry)}
-#define POLICY_FIXED_POINT {0 if fixed is None else (15 if fixed.mode == "q15" else 8)}
-{f"#define POLICY_ODOMETRY_HISTORY {history}" if odometry else ""}
+{chr(10).join(defines)}
 
 /* Per-robot state, owned by the caller; policy_reset() at the start of every episode. */
 {state}
 
+/* Start an episode: clears the state (odometry, held action, stacked frames, LSTM state). */
 void policy_reset(policy_state_t *state);
 /* One control step: the flat observation (README.md, "Observation") -> the action in [-1, 1]
- * (linear, angular, message bits...), the deterministic policy as SB3's predict(deterministic=True). */
+ * (linear, angular, message bits...), the deterministic policy as SB3's predict(deterministic=True).
+ * Call it every control step, also between decisions (it returns the held action then). */
 void policy_step(policy_state_t *state, const float obs[POLICY_OBS_SIZE], float action[POLICY_ACTION_SIZE]);
 size_t policy_state_size(void);
 {fixed_api}
@@ -163,17 +191,136 @@ size_t policy_state_size(void);
 """
 
 
-def _float_net(layers: list[Layer]) -> tuple[str, str]:
-    data, calls = [], []
-    width = max(layer.weight.shape[0] for layer in layers)
+def _index_type(index: np.ndarray) -> str:
+    return "int16_t" if int(np.max(index, initial=0)) < 32768 else "int32_t"
+
+
+def _chain(layers: list[Layer], prefix: str, src: str, last_dst: str) -> list[str]:
+    """``dense`` calls through ``layers`` from ``src``, alternating h0 / h1, the last into ``last_dst``."""
+    calls = []
     for i, layer in enumerate(layers):
         out, inp = layer.weight.shape
-        data.append(f"static const POLICY_ROM float W{i}[{out * inp}] = {{\n{_wrap(_f32(layer.weight))}\n}};")
-        data.append(f"static const POLICY_ROM float B{i}[{out}] = {{\n{_wrap(_f32(layer.bias))}\n}};")
         act = {"tanh": "ACT_TANH", "relu": "ACT_RELU", "none": "ACT_NONE"}[layer.activation]
-        src = "x" if i == 0 else ("h0" if i % 2 == 1 else "h1")
-        dst = "action" if i == len(layers) - 1 else ("h0" if i % 2 == 0 else "h1")
-        calls.append(f"    dense(W{i}, B{i}, {src}, {dst}, {out}, {inp}, {act});")
+        dst = last_dst if i == len(layers) - 1 else ("h0" if i % 2 == 0 else "h1")
+        calls.append(f"dense({prefix}W{i}, {prefix}B{i}, {src}, {dst}, {out}, {inp}, {act});")
+        src = dst
+    return calls
+
+
+def _weights(layers: list[Layer], prefix: str) -> list[str]:
+    data = []
+    for i, layer in enumerate(layers):
+        out, inp = layer.weight.shape
+        data.append(f"static const POLICY_ROM float {prefix}W{i}[{out * inp}] = {{\n{_wrap(_f32(layer.weight))}\n}};")
+        data.append(f"static const POLICY_ROM float {prefix}B{i}[{out}] = {{\n{_wrap(_f32(layer.bias))}\n}};")
+    return data
+
+
+def _set_encoder(features: SetFeatures) -> tuple[list[str], str]:
+    """Constants and ``set_encode(frame, out)``: the DeepSets features of one frame (SetEncoder.forward)."""
+    data, code = [], []
+    width = max(layer.weight.shape[0] for b in features.blocks for layer in b.phi)
+    n_feat = max(b.index.shape[1] for b in features.blocks)
+    for j, block in enumerate(features.blocks):
+        k, f = block.index.shape
+        e = block.phi[-1].weight.shape[0]
+        data.append(f"static const POLICY_ROM {_index_type(block.index)} SET{j}_INDEX[{k}][{f}] = {{\n{_rows(block.index)}\n}};")
+        data += _weights(block.phi, f"S{j}")
+        calls = "\n            ".join(_chain(block.phi, f"S{j}", "row", "h"))
+        code.append(f"""    /* block {j}: {k} rows of {f} features -> mean of phi ({e}) over the valid rows, share of valid rows */
+    count = 0;
+    for (j = 0; j < {e}; ++j) sum[j] = 0.0f;
+    for (r = 0; r < {k}; ++r) {{
+        const POLICY_ROM {_index_type(block.index)} *idx = SET{j}_INDEX[r];
+        if (frame[idx[0]] > 0.5f) {{
+            for (j = 0; j < {f}; ++j) row[j] = frame[idx[j]];
+            {calls}
+            for (j = 0; j < {e}; ++j) sum[j] += h[j];
+            ++count;
+        }}
+    }}
+    for (j = 0; j < {e}; ++j) out[o + j] = sum[j] / (float)(count > 0 ? count : 1);
+    out[o + {e}] = (float)count / {float(k):.1f}f;
+    o += {e + 1};""")
+    rest = features.rest
+    if len(rest):
+        data.append(f"static const POLICY_ROM {_index_type(rest)} SET_REST[{len(rest)}] = {{\n{_wrap(_ints(rest))}\n}};")
+        code.append(f"    for (j = 0; j < {len(rest)}; ++j) out[o + j] = frame[SET_REST[j]];")
+    body = f"""
+/* DeepSets features of one observation frame (swarm_envs.agents.policies.SetEncoder): per row block, phi on
+ * every valid row (column 0 > 0.5), the mean over them (zeros when none) and their share; then the rest. */
+static void set_encode(const float *frame, float *out)
+{{
+    float row[{n_feat}], h0[{width}], h1[{width}], h[{width}], sum[{width}];
+    int r, j, count, o = 0;
+    (void)h0; (void)h1;
+{chr(10).join(code)}
+}}
+"""
+    return data, body
+
+
+def _lstm(lstm: list[LstmLayer]) -> tuple[list[str], str]:
+    data = []
+    for i, layer in enumerate(lstm):
+        four, inp = layer.w_ih.shape
+        data.append(f"static const POLICY_ROM float L{i}_WIH[{four * inp}] = {{\n{_wrap(_f32(layer.w_ih))}\n}};")
+        data.append(f"static const POLICY_ROM float L{i}_WHH[{four * layer.hidden}] = {{\n{_wrap(_f32(layer.w_hh))}\n}};")
+        data.append(f"static const POLICY_ROM float L{i}_B[{four}] = {{\n{_wrap(_f32(layer.bias))}\n}};")
+    body = """
+static float sigmoid(float v) { return 1.0f / (1.0f + expf(-v)); }
+
+/* One step of an LSTM layer (torch.nn.LSTM): gates i, f, g, o = W_ih x + W_hh h + b; c = f c + i g; h = o tanh(c) */
+static void lstm_cell(const POLICY_ROM float *w_ih, const POLICY_ROM float *w_hh, const POLICY_ROM float *b, const float *x, int n_in,
+                      float *h, float *c)
+{
+    float gates[4 * POLICY_LSTM_HIDDEN];
+    int i, j;
+    for (i = 0; i < 4 * POLICY_LSTM_HIDDEN; ++i) {
+        float acc = b[i];
+        const POLICY_ROM float *row = w_ih + (size_t)i * n_in;
+        for (j = 0; j < n_in; ++j) acc += row[j] * x[j];
+        row = w_hh + (size_t)i * POLICY_LSTM_HIDDEN;
+        for (j = 0; j < POLICY_LSTM_HIDDEN; ++j) acc += row[j] * h[j];
+        gates[i] = acc;
+    }
+    for (j = 0; j < POLICY_LSTM_HIDDEN; ++j) {
+        float in = sigmoid(gates[j]), forget = sigmoid(gates[POLICY_LSTM_HIDDEN + j]);
+        float cell = tanhf(gates[2 * POLICY_LSTM_HIDDEN + j]), out = sigmoid(gates[3 * POLICY_LSTM_HIDDEN + j]);
+        c[j] = forget * c[j] + in * cell;
+        h[j] = out * tanhf(c[j]);
+    }
+}
+"""
+    return data, body
+
+
+def _float_net(actor: Actor) -> tuple[str, str]:
+    layers = actor.layers
+    data = []
+    parts = []
+    width = max(layer.weight.shape[0] for layer in layers)
+    lines = ["    const float *in = x;"]
+    if actor.features is not None:
+        f = actor.features
+        set_data, set_body = _set_encoder(f)
+        data += set_data
+        parts.append(set_body)
+        lines = [f"    float features[{f.n_stack * f.frame_out}];", "    const float *in = features;",
+                 f"    for (i = 0; i < {f.n_stack}; ++i) set_encode(x + (size_t)i * {f.frame_size}, features + (size_t)i * {f.frame_out});"]
+    else:
+        lines.append("    (void)i;")
+    if actor.lstm:
+        lstm_data, lstm_body = _lstm(actor.lstm)
+        data += lstm_data
+        parts.append(lstm_body)
+        for i, layer in enumerate(actor.lstm):
+            lines.append(f"    lstm_cell(L{i}_WIH, L{i}_WHH, L{i}_B, in, {layer.w_ih.shape[1]}, state->lstm_h[{i}], state->lstm_c[{i}]);")
+            lines.append(f"    in = state->lstm_h[{i}];")
+    else:
+        lines.append("    (void)state;")
+    data += _weights(layers, "")
+    calls = "\n".join("    " + c for c in _chain(layers, "", "in", "action"))
     body = f"""
 enum {{ ACT_NONE, ACT_TANH, ACT_RELU }};
 
@@ -188,13 +335,15 @@ static void dense(const POLICY_ROM float *w, const POLICY_ROM float *b, const fl
         y[i] = act == ACT_TANH ? tanhf(acc) : (act == ACT_RELU ? (acc > 0.0f ? acc : 0.0f) : acc);
     }}
 }}
-
-static void forward(const float *x, float *action)
+{"".join(parts)}
+/* the network: input (POLICY_INPUT_SIZE) -> action in [-1, 1] */
+static void forward(policy_state_t *state, const float *x, float *action)
 {{
     float h0[{width}], h1[{width}];
     int i;
+{chr(10).join(lines)}
     (void)h0; (void)h1;
-{chr(10).join(calls)}
+{calls}
     for (i = 0; i < POLICY_ACTION_SIZE; ++i) action[i] = action[i] < -1.0f ? -1.0f : (action[i] > 1.0f ? 1.0f : action[i]);
 }}
 """
@@ -267,11 +416,13 @@ static void forward_q(const int16_t *x, int16_t *action_q15)
 {chr(10).join(calls)}
 }}
 
-static void forward(const float *obs, float *action)
+/* the network: input (POLICY_INPUT_SIZE) -> action in [-1, 1], quantised on the way in */
+static void forward(policy_state_t *state, const float *obs, float *action)
 {{
-    int16_t x[POLICY_OBS_SIZE], action_q15[POLICY_ACTION_SIZE];
+    int16_t x[POLICY_INPUT_SIZE], action_q15[POLICY_ACTION_SIZE];
     int i;
-    for (i = 0; i < POLICY_OBS_SIZE; ++i) {{
+    (void)state;
+    for (i = 0; i < POLICY_INPUT_SIZE; ++i) {{
         long q = lrintf(obs[i] * {float(2.0 ** net.in_frac):.1f}f);
         x[i] = (int16_t)(q < -32768 ? -32768 : (q > 32767 ? 32767 : q));
     }}
@@ -282,19 +433,60 @@ static void forward(const float *obs, float *action)
     return "\n\n".join(data), body
 
 
-def write_policy(layers: list[Layer], layout: ObservationLayout, platform: Platform, odometry: bool, out_dir: Path,
-                 fixed: FixedNet | None = None, summary: str = "") -> list[Path]:
-    """Write ``policy.h`` and ``policy.c`` into ``out_dir``: the float actor, or the integer one of ``fixed``."""
-    obs_size, action_size = layers[0].weight.shape[1], layers[-1].weight.shape[0]
+def _reset(odometry: bool, k: int, action_repeat: int, frame_stack: int, lstm: list[LstmLayer]) -> str:
+    lines = []
+    if odometry:
+        lines += ["    for (i = 0; i < POLICY_ODOMETRY_HISTORY; ++i) state->turned[i] = 0.0;", "    state->sf_since = 0;",
+                  "    state->has_sf_last = 0;", f"    for (i = 0; i < {k}; ++i)", "        for (j = 0; j < 3; ++j) state->sf_last[i][j] = 0.0f;"]
+    if action_repeat > 1:
+        lines += ["    state->held_steps = 0;", "    for (i = 0; i < POLICY_ACTION_SIZE; ++i) state->held[i] = 0.0f;"]
+    if frame_stack > 1:
+        lines += ["    for (i = 0; i < POLICY_FRAME_STACK; ++i)", "        for (j = 0; j < POLICY_OBS_SIZE; ++j) state->frames[i][j] = 0.0f;"]
+    if lstm:
+        lines += ["    for (i = 0; i < POLICY_LSTM_LAYERS; ++i)",
+                  "        for (j = 0; j < POLICY_LSTM_HIDDEN; ++j) state->lstm_h[i][j] = state->lstm_c[i][j] = 0.0f;"]
+    if not lines:
+        return "    state->unused = 0;\n"
+    return "    int i, j;\n" + "\n".join(lines) + "\n    (void)j;\n"
+
+
+def _step(odometry: bool, action_repeat: int, frame_stack: int) -> str:
+    lines = ["    float x[POLICY_OBS_SIZE];", "    memcpy(x, obs, sizeof x);"]
+    lines.append("    odometry(state, x);                  /* every control step */" if odometry else "")
+    if action_repeat > 1:
+        lines += ["    if (state->held_steps > 0) {          /* between decisions: the held action */",
+                  "        --state->held_steps;", "        memcpy(action, state->held, sizeof state->held);", "        return;", "    }",
+                  "    state->held_steps = POLICY_ACTION_REPEAT - 1;"]
+    if frame_stack > 1:
+        lines += ["    memmove(state->frames[0], state->frames[1], (POLICY_FRAME_STACK - 1) * sizeof state->frames[0]);",
+                  "    memcpy(state->frames[POLICY_FRAME_STACK - 1], x, sizeof x);",
+                  "    forward(state, state->frames[0], action);"]
+    else:
+        lines.append("    forward(state, x, action);")
+    if action_repeat > 1:
+        lines.append("    memcpy(state->held, action, sizeof state->held);")
+    return "\n".join(line for line in lines if line)
+
+
+def write_policy(actor: Actor, layout: ObservationLayout, platform: Platform, out_dir: Path, odometry: bool = False,
+                 action_repeat: int = 1, fixed: FixedNet | None = None, summary: str = "") -> list[Path]:
+    """Write ``policy.h`` and ``policy.c`` into ``out_dir``: the float ``actor``, or the integer one of ``fixed``
+    (an MLP actor), with the odometry, action repeat and frame stack around it (the frame stack is the
+    actor's input size over the observation's)."""
+    obs_size = sum(int(np.prod(box.shape)) for box in layout.dict_space().spaces.values())
+    action_size = actor.layers[-1].weight.shape[0]
+    frame_stack = actor.input_size // obs_size
+    if frame_stack * obs_size != actor.input_size:
+        raise ValueError(f"the actor's input ({actor.input_size}) is not a whole number of observations ({obs_size})")
+    if fixed is not None and (actor.features is not None or actor.lstm):
+        raise ValueError("the fixed-point build takes an MLP actor (no set encoder, no LSTM)")
     k, history = layout.n_neighbours, int(layout.max_age) + 1
-    header = _header(obs_size, action_size, odometry, k, history, fixed, summary)
-    data, body = _float_net(layers) if fixed is None else _fixed_net(fixed)
+    header = _header(obs_size, action_size, odometry, k, history, fixed, summary, action_repeat, frame_stack, actor.lstm)
+    data, body = _float_net(actor) if fixed is None else _fixed_net(fixed)
     odo = _odometry_c(layout, platform) if odometry else ""
-    reset = ("    int i, a;\n    for (i = 0; i < POLICY_ODOMETRY_HISTORY; ++i) state->turned[i] = 0.0;\n"
-             "    state->sf_since = 0;\n    state->has_sf_last = 0;\n"
-             f"    for (i = 0; i < {k}; ++i)\n        for (a = 0; a < 3; ++a) state->sf_last[i][a] = 0.0f;\n") if odometry else "    state->unused = 0;\n"
+    stateless = not odometry and action_repeat == 1 and frame_stack == 1 and not actor.lstm
     step_q = ""
-    if fixed is not None and not odometry:
+    if fixed is not None and stateless:
         step_q = """
 void policy_step_q(policy_state_t *state, const int16_t obs_q[POLICY_OBS_SIZE], int16_t action_q15[POLICY_ACTION_SIZE])
 {
@@ -318,16 +510,13 @@ void policy_step_q(policy_state_t *state, const int16_t obs_q[POLICY_OBS_SIZE], 
 {odo}
 void policy_reset(policy_state_t *state)
 {{
-{reset}}}
+{_reset(odometry, k, action_repeat, frame_stack, actor.lstm)}}}
 
 size_t policy_state_size(void) {{ return sizeof(policy_state_t); }}
 
 void policy_step(policy_state_t *state, const float obs[POLICY_OBS_SIZE], float action[POLICY_ACTION_SIZE])
 {{
-    float x[POLICY_OBS_SIZE];
-    memcpy(x, obs, sizeof x);
-{"    odometry(state, x);" if odometry else "    (void)state;"}
-    forward(x, action);
+{_step(odometry, action_repeat, frame_stack)}
 }}
 {step_q}"""
     out_dir.mkdir(parents=True, exist_ok=True)

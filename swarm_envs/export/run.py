@@ -13,8 +13,9 @@ from swarm_envs.platforms import Platform
 
 __all__ = ["ExportError", "LoadedRun", "load_run", "SUPPORTED"]
 
-#: the policy variants the C export implements: PPO with the flat MLP, with or without odometry
-SUPPORTED = "algorithm ppo, encoder mlp, odometry on or off, action_repeat 1, frame_stack 1"
+#: the policy variants the C export implements
+SUPPORTED = ("algorithm ppo or recurrent_ppo, encoder mlp or deepsets, odometry on or off, any action_repeat and frame_stack; "
+             "the fixed-point builds (q15, int8) for algorithm ppo with encoder mlp")
 
 
 class ExportError(ValueError):
@@ -38,8 +39,9 @@ class LoadedRun:
     max_cycles: int
 
 
-def load_run(run_dir: str | Path) -> LoadedRun:
-    """The run of ``run_dir``; :class:`ExportError` with one line saying what is missing or unsupported."""
+def load_run(run_dir: str | Path, fixed: str | None = None) -> LoadedRun:
+    """The run of ``run_dir``; :class:`ExportError` with one line saying what is missing or unsupported
+    (``fixed``: the fixed-point build asked for, ``q15`` or ``int8``, or None for float32)."""
     run_dir = Path(run_dir)
     if not run_dir.is_dir():
         raise ExportError(f"run folder '{run_dir}' not found (give the output folder of train.py, holding config.yaml and model.zip)")
@@ -65,16 +67,12 @@ def load_run(run_dir: str | Path) -> LoadedRun:
         raise ExportError(f"'{config}': {err}") from None
     spec = PolicySpec.from_agent(cfg["agent"])
     unsupported = []
-    if spec.algorithm != "ppo":
-        unsupported.append(f"algorithm {spec.algorithm}")
-    if spec.encoder != "mlp":
-        unsupported.append(f"encoder {spec.encoder}")
-    if spec.action_repeat != 1:
-        unsupported.append(f"action_repeat {spec.action_repeat}")
-    if spec.frame_stack != 1:
-        unsupported.append(f"frame_stack {spec.frame_stack}")
+    if fixed is not None and spec.algorithm != "ppo":
+        unsupported.append(f"algorithm {spec.algorithm} with --fixed {fixed} (the LSTM is exported in float32 only)")
+    if fixed is not None and spec.encoder != "mlp":
+        unsupported.append(f"encoder {spec.encoder} with --fixed {fixed} (the set encoder is exported in float32 only)")
     if unsupported:
-        raise ExportError(f"run '{run_dir}' trained the policy variant {spec.name} ({', '.join(unsupported)}); the C export "
+        raise ExportError(f"run '{run_dir}' trained the policy variant {spec.name} ({'; '.join(unsupported)}); the C export "
                           f"supports {SUPPORTED}")
     kwargs = {k: v for k, v in env_kwargs_of(cfg).items() if k != "render_mode"}
     try:
