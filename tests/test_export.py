@@ -226,8 +226,8 @@ def test_onnx_matches_c(exported, tmp_path):
 
 
 def test_cli_errors(tmp_path, capsys):
-    """A missing folder, a folder without model.zip and a fixed-point build of a set-encoder or recurrent
-    policy (float32 only): exit 2, one clear line, nothing written."""
+    """A missing folder, a folder without model.zip and a fixed-point build of a recurrent policy (float32
+    only): exit 2, one clear line, nothing written."""
     from swarm_envs.export.cli import main
 
     assert main([str(tmp_path / "nope"), "--output", str(tmp_path / "out")]) == 2
@@ -235,17 +235,13 @@ def test_cli_errors(tmp_path, capsys):
     (tmp_path / "run").mkdir()
     assert main([str(tmp_path / "run"), "--output", str(tmp_path / "out")]) == 2
     assert "no config.yaml and no model.zip" in capsys.readouterr().err
-    cfg = {"task": "aggregation", "agent": {"encoder": "deepsets"}, "env": {"n_robots": 4}}
+    cfg = {"task": "aggregation", "agent": {"algorithm": "recurrent_ppo"}, "env": {"n_robots": 4}}
     (tmp_path / "run" / "config.yaml").write_text(yaml.safe_dump(cfg))
     (tmp_path / "run" / "model.zip").write_bytes(b"")
-    assert main([str(tmp_path / "run"), "--output", str(tmp_path / "out"), "--fixed", "q15"]) == 2
-    err = capsys.readouterr().err
-    assert "encoder deepsets with --fixed q15" in err and "supports" in err and len(err.strip().splitlines()) == 1
-    cfg["agent"] = {"algorithm": "recurrent_ppo"}
-    (tmp_path / "run" / "config.yaml").write_text(yaml.safe_dump(cfg))
-    assert main([str(tmp_path / "run"), "--output", str(tmp_path / "out"), "--int8"]) == 2
-    err = capsys.readouterr().err
-    assert "algorithm recurrent_ppo with --fixed int8" in err and len(err.strip().splitlines()) == 1
+    for flags, mode in ((["--fixed", "q15"], "q15"), (["--int8"], "int8")):
+        assert main([str(tmp_path / "run"), "--output", str(tmp_path / "out"), *flags]) == 2
+        err = capsys.readouterr().err
+        assert f"algorithm recurrent_ppo with --fixed {mode}" in err and "supports" in err and len(err.strip().splitlines()) == 1
     assert not (tmp_path / "out").exists()
 
 

@@ -25,7 +25,7 @@ needs_cc = pytest.mark.skipif(compiler() is None, reason="no C compiler (cc, gcc
 SMALL = ["agent.net_arch=[16]", "agent.set_embedding=8", "agent.lstm_hidden=8"]
 #: variant -> (config, overrides)
 VARIANTS = {
-    "deepsets": ("configs/aggregation.yaml", [*SMALL, "agent.encoder=deepsets"]),
+    "deepsets_stack2": ("configs/aggregation.yaml", [*SMALL, "agent.encoder=deepsets", "agent.frame_stack=2", "agent.activation=relu"]),
     "recurrent": ("configs/aggregation.yaml", [*SMALL, "agent.algorithm=recurrent_ppo"]),
     "stack3_repeat2_odometry": ("configs/sorted_following.yaml", [*SMALL, "agent.frame_stack=3", "agent.action_repeat=2"]),
     "all_droplet": ("configs/aggregation.yaml", [*SMALL, "env.platform=droplet", "env.message_bits=3", "agent.activation=relu",
@@ -139,8 +139,9 @@ def test_variant_in_the_loop_metric(exported):
 
 @needs_cc
 def test_onnx_matches_c(exported, tmp_path):
-    """policy.onnx run by onnxruntime gives the C's actions on recorded observations (within 1e-5); for the LSTM
-    with h and c carried from step to step and zeroed at the episode start."""
+    """policy.onnx run by onnxruntime gives the C's actions on recorded observations (within 1e-5): its input the
+    stacked observations (zeros before the first), for the LSTM with h and c carried from step to step and zeroed
+    at the episode start."""
     pytest.importorskip("onnx")
     ort = pytest.importorskip("onnxruntime")
     from swarm_envs.agents.base import flatten_batch
@@ -149,12 +150,12 @@ def test_onnx_matches_c(exported, tmp_path):
     from swarm_envs.export.network import write_onnx
 
     name, run, folder = exported
-    if run.spec.odometry or run.spec.action_repeat > 1 or run.spec.frame_stack > 1:
-        pytest.skip("the ONNX graph is the network alone; odometry, repeat and stacking are the C's pipeline")
+    if run.spec.odometry or run.spec.action_repeat > 1:
+        pytest.skip("the ONNX graph is the network alone; odometry and action repeat are the C's pipeline")
     session = ort.InferenceSession(str(write_onnx(run.model, tmp_path / "policy.onnx")))
     c = CPolicyLibrary(compile_shared(folder), run.obs_size, run.action_size)
     env = make_env(run.cfg["task"], **run.env_kwargs)
-    recurrent = run.spec.algorithm == "recurrent_ppo"
+    recurrent, k = run.spec.algorithm == "recurrent_ppo", run.spec.frame_stack
     worst, moved = 0.0, 0.0
     try:
         for seed in (6, 7):
@@ -162,14 +163,16 @@ def test_onnx_matches_c(exported, tmp_path):
             c.reset(env.n_agents)
             shape = (1, env.n_agents, run.spec.lstm_hidden)
             h, cell = np.zeros(shape, np.float32), np.zeros(shape, np.float32)
+            stack = np.zeros((env.n_agents, k * run.obs_size), np.float32)
             for _ in range(20):
-                parts = {k: v[env.agent_robots] for k, v in env.batched_observations().items()}
+                parts = {key: v[env.agent_robots] for key, v in env.batched_observations().items()}
                 flat = flatten_batch(run.layout, parts)
+                stack = np.concatenate([stack[:, run.obs_size :], flat], axis=1)
                 if recurrent:
-                    got, h, cell = session.run(None, {"observation": flat, "h": h, "c": cell})
+                    got, h, cell = session.run(None, {"observation": stack, "h": h, "c": cell})
                     moved = max(moved, float(np.abs(h).max()))
                 else:
-                    got = session.run(None, {"observation": flat})[0]
+                    got = session.run(None, {"observation": stack})[0]
                 worst = max(worst, float(np.abs(got - c.step(flat)).max()))
                 env.step({agent: env.action_space(agent).sample() for agent in env.possible_agents})
     finally:
@@ -192,29 +195,28 @@ class _FixedModel:
 
 @needs_cc
 @pytest.mark.parametrize("mode", ["q15", "int8"])
-def test_fixed_point_with_repeat_and_stack(exported, mode, tmp_path):
-    """The integer build of the MLP variant with odometry, frame stack 3 and action repeat 2 equals, bit for bit,
-    the numpy model of its integer network run through the same pipeline (TrainedPolicy), and stays near torch
-    (q15 within 2e-3, int8 within 0.1); the set-encoder and LSTM variants are refused with one line."""
+def test_fixed_point_variants(exported, mode, tmp_path):
+    """The integer builds of the DeepSets policy (frame stack 2, ReLU) and of the MLP policy with odometry, frame
+    stack 3 and action repeat 2 equal, bit for bit, the numpy model of their integer network run through the same
+    pipeline (TrainedPolicy), and stay near torch (q15 within 2e-3, int8 within 0.1 per component); a recurrent
+    policy's fixed-point build is refused with one line."""
     from swarm_envs.agents.evaluation import make_env
     from swarm_envs.agents.policies import TrainedPolicy
     from swarm_envs.export import ExportError, export_run
     from swarm_envs.export.compare import _c_policy, _torch_policy
-    from swarm_envs.export.export import calibration_observations, observation_bound
+    from swarm_envs.export.export import fixed_network
     from swarm_envs.export.host import compile_shared
     from swarm_envs.export.network import actor_network
-    from swarm_envs.export.quantize import quantize
 
     name, run, _ = exported
-    if run.spec.encoder != "mlp" or run.spec.algorithm != "ppo":
+    if run.spec.algorithm != "ppo":
         with pytest.raises(ExportError, match=f"with --fixed {mode}") as err:
             export_run(run.run_dir, tmp_path, fixed=mode, onnx=False)
         assert "\n" not in str(err.value) and not any(tmp_path.iterdir())
         return
     export_run(run.run_dir, tmp_path, fixed=mode, onnx=False)
-    layers = actor_network(run.model).layers
-    relu = any(layer.activation == "relu" for layer in layers[:-1])
-    net = quantize(layers, observation_bound(run), mode, calibration_observations(run) if relu else None)
+    net = fixed_network(run, actor_network(run.model), mode)
+    assert (net.features is not None) == (run.spec.encoder == "deepsets")
     env = make_env(run.cfg["task"], **run.env_kwargs)
     c = _c_policy(run, compile_shared(tmp_path), env)
     model_q = TrainedPolicy(_FixedModel(net), env.platform, env.layout, run.spec)
@@ -223,6 +225,7 @@ def test_fixed_point_with_repeat_and_stack(exported, mode, tmp_path):
     (a_c, a_q, a_torch), _ = _episodes(run, [c, model_q, reference], seeds=[5, 6], steps=20)
     assert np.array_equal(a_c, a_q)
     near = float(np.abs(a_c - a_torch).max())
+    print(f"{name} {mode}: largest |C - torch| {near:.3g}")
     assert near <= (2e-3 if mode == "q15" else 0.1), f"{name} {mode}: {near}"
 
 
@@ -241,11 +244,13 @@ def test_readme_describes_state(exported):
 
 @pytest.mark.parametrize("cross", ["arm-none-eabi-gcc", "avr-gcc"])
 def test_variant_cross_compiles(exported, cross, tmp_path):
-    """policy.c compiles without warnings for a Cortex-M3 (and, for the Droplet run, the ATxmega with the
-    weights in flash), with no writable data: the state is all in the caller's policy_state_t."""
+    """policy.c (float32, and q15 for a PPO run) compiles without warnings for a Cortex-M3 (and, for the Droplet
+    run, the ATxmega with the tables in flash), with no writable data: the state is all in the caller's
+    policy_state_t."""
     import shutil
     import subprocess
 
+    from swarm_envs.export import export_run
     from tests.test_export import CROSS
 
     if shutil.which(cross) is None:
@@ -254,10 +259,15 @@ def test_variant_cross_compiles(exported, cross, tmp_path):
     flags, platforms = CROSS[cross]
     if run.platform.name not in platforms:
         pytest.skip(f"{cross} targets {', '.join(platforms)}")
-    obj = tmp_path / "policy.o"
-    done = subprocess.run([cross, *flags, "-Os", "-Wall", "-Wextra", "-Werror", "-c", str(folder / "policy.c"), "-o", str(obj)],
-                          capture_output=True, text=True)
-    assert done.returncode == 0, done.stderr
-    sections = subprocess.run([cross.replace("gcc", "objdump"), "-h", str(obj)], capture_output=True, text=True).stdout
-    sizes = {f[1]: int(f[2], 16) for f in (line.split() for line in sections.splitlines()) if len(f) > 3 and f[0].isdigit()}
-    assert sizes.get(".data", 0) == 0 and sizes.get(".bss", 0) == 0, sizes
+    folders = [folder]
+    if run.spec.algorithm == "ppo":
+        export_run(run.run_dir, tmp_path / "q15", fixed="q15", onnx=False)
+        folders.append(tmp_path / "q15")
+    for source in folders:
+        obj = tmp_path / "policy.o"
+        done = subprocess.run([cross, *flags, "-Os", "-Wall", "-Wextra", "-Werror", "-c", str(source / "policy.c"), "-o", str(obj)],
+                              capture_output=True, text=True)
+        assert done.returncode == 0, done.stderr
+        sections = subprocess.run([cross.replace("gcc", "objdump"), "-h", str(obj)], capture_output=True, text=True).stdout
+        sizes = {f[1]: int(f[2], 16) for f in (line.split() for line in sections.splitlines()) if len(f) > 3 and f[0].isdigit()}
+        assert sizes.get(".data", 0) == 0 and sizes.get(".bss", 0) == 0, (source, sizes)

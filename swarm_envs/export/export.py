@@ -17,7 +17,7 @@ from swarm_envs.export.run import ExportError, LoadedRun, load_run
 from swarm_envs.registry import task_class
 from swarm_envs.views import resolve_config
 
-__all__ = ["export_run", "observation_bound", "layout_table"]
+__all__ = ["export_run", "observation_bound", "fixed_network", "layout_table"]
 
 
 def observation_bound(run: LoadedRun) -> float:
@@ -60,6 +60,22 @@ def calibration_observations(run: LoadedRun, seeds: tuple[int, ...] = (0, 1), st
     finally:
         env.close()
     return np.concatenate(recorder.rows)
+
+
+def fixed_network(run: LoadedRun, actor: Actor, mode: str) -> FixedNet:
+    """The ``mode`` (``q15`` / ``int8``) integer form of ``actor`` (no LSTM): the input format from the
+    observation bound, ReLU formats from :func:`calibration_observations`, the set encoder's feature format
+    from the bound of the values it passes through (``proprio``, ``rigid``, ``own_id``)."""
+    relu = any(layer.activation == "relu" for layer in actor.layers[:-1])
+    rest_bound = 1.0
+    if actor.features is not None:
+        from gymnasium import spaces
+
+        box = spaces.flatten_space(run.layout.dict_space())
+        rest = actor.features.rest
+        rest_bound = float(max(np.abs(box.low[rest]).max(initial=0.0), np.abs(box.high[rest]).max(initial=0.0)))
+    return quantize(actor.layers, observation_bound(run), mode, calibration_observations(run) if relu else None,
+                    features=actor.features, rest_bound=rest_bound)
 
 
 def layout_table(run: LoadedRun) -> str:
@@ -131,7 +147,8 @@ def _readme(run: LoadedRun, actor: Actor, fixed: FixedNet | None, files: list[Pa
         weight_bytes = 4 * params
     else:
         per_weight = 2 if fixed.mode == "q15" else 1
-        weight_bytes = sum(per_weight * layer.weight.size + 8 * layer.bias.size for layer in fixed.layers) + 2 * 513
+        fixed_layers = list(fixed.layers) + ([layer for _, phi in fixed.features.blocks for layer in phi] if fixed.features else [])
+        weight_bytes = sum(per_weight * layer.weight.size + 8 * layer.bias.size for layer in fixed_layers) + 2 * 513
     width = max([layer.weight.shape[0] for layer in actor.layers] + ([4 * actor.lstm[0].hidden] if actor.lstm else []))
     state_bytes = ((8 * (run.layout.max_age + 1) + 8 + 4 * 3 * run.layout.n_neighbours) if spec.odometry else 0)
     state_bytes += (4 + 4 * run.action_size if spec.action_repeat > 1 else 0) + (4 * actor.input_size if spec.frame_stack > 1 else 0)
@@ -139,7 +156,8 @@ def _readme(run: LoadedRun, actor: Actor, fixed: FixedNet | None, files: list[Pa
     state_bytes = max(state_bytes, 4)
     stack_bytes = 4 * run.obs_size + 8 * width + (4 * spec.frame_stack * actor.features.frame_out if actor.features else 0)
     kind = "float32" if fixed is None else (f"fixed point ({fixed.mode}: {'int16' if fixed.mode == 'q15' else 'int8'} weights, "
-                                            f"int16 activations, int64 sums; observation input Q{fixed.in_frac})")
+                                            f"int16 activations, int64 sums; observation input Q{fixed.in_frac}"
+                                            + (f", set features Q{fixed.features.feat_frac}" if fixed.features else "") + ")")
     settings = ", ".join(f"{k}={v!r}" for k, v in sorted(run.env_kwargs.items())) or "defaults"
     obs_line = ("`observation.h` / `observation.c` build the flat observation from the robot's sensing."
                 if observation else "The observation builder is not part of this folder (it rebuilds sensing='full' with the two-hop "
@@ -205,8 +223,7 @@ def export_run(run_dir: str | Path, out_dir: str | Path, fixed: str | None = Non
     out.mkdir(parents=True, exist_ok=True)
     net = None
     if fixed is not None:
-        relu = any(layer.activation == "relu" for layer in actor.layers[:-1])
-        net = quantize(actor.layers, observation_bound(run), fixed, calibration_observations(run) if relu else None)
+        net = fixed_network(run, actor, fixed)
     summary = f"{run.env_id} on the {run.platform.name}, {run.spec.name}, {'float32' if net is None else net.mode}"
     files = write_policy(actor, run.layout, run.platform, out, odometry=run.spec.odometry, action_repeat=run.spec.action_repeat,
                          fixed=net, summary=summary)

@@ -6,8 +6,8 @@ policy's own pre-processing (:class:`swarm_envs.agents.policies.Odometry`, a per
 graph, and the integer build (:mod:`swarm_envs.export.quantize`) must follow one arithmetic that a numpy
 model reproduces bit for bit. One generator writes both builds with the same structure: a chain of dense
 layers (tanh / ReLU), weights as ``const`` arrays, no dynamic memory, the per-robot state a caller-owned
-``policy_state_t``. The float build also takes the DeepSets encoder and the LSTM of the recurrent policy;
-both builds take the pipeline :class:`swarm_envs.agents.policies.TrainedPolicy` runs around the network:
+``policy_state_t``. Both builds take the DeepSets encoder, the float build also the LSTM of the recurrent
+policy; both take the pipeline :class:`swarm_envs.agents.policies.TrainedPolicy` runs around the network:
 odometry every control step, a decision every ``action_repeat`` steps (the action held in between) and the
 last ``frame_stack`` decision observations, oldest first, zeros before the first.
 """
@@ -350,21 +350,98 @@ static void forward(policy_state_t *state, const float *x, float *action)
     return "\n".join(data), body
 
 
+def _fixed_weights(layers: list, prefix: str, wtype: str) -> list[str]:
+    data = []
+    for i, layer in enumerate(layers):
+        out, inp = layer.weight.shape
+        data.append(f"/* {prefix or 'mlp '}layer {i}: input Q{layer.in_frac}, weights Q{layer.w_frac}, output Q{layer.out_frac}, {layer.activation} */")
+        data.append(f"static const POLICY_ROM {wtype} {prefix}W{i}[{out * inp}] = {{\n{_wrap(_ints(layer.weight))}\n}};")
+        data.append(f"static const POLICY_ROM int64_t {prefix}B{i}[{out}] = {{\n{_wrap(','.join(f'INT64_C({int(v)})' for v in layer.bias))}\n}};")
+    return data
+
+
+def _fixed_chain(layers: list, prefix: str, src: str, last_dst: str, head: bool) -> list[str]:
+    calls = []
+    for i, layer in enumerate(layers):
+        out, inp = layer.weight.shape
+        last = i == len(layers) - 1
+        kind = "OUT_ACTION" if (head and last) else {"tanh": "OUT_TANH", "relu": "OUT_RELU"}[layer.activation]
+        dst = last_dst if last else ("h0" if i % 2 == 0 else "h1")
+        calls.append(f"dense_q({prefix}W{i}, {prefix}B{i}, {src}, {dst}, {out}, {inp}, {layer.in_frac + layer.w_frac}, {layer.out_frac}, {kind});")
+        src = dst
+    return calls
+
+
+def _fixed_set(fs, wtype: str) -> tuple[list[str], str]:
+    """Constants and ``set_encode_q(frame, out)``: the integer DeepSets features of one frame (quantize._set_q)."""
+    data, code = [], []
+    width = max(layer.weight.shape[0] for _, phi in fs.blocks for layer in phi)
+    n_feat = max(index.shape[1] for index, _ in fs.blocks)
+    for j, (index, phi) in enumerate(fs.blocks):
+        k, f = index.shape
+        e = phi[-1].weight.shape[0]
+        data.append(f"static const POLICY_ROM {_index_type(index)} SET{j}_INDEX[{k}][{f}] = {{\n{_rows(index)}\n}};")
+        data += _fixed_weights(phi, f"S{j}", wtype)
+        calls = "\n            ".join(_fixed_chain(phi, f"S{j}", "row", "h", head=False))
+        code.append(f"""    /* block {j}: {k} rows of {f} features -> mean of phi ({e}, Q15) over the valid rows, share of valid rows */
+    count = 0;
+    for (j = 0; j < {e}; ++j) sum[j] = 0;
+    for (r = 0; r < {k}; ++r) {{
+        const POLICY_ROM {_index_type(index)} *idx = SET{j}_INDEX[r];
+        if (frame[idx[0]] > VALID_Q) {{
+            for (j = 0; j < {f}; ++j) row[j] = frame[idx[j]];
+            {calls}
+            for (j = 0; j < {e}; ++j) sum[j] += h[j];
+            ++count;
+        }}
+    }}
+    for (j = 0; j < {e}; ++j) out[o + j] = to_feature(div_round(sum[j], count > 0 ? count : 1), 15);
+    share = ((int64_t)count * 32768 + {k // 2}) / {k};
+    out[o + {e}] = to_feature(share < 32767 ? share : 32767, 15);
+    o += {e + 1};""")
+    if len(fs.rest):
+        data.append(f"static const POLICY_ROM {_index_type(fs.rest)} SET_REST[{len(fs.rest)}] = {{\n{_wrap(_ints(fs.rest))}\n}};")
+        code.append(f"    for (j = 0; j < {len(fs.rest)}; ++j) out[o + j] = to_feature(frame[SET_REST[j]], {fs.in_frac});")
+    body = f"""
+#define VALID_Q {1 << (fs.in_frac - 1)} /* 0.5 at the input's Q{fs.in_frac} */
+#define FEATURE_FRAC {fs.feat_frac}
+
+/* v / count (count > 0) rounded to nearest, ties away from zero */
+static int64_t div_round(int64_t v, int64_t count)
+{{
+    return v >= 0 ? (v + count / 2) / count : -((-v + count / 2) / count);
+}}
+
+/* v at Q(frac) -> the features' Q(FEATURE_FRAC), saturated to int16 */
+static int16_t to_feature(int64_t v, int frac) {{ return sat16(shift_round(v, frac - FEATURE_FRAC), -32768, 32767); }}
+
+/* integer DeepSets features of one quantised frame (quantize._set_q) */
+static void set_encode_q(const int16_t *frame, int16_t *out)
+{{
+    int16_t row[{n_feat}], h0[{width}], h1[{width}], h[{width}];
+    int64_t sum[{width}], share;
+    int r, j, count, o = 0;
+    (void)h0; (void)h1;
+{chr(10).join(code)}
+}}
+"""
+    return data, body
+
+
 def _fixed_net(net: FixedNet) -> tuple[str, str]:
     wtype = "int16_t" if net.mode == "q15" else "int8_t"
     data = [f"/* tanh(i / 64) in Q15, i = 0 .. 512 */\nstatic const POLICY_ROM int16_t TANH_Q15[513] = {{\n{_wrap(_ints(TANH_TABLE))}\n}};"]
-    calls = []
     width = max(layer.weight.shape[0] for layer in net.layers)
-    for i, layer in enumerate(net.layers):
-        out, inp = layer.weight.shape
-        data.append(f"/* layer {i}: input Q{layer.in_frac}, weights Q{layer.w_frac}, output Q{layer.out_frac}, {layer.activation} */")
-        data.append(f"static const POLICY_ROM {wtype} W{i}[{out * inp}] = {{\n{_wrap(_ints(layer.weight))}\n}};")
-        data.append(f"static const POLICY_ROM int64_t B{i}[{out}] = {{\n{_wrap(','.join(f'INT64_C({int(v)})' for v in layer.bias))}\n}};")
-        last = i == len(net.layers) - 1
-        kind = "OUT_ACTION" if last else {"tanh": "OUT_TANH", "relu": "OUT_RELU"}[layer.activation]
-        src = "x" if i == 0 else ("h0" if i % 2 == 1 else "h1")
-        dst = "action_q15" if last else ("h0" if i % 2 == 0 else "h1")
-        calls.append(f"    dense_q(W{i}, B{i}, {src}, {dst}, {out}, {inp}, {layer.in_frac + layer.w_frac}, {layer.out_frac}, {kind});")
+    set_body, prelude = "", ["    const int16_t *in = x;"]
+    if net.features is not None:
+        fs = net.features
+        set_data, set_body = _fixed_set(fs, wtype)
+        data += set_data
+        frame_out = sum(phi[-1].weight.shape[0] + 1 for _, phi in fs.blocks) + len(fs.rest)
+        prelude = [f"    int16_t features[{fs.n_stack * frame_out}];", "    const int16_t *in = features;", "    int i;",
+                   f"    for (i = 0; i < {fs.n_stack}; ++i) set_encode_q(x + (size_t)i * {fs.frame_size}, features + (size_t)i * {frame_out});"]
+    data += _fixed_weights(net.layers, "", wtype)
+    calls = [f"    {c}" for c in _fixed_chain(net.layers, "", "in", "action_q15", head=True)]
     body = f"""
 enum {{ OUT_TANH, OUT_RELU, OUT_ACTION }};
 
@@ -409,9 +486,12 @@ static void dense_q(const POLICY_ROM {wtype} *w, const POLICY_ROM int64_t *b, co
     }}
 }}
 
+{set_body}
+/* the integer network: quantised input (POLICY_INPUT_SIZE, Q{net.in_frac}) -> action in Q15 */
 static void forward_q(const int16_t *x, int16_t *action_q15)
 {{
     int16_t h0[{width}], h1[{width}];
+{chr(10).join(prelude)}
     (void)h0; (void)h1;
 {chr(10).join(calls)}
 }}
@@ -471,15 +551,15 @@ def _step(odometry: bool, action_repeat: int, frame_stack: int) -> str:
 def write_policy(actor: Actor, layout: ObservationLayout, platform: Platform, out_dir: Path, odometry: bool = False,
                  action_repeat: int = 1, fixed: FixedNet | None = None, summary: str = "") -> list[Path]:
     """Write ``policy.h`` and ``policy.c`` into ``out_dir``: the float ``actor``, or the integer one of ``fixed``
-    (an MLP actor), with the odometry, action repeat and frame stack around it (the frame stack is the
+    (an actor without LSTM), with the odometry, action repeat and frame stack around it (the frame stack is the
     actor's input size over the observation's)."""
     obs_size = sum(int(np.prod(box.shape)) for box in layout.dict_space().spaces.values())
     action_size = actor.layers[-1].weight.shape[0]
     frame_stack = actor.input_size // obs_size
     if frame_stack * obs_size != actor.input_size:
         raise ValueError(f"the actor's input ({actor.input_size}) is not a whole number of observations ({obs_size})")
-    if fixed is not None and (actor.features is not None or actor.lstm):
-        raise ValueError("the fixed-point build takes an MLP actor (no set encoder, no LSTM)")
+    if fixed is not None and (actor.lstm or (actor.features is None) != (fixed.features is None)):
+        raise ValueError("the fixed-point build takes an actor without LSTM, quantised with its set encoder if it has one")
     k, history = layout.n_neighbours, int(layout.max_age) + 1
     header = _header(obs_size, action_size, odometry, k, history, fixed, summary, action_repeat, frame_stack, actor.lstm)
     data, body = _float_net(actor) if fixed is None else _fixed_net(fixed)

@@ -15,7 +15,7 @@ __all__ = ["ExportError", "LoadedRun", "load_run", "SUPPORTED"]
 
 #: the policy variants the C export implements
 SUPPORTED = ("algorithm ppo or recurrent_ppo, encoder mlp or deepsets, odometry on or off, any action_repeat and frame_stack; "
-             "the fixed-point builds (q15, int8) for algorithm ppo with encoder mlp")
+             "the fixed-point builds (q15, int8) for algorithm ppo")
 
 
 class ExportError(ValueError):
@@ -69,8 +69,6 @@ def load_run(run_dir: str | Path, fixed: str | None = None) -> LoadedRun:
     unsupported = []
     if fixed is not None and spec.algorithm != "ppo":
         unsupported.append(f"algorithm {spec.algorithm} with --fixed {fixed} (the LSTM is exported in float32 only)")
-    if fixed is not None and spec.encoder != "mlp":
-        unsupported.append(f"encoder {spec.encoder} with --fixed {fixed} (the set encoder is exported in float32 only)")
     if unsupported:
         raise ExportError(f"run '{run_dir}' trained the policy variant {spec.name} ({'; '.join(unsupported)}); the C export "
                           f"supports {SUPPORTED}")
