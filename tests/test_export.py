@@ -241,7 +241,7 @@ def test_cli_errors(tmp_path, capsys):
     for flags, mode in ((["--fixed", "q15"], "q15"), (["--int8"], "int8")):
         assert main([str(tmp_path / "run"), "--output", str(tmp_path / "out"), *flags]) == 2
         err = capsys.readouterr().err
-        assert f"algorithm recurrent_ppo with --fixed {mode}" in err and "supports" in err and len(err.strip().splitlines()) == 1
+        assert f"--fixed {mode} is not available for algorithm recurrent_ppo" in err and "supports" in err and len(err.strip().splitlines()) == 1
     assert not (tmp_path / "out").exists()
 
 

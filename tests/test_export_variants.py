@@ -210,7 +210,7 @@ def test_fixed_point_variants(exported, mode, tmp_path):
 
     name, run, _ = exported
     if run.spec.algorithm != "ppo":
-        with pytest.raises(ExportError, match=f"with --fixed {mode}") as err:
+        with pytest.raises(ExportError, match=f"--fixed {mode} is not available") as err:
             export_run(run.run_dir, tmp_path, fixed=mode, onnx=False)
         assert "\n" not in str(err.value) and not any(tmp_path.iterdir())
         return

@@ -66,12 +66,9 @@ def load_run(run_dir: str | Path, fixed: str | None = None) -> LoadedRun:
     except (ConfigError, ImportError) as err:
         raise ExportError(f"'{config}': {err}") from None
     spec = PolicySpec.from_agent(cfg["agent"])
-    unsupported = []
     if fixed is not None and spec.algorithm != "ppo":
-        unsupported.append(f"algorithm {spec.algorithm} with --fixed {fixed} (the LSTM is exported in float32 only)")
-    if unsupported:
-        raise ExportError(f"run '{run_dir}' trained the policy variant {spec.name} ({'; '.join(unsupported)}); the C export "
-                          f"supports {SUPPORTED}")
+        raise ExportError(f"run '{run_dir}' trained the policy variant {spec.name}: --fixed {fixed} is not available for algorithm "
+                          f"{spec.algorithm} (its LSTM is exported in float32 only); the C export supports {SUPPORTED}")
     kwargs = {k: v for k, v in env_kwargs_of(cfg).items() if k != "render_mode"}
     try:
         model = load_checkpoint(model_path, cfg, kwargs)
