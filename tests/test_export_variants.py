@@ -109,7 +109,7 @@ def test_action_repeat_holds(exported):
     from swarm_envs.export.compare import _c_policy
     from swarm_envs.export.host import compile_shared
 
-    name, run, folder = exported
+    _, run, folder = exported
     k = run.spec.action_repeat
     if k == 1:
         pytest.skip("no action repeat in this variant")
@@ -231,7 +231,7 @@ def test_fixed_point_variants(exported, mode, tmp_path):
 
 def test_readme_describes_state(exported):
     """The folder's README names the variant's state (held action, stacked frames, LSTM) and the network."""
-    name, run, folder = exported
+    _, run, folder = exported
     readme = (folder / "README.md").read_text()
     assert run.spec.name in readme
     assert ("held action" in readme) == (run.spec.action_repeat > 1)
@@ -255,7 +255,7 @@ def test_variant_cross_compiles(exported, cross, tmp_path):
 
     if shutil.which(cross) is None:
         pytest.skip(f"{cross} is not installed")
-    name, run, folder = exported
+    _, run, folder = exported
     flags, platforms = CROSS[cross]
     if run.platform.name not in platforms:
         pytest.skip(f"{cross} targets {', '.join(platforms)}")
@@ -266,8 +266,8 @@ def test_variant_cross_compiles(exported, cross, tmp_path):
     for source in folders:
         obj = tmp_path / "policy.o"
         done = subprocess.run([cross, *flags, "-Os", "-Wall", "-Wextra", "-Werror", "-c", str(source / "policy.c"), "-o", str(obj)],
-                              capture_output=True, text=True)
+                              capture_output=True, text=True, check=False)
         assert done.returncode == 0, done.stderr
-        sections = subprocess.run([cross.replace("gcc", "objdump"), "-h", str(obj)], capture_output=True, text=True).stdout
+        sections = subprocess.run([cross.replace("gcc", "objdump"), "-h", str(obj)], capture_output=True, text=True, check=False).stdout
         sizes = {f[1]: int(f[2], 16) for f in (line.split() for line in sections.splitlines()) if len(f) > 3 and f[0].isdigit()}
         assert sizes.get(".data", 0) == 0 and sizes.get(".bss", 0) == 0, (source, sizes)

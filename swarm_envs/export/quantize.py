@@ -28,7 +28,7 @@ import numpy as np
 
 from swarm_envs.export.network import Layer, SetFeatures
 
-__all__ = ["FixedLayer", "FixedSet", "FixedNet", "quantize", "TANH_TABLE", "TANH_IN_FRAC", "fixed_forward", "input_frac"]
+__all__ = ["FixedLayer", "FixedSet", "FixedNet", "quantize", "set_features_float", "TANH_TABLE", "TANH_IN_FRAC", "fixed_forward", "input_frac"]
 
 #: the Q format of a tanh layer's input (the table's index is its top bits)
 TANH_IN_FRAC = 12
