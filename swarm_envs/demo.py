@@ -44,12 +44,14 @@ TASKS = dict(SHORT_NAMES)
 
 #: per task, the settings a demo uses unless the command line gives them: scenes in which the scripted
 #: baseline visibly does its task (docs/environments/<task>.md and the README show the GIFs they make;
-#: ``"env"``: further env settings). Flocking runs on Droplets, whose top speed, 2 cm/s, is the forward speed
-#: of the thesis's flocking robots (20 mm/s [L Alg. 5]), in a 1 m arena (23 body diameters: room to move as
-#: a group between walls) for 90 s, time to align.
+#: ``"env"``: further env settings; ``"policy"``: the scripted controller ``--all`` shows instead of the task's
+#: baseline). Flocking runs on Droplets, whose top speed, 2 cm/s, is the forward speed of the thesis's flocking
+#: robots (20 mm/s [L Alg. 5]), in a 1 m arena (23 body diameters: room to move as a group between walls) for
+#: 90 s, time to align, with the Reynolds flocker: alignment alone ([L] Alg. 5) does not keep the group together.
 SHOWCASE: dict[str, dict[str, Any]] = {
     "aggregation": {"platform": "epuck", "n_robots": 10, "steps": 300, "seed": 0, "overlay": 0, "frame_skip": 5},
-    "flocking": {"platform": "droplet", "n_robots": 16, "steps": 900, "seed": 0, "overlay": None, "frame_skip": 9, "env": {"arena_size": 1.0}},
+    "flocking": {"platform": "droplet", "n_robots": 16, "steps": 900, "seed": 0, "overlay": None, "frame_skip": 9, "env": {"arena_size": 1.0},
+                 "policy": "reynolds_flocking"},
     "centroid_seeking": {"platform": "rone", "n_robots": 1, "steps": 300, "seed": 0, "overlay": 0},
     "sorted_following": {"platform": "rone", "n_robots": None, "steps": 600, "seed": 0, "overlay": None},
     "parity_clustering": {"platform": "rone", "n_robots": None, "steps": 600, "seed": 0, "overlay": None, "frame_skip": 6},
