@@ -7,7 +7,11 @@ import numpy as np
 import pytest
 
 from swarm_envs.agents.evaluation import evaluate, make_env
-from swarm_envs.agents.scripted import OrientationFlocking, ReynoldsFlocking, make_scripted
+from swarm_envs.agents.scripted import (
+    OrientationFlocking,
+    ReynoldsFlocking,
+    make_scripted,
+)
 from swarm_envs.demo import SHOWCASE
 
 #: the flocking GIF's scene (swarm_envs.demo.SHOWCASE["flocking"])
