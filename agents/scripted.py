@@ -8,6 +8,8 @@ Every controller implements :class:`agents.base.Policy` and works the same with 
 - :class:`OrientationFlocking` - [L] Sec. 6.4.1, Alg. 5: average the neighbours' orientations (headings from
   ``range_bearing``), steer to that heading at a fixed forward speed; on a bump stop and turn away
   (``heading = theta_u + pi``).
+- :class:`ReynoldsFlocking` - Reynolds (1987) alignment + cohesion + separation from the ``range_bearing``
+  rows (alignment alone is Alg. 5; [L] Sec. 6.4.3 suggests adding clustering to it); bump -> turn away.
 - :class:`BearingAggregation` - [L] Sec. 6.4.3, Alg. 7 generalised to one cluster (every robot is in the same
   "even/odd" group): steer towards the average neighbour bearing at a fixed speed; bump -> turn away.
 - :class:`CentroidSeeker` - [L] Sec. 6.2.2: pause, take the centroid of the scale-free neighbour coordinates,
@@ -47,6 +49,7 @@ from swarm_envs.world import N_BUMP_SECTORS
 __all__ = [
     "RandomWalk",
     "OrientationFlocking",
+    "ReynoldsFlocking",
     "BearingAggregation",
     "CentroidSeeker",
     "SortedFollowing",
@@ -214,6 +217,86 @@ class OrientationFlocking(_Stateful):
         psi, has = circular_mean(rb[..., 4], rb[..., 5], rb[..., 0] > 0.5)
         lin = np.full(n, self.speed)
         ang = np.where(has, self.turn_towards(psi, self.gain), 0.0)
+        escaping, e_lin, e_ang = self._bump_escape(obs["proprio"])
+        lin, ang = np.where(escaping, e_lin, lin), np.where(escaping, e_ang, ang)
+        return self.compose(lin, ang)
+
+
+class ReynoldsFlocking(_Stateful):
+    """Alignment + cohesion + separation (Reynolds 1987, "Flocks, herds and schools") on the robot's own
+    ``range_bearing`` rows; bump -> turn away as [L] Alg. 5.
+
+    [L] Alg. 5 (:class:`OrientationFlocking`) is the alignment rule alone; of its clustering (steering to the
+    neighbours' bearings, Alg. 7) [L] Sec. 6.4.3 says that "clustering with angle-only flocking has the
+    potential to enhance flocking on the r-one".
+    Here each robot steers, at a fixed forward speed ``speed``, to the direction of
+
+    ``align_weight x a + cohesion_weight x c + separation_weight x s``
+
+    (body frame): ``a`` the mean of the neighbours' heading unit vectors (length 1 when they agree, ~0 when
+    they do not); ``c`` the mean neighbour position (range x bearing unit vector; the bearing alone where a
+    platform measures no range, the r-one) divided by ``cohesion_range`` metres and clipped to length 1;
+    ``s`` the sum over neighbours closer than ``separation`` metres of ``-(1 - range / separation)`` times
+    their bearing unit vector (none without range). ``gain`` is the fraction of the heading error corrected
+    per step. ``odometry`` (default on) turns each reading's bearing and relative heading back by the
+    robot's own rotation since the reading was measured (its ``age``; the Droplet refreshes a neighbour
+    about once a second). No neighbour in range -> drive straight on. Ranges in metres; ``None`` distances
+    scale with the platform: ``separation`` 3 body diameters, ``cohesion_range`` half the IR range.
+    The default weights (3, 0.5, 2) were picked on 16 Droplets in a 1 m arena, ``sensing="full"``, 90 s,
+    seeds 0-9, from a grid of align 1-4, cohesion 0.25-1, separation 0.5-4: polarisation 0.65 and cohesion
+    0.73, against 0.59 and 0.63 for :class:`OrientationFlocking` (weights 1, 1, 1: 0.48 and 0.88); on the
+    held-out seeds 10-29, 0.60 and 0.73 against 0.56 and 0.62.
+    """
+
+    name = "reynolds_flocking"
+
+    def __init__(self, platform: Platform, layout: ObservationLayout, rng: np.random.Generator | None = None,
+                 speed: float = 1.0, gain: float = 0.2, align_weight: float = 3.0, cohesion_weight: float = 0.5,
+                 separation_weight: float = 2.0, separation: float | None = None, cohesion_range: float | None = None,
+                 odometry: bool = True, t_m: float = 2.0) -> None:
+        self.speed, self.gain = float(speed), float(gain)
+        self.align_weight, self.cohesion_weight = float(align_weight), float(cohesion_weight)
+        self.separation_weight = float(separation_weight)
+        self.separation = 3.0 * platform.diameter if separation is None else float(separation)
+        self.cohesion_range = 0.5 * platform.ir_range if cohesion_range is None else float(cohesion_range)
+        if self.cohesion_range <= 0:
+            raise ValueError(f"cohesion_range must be > 0 m, got {self.cohesion_range}")
+        self.odometry = bool(odometry)
+        super().__init__(platform, layout, rng, t_m)
+
+    def steering(self, obs: dict[str, np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+        """The desired direction (rad, body frame) per robot, and whether it has one (a neighbour in range
+        and a non-zero resultant). Call once per step (the odometry keeps the robot's recent rotation)."""
+        rb = obs["range_bearing"]
+        valid = rb[..., 0] > 0.5
+        w = valid.astype(np.float64)
+        count = np.maximum(w.sum(axis=1), 1.0)
+        if self.odometry:
+            since = self._rotation_since(obs)
+            bearing = self._current_bearings(rb, since)
+            age = np.clip(np.rint(rb[..., 6]).astype(np.int64), 0, since.shape[1] - 1)
+            heading = np.arctan2(rb[..., 5], rb[..., 4]) - np.take_along_axis(since, age, axis=1)
+        else:
+            bearing, heading = np.arctan2(rb[..., 3], rb[..., 2]), np.arctan2(rb[..., 5], rb[..., 4])
+        ub = np.stack([np.cos(bearing), np.sin(bearing)], axis=-1)  # (N, K, 2)
+        align = (np.stack([np.cos(heading), np.sin(heading)], axis=-1) * w[..., None]).sum(axis=1) / count[:, None]
+        ranged = rb[..., 1] > 0
+        dist = np.where(ranged, rb[..., 1], 1.0)  # no range (r-one): the bearing alone
+        centre = (ub * (dist * w)[..., None]).sum(axis=1) / count[:, None]
+        centre = centre / np.where(ranged.any(axis=1), self.cohesion_range, 1.0)[:, None]
+        centre = centre / np.maximum(1.0, np.linalg.norm(centre, axis=1))[:, None]
+        push = np.where(valid & ranged, np.clip(1.0 - rb[..., 1] / self.separation, 0.0, 1.0), 0.0) if self.separation > 0 else np.zeros_like(w)
+        apart = -(ub * push[..., None]).sum(axis=1)
+        total = self.align_weight * align + self.cohesion_weight * centre + self.separation_weight * apart
+        has = valid.any(axis=1) & (np.linalg.norm(total, axis=1) > 1e-9)
+        return np.where(has, np.arctan2(total[:, 1], total[:, 0]), 0.0), has
+
+    def act_batch(self, obs: dict[str, np.ndarray]) -> np.ndarray:
+        n = len(obs["range_bearing"])
+        self._ensure(n)
+        theta, has = self.steering(obs)
+        lin = np.full(n, self.speed)
+        ang = np.where(has, self.turn_towards(theta, self.gain), 0.0)
         escaping, e_lin, e_ang = self._bump_escape(obs["proprio"])
         lin, ang = np.where(escaping, e_lin, lin), np.where(escaping, e_ang, ang)
         return self.compose(lin, ang)
@@ -567,7 +650,7 @@ class MidAngleNavigation(_Stateful):
 #: name -> class of every scripted controller
 SCRIPTED: dict[str, type[Policy]] = {
     cls.name: cls
-    for cls in (RandomWalk, OrientationFlocking, BearingAggregation, CentroidSeeker, SortedFollowing, ParityClustering, MidAngleNavigation)
+    for cls in (RandomWalk, OrientationFlocking, ReynoldsFlocking, BearingAggregation, CentroidSeeker, SortedFollowing, ParityClustering, MidAngleNavigation)
 }
 
 def scripted_class(name: str) -> type[Policy]:
@@ -604,6 +687,11 @@ KWARG_RULES: dict[str, Setting] = {
     "stop_range": Real(0.0, "stop driving with a neighbour this close; 0 disables", high=100.0, unit="m"),
     "avoid_range": Real(0.15, "turn away from a neighbour ahead this close", high=100.0, unit="m"),
     "d_step": Real(0.11, "step length towards the centroid estimate", low=0.0, high=100.0, low_open=True, unit="m"),
+    "align_weight": Real(3.0, "weight of the neighbours' mean heading", low=0.0, high=100.0),
+    "cohesion_weight": Real(0.5, "weight of the pull to the neighbours' mean position", low=0.0, high=100.0),
+    "separation_weight": Real(2.0, "weight of the push from neighbours closer than separation", low=0.0, high=100.0),
+    "separation": Real(None, "push apart below this range; None: 3 body diameters", high=100.0, unit="m", allow_none=True),
+    "cohesion_range": Real(None, "the pull is full at this distance; None: half the IR range", low=0.0, high=100.0, low_open=True, unit="m", allow_none=True),
     "passing_angle": Real(2.5, "rad between two relays the seeker passes between", low=0.0, high=6.2832),
     "pause_steps": Int(None, "control steps; None: until the readings are fresh", low=0, high=1_000_000, allow_none=True),
     "min_scale_free": Int(3, "scale-free neighbours needed", low=1, high=1_000),

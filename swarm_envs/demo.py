@@ -4,6 +4,7 @@
 
     swarm-demo --task flocking --out flocking.gif          # the task's scripted baseline (default policy)
     swarm-demo --task aggregation --policy random --overlay
+    swarm-demo --task flocking --policy reynolds_flocking  # another scripted controller, by name
     swarm-demo --task swarm_envs/Flocking-v0 --model runs/flocking/model.zip
     swarm-demo --import examples/custom_task.py --task swarm_examples/Dispersion-v0 --policy random
     swarm-demo --all --out-dir docs/img/envs               # one small GIF per task (the docs' pictures)
@@ -30,6 +31,7 @@ from typing import Any
 import numpy as np
 
 from swarm_envs.agents.evaluation import make_env, run_episode
+from swarm_envs.agents.scripted import SCRIPTED
 from swarm_envs.agents.tasks import SHORT_NAMES, headline, import_modules, metric_reductions
 from swarm_envs.env import DT
 from swarm_envs.platforms import PLATFORMS
@@ -42,12 +44,14 @@ TASKS = dict(SHORT_NAMES)
 
 #: per task, the settings a demo uses unless the command line gives them: scenes in which the scripted
 #: baseline visibly does its task (docs/environments/<task>.md and the README show the GIFs they make;
-#: ``"env"``: further env settings). Flocking runs on Droplets, whose top speed, 2 cm/s, is the forward speed
-#: of the thesis's flocking robots (20 mm/s [L Alg. 5]), in a 1 m arena (23 body diameters: room to move as
-#: a group between walls) for 90 s, time to align.
+#: ``"env"``: further env settings; ``"policy"``: the scripted controller ``--all`` shows instead of the task's
+#: baseline). Flocking runs on Droplets, whose top speed, 2 cm/s, is the forward speed of the thesis's flocking
+#: robots (20 mm/s [L Alg. 5]), in a 1 m arena (23 body diameters: room to move as a group between walls) for
+#: 90 s, time to align, with the Reynolds flocker: alignment alone ([L] Alg. 5) does not keep the group together.
 SHOWCASE: dict[str, dict[str, Any]] = {
     "aggregation": {"platform": "epuck", "n_robots": 10, "steps": 300, "seed": 0, "overlay": 0, "frame_skip": 5},
-    "flocking": {"platform": "droplet", "n_robots": 16, "steps": 900, "seed": 0, "overlay": None, "frame_skip": 9, "env": {"arena_size": 1.0}},
+    "flocking": {"platform": "droplet", "n_robots": 16, "steps": 900, "seed": 0, "overlay": None, "frame_skip": 9, "env": {"arena_size": 1.0},
+                 "policy": "reynolds_flocking"},
     "centroid_seeking": {"platform": "rone", "n_robots": 1, "steps": 300, "seed": 0, "overlay": 0},
     "sorted_following": {"platform": "rone", "n_robots": None, "steps": 600, "seed": 0, "overlay": None},
     "parity_clustering": {"platform": "rone", "n_robots": None, "steps": 600, "seed": 0, "overlay": None, "frame_skip": 6},
@@ -188,7 +192,10 @@ def _size(shape: tuple[int, ...] | None) -> str:
 
 
 def make_policy(kind: str, env: Any, model: str | None = None):
-    """The policy of a demo: ``"scripted"`` (the task's baseline), ``"random"`` or a PPO ``model`` path."""
+    """The policy of a demo: ``"scripted"`` (the task's baseline), ``"random"``, a scripted controller's name
+    (:data:`swarm_envs.agents.scripted.SCRIPTED`) or a PPO ``model`` path."""
+    from swarm_envs.agents.scripted import make_scripted
+
     if model is not None:
         return load_model_policy(model, env)
     if kind == "scripted":
@@ -197,7 +204,12 @@ def make_policy(kind: str, env: Any, model: str | None = None):
         from swarm_envs.agents.base import RandomPolicy
 
         return RandomPolicy(env.platform, env.layout)
-    raise DemoError(f"unknown policy {kind!r}; use 'scripted' or 'random'")
+    if kind in SCRIPTED:
+        try:
+            return make_scripted(kind, env)
+        except ValueError as err:  # e.g. a controller that needs ids or message bits this env does not give
+            raise DemoError(f"--policy {kind}: {err}") from None
+    raise DemoError(f"unknown policy {kind!r}; use 'scripted', 'random' or one of {sorted(SCRIPTED)}")
 
 
 def run_demo(
@@ -332,7 +344,9 @@ def _parser() -> argparse.ArgumentParser:
     parser.add_argument("--import", dest="imports", action="append", default=[], metavar="MODULE",
                         help="import a module or .py file first, e.g. one that registers a task of your own (repeatable)")
     parser.add_argument("--all", action="store_true", help="one GIF per task, <task>.gif in --out-dir (small documentation GIFs)")
-    parser.add_argument("--policy", choices=["scripted", "random"], default=None, help="default: the task's scripted baseline")
+    parser.add_argument("--policy", choices=["scripted", "random", *SCRIPTED], default=None, metavar="POLICY",
+                        help=f"scripted (the task's baseline), random, or a scripted controller {sorted(SCRIPTED)}; "
+                        "default: the task's scripted baseline (--all: the showcase's)")
     parser.add_argument(
         "--model", default=None, metavar="PATH",
         help="a trained PPO .zip (train.py's model.zip) instead of --policy; torch runs on 1 thread on <= 2 cores (OMP_NUM_THREADS overrides)",
@@ -457,7 +471,8 @@ def main(argv: list[str] | None = None) -> int:
         try:
             if overlay is not None and overlay >= probe.n_agents:
                 raise DemoError(f"--overlay {overlay}: this env has agents 0 .. {probe.n_agents - 1}")
-            policy = make_policy(args.policy or "scripted", probe, args.model)
+            shown_policy = args.policy or (preset.get("policy", "scripted") if args.all else "scripted")
+            policy = make_policy(shown_policy, probe, args.model)
         except DemoError as err:
             parser.error(str(err))
         finally:
