@@ -69,12 +69,13 @@ def test_runs_without_range_on_the_rone():
     assert np.isfinite(result["polarisation"]).all()
 
 
+@pytest.mark.slow
 def test_flocks_better_than_orientation_flocking_in_the_gif_scene():
-    """Seeds 0-4 of the GIF's scene. Over seeds 0-29 (0-9 picked the default weights, 10-29 held out) the mean
+    """Seeds 10-14 of the GIF's scene (held out from the choice of the default weights; ~1 min). Over seeds 0-29 (0-9 picked the default weights, 10-29 held out) the mean
     polarisation was 0.616 vs 0.574 (+0.042) and cohesion 0.732 vs 0.625 (+0.107); the test asks for half of
     each difference on the mean of five seeds."""
     assert SHOWCASE["flocking"]["policy"] == ReynoldsFlocking.name
-    seeds = range(5)
+    seeds = range(10, 15)
     ours = evaluate("flocking", GIF_SCENE, lambda env: make_scripted(ReynoldsFlocking.name, env), seeds)
     alg5 = evaluate("flocking", GIF_SCENE, lambda env: make_scripted(OrientationFlocking.name, env), seeds)
     assert ours["polarisation"].mean() > alg5["polarisation"].mean() + 0.02
