@@ -407,6 +407,11 @@ def rows(res: dict[str, Any]) -> list[Row]:
         Row("[F14 Figs. 6, 7]", "bearing / heading error std", f"{res['bearing_std']:.1f} / {res['heading_std']:.1f} deg",
             "a few degrees / larger", gantry, sweep),
     ]
+    shares = [100.0 * share for _, share in res["harmonics"].values()]
+    out.append(Row("[F14 Fig. 7]", "heading error periodic with the 60-degree channel spacing",
+                   f"{min(shares):.0f}-{max(shares):.0f} % of the error curve's power repeats every 60 deg", "periodic", gantry,
+                   "model sweep: share of the non-constant power in harmonics that are multiples of 6 (heading error at "
+                   "bearing 0, |heading error| over all, bearing error)"))
     for key, label in ENV_RUNS:
         e = res.get(key)
         if e is None:
@@ -421,6 +426,8 @@ def rows(res: dict[str, Any]) -> list[Row]:
                        f"< {diam:.1f} cm (within one diameter)", gantry, how))
         out.append(Row("[F14 Figs. 6, 7]", "bearing / heading error std", f"{e['bearing_std']:.1f} / {e['heading_std']:.1f} deg",
                        "a few degrees / larger", gantry, how))
+        out.append(Row("[F14 Figs. 5-7]", "range error std", f"{e['range_std']:.2f} cm", "real Droplets differ (no numbers) [F14 Sec. VI]",
+                       gantry, how))
     return out
 
 
