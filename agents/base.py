@@ -4,7 +4,7 @@ A policy maps observations to actions for a batch of robots at once:
 
 - :meth:`Policy.act_batch` takes the **named, batched** observation dict (``range_bearing`` (N, K, 7),
   ``messages`` (N, M, 2+b), ``scale_free`` (N, K, 3), ``rigid`` (N, 1), ``proprio`` (N, 8+A); the layout of
-  :class:`swarm_envs.observation.ObservationLayout`) and returns actions ``(N, A)`` in [-1, 1];
+  :class:`swarm_envs.sensing.observation.ObservationLayout`) and returns actions ``(N, A)`` in [-1, 1];
 - :meth:`Policy.act` is the single-robot convenience (row 0 of a batch of one);
 - :meth:`Policy.reset` starts a new episode for ``n`` robots (stateful behaviours such as the random walk keep
   per-row timers; row i is always the same robot within an episode).
@@ -19,8 +19,8 @@ from abc import ABC, abstractmethod
 from typing import Any
 
 import numpy as np
-from swarm_envs.observation import ObservationLayout
-from swarm_envs.platforms import Platform
+from swarm_envs.sensing.observation import ObservationLayout
+from swarm_envs.sim.platforms import Platform
 
 __all__ = ["Policy", "RandomPolicy", "flatten_batch", "named_batch"]
 
@@ -82,7 +82,7 @@ class Policy(ABC):
     def turn_towards(self, angle: np.ndarray, gain: float = 1.0) -> np.ndarray:
         """Angular command (fraction of max) that turns by ``angle`` (rad, body frame) in about one step,
         times ``gain``, clipped to [-1, 1]. Uses the platform's max angular speed and the 0.1 s step."""
-        from swarm_envs.env import DT
+        from swarm_envs.adapters.env import DT
 
         return np.clip(gain * np.asarray(angle) / (self.platform.max_angular_speed * DT), -1.0, 1.0)
 

@@ -8,8 +8,8 @@ tasks (``flocking``), and has five sections besides ``task``, ``imports``, ``see
 - ``imports``: modules (``my_lab.tasks``) or Python files (``path/to/tasks.py``) imported before the task
   is looked up, e.g. the module that calls ``swarm_envs.register``;
 - ``env``: keyword arguments of the task's env (any common setting, see
-  ``swarm_envs.settings.COMMON_SETTINGS``, or the task's own ``SETTINGS``; values are checked by the env's
-  own validator, ``swarm_envs.settings.validate_settings``, for the env train.py would build, whatever its
+  ``swarm_envs.tasks.settings.COMMON_SETTINGS``, or the task's own ``SETTINGS``; values are checked by the env's
+  own validator, ``swarm_envs.tasks.settings.validate_settings``, for the env train.py would build, whatever its
   ``sensing``);
 - ``agent``: PPO hyper-parameters (stable-baselines3 names), the policy variant (``algorithm``, ``encoder``,
   ``odometry``, ``action_repeat``, ``frame_stack``: :mod:`swarm_envs.agents.policies`) and the scripted baseline;
@@ -201,7 +201,7 @@ def _env_allowed(task: str) -> dict[str, Any]:
     """Every env setting of ``task`` with its default (the id's registered settings included)."""
     from swarm_envs.agents.tasks import env_id
     from swarm_envs.registry import spec, task_class
-    from swarm_envs.settings import COMMON_DEFAULTS
+    from swarm_envs.tasks.settings import COMMON_DEFAULTS
 
     name = env_id(task)
     return {**COMMON_DEFAULTS, **task_class(name).TASK_DEFAULTS, **spec(name).kwargs}
@@ -327,7 +327,7 @@ def _span(dotted: str) -> str:
 
 def _check_batch(cfg: dict[str, Any], env: dict[str, int]) -> None:
     """The rollout fits make_vec's bounds and memory, and the batch fits the rollout."""
-    from swarm_envs.vector import MAX_TOTAL_ROBOTS, available_memory
+    from swarm_envs.adapters.vector import MAX_TOTAL_ROBOTS, available_memory
 
     a, t = cfg["agent"], cfg["train"]
     if t["n_envs"] * env["n_world"] > MAX_TOTAL_ROBOTS:
@@ -358,16 +358,16 @@ def _check_batch(cfg: dict[str, Any], env: dict[str, int]) -> None:
 
 
 def _check_env_settings(task: str, env: dict[str, Any], scripted: tuple[str, dict[str, Any]] | None = None) -> dict[str, int]:
-    """Run the env's own validator (:func:`swarm_envs.settings.validate_settings`) on the settings train.py
+    """Run the env's own validator (:func:`swarm_envs.tasks.settings.validate_settings`) on the settings train.py
     would build the env with (YAML lists as tuples, ``flatten=True``), then build that env once (cheap: no
     reset) for the checks that need its arena (robots and anchors fit; the build's fit test is exact, so
     every seed resets), and the ``scripted`` (name, keyword arguments) baseline once on it. Returns its
     sizes (``n_agents``, ``n_world``, ``obs_size``, ``act_size``) and ``copy_bytes``, the estimated memory of one env
-    copy (:func:`swarm_envs.vector.copy_memory`); raises :class:`ConfigError`."""
+    copy (:func:`swarm_envs.adapters.vector.copy_memory`); raises :class:`ConfigError`."""
     import swarm_envs
     from swarm_envs.agents.tasks import env_id
-    from swarm_envs.settings import SettingsError
-    from swarm_envs.vector import copy_memory
+    from swarm_envs.tasks.settings import SettingsError
+    from swarm_envs.adapters.vector import copy_memory
 
     kwargs = {**env, "flatten": True}
     if isinstance(kwargs.get("code"), list):

@@ -1,7 +1,7 @@
 """Evaluate policies on the swarm tasks over many seeds, with bootstrap 95 % confidence intervals.
 
 An episode is run with :func:`run_episode`: the policy sees the named batched observations of the agents
-(:meth:`swarm_envs.env.SwarmEnv.batched_observations`, rows = agents in ``possible_agents`` order); the task
+(:meth:`swarm_envs.adapters.env.SwarmEnv.batched_observations`, rows = agents in ``possible_agents`` order); the task
 metrics are read from ``infos[agent]["metrics"][name]`` by the *evaluator* only. Each task metric is reduced
 over the episode as the task declares in ``Task.METRICS`` ("final" = value after the last step, "mean" = mean
 over all steps after reset). ``episode_return`` is the mean over robots of the summed per-robot reward.

@@ -31,10 +31,10 @@ from stable_baselines3.common.torch_layers import BaseFeaturesExtractor
 from stable_baselines3.common.vec_env import VecEnv, VecEnvWrapper
 
 from swarm_envs.agents.base import Policy, flatten_batch
-from swarm_envs.env import DT
-from swarm_envs.observation import ObservationLayout
-from swarm_envs.platforms import Platform
-from swarm_envs.world import N_BUMP_SECTORS, wheel_limited
+from swarm_envs.adapters.env import DT
+from swarm_envs.sensing.observation import ObservationLayout
+from swarm_envs.sim.platforms import Platform
+from swarm_envs.sim.world import N_BUMP_SECTORS, wheel_limited
 
 __all__ = [
     "PolicySpec",

@@ -2,7 +2,7 @@
 
 Every robot of every env copy is one row: row ``c * n_agents + i`` is agent ``possible_agents[i]`` of copy
 ``c``, so one policy network acts for all robots (parameter sharing). ``num_envs = n_copies * n_agents``.
-All copies are stepped by one :class:`swarm_envs.vector.SwarmVectorEnv` (one array program, no loop over
+All copies are stepped by one :class:`swarm_envs.adapters.vector.SwarmVectorEnv` (one array program, no loop over
 copies here).
 
 - observations: the flat observation (``flatten=True`` is forced), float32 ``(num_envs, D)``;
@@ -56,7 +56,7 @@ class SwarmVecEnv(VecEnv):
         n_copies: env copies stepped together by the batched core.
         env_kwargs: env settings (``flatten`` is forced to True).
         torch_threads: torch's intra-op thread count, set here for the policy that steps this env
-            (:func:`swarm_envs.torch_threads.set_torch_threads`: None = 1 on at most 2 cores, else
+            (:func:`swarm_envs.adapters.torch_threads.set_torch_threads`: None = 1 on at most 2 cores, else
             ``min(4, cores // 2)``, or ``OMP_NUM_THREADS`` if set; torch's default threads made PPO up
             to 25x slower on a loaded 2-core machine); ``0`` leaves torch's setting alone.
     """
@@ -65,8 +65,8 @@ class SwarmVecEnv(VecEnv):
         self, env: str | type | Callable[..., Any], n_copies: int = 1, env_kwargs: dict[str, Any] | None = None, n_workers: int = 1,
         torch_threads: int | None = None,
     ) -> None:
-        from swarm_envs.torch_threads import set_torch_threads
-        from swarm_envs.vector import SwarmVectorEnv
+        from swarm_envs.adapters.torch_threads import set_torch_threads
+        from swarm_envs.adapters.vector import SwarmVectorEnv
 
         if torch_threads != 0:
             set_torch_threads(torch_threads)
@@ -176,7 +176,7 @@ def _merge(parts: list[Any]) -> Any:
 def _worker(conn, env_cls: type, n_copies: int, kwargs: dict[str, Any]) -> None:  # pragma: no cover - runs in a child
     import signal
 
-    from swarm_envs.vector import SwarmVectorEnv
+    from swarm_envs.adapters.vector import SwarmVectorEnv
 
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the trainer's to handle; it closes the workers
 
@@ -196,13 +196,13 @@ def _worker(conn, env_cls: type, n_copies: int, kwargs: dict[str, Any]) -> None:
 
 
 class _WorkerVec:
-    """``n_copies`` copies split over ``n_workers`` processes, each a :class:`swarm_envs.vector.SwarmVectorEnv`
+    """``n_copies`` copies split over ``n_workers`` processes, each a :class:`swarm_envs.adapters.vector.SwarmVectorEnv`
     of a contiguous block of copies; the same reset/step interface as one vector env."""
 
     def __init__(self, env_cls: type, n_copies: int, kwargs: dict[str, Any], n_workers: int) -> None:
         import multiprocessing as mp
 
-        from swarm_envs.vector import SwarmVectorEnv
+        from swarm_envs.adapters.vector import SwarmVectorEnv
 
         ctx = mp.get_context("forkserver" if "forkserver" in mp.get_all_start_methods() else "spawn")
         self.blocks = np.array_split(np.arange(n_copies), n_workers)

@@ -39,12 +39,12 @@ import inspect
 import numpy as np
 
 from swarm_envs.agents.base import Policy
-from swarm_envs.env import DT
-from swarm_envs.geometry import wrap_angle
-from swarm_envs.observation import ObservationLayout
-from swarm_envs.platforms import Platform
-from swarm_envs.settings import Choice, Flag, Int, Real, Setting, SettingsError
-from swarm_envs.world import N_BUMP_SECTORS
+from swarm_envs.adapters.env import DT
+from swarm_envs.sim.geometry import wrap_angle
+from swarm_envs.sensing.observation import ObservationLayout
+from swarm_envs.sim.platforms import Platform
+from swarm_envs.tasks.settings import Choice, Flag, Int, Real, Setting, SettingsError
+from swarm_envs.sim.world import N_BUMP_SECTORS
 
 __all__ = [
     "RandomWalk",
@@ -79,7 +79,7 @@ def circular_mean(cos: np.ndarray, sin: np.ndarray, valid: np.ndarray) -> tuple[
 
 
 def _wrap_below_pi(angle: np.ndarray) -> np.ndarray:
-    """Angles (rad) wrapped to [-pi, pi), the mirror of :func:`swarm_envs.geometry.wrap_angle`'s (-pi, pi],
+    """Angles (rad) wrapped to [-pi, pi), the mirror of :func:`swarm_envs.sim.geometry.wrap_angle`'s (-pi, pi],
     bit for bit ``mod(angle + pi, 2 pi) - pi``: the baselines turn clockwise (by -pi) away from a bump dead
     ahead and read a bearing of exactly pi as -pi, as their recorded results do."""
     return -wrap_angle(-np.asarray(angle, dtype=float)) + 0.0  # + 0.0: a zero comes out as +0.0

@@ -940,7 +940,7 @@ def _command() -> str:
 
 
 def _parser() -> argparse.ArgumentParser:
-    from swarm_envs.settings import OneLineArgumentParser
+    from swarm_envs.tasks.settings import OneLineArgumentParser
 
     parser = OneLineArgumentParser(prog=_command().removeprefix("python "), description=__doc__.split("\n\n")[0])
     what = parser.add_mutually_exclusive_group(required=True)

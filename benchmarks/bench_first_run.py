@@ -7,7 +7,7 @@ the environments": make, reset, one episode of random actions) with ``NUMBA_CACH
 directory, so every kernel it calls compiles, and times it from start to exit (wall clock, as a user
 waits for it). Then the same snippet runs again on the now filled cache (the warm time). Before the
 next run the benchmark waits for the background compile process the first run may have started
-(:mod:`swarm_envs._first_run`) to finish, so runs do not overlap. Prints the median of the runs, each
+(:mod:`swarm_envs._compile._first_run`) to finish, so runs do not overlap. Prints the median of the runs, each
 run, whether the "compiling" line was printed, and the load averages; ``--json`` prints one JSON object.
 The background process starts only when a core is idle (as for a user); ``--background`` starts it
 whatever the load (``SWARM_ENVS_BACKGROUND_COMPILE=1``), ``--no-background`` never (``=0``, compiling
@@ -30,7 +30,7 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 NOTICE = "swarm_envs: compiling the numba kernels"
-LOCK_NAME = "swarm_envs_first_run.lock"  # swarm_envs._first_run.LOCK_NAME
+LOCK_NAME = "swarm_envs_first_run.lock"  # swarm_envs._compile._first_run.LOCK_NAME
 
 
 def readme_snippet(readme: Path = ROOT / "README.md") -> str:

@@ -23,9 +23,9 @@ import numpy as np
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 
 import swarm_envs  # noqa: E402
-from swarm_envs.flocking_v0 import FlockingTask  # noqa: E402
+from swarm_envs.tasks.flocking_v0 import FlockingTask  # noqa: E402
 from swarm_envs.ir.layer import compute_links  # noqa: E402
-from swarm_envs.task import SPACING  # noqa: E402
+from swarm_envs.tasks.task import SPACING  # noqa: E402
 
 
 def walls(size: float) -> np.ndarray:

@@ -1,4 +1,4 @@
-"""Cost of the checks of a task's rewards() return (``swarm_envs._task_checks.RewardsCheck``) per vector step.
+"""Cost of the checks of a task's rewards() return (``swarm_envs.tasks._task_checks.RewardsCheck``) per vector step.
 
 Two measures, in the same run: (1) the median wall-clock time of a ``make_vec`` step with the checks and
 with them replaced by a pass-through, alternated in rounds so both see the same load on a shared machine;

@@ -28,7 +28,7 @@ import numpy as np
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 
 import swarm_envs  # noqa: E402
-from swarm_envs.env import FlatInfos  # noqa: E402
+from swarm_envs.adapters.env import FlatInfos  # noqa: E402
 
 TASK = "swarm_envs/Flocking-v0"
 

@@ -23,7 +23,7 @@ from bench_scale_free import place, timeit  # noqa: E402
 from swarm_envs.ir.layer import compute_links  # noqa: E402
 from swarm_envs.sensing.bearing_sensor import sense_bearings  # noqa: E402
 from swarm_envs.sensing.exchange import BearingExchange  # noqa: E402
-from swarm_envs.reference import coordinates_all as coordinates_all_numpy  # noqa: E402
+from swarm_envs._compile.reference import coordinates_all as coordinates_all_numpy  # noqa: E402
 from swarm_envs.sensing.scale_free import coordinates_all  # noqa: E402
 
 

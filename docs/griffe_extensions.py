@@ -7,7 +7,7 @@
 - :class:`SphinxRoles`: the docstrings use Sphinx roles (``:class:`~pkg.Name```); MkDocs renders them
   as inline code (``Name``) instead of showing the role markup.
 - :class:`TaskModules`: a task module makes its env class, ``parallel_env`` and ``env`` when it is imported
-  (``swarm_envs.factories.task_module``), so static analysis sees only an assignment; this takes those
+  (``swarm_envs.tasks.factories.task_module``), so static analysis sees only an assignment; this takes those
   members, with their generated signatures and docstrings, from the imported module.
 """
 

@@ -7,7 +7,7 @@
     python examples/benchmarl_mappo.py --config configs/benchmarl/gru.yaml --task sorted_following
     python examples/benchmarl_mappo.py --import examples/custom_task.py --task swarm_examples/Dispersion-v0
 
-The task is :class:`swarm_envs.benchmarl_tasks.SwarmTask` (e.g. ``SwarmTask.FLOCKING``): BenchMARL builds
+The task is :class:`swarm_envs.adapters.benchmarl_tasks.SwarmTask` (e.g. ``SwarmTask.FLOCKING``): BenchMARL builds
 one batched TorchRL env of ``--num-envs`` copies per collector (``swarm_envs.make_torchrl``), with the
 default ``Dict`` observation (each part flattened to a vector by the task family's transform) and the
 global ground-truth ``state`` for MAPPO's centralised critic. IPPO's critic sees each robot's own
@@ -62,8 +62,8 @@ from torchrl.envs import EnvBase, Transform
 
 import swarm_envs
 from swarm_envs.agents.tasks import import_modules
-from swarm_envs.benchmarl_tasks import GROUP, SwarmTask, SwarmTaskClass
-from swarm_envs.torch_threads import set_torch_threads
+from swarm_envs.adapters.benchmarl_tasks import GROUP, SwarmTask, SwarmTaskClass
+from swarm_envs.adapters.torch_threads import set_torch_threads
 
 ALGORITHMS = {"mappo": MappoConfig, "ippo": IppoConfig}
 #: the model layers ``--model`` chains with ``+``

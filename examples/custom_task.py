@@ -13,7 +13,7 @@ rewards and measures, from ground truth, over all env copies at once (``(B, N)``
 import numpy as np
 
 import swarm_envs
-from swarm_envs.task import Real, Task, largest_component_fraction, nearest_distances
+from swarm_envs.tasks.task import Real, Task, largest_component_fraction, nearest_distances
 
 
 class Dispersion(Task):

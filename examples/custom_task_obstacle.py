@@ -13,9 +13,9 @@ through the sensing stack. Frame: the arena is centred on the origin, x and y in
 import numpy as np
 
 import swarm_envs
-from swarm_envs.settings import SettingsError
-from swarm_envs.task import Real, Task
-from swarm_envs.world import Arena, check_capacity, spawn_positions
+from swarm_envs.tasks.settings import SettingsError
+from swarm_envs.tasks.task import Real, Task
+from swarm_envs.sim.world import Arena, check_capacity, spawn_positions
 
 
 class GatherBeyondWall(Task):

@@ -56,7 +56,7 @@ from ray.tune.registry import register_env
 
 import swarm_envs
 from swarm_envs.agents.tasks import import_modules, import_task
-from swarm_envs.torch_threads import set_torch_threads
+from swarm_envs.adapters.torch_threads import set_torch_threads
 
 ENV_NAME = "swarm_envs_parallel"
 POLICY = "shared"

@@ -7,10 +7,10 @@
     python examples/torchrl_mappo.py --import examples/custom_task.py --task swarm_examples/Dispersion-v0
 
 The env is ``swarm_envs.make_torchrl``: ``--num-envs`` copies of the task stepped by one batched core, as
-one TorchRL env with ``batch_size=[num_envs]`` (:mod:`swarm_envs.torchrl_env`), with the default ``Dict``
+one TorchRL env with ``batch_size=[num_envs]`` (:mod:`swarm_envs.adapters.torchrl_env`), with the default ``Dict``
 observation and the global ``state``. ``--wrapper pettingzoo`` uses TorchRL's stock ``PettingZooWrapper``
 around the single parallel env (``return_state=True``) instead, with flat ``(group, name)`` info keys
-(``swarm_envs.env.FlatInfos``; the stock wrapper does not read nested info dicts): the same model and loss
+(``swarm_envs.adapters.env.FlatInfos``; the stock wrapper does not read nested info dicts): the same model and loss
 work on both.
 
 - **Actor** (decentralised, parameters shared by all robots): each robot's Dict observation (range &
@@ -48,8 +48,8 @@ from torchrl.objectives import ClipPPOLoss, ValueEstimators
 
 import swarm_envs
 from swarm_envs.agents.tasks import import_task
-from swarm_envs.env import FlatInfos
-from swarm_envs.torch_threads import set_torch_threads
+from swarm_envs.adapters.env import FlatInfos
+from swarm_envs.adapters.torch_threads import set_torch_threads
 
 GROUP = "robot"  # the stock wrapper groups agents by name prefix (robot_0, robot_1, ... -> "robot"); make_torchrl uses it too
 

@@ -7,7 +7,7 @@ Importing the package registers the suite's tasks (in its registry and in Pettin
     env = swarm_envs.make("swarm_envs/Flocking-v0", platform="rone")        # same, parallel API
     vec = swarm_envs.make_vec("swarm_envs/Flocking-v0", 64)                 # 64 copies, one batched core
 
-Your own task: subclass :class:`swarm_envs.Task` (``swarm_envs.task`` has its helpers) and ``swarm_envs.register("my_lab/MyTask-v0",
+Your own task: subclass :class:`swarm_envs.Task` (``swarm_envs.tasks.task`` has its helpers) and ``swarm_envs.register("my_lab/MyTask-v0",
 MyTask)`` (or ``"my_module:MyTask"``, imported when first made); every function here then accepts the id.
 
 ``swarm_envs.make`` passes every keyword to the env unchanged (``max_cycles=-1`` raises), whereas
@@ -18,12 +18,12 @@ from __future__ import annotations
 
 from typing import Any
 
-from swarm_envs import env, task  # noqa: F401  (swarm_envs.env.info_group, swarm_envs.task.Task)
-from swarm_envs.ir import models as _ir_models  # noqa: F401  (registers the IR models with swarm_envs.platforms)
-from swarm_envs.env import SwarmEnv
-from swarm_envs.platforms import PLATFORMS, Platform, get_platform
+from swarm_envs import _moved  # noqa: F401  (old module paths: the task aliases, deprecated paths)
+from swarm_envs.ir import models as _ir_models  # noqa: F401  (registers the IR models with swarm_envs.sim.platforms)
+from swarm_envs.adapters.env import SwarmEnv
+from swarm_envs.sim.platforms import PLATFORMS, Platform, get_platform
 from swarm_envs.registry import ENV_IDS, EnvSpec, list_envs, make, make_vec, register, spec
-from swarm_envs.task import BatchState, Task
+from swarm_envs.tasks.task import BatchState, Task
 
 
 def _read_version() -> str:
@@ -61,24 +61,24 @@ __all__ = [
     "SwarmEnv",
 ]
 
-register("swarm_envs/Aggregation-v0", "swarm_envs.aggregation_v0:AggregationEnv")
-register("swarm_envs/Flocking-v0", "swarm_envs.flocking_v0:FlockingEnv")
-register("swarm_envs/CentroidSeeking-v0", "swarm_envs.centroid_seeking_v0:CentroidSeekingEnv")
-register("swarm_envs/SortedFollowing-v0", "swarm_envs.sorted_following_v0:SortedFollowingEnv")
-register("swarm_envs/ParityClustering-v0", "swarm_envs.parity_clustering_v0:ParityClusteringEnv")
-register("swarm_envs/MidAngleNavigation-v0", "swarm_envs.mid_angle_navigation_v0:MidAngleNavigationEnv")
+register("swarm_envs/Aggregation-v0", "swarm_envs.tasks.aggregation_v0:AggregationEnv")
+register("swarm_envs/Flocking-v0", "swarm_envs.tasks.flocking_v0:FlockingEnv")
+register("swarm_envs/CentroidSeeking-v0", "swarm_envs.tasks.centroid_seeking_v0:CentroidSeekingEnv")
+register("swarm_envs/SortedFollowing-v0", "swarm_envs.tasks.sorted_following_v0:SortedFollowingEnv")
+register("swarm_envs/ParityClustering-v0", "swarm_envs.tasks.parity_clustering_v0:ParityClusteringEnv")
+register("swarm_envs/MidAngleNavigation-v0", "swarm_envs.tasks.mid_angle_navigation_v0:MidAngleNavigationEnv")
 
 
 def make_torchrl(env: str | type, num_envs: int, **kwargs: Any):
     """``num_envs`` copies of a registered id (or a ``Task`` class) as one batched TorchRL ``EnvBase``
-    (:mod:`swarm_envs.torchrl_env`; needs the ``torchrl`` extra)."""
-    from swarm_envs.torchrl_env import make_torchrl as _make_torchrl
+    (:mod:`swarm_envs.adapters.torchrl_env`; needs the ``torchrl`` extra)."""
+    from swarm_envs.adapters.torchrl_env import make_torchrl as _make_torchrl
 
     return _make_torchrl(env, num_envs, **kwargs)
 
 
 def __getattr__(name: str) -> Any:
-    # submodules on first use (``swarm_envs.flocking_v0``, ``swarm_envs.vector``)
+    # submodules on first use (``swarm_envs.tasks.flocking_v0``, ``swarm_envs.adapters.vector``)
     import importlib
     import importlib.util
 

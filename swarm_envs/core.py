@@ -2,13 +2,13 @@
 
 Every per-step array covers all ``B x n_world`` robots (robot ``b * n_world + i`` is robot ``i`` of copy
 ``b``). Data flows one way each control step (``DT`` = 0.1 s): the commands through the platform's motion error
-(:func:`swarm_envs.world.motion_error`, ``motion_noise``) -> physics (one pymunk ``Space`` per copy,
-:func:`swarm_envs.world.step_worlds`) -> sensing stack over all robots at once (IR links, range & bearing, SwarmCom,
+(:func:`swarm_envs.sim.world.motion_error`, ``motion_noise``) -> physics (one pymunk ``Space`` per copy,
+:func:`swarm_envs.sim.world.step_worlds`) -> sensing stack over all robots at once (IR links, range & bearing, SwarmCom,
 bearing exchange, scale-free coordinates; no link, message or random draw crosses copies) -> observation
 arrays -> rewards (the task, on ``(B, ...)`` views).
 
-Thin views sit on top: :class:`swarm_envs.env.SwarmEnv` (a PettingZoo ``ParallelEnv``) is the core with
-``B = 1``; :func:`swarm_envs.make_vec` (:mod:`swarm_envs.vector`) exposes ``B`` copies as arrays. Because each copy draws from
+Thin views sit on top: :class:`swarm_envs.adapters.env.SwarmEnv` (a PettingZoo ``ParallelEnv``) is the core with
+``B = 1``; :func:`swarm_envs.make_vec` (:mod:`swarm_envs.adapters.vector`) exposes ``B`` copies as arrays. Because each copy draws from
 its own generators in the order a single env would, copy ``b`` seeded with ``s`` reproduces a single env
 seeded with ``s`` bit for bit.
 
@@ -24,13 +24,13 @@ from typing import Any
 
 import numpy as np
 
-from swarm_envs._task_checks import RewardsCheck, checked_mask, checked_spawn
-from swarm_envs._worker import worker
-from swarm_envs.copies import CopyStream
-from swarm_envs.observation import ObservationLayout, id_rows, nearest_slots, own_id_rows, pack_nearest, range_bearing_rows
+from swarm_envs.tasks._task_checks import RewardsCheck, checked_mask, checked_spawn
+from swarm_envs._compile._worker import worker
+from swarm_envs.sim.copies import CopyStream
+from swarm_envs.sensing.observation import ObservationLayout, id_rows, nearest_slots, own_id_rows, pack_nearest, range_bearing_rows
 from swarm_envs.sensing.base import SensorFrame
-from swarm_envs.task import BatchState, Task
-from swarm_envs.world import DT, N_BUMP_SECTORS, World, motion_error, step_worlds, wheel_gains
+from swarm_envs.tasks.task import BatchState, Task
+from swarm_envs.sim.world import DT, N_BUMP_SECTORS, World, motion_error, step_worlds, wheel_gains
 
 __all__ = ["SwarmCore", "DT"]
 
@@ -54,7 +54,7 @@ class SwarmCore:
         self.copy_of_robot = np.repeat(np.arange(self.B), self.n_world)
         obstacles = task.obstacle_segments
         self.worlds = [World(self.platform, self.n_world, task.arena, substeps=cfg["physics_substeps"], obstacles=obstacles) for _ in range(self.B)]
-        from swarm_envs._first_run import prepare  # (not at import: ``python -m swarm_envs._first_run`` runs it)
+        from swarm_envs._compile._first_run import prepare  # (not at import: ``python -m swarm_envs._compile._first_run`` runs it)
 
         prepare(type(task).__name__, self.platform.name, cfg["sensing"])  # a cold numba cache: the notice, a second core
         self.sensing = _make_sensing(cfg, self.platform, self.n_world, self.B, obstacles)
@@ -94,7 +94,7 @@ class SwarmCore:
     def start(self, copies: Sequence[int], poses: Sequence[tuple[np.ndarray | None, np.ndarray | None]] | None = None) -> None:
         """Begin new episodes in ``copies``: fresh physics and sensing state, robots spawned by the task or
         placed from ``poses[k] = (positions (n_world, 2) m or None, headings (n_world,) rad or None)``
-        (checked by :func:`swarm_envs.views.check_reset_options`). Given positions skip the task's spawner
+        (checked by :func:`swarm_envs.adapters.views.check_reset_options`). Given positions skip the task's spawner
         (headings then come from the spawn stream unless given); given headings alone replace the spawned
         ones. The copies' first observation comes from the next :meth:`step` (which does not move them).
         """

@@ -9,7 +9,7 @@
     swarm-demo --import examples/custom_task.py --task swarm_examples/Dispersion-v0 --policy random
     swarm-demo --all --out-dir docs/img/envs               # one small GIF per task (the docs' pictures)
 
-The frames (:func:`swarm_envs.render.render_env`) show the robots with their headings, the IR links that
+The frames (:func:`swarm_envs.adapters.render.render_env`) show the robots with their headings, the IR links that
 delivered a decoded reading this step, decoded messages, the task's markers, a caption (task, platform,
 policy, step, the task's headline metric) and a legend; ``--overlay`` adds where one robot's range & bearing
 observation puts its neighbours next to where they are. At the end the headline metric of the episode is
@@ -33,11 +33,11 @@ import numpy as np
 from swarm_envs.agents.evaluation import make_env, run_episode
 from swarm_envs.agents.scripted import SCRIPTED
 from swarm_envs.agents.tasks import SHORT_NAMES, headline, import_modules, metric_reductions
-from swarm_envs.env import DT
-from swarm_envs.platforms import PLATFORMS
+from swarm_envs.adapters.env import DT
+from swarm_envs.sim.platforms import PLATFORMS
 from swarm_envs.registry import list_envs, task_class
-from swarm_envs.render import VIEWS
-from swarm_envs.settings import Int, cli_type
+from swarm_envs.adapters.render import VIEWS
+from swarm_envs.tasks.settings import Int, cli_type
 
 #: short task name -> registered env id
 TASKS = dict(SHORT_NAMES)
@@ -148,7 +148,7 @@ def load_model_policy(path: str | Path, env: Any):
         raise DemoError(f"--model needs stable-baselines3 ({err}); pip install 'swarm_envs[rl]'") from None
     from gymnasium.spaces import flatdim
 
-    from swarm_envs.torch_threads import set_torch_threads
+    from swarm_envs.adapters.torch_threads import set_torch_threads
 
     set_torch_threads()  # 1 thread on <= 2 cores (OMP_NUM_THREADS overrides): inference beside the simulation
     spec = _run_policy_spec(path)
@@ -227,9 +227,9 @@ def run_demo(
     The episode is driven as :func:`swarm_envs.agents.evaluation.run_episode` drives it (the policy sees the
     agents' named batched observations; its generator is derived from ``seed`` the same way), so the
     reduced metrics are the same numbers. Frames: the reset, every ``frame_skip``-th step and the last step,
-    in the renderer's ``view`` (:data:`swarm_envs.render.VIEWS`; ``"swarm"`` follows the robots).
+    in the renderer's ``view`` (:data:`swarm_envs.adapters.render.VIEWS`; ``"swarm"`` follows the robots).
     """
-    from swarm_envs.render import Renderer, render_env
+    from swarm_envs.adapters.render import Renderer, render_env
 
     env = make_env(task, **env_kwargs)
     if overlay_agent is not None and not 0 <= overlay_agent < env.n_agents:
@@ -290,7 +290,7 @@ def write_gif(frames: list[np.ndarray], path: str | Path, frame_ms: float) -> in
     stores only the changed pixels of each frame. Returns the file size in bytes."""
     from PIL import Image
 
-    from swarm_envs.render import PALETTE
+    from swarm_envs.adapters.render import PALETTE
 
     palette = Image.new("P", (1, 1))
     palette.putpalette([c for colour in PALETTE for c in colour])

@@ -2,7 +2,7 @@
 
 An id names a task and, optionally, default settings, as in Gymnasium: ``"namespace/Name-vN"`` (the
 namespace is optional, the version is not: any change that can alter results gets a new version). The
-entry point is a :class:`swarm_envs.task.Task` subclass, a :class:`swarm_envs.env.SwarmEnv` subclass, or a
+entry point is a :class:`swarm_envs.tasks.task.Task` subclass, a :class:`swarm_envs.adapters.env.SwarmEnv` subclass, or a
 ``"module:Class"`` string naming one, imported only when an env is made, so a package can register its
 tasks on import without importing the task's module. Every id is registered in PettingZoo's registry too
 (``pettingzoo.make("parallel", id)`` and ``pettingzoo.make("aec", id)``). :func:`make` and :func:`make_vec`
@@ -24,9 +24,9 @@ from typing import Any
 import numpy as np
 
 from swarm_envs._text import shown
-from swarm_envs.env import SwarmEnv
-from swarm_envs.task import Task
-from swarm_envs.vector import AgentsAsEnvs, SwarmVectorEnv
+from swarm_envs.adapters.env import SwarmEnv
+from swarm_envs.tasks.task import Task
+from swarm_envs.adapters.vector import AgentsAsEnvs, SwarmVectorEnv
 
 __all__ = ["EnvSpec", "register", "spec", "list_envs", "task_class", "resolve", "make", "make_vec", "ENV_IDS", "ID_PATTERN"]
 
@@ -75,7 +75,7 @@ ENV_IDS: Mapping[str, EnvSpec] = MappingProxyType(_REGISTRY)
 
 def _check_entry_class(target: Any, env_id: str) -> None:
     if not (isinstance(target, type) and issubclass(target, (Task, SwarmEnv))):
-        raise TypeError(f"{env_id}: the entry point must be a swarm_envs.task.Task or swarm_envs.env.SwarmEnv subclass, got {target!r}")
+        raise TypeError(f"{env_id}: the entry point must be a swarm_envs.tasks.task.Task or swarm_envs.adapters.env.SwarmEnv subclass, got {target!r}")
     _check_concrete(target, f"{env_id}: the entry point")
 
 
@@ -171,7 +171,7 @@ def task_class(task: Any) -> type:
         return task.TASK
     if isinstance(task, type) and issubclass(task, Task):
         return task
-    raise TypeError(f"expected an env id, a swarm_envs.task.Task subclass or a SwarmEnv subclass, got {task!r:.80}")
+    raise TypeError(f"expected an env id, a swarm_envs.tasks.task.Task subclass or a SwarmEnv subclass, got {task!r:.80}")
 
 
 def resolve(env: Any) -> tuple[type, dict[str, Any]]:
@@ -197,9 +197,9 @@ def make(env: str | type, **kwargs: Any) -> SwarmEnv:
 
 def make_vec(env: str | type, num_envs: int, *, agents_as_envs: bool = False, **kwargs: Any) -> SwarmVectorEnv | AgentsAsEnvs:
     """``num_envs`` copies of a registered id (or a ``Task`` / ``SwarmEnv`` subclass) stepped by one batched
-    core: a Gymnasium ``VectorEnv`` with ``(num_envs, n_agents, ...)`` arrays (:mod:`swarm_envs.vector`).
+    core: a Gymnasium ``VectorEnv`` with ``(num_envs, n_agents, ...)`` arrays (:mod:`swarm_envs.adapters.vector`).
     ``agents_as_envs=True``: every robot of every copy as one sub-env (``num_envs x n_agents`` rows,
-    :class:`swarm_envs.vector.AgentsAsEnvs`), for Gymnasium's vector wrappers. ``SettingsError`` naming
+    :class:`swarm_envs.adapters.vector.AgentsAsEnvs`), for Gymnasium's vector wrappers. ``SettingsError`` naming
     ``num_envs`` when the copies' estimated memory exceeds the machine's available memory."""
     if not isinstance(agents_as_envs, (bool, np.bool_)):
         raise TypeError(f"agents_as_envs must be True or False, got {agents_as_envs!r:.80}")

@@ -19,13 +19,13 @@ os.environ.setdefault("SWARM_ENVS_BACKGROUND_COMPILE", "0")
 @pytest.fixture(scope="session", autouse=True)
 def _share_the_kernel_compile():
     """Under pytest-xdist, each worker first compiles its share of the recorded numba kernels of every
-    scenario (:func:`swarm_envs._first_run.compile_share`: the workers claim kernels longest first, so none
+    scenario (:func:`swarm_envs._compile._first_run.compile_share`: the workers claim kernels longest first, so none
     is compiled twice on a cold cache, then load the others' from the shared disk cache). On a warm cache
     this only reads the cache indexes."""
     if os.environ.get("PYTEST_XDIST_WORKER") is None:
         return
-    import swarm_envs._kernel_manifest as manifest
-    from swarm_envs._first_run import compile_share
+    import swarm_envs._compile._kernel_manifest as manifest
+    from swarm_envs._compile._first_run import compile_share
 
     for task, platform in manifest.SCENARIOS:
         compile_share(task, platform)

@@ -1,4 +1,4 @@
-"""One angle wrap, swarm_envs.geometry.wrap_angle ((-pi, pi]); the scripted baselines' [-pi, pi) is its mirror."""
+"""One angle wrap, swarm_envs.sim.geometry.wrap_angle ((-pi, pi]); the scripted baselines' [-pi, pi) is its mirror."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from swarm_envs.agents.scripted import _wrap_below_pi
-from swarm_envs.geometry import wrap_angle
+from swarm_envs.sim.geometry import wrap_angle
 
 EDGES = np.array([np.pi, -np.pi, 0.0, -0.0, 3 * np.pi, -3 * np.pi, 2 * np.pi, 1e-300, -1e-300, np.nextafter(np.pi, 0), np.nextafter(-np.pi, 0)])
 

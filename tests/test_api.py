@@ -48,8 +48,8 @@ def test_registry_entry_points_and_make():
         "swarm_envs/SortedFollowing-v0", "swarm_envs/ParityClustering-v0", "swarm_envs/MidAngleNavigation-v0",
     ]
     for module in (
-        swarm_envs.aggregation_v0, swarm_envs.flocking_v0, swarm_envs.centroid_seeking_v0,
-        swarm_envs.sorted_following_v0, swarm_envs.parity_clustering_v0, swarm_envs.mid_angle_navigation_v0,
+        swarm_envs.tasks.aggregation_v0, swarm_envs.tasks.flocking_v0, swarm_envs.tasks.centroid_seeking_v0,
+        swarm_envs.tasks.sorted_following_v0, swarm_envs.tasks.parity_clustering_v0, swarm_envs.tasks.mid_angle_navigation_v0,
     ):
         assert isinstance(module.parallel_env(sensing="ideal"), module.raw_env)
         aec = module.env(sensing="ideal")

@@ -7,7 +7,7 @@ import json
 import numpy as np
 import pytest
 
-from swarm_envs.task import MESSAGE_RANGE
+from swarm_envs.tasks.task import MESSAGE_RANGE
 from swarm_envs.validate import __main__ as validate
 from swarm_envs.validate import behaviours
 

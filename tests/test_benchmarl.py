@@ -12,8 +12,8 @@ import torch  # noqa: E402
 from torchrl.envs import Compose, TransformedEnv  # noqa: E402
 from torchrl.envs.utils import check_env_specs  # noqa: E402
 
-from swarm_envs.benchmarl_tasks import GROUP, TASK_DEFAULTS, SwarmTask  # noqa: E402
-from swarm_envs.torchrl_env import SwarmTorchRLEnv  # noqa: E402
+from swarm_envs.adapters.benchmarl_tasks import GROUP, TASK_DEFAULTS, SwarmTask  # noqa: E402
+from swarm_envs.adapters.torchrl_env import SwarmTorchRLEnv  # noqa: E402
 
 pytestmark = pytest.mark.filterwarnings("ignore::DeprecationWarning")
 EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "benchmarl_mappo.py"
@@ -59,7 +59,7 @@ def test_task_family_specs(task, flatten):
 
 def test_every_suite_task_is_a_member_and_a_registered_id_of_your_own_runs():
     import swarm_envs
-    from swarm_envs.benchmarl_tasks import TASK_IDS
+    from swarm_envs.adapters.benchmarl_tasks import TASK_IDS
 
     assert set(TASK_IDS.values()) == {i for i in swarm_envs.list_envs() if i.startswith("swarm_envs/")}
     assert set(TASK_IDS) == {t.name for t in SwarmTask} == set(TASK_DEFAULTS)

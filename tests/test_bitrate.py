@@ -5,7 +5,7 @@ import pytest
 
 from swarm_envs.comm.channel import ADCModel, adc_model_for, detector_response
 from swarm_envs.comm.network import Network
-from swarm_envs.copies import CopyRandom
+from swarm_envs.sim.copies import CopyRandom
 from swarm_envs.ir.layer import compute_links
 from swarm_envs.validate.swarmcom import SEP, comm_range_cm, reliable_range_cm, run_pairs
 

@@ -5,7 +5,7 @@ import pytest
 
 from swarm_envs.comm.channel import ADCModel, adc, adc_model_for, detector_intensity
 from swarm_envs.ir.layer import compute_links
-from swarm_envs.platforms import get_platform
+from swarm_envs.sim.platforms import get_platform
 
 
 def _hand_intensity(d_m: float) -> np.ndarray:

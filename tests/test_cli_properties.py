@@ -26,7 +26,7 @@ from hypothesis import strategies as st  # noqa: E402
 from swarm_envs.agents import benchmark, train  # noqa: E402
 from swarm_envs.agents.config import DEFAULTS  # noqa: E402
 from swarm_envs.agents.tasks import SHORT_NAMES  # noqa: E402
-from swarm_envs.settings import COMMON_SETTINGS  # noqa: E402
+from swarm_envs.tasks.settings import COMMON_SETTINGS  # noqa: E402
 from tests.conftest import dotted_keys  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]

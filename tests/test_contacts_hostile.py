@@ -13,10 +13,10 @@ import numpy as np
 import pytest
 from scipy.spatial import cKDTree
 
-from swarm_envs.platforms import PLATFORMS
-from swarm_envs.task import SPACING
-from swarm_envs.world import MAX_OVERLAP, Arena, World, spawn_positions
-from swarm_envs.geometry import wrap_angle
+from swarm_envs.sim.platforms import PLATFORMS
+from swarm_envs.tasks.task import SPACING
+from swarm_envs.sim.world import MAX_OVERLAP, Arena, World, spawn_positions
+from swarm_envs.sim.geometry import wrap_angle
 
 SCENES = ("centre", "corner", "walls", "pairs")
 STEPS = 600

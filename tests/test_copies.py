@@ -1,9 +1,9 @@
-"""Per-copy random streams (swarm_envs.copies): buffered draws equal each copy's own generator stream."""
+"""Per-copy random streams (swarm_envs.sim.copies): buffered draws equal each copy's own generator stream."""
 
 import numpy as np
 import pytest
 
-from swarm_envs.copies import CopyStream
+from swarm_envs.sim.copies import CopyStream
 
 
 @pytest.mark.parametrize("kind", ["normal", "uniform"])

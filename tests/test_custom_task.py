@@ -14,10 +14,10 @@ import pettingzoo
 import pytest
 
 import swarm_envs
-from swarm_envs.env import SwarmEnv
+from swarm_envs.adapters.env import SwarmEnv
 from swarm_envs.registry import spec, task_class
-from swarm_envs.settings import SettingsError
-from swarm_envs.task import Int, Real, Task
+from swarm_envs.tasks.settings import SettingsError
+from swarm_envs.tasks.task import Int, Real, Task
 from tests.conftest import parallel_api_check
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -140,11 +140,11 @@ def test_register_string_entry_point_is_imported_lazily_and_errors_name_it():
     with pytest.raises(ImportError, match="tests/Lazy-v0: cannot import the entry point's module 'tests_missing_module_xyz'"):
         swarm_envs.make("tests/Lazy-v0")
     with pytest.warns(UserWarning, match="re-registering 'tests/Lazy-v0'"):
-        swarm_envs.register("tests/Lazy-v0", "swarm_envs.flocking_v0:NoSuchClass")
+        swarm_envs.register("tests/Lazy-v0", "swarm_envs.tasks.flocking_v0:NoSuchClass")
     with pytest.raises(ImportError, match="has no 'NoSuchClass'"):
         swarm_envs.make("tests/Lazy-v0")
     with pytest.warns(UserWarning, match="re-registering 'tests/Lazy-v0'"):
-        swarm_envs.register("tests/Lazy-v0", "swarm_envs.flocking_v0:FlockingTask", kwargs={"n_robots": 3})
+        swarm_envs.register("tests/Lazy-v0", "swarm_envs.tasks.flocking_v0:FlockingTask", kwargs={"n_robots": 3})
     env = swarm_envs.make("tests/Lazy-v0", sensing="ideal")
     assert env.n_agents == 3 and env.config["collision_penalty"] == 0.1  # the id's defaults, then the caller's
 
@@ -184,20 +184,20 @@ def test_a_task_without_rewards_says_so():
     env = swarm_envs.make(type("NoRewards", (Task,), {}), n_robots=2, sensing="ideal")
     with pytest.raises(NotImplementedError, match="NoRewards must implement rewards"):
         env.reset(seed=0)
-    with pytest.raises(TypeError, match="needs a swarm_envs.task.Task subclass"):
+    with pytest.raises(TypeError, match="needs a swarm_envs.tasks.task.Task subclass"):
         SwarmEnv(n_robots=2)
 
 
 # -- the suite's own tasks use only the public API --------------------------------------------------------
-PUBLIC = {"swarm_envs", "swarm_envs.task", "swarm_envs.env", "swarm_envs.factories", "swarm_envs.platforms"}
+PUBLIC = {"swarm_envs", "swarm_envs.tasks.task", "swarm_envs.adapters.env", "swarm_envs.tasks.factories", "swarm_envs.sim.platforms"}
 TASK_MODULES = [
     "aggregation_v0", "flocking_v0", "centroid_seeking_v0", "sorted_following_v0", "parity_clustering_v0", "mid_angle_navigation_v0",
 ]
 
 
-@pytest.mark.parametrize("name", TASK_MODULES + ["../examples/custom_task"])
+@pytest.mark.parametrize("name", TASK_MODULES + ["../../examples/custom_task"])
 def test_task_modules_import_only_the_public_api(name):
-    path = (ROOT / "swarm_envs" / f"{name}.py").resolve()
+    path = (ROOT / "swarm_envs" / "tasks" / f"{name}.py").resolve()
     imported = set()
     for node in ast.walk(ast.parse(path.read_text())):
         if isinstance(node, ast.ImportFrom) and node.module:

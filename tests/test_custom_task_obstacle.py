@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 import swarm_envs
-from swarm_envs.settings import SettingsError
+from swarm_envs.tasks.settings import SettingsError
 from tests.conftest import parallel_api_check
 
 ROOT = Path(__file__).resolve().parent.parent

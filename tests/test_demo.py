@@ -1,4 +1,4 @@
-"""``swarm-demo`` (``python -m swarm_envs.demo``) and the frames it draws (:mod:`swarm_envs.render`)."""
+"""``swarm-demo`` (``python -m swarm_envs.demo``) and the frames it draws (:mod:`swarm_envs.adapters.render`)."""
 
 from __future__ import annotations
 
@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from swarm_envs import render
+from swarm_envs.adapters import render
 from swarm_envs.agents.base import RandomPolicy
 from swarm_envs.agents.evaluation import make_env, run_episode
 from swarm_envs.agents.tasks import headline, scripted_policy
@@ -118,7 +118,7 @@ def test_model_runs_and_a_mismatching_model_is_refused(tmp_path, capsys):
     out = tmp_path / "ppo.gif"
     import torch
 
-    from swarm_envs.torch_threads import default_torch_threads
+    from swarm_envs.adapters.torch_threads import default_torch_threads
 
     before = torch.get_num_threads()
     torch.set_num_threads(default_torch_threads() + 1)

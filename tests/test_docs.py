@@ -54,4 +54,4 @@ def test_images_exist_and_are_small():
 @pytest.mark.parametrize("name", ["aggregation", "flocking", "centroid_seeking", "sorted_following", "parity_clustering", "mid_angle_navigation"])
 def test_environment_page_renders_the_task_docstring(name):
     text = (DOCS / "environments" / f"{name}.md").read_text(encoding="utf-8")
-    assert f"::: swarm_envs.{name}_v0.parallel_env" in text
+    assert f"::: swarm_envs.tasks.{name}_v0.parallel_env" in text

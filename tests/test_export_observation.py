@@ -20,7 +20,7 @@ import yaml
 from gymnasium import spaces
 
 from swarm_envs.export.observation_c import builder_constants, firmware_tables, write_observation_builder
-from swarm_envs.observation import nearest_slots, range_bearing_rows, ranked_slots
+from swarm_envs.sensing.observation import nearest_slots, range_bearing_rows, ranked_slots
 from swarm_envs.registry import make
 
 CONFIGS = Path(__file__).resolve().parents[1] / "configs"
@@ -190,7 +190,7 @@ def test_c_vector_equals_env_observation(built):
 
 def test_rank_rows_matches_the_simulators_selection(built):
     """obs_rank_rows (the C's one ranking function) picks the same rows in the same order as
-    swarm_envs.observation.nearest_slots, with ties and NaN keys."""
+    swarm_envs.sensing.observation.nearest_slots, with ties and NaN keys."""
     _, _, _, lib = built
     rng = np.random.default_rng(0)
     for n in (0, 1, 5, 8, 13, 30):
@@ -209,7 +209,7 @@ def test_full_synthetic_tables_match_the_simulators_packing(built):
     outside the Box, stale readings and malformed messages): the C vector equals what the simulator's own packing gives for the same readings
     (the observation builder of swarm_envs.core on a sensor frame holding them, and FullSensing's
     scale-free ranking), so truncation and clipping are covered whatever the random runs reached."""
-    from swarm_envs.observation import pack_nearest
+    from swarm_envs.sensing.observation import pack_nearest
     from swarm_envs.sensing.base import MessageReadings, NeighbourReadings, ScaleFreeReadings, SensorFrame
 
     name, env_id, kwargs, lib = built

@@ -1,6 +1,6 @@
 """The fast per-step paths (ideal sensing, observations, task rewards and metrics) equal straightforward
 numpy formulas, bit for bit: the ``_plain_*`` functions below (KD-tree pairs + argsort, ``np.add.at``,
-``np.mod`` wrapping, packing of every link, ``np.clip``) and :mod:`swarm_envs.reference`.
+``np.mod`` wrapping, packing of every link, ``np.clip``) and :mod:`swarm_envs._compile.reference`.
 """
 
 from __future__ import annotations
@@ -9,13 +9,14 @@ import numpy as np
 import pytest
 
 import swarm_envs
-from swarm_envs import observation, reference
-from swarm_envs.geometry import wrap_angle
-from swarm_envs.observation import nearest_slots, wrapped_difference
+from swarm_envs.sensing import observation
+from swarm_envs._compile import reference
+from swarm_envs.sim.geometry import wrap_angle
+from swarm_envs.sensing.observation import nearest_slots, wrapped_difference
 from swarm_envs.sensing import ideal
-from swarm_envs.task import MESSAGE_RANGE
+from swarm_envs.tasks.task import MESSAGE_RANGE
 from swarm_envs.sensing.ideal import candidate_pairs, copy_pairs, directed_links, directed_pairs
-from swarm_envs.task import bump_any
+from swarm_envs.tasks.task import bump_any
 
 
 def _equal(a, b, what=""):
@@ -240,7 +241,7 @@ def test_flocking_rewards_equal_the_plain_formulas(B, n, mode):
 
 
 def test_cluster_metrics_equal_the_reference():
-    from swarm_envs import metrics
+    from swarm_envs.tasks import metrics
 
     rng = np.random.default_rng(8)
     for B, N, link in [(9, 10, 0.3), (1, 1200, 0.25), (3, 30, 0.1), (2, 5, 2.0), (4, 6, 1e-3)]:
@@ -251,7 +252,7 @@ def test_cluster_metrics_equal_the_reference():
 
 
 def test_neighbourhood_sums_equal_add_at_over_sorted_links():
-    from swarm_envs import metrics
+    from swarm_envs.tasks import metrics
 
     rng = np.random.default_rng(9)
     pos = rng.uniform(0, 2, (400, 2))

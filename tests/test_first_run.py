@@ -1,4 +1,4 @@
-"""The first run on a cold numba cache (swarm_envs._first_run, swarm_envs._numba, swarm_envs._sort): the
+"""The first run on a cold numba cache (swarm_envs._compile._first_run, swarm_envs._compile._numba, swarm_envs._compile._sort): the
 "compiling" line on an empty cache and none on a warm one, the background compile process filling the
 cache with the same results, one set of compiler flags for every kernel, no per-constant
 specialisations, a cache entry of another signature rejected, and numba's argsort written out."""
@@ -20,9 +20,9 @@ import numpy as np
 import pytest
 
 import swarm_envs
-from swarm_envs import _first_run, _kernel_manifest
-from swarm_envs._numba import njit
-from swarm_envs._sort import argsort_quick
+from swarm_envs._compile import _first_run, _kernel_manifest
+from swarm_envs._compile._numba import njit
+from swarm_envs._compile._sort import argsort_quick
 
 ROOT = Path(__file__).resolve().parents[1]
 NOTICE = "swarm_envs: compiling the numba kernels for the first run"
@@ -130,7 +130,7 @@ def test_notice_once_and_only_above_a_few_seconds(monkeypatch, capsys):
 def test_manifest_names_existing_kernels_and_scenarios():
     """Every recorded kernel resolves to a cached dispatcher of the package and its argument types decode
     (a renamed kernel or a changed type module fails here: re-record with ``python -m
-    swarm_envs._kernel_record``); every scenario is a registered task on a known platform."""
+    swarm_envs._compile._kernel_record``); every scenario is a registered task on a known platform."""
     assert _kernel_manifest.KERNELS and _kernel_manifest.SCENARIOS
     for module, name, types in _kernel_manifest.KERNELS:
         dispatcher = _first_run._dispatcher(module, name)
@@ -175,7 +175,7 @@ def test_every_kernel_has_the_shared_flags_and_a_guarded_cache():
 
 
 def test_kernels_allocate_with_np_empty_and_a_positional_dtype():
-    """Kernels allocate only with ``np.empty(shape, dtype)`` (swarm_envs._numba docstring): every
+    """Kernels allocate only with ``np.empty(shape, dtype)`` (swarm_envs._compile._numba docstring): every
     ``np.zeros``/``np.ones``/``np.full`` or dtype left to its default or given by keyword is one more library
     function numba compiles on the first run."""
     import ast
@@ -216,7 +216,7 @@ def test_a_cache_entry_of_another_signature_is_recompiled(tmp_path):
     (tmp_path / "kern.py").write_text(
         textwrap.dedent(
             """
-            from swarm_envs._numba import njit
+            from swarm_envs._compile._numba import njit
 
             @njit(cache=True)
             def half(x):
@@ -241,7 +241,7 @@ def test_a_cache_entry_of_another_signature_is_recompiled(tmp_path):
 
 def _kernel_in(tmp_path: Path, monkeypatch, name: str):
     """A fresh cached kernel ``double(float64)`` in module ``name`` under ``tmp_path`` (its own disk cache)."""
-    (tmp_path / f"{name}.py").write_text("from swarm_envs._numba import njit\n\n@njit(cache=True)\ndef double(x):\n    return 2 * x\n")
+    (tmp_path / f"{name}.py").write_text("from swarm_envs._compile._numba import njit\n\n@njit(cache=True)\ndef double(x):\n    return 2 * x\n")
     monkeypatch.syspath_prepend(str(tmp_path))
     monkeypatch.setattr(numba.config, "CACHE_DIR", str(tmp_path / "cache"), raising=False)
     module = importlib.import_module(name)

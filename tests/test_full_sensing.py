@@ -5,7 +5,7 @@ import pytest
 
 import swarm_envs
 from swarm_envs.sensing.full import BEACON_PERIOD
-from swarm_envs.observation import wrapped_difference
+from swarm_envs.sensing.observation import wrapped_difference
 from tests.conftest import assert_tree_equal
 
 

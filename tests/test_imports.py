@@ -102,7 +102,7 @@ def test_graph_finds_a_lazy_cycle_and_a_relative_import(tmp_path):
 
 
 def test_sources_found():
-    assert "swarm_envs.env" in MODULES and "swarm_envs.agents.scripted" in MODULES
+    assert "swarm_envs.adapters.env" in MODULES and "swarm_envs.agents.scripted" in MODULES
     assert "swarm_envs.sensing.scale_free" in MODULES and "swarm_envs.validate.__main__" in MODULES
 
 

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import swarm_envs
-from swarm_envs.env import INFO_GROUPS, FlatInfos, flat_info, info_group
+from swarm_envs.adapters.env import INFO_GROUPS, FlatInfos, flat_info, info_group
 from tests.conftest import assert_tree_equal
 
 ENV_IDS = swarm_envs.list_envs()

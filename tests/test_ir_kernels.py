@@ -1,14 +1,14 @@
 """The compiled IR kernels equal the numpy references (models of swarm_envs.ir.models, docs/design.md#infrared-physical-layer;
-swarm_envs.reference)."""
+swarm_envs._compile.reference)."""
 
 import numpy as np
 import pytest
 from scipy.spatial import cKDTree
 
-from swarm_envs import reference
+from swarm_envs._compile import reference
 from swarm_envs.ir import kernels, layer
 from swarm_envs.ir.models import DropletLowPowerIR
-from swarm_envs.platforms import get_platform
+from swarm_envs.sim.platforms import get_platform
 
 
 @pytest.mark.parametrize("name", ["droplet", "droplet_low", "epuck", "rone"])
@@ -231,7 +231,7 @@ def test_occluder_lists_equal_the_exact_segment_test_near_the_disc_edge():
     """occluders_kernel decides candidates within 1e-6 of the width by the exact segment test: the same
     lists as _segment_hits_disc over every third robot, for third robots placed at the width (to +-1e-15
     .. 1e-3 relative) from the centre segment, inside it, beyond either end and near the ends. (The numpy
-    reference, swarm_envs.reference.occluder_lists, rounds the segment differently and may disagree within
+    reference, swarm_envs._compile.reference.occluder_lists, rounds the segment differently and may disagree within
     ~1e-16 of the width.)"""
     rng = np.random.default_rng(35)
     width = 0.0686

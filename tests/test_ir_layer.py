@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 from swarm_envs.ir.layer import compute_links, line_of_sight, occluder_width, pair_gains, pair_geometry
-from swarm_envs.geometry import wrap_angle
-from swarm_envs.platforms import get_platform
+from swarm_envs.sim.geometry import wrap_angle
+from swarm_envs.sim.platforms import get_platform
 
 DROPLET = get_platform("droplet")
 

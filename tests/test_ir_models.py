@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from swarm_envs.ir.models import DropletIR, EpuckIR, RoneIR
-from swarm_envs.platforms import get_platform, model_for
+from swarm_envs.sim.platforms import get_platform, model_for
 
 
 def test_model_for_cached_and_by_name():

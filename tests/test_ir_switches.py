@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 import swarm_envs
-from swarm_envs.aggregation_v0 import AggregationTask
+from swarm_envs.tasks.aggregation_v0 import AggregationTask
 from swarm_envs.ir.layer import compute_links
 
 

@@ -13,8 +13,8 @@ import swarm_envs
 from swarm_envs.comm.channel import recommended_relative_threshold
 from swarm_envs.comm.network import BACKENDS, Network
 from swarm_envs.ir.layer import compute_links
-from swarm_envs.platforms import get_platform
-from swarm_envs.task import Task
+from swarm_envs.sim.platforms import get_platform
+from swarm_envs.tasks.task import Task
 
 
 def test_frame_crc_per_platform():

@@ -14,10 +14,10 @@ import pytest
 
 import swarm_envs
 from swarm_envs.core import DT
-from swarm_envs.platforms import PLATFORMS, get_platform
-from swarm_envs.task import SPACING
-from swarm_envs.world import MAX_OVERLAP, Arena, World, motion_error, spawn_positions, wheel_gains
-from swarm_envs.geometry import wrap_angle
+from swarm_envs.sim.platforms import PLATFORMS, get_platform
+from swarm_envs.tasks.task import SPACING
+from swarm_envs.sim.world import MAX_OVERLAP, Arena, World, motion_error, spawn_positions, wheel_gains
+from swarm_envs.sim.geometry import wrap_angle
 
 ENV = "swarm_envs/Aggregation-v0"
 

@@ -353,7 +353,7 @@ def test_the_default_bitrate_is_the_platforms(platform, rate):
     import dataclasses
 
     import swarm_envs
-    from swarm_envs.platforms import get_platform
+    from swarm_envs.sim.platforms import get_platform
 
     env = swarm_envs.make("swarm_envs/Flocking-v0", n_robots=3, platform=platform)
     assert env.core.sensing.network.bitrate == rate == get_platform(platform).ir_bitrate

@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
-from swarm_envs import reference
-from swarm_envs.observation import pack_nearest
+from swarm_envs._compile import reference
+from swarm_envs.sensing.observation import pack_nearest
 
 
 @pytest.mark.parametrize("P,n_rows,k", [(5000, 600, 8), (400, 10, 3), (50, 200, 1), (1, 1, 4)])

@@ -10,7 +10,7 @@ from gymnasium import spaces
 
 import swarm_envs
 from swarm_envs.comm.network import Network
-from swarm_envs.observation import ID_FIELDS, ObservationLayout, id_rows, nearest_slots, own_id_rows, pack_nearest
+from swarm_envs.sensing.observation import ID_FIELDS, ObservationLayout, id_rows, nearest_slots, own_id_rows, pack_nearest
 from swarm_envs.sensing.range_bearing import RangeBearingSensor
 
 ENV = "swarm_envs/Aggregation-v0"

@@ -8,8 +8,8 @@ import pytest
 
 import swarm_envs
 from swarm_envs.ir.layer import _emitter_sums, block_links, compute_links, rays_blocked
-from swarm_envs.platforms import get_platform
-from swarm_envs.task import Task, distance_to_segments, obstacle_points
+from swarm_envs.sim.platforms import get_platform
+from swarm_envs.tasks.task import Task, distance_to_segments, obstacle_points
 
 WALL = np.array([[[0.0, -0.3], [0.0, 0.3]]])  # a vertical wall through the middle of the arena
 

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 import swarm_envs
-from swarm_envs import world as world_module
+from swarm_envs.sim import world as world_module
 from tests.conftest import assert_tree_equal
 
 TASKS = [i for i in swarm_envs.list_envs() if i.startswith("swarm_envs/")]  # every task of the suite

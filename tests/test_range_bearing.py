@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from swarm_envs.ir.layer import IRLinks, compute_links
-from swarm_envs.geometry import wrap_angle
+from swarm_envs.sim.geometry import wrap_angle
 from swarm_envs.sensing.range_bearing import (
     POWER_LADDER,
     RangeBearingSensor,
@@ -238,7 +238,7 @@ def test_sensor_deterministic_and_uses_only_gains():
 
 # --- power control, vectorisation and the Droplet low-power near model ---
 
-from swarm_envs.platforms import get_platform  # noqa: E402
+from swarm_envs.sim.platforms import get_platform  # noqa: E402
 from swarm_envs.sensing.range_bearing import read  # noqa: E402
 
 DROPLET = get_platform("droplet")

@@ -5,10 +5,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from swarm_envs import reference
-from swarm_envs.copies import CopyRandom
+from swarm_envs._compile import reference
+from swarm_envs.sim.copies import CopyRandom
 from swarm_envs.ir.layer import IRLinks, compute_links, pair_gains
-from swarm_envs.geometry import wrap_angle
+from swarm_envs.sim.geometry import wrap_angle
 from swarm_envs.sensing import range_bearing as rbmod
 from swarm_envs.sensing.range_bearing import (
     CONFLICT,
@@ -309,7 +309,7 @@ def test_compiled_frame_words_equal_the_numpy_reference(platform):
     """kernels.frame_words reads the same id and CRC words as range_bearing.frame_words_numpy on random
     groups of colliding frames (1 to 40 links per group: reduceat's short and pairwise sums), with light
     around the floor so that noise and superposition decide bits."""
-    from swarm_envs.platforms import get_platform
+    from swarm_envs.sim.platforms import get_platform
     from swarm_envs.sensing.kernels import frame_words
 
     model = get_platform(platform).ir_model

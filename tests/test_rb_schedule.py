@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 import swarm_envs
-from swarm_envs.copies import CopyRandom
+from swarm_envs.sim.copies import CopyRandom
 from swarm_envs.ir.layer import IRLinks, compute_links
 from swarm_envs.sensing.range_bearing import TIMER_JITTER, TIMER_PERIOD, RangeBearingSensor
 from swarm_envs.validate.envs import scene_core

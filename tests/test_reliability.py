@@ -16,8 +16,8 @@ import pytest
 
 import swarm_envs
 from swarm_envs import aggregation_v0, centroid_seeking_v0, flocking_v0
-from swarm_envs.platforms import PLATFORMS
-from swarm_envs.world import Arena, _best_lattice, spawn_positions
+from swarm_envs.sim.platforms import PLATFORMS
+from swarm_envs.sim.world import Arena, _best_lattice, spawn_positions
 from tests.conftest import assert_tree_equal
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -125,7 +125,7 @@ def test_headings_alone_keep_the_task_spawn_and_positions_alone_are_seeded():
 @pytest.mark.parametrize("shape", Arena.SHAPES)
 @pytest.mark.parametrize("size", [0.05, 0.1, 0.2, 0.33, 0.75, 1.5, 3.0])
 def test_capacity_lower_bound_is_a_lower_bound(shape, size):
-    from swarm_envs.world import lattice_lower_bound
+    from swarm_envs.sim.world import lattice_lower_bound
 
     arena = Arena(shape, size)
     for radius, gap in ((0.035, 0.0035), (0.022, 0.0), (0.055, 0.011)):
@@ -133,7 +133,7 @@ def test_capacity_lower_bound_is_a_lower_bound(shape, size):
 
 
 def test_spawner_does_not_enumerate_a_roomy_arena(monkeypatch):
-    import swarm_envs.world as world
+    import swarm_envs.sim.world as world
 
     def enumerate_lattice(*args, **kwargs):
         raise AssertionError("the spawner enumerated the whole arena")
@@ -192,7 +192,7 @@ def test_too_many_anchors_is_a_capacity_error(sensing):
 
 def test_good_settings_still_pass_and_resolve():
     from swarm_envs.registry import task_class
-    from swarm_envs.settings import validate_settings
+    from swarm_envs.tasks.settings import validate_settings
 
     cfg = validate_settings(task_class("swarm_envs/Flocking-v0"), {"code": [15, 7], "message_bits": 255, "rb_noise": 0})
     assert cfg["code"] == (15, 7) and cfg["collision_penalty"] == 0.1 and cfg["n_robots"] == 10
@@ -299,7 +299,7 @@ def test_guarded_numba_cache_recovers(tmp_path):
     (tmp_path / "kern.py").write_text(
         textwrap.dedent(
             """
-            from swarm_envs._numba import njit
+            from swarm_envs._compile._numba import njit
 
             @njit(cache=True)
             def twice(x):

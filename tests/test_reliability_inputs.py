@@ -12,7 +12,7 @@ import pytest
 import swarm_envs
 from swarm_envs.agents import train as train_cli
 from swarm_envs.agents.config import ConfigError, load_config
-from swarm_envs.settings import SettingsError
+from swarm_envs.tasks.settings import SettingsError
 
 HUGE = "9" * 5000  # past Python's 4300-digit limit for reading and printing integers
 

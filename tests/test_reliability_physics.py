@@ -9,11 +9,11 @@ import numpy as np
 import pytest
 
 import swarm_envs
-from swarm_envs.platforms import PLATFORMS
-from swarm_envs.settings import SettingsError
-from swarm_envs.task import SPACING
-from swarm_envs.world import MAX_OVERLAP, Arena, World, default_substeps, min_substeps, spawn_positions
-from swarm_envs.geometry import wrap_angle
+from swarm_envs.sim.platforms import PLATFORMS
+from swarm_envs.tasks.settings import SettingsError
+from swarm_envs.tasks.task import SPACING
+from swarm_envs.sim.world import MAX_OVERLAP, Arena, World, default_substeps, min_substeps, spawn_positions
+from swarm_envs.sim.geometry import wrap_angle
 
 
 def drive(world: World, kind: str) -> tuple[np.ndarray, np.ndarray]:

@@ -141,9 +141,9 @@ def test_rejected_calls_change_nothing(config, ops):
 import fractions  # noqa: E402
 
 import swarm_envs  # noqa: E402
-from swarm_envs.platforms import PLATFORMS, get_platform  # noqa: E402
+from swarm_envs.sim.platforms import PLATFORMS, get_platform  # noqa: E402
 from swarm_envs.registry import task_class  # noqa: E402
-from swarm_envs.settings import COMMON_SETTINGS, Choice, Flag, Int, Real  # noqa: E402
+from swarm_envs.tasks.settings import COMMON_SETTINGS, Choice, Flag, Int, Real  # noqa: E402
 from tests.property_worker import EnvWorker  # noqa: E402
 
 #: seconds one example may take in the worker (build, reset and 3 steps of a small env)

@@ -13,8 +13,8 @@ import pytest
 
 import swarm_envs
 from swarm_envs.agents.config import ConfigError, load_config
-from swarm_envs.settings import SettingsError
-from swarm_envs.task import Task
+from swarm_envs.tasks.settings import SettingsError
+from swarm_envs.tasks.task import Task
 
 TINY_DEMO = ["--sensing", "ideal", "--n-robots", "2", "--steps", "1", "--pixels", "160", "--policy", "random"]
 

@@ -14,9 +14,9 @@ from hypothesis import HealthCheck, event, given, settings  # noqa: E402
 from hypothesis import strategies as st  # noqa: E402
 
 import swarm_envs  # noqa: E402
-from swarm_envs.platforms import PLATFORMS  # noqa: E402
-from swarm_envs.settings import SettingsError  # noqa: E402
-from swarm_envs.world import Arena, check_capacity, fit_count, spawn_positions  # noqa: E402
+from swarm_envs.sim.platforms import PLATFORMS  # noqa: E402
+from swarm_envs.tasks.settings import SettingsError  # noqa: E402
+from swarm_envs.sim.world import Arena, check_capacity, fit_count, spawn_positions  # noqa: E402
 
 FLOCKING, AGGREGATION, CENTROID = "swarm_envs/Flocking-v0", "swarm_envs/Aggregation-v0", "swarm_envs/CentroidSeeking-v0"
 

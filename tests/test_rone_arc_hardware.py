@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from swarm_envs.ir.layer import compute_links
-from swarm_envs.platforms import get_platform
+from swarm_envs.sim.platforms import get_platform
 from swarm_envs.sensing.bearing_sensor import (
     RONE_ARC_MEAN_DEG,
     RONE_ARC_RANGE_DEG,

@@ -8,12 +8,12 @@ import numpy as np
 import pytest
 
 from swarm_envs.ir.layer import compute_links
-from swarm_envs.platforms import get_platform
+from swarm_envs.sim.platforms import get_platform
 from swarm_envs.sensing.bearing_sensor import RONE_ARC_RANGE_DEG, MessageBearings, link_masks, sector_lut, sense_bearings
 from swarm_envs.sensing.exchange import BearingExchange, encode_rows
 from swarm_envs.sensing.full import BEACON_PERIOD, FullSensing
 from swarm_envs.registry import task_class
-from swarm_envs.settings import validate_settings
+from swarm_envs.tasks.settings import validate_settings
 
 RONE = get_platform("rone")
 

@@ -8,8 +8,8 @@ import pytest
 from scipy.sparse.csgraph import shortest_path
 
 import swarm_envs
-from swarm_envs.mid_angle_navigation_v0 import MidAngleNavigationTask
-from swarm_envs.task import BatchState, distance_to_segments, segments_crossed
+from swarm_envs.tasks.mid_angle_navigation_v0 import MidAngleNavigationTask
+from swarm_envs.tasks.task import BatchState, distance_to_segments, segments_crossed
 
 
 def _state(positions, headings, steps=5):

@@ -1,11 +1,11 @@
 """r-one observation rows are ranked by what the robot measures (age of the last decoded frame), never by
-the decoded id (swarm_envs.observation.ranked_slots)."""
+the decoded id (swarm_envs.sensing.observation.ranked_slots)."""
 
 import numpy as np
 import pytest
 
 import swarm_envs
-from swarm_envs.observation import ranked_slots
+from swarm_envs.sensing.observation import ranked_slots
 from swarm_envs.sensing.full import BEACON_PERIOD
 
 N = 10  # observer robot 0 at the centre, nine neighbours on a ring (one more than K = 8)

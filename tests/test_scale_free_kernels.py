@@ -1,12 +1,12 @@
 """The compiled 2-hop scale-free path (swarm_envs.sensing.kernels) equals the numpy reference
-(swarm_envs.reference.coordinates_all) bit for bit."""
+(swarm_envs._compile.reference.coordinates_all) bit for bit."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from swarm_envs import reference
+from swarm_envs._compile import reference
 from swarm_envs.sensing.scale_free import NeighbourKnowledge, coordinates_all, knowledge_from_matrix
 
 

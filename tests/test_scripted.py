@@ -12,7 +12,7 @@ from swarm_envs.agents.base import RandomPolicy
 from swarm_envs.agents.evaluation import confidence_interval, evaluate, make_env, random_factory, run_episode
 from swarm_envs.agents.scripted import SCRIPTED, bump_direction, circular_mean, make_scripted, scripted_class
 from swarm_envs.agents.tasks import SHORT_NAMES, headline, scripted_policy
-from swarm_envs.env import DT
+from swarm_envs.adapters.env import DT
 
 SEEDS = list(range(5))
 
@@ -243,7 +243,7 @@ def test_centroid_seeker_pauses_until_its_readings_are_younger_than_the_pause():
 
 
 def test_task_robot_groups_are_drawn_in_two_colours():
-    from swarm_envs.render import _ROBOT, _ROBOT_B
+    from swarm_envs.adapters.render import _ROBOT, _ROBOT_B
 
     env = swarm_envs.make("swarm_envs/ParityClustering-v0", sensing="ideal", render_mode="rgb_array")
     env.reset(seed=0)

@@ -1,12 +1,12 @@
 """Compiled glue of the range & bearing sensor and the bearing exchange (swarm_envs.sensing.kernels) against
-their numpy references (swarm_envs.reference, or the formulas written out here), bit for bit."""
+their numpy references (swarm_envs._compile.reference, or the formulas written out here), bit for bit."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from swarm_envs import reference
+from swarm_envs._compile import reference
 from swarm_envs.sensing import range_bearing as rbmod
 from swarm_envs.sensing.exchange import BearingExchange
 

@@ -16,9 +16,9 @@ import pytest
 
 import swarm_envs
 from swarm_envs import get_platform
-import swarm_envs.mid_angle_navigation_v0 as mid
+import swarm_envs.tasks.mid_angle_navigation_v0 as mid
 from swarm_envs.registry import task_class
-from swarm_envs.settings import COMMON_SETTINGS, SettingsError
+from swarm_envs.tasks.settings import COMMON_SETTINGS, SettingsError
 
 BUILT_IN = [env_id for env_id in swarm_envs.list_envs() if env_id.startswith("swarm_envs/")]
 PLATFORMS = ["droplet", "epuck", "rone"]

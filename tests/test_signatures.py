@@ -9,8 +9,8 @@ import typing
 import pytest
 
 from swarm_envs import aggregation_v0, centroid_seeking_v0, flocking_v0, mid_angle_navigation_v0, parity_clustering_v0, sorted_following_v0
-from swarm_envs.settings import COMMON_DEFAULTS, COMMON_SETTINGS, Choice
-from swarm_envs.platforms import PLATFORMS
+from swarm_envs.tasks.settings import COMMON_DEFAULTS, COMMON_SETTINGS, Choice
+from swarm_envs.sim.platforms import PLATFORMS
 
 TASK_MODULES = [aggregation_v0, flocking_v0, centroid_seeking_v0, sorted_following_v0, parity_clustering_v0, mid_angle_navigation_v0]
 _CHOICES = {key: rule.choices for key, rule in COMMON_SETTINGS.items() if isinstance(rule, Choice)}
@@ -75,8 +75,8 @@ def test_arguments_reach_the_env(module):
 
 
 def test_task_module_builds_the_entry_points_from_a_task():
-    from swarm_envs.factories import task_module
-    from swarm_envs.task import Default, Real, Task
+    from swarm_envs.tasks.factories import task_module
+    from swarm_envs.tasks.task import Default, Real, Task
 
     class GainTask(Task):
         SETTINGS = {"gain": Real(2.0, low=0.0, help="the gain of the test"), "n_robots": Default(3, help="three robots")}

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 import swarm_envs
-from swarm_envs.env import STATE_ROBOT_FIELDS
+from swarm_envs.adapters.env import STATE_ROBOT_FIELDS
 
 N_FIELDS = len(STATE_ROBOT_FIELDS)
 

@@ -14,8 +14,8 @@ from hypothesis import strategies as st  # noqa: E402
 from hypothesis.extra import numpy as hnp  # noqa: E402
 
 import swarm_envs  # noqa: E402
-from swarm_envs.env import info_group  # noqa: E402
-from swarm_envs.task import Task  # noqa: E402
+from swarm_envs.adapters.env import info_group  # noqa: E402
+from swarm_envs.tasks.task import Task  # noqa: E402
 
 B, N = 3, 4  # copies of make_vec, robots
 

@@ -80,7 +80,7 @@ def test_batched_components_equal_one_graph_per_copy():
     from scipy.sparse.csgraph import connected_components
     from scipy.spatial import cKDTree
 
-    from swarm_envs.metrics import largest_component_fraction
+    from swarm_envs.tasks.metrics import largest_component_fraction
 
     def cluster_stats(positions, link_distance):  # one copy: (largest-cluster fraction, number of clusters)
         n = len(positions)

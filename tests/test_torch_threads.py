@@ -1,8 +1,8 @@
-"""The default torch thread count of the adapters and examples (swarm_envs.torch_threads)."""
+"""The default torch thread count of the adapters and examples (swarm_envs.adapters.torch_threads)."""
 
 import pytest
 
-from swarm_envs.torch_threads import default_torch_threads, set_torch_threads
+from swarm_envs.adapters.torch_threads import default_torch_threads, set_torch_threads
 
 
 def test_default_rule(monkeypatch):

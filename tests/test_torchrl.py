@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import swarm_envs
-from swarm_envs.env import FlatInfos, flat_info
+from swarm_envs.adapters.env import FlatInfos, flat_info
 
 pytest.importorskip("torchrl", reason="torchrl is not installed: pip install -e '.[torchrl]'")
 import torch  # noqa: E402

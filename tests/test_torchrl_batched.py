@@ -189,7 +189,7 @@ def test_bad_arguments_raise_one_line_errors():
 
 
 def test_sets_torch_threads_by_default_and_on_request(monkeypatch):
-    from swarm_envs.torch_threads import default_torch_threads
+    from swarm_envs.adapters.torch_threads import default_torch_threads
 
     before = torch.get_num_threads()
     try:

@@ -211,7 +211,7 @@ class _GhostMetric:
         import numpy as np
 
         import swarm_envs
-        from swarm_envs.task import Task
+        from swarm_envs.tasks.task import Task
 
         class Ghost(Task):
             METRICS = {"spread": "mean", "ghost": "final"}

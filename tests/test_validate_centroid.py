@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from swarm_envs.platforms import get_platform
+from swarm_envs.sim.platforms import get_platform
 from swarm_envs.sensing.full import BEACON_PERIOD
 from swarm_envs.validate.centroid import D_STEP, PauseStepSeeker, experiment_env, trial_layouts
 from swarm_envs.validate.envs import scene_core

@@ -13,8 +13,8 @@ from pathlib import Path
 import pytest
 
 import swarm_envs
-import swarm_envs.vector as vector
-from swarm_envs.settings import SettingsError
+import swarm_envs.adapters.vector as vector
+from swarm_envs.tasks.settings import SettingsError
 
 ROOT = Path(__file__).resolve().parents[1]
 GIB = 2**30
@@ -101,7 +101,7 @@ def test_train_config_refuses_more_copies_than_the_memory_holds(monkeypatch):
 MEASURE = textwrap.dedent(
     """
     import gc, sys, numpy as np, swarm_envs
-    from swarm_envs.vector import copy_memory
+    from swarm_envs.adapters.vector import copy_memory
     def rss():
         return next(int(l.split()[1]) * 1024 for l in open("/proc/self/status") if l.startswith("VmHWM:"))
     B, n, steps = (int(a) for a in sys.argv[1:4])

@@ -1,11 +1,11 @@
-"""swarm_envs._vecmath: the vectorisable log / exp / power used by the e-puck gain kernel."""
+"""swarm_envs.sim._vecmath: the vectorisable log / exp / power used by the e-puck gain kernel."""
 
 import math
 
 import numpy as np
 import pytest
 
-from swarm_envs import _vecmath
+from swarm_envs.sim import _vecmath
 
 
 def _samples(rng):

@@ -1,4 +1,4 @@
-"""The env views share their checks and infos (swarm_envs.views): the same messages and the same numbers."""
+"""The env views share their checks and infos (swarm_envs.adapters.views): the same messages and the same numbers."""
 
 from __future__ import annotations
 

@@ -1,11 +1,11 @@
-"""swarm_envs._worker: the worker thread and the helper threads of run_chunks."""
+"""swarm_envs._compile._worker: the worker thread and the helper threads of run_chunks."""
 
 import threading
 import time
 
 import pytest
 
-from swarm_envs._worker import run_chunks, worker
+from swarm_envs._compile._worker import run_chunks, worker
 
 
 def test_run_chunks_returns_results_in_chunk_order_with_chunk_zero_here():

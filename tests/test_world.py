@@ -3,9 +3,9 @@
 import numpy as np
 import pytest
 
-from swarm_envs.platforms import PLATFORMS
-from swarm_envs.world import Arena, World, spawn_positions
-from swarm_envs.geometry import wrap_angle
+from swarm_envs.sim.platforms import PLATFORMS
+from swarm_envs.sim.world import Arena, World, spawn_positions
+from swarm_envs.sim.geometry import wrap_angle
 
 
 @pytest.mark.parametrize("platform", sorted(PLATFORMS))
@@ -18,7 +18,7 @@ def test_free_robot_follows_analytic_arc(platform, v_frac, w_frac):
     v, w = (x.item() for x in world.wheel_limited(np.array([v]), np.array([w])))
     for _ in range(10):  # 1 s
         world.step(np.array([v]), np.array([w]), 0.1)
-    # the control velocities compensate pymunk's one-sub-step motor latency (swarm_envs.world docstring):
+    # the control velocities compensate pymunk's one-sub-step motor latency (swarm_envs.sim.world docstring):
     # a free robot ends every control step on the exact differential-drive arc
     t, h0 = 1.0, 0.7
     if abs(w) > 1e-12:
@@ -109,7 +109,7 @@ def test_place_rejects_overlap_and_outside():
 
 def test_step_worlds_equals_stepping_each_world_alone():
     """Several worlds stepped together (the batched core's physics) move bit for bit as each alone."""
-    from swarm_envs.world import step_worlds
+    from swarm_envs.sim.world import step_worlds
 
     p = PLATFORMS["epuck"]
     arena = Arena("square", 0.8)
@@ -145,7 +145,7 @@ class _PostSolveReference:
     solver processed flags the sector of its normal seen from each robot it touches."""
 
     def __init__(self, world):
-        from swarm_envs.world import _ROBOT, _WALL
+        from swarm_envs.sim.world import _ROBOT, _WALL
 
         self.world = world
         self.index = {body: i for i, body in enumerate(world.bodies)}
@@ -163,7 +163,7 @@ class _PostSolveReference:
 
     def flags(self):
         """Flags of the contacts since the last call, relative to the world's current headings."""
-        from swarm_envs.world import N_BUMP_SECTORS
+        from swarm_envs.sim.world import N_BUMP_SECTORS
 
         bumps = np.zeros((self.world.n, N_BUMP_SECTORS), dtype=bool)
         if self.contacts:
@@ -182,7 +182,7 @@ def test_bump_flags_equal_post_solve_callbacks_on_dense_scenes(substeps, shape):
     """The batched contact read gives, step by step, exactly the flags of post-solve callbacks, on
     aggregated robots (random commands, pushing each other and the walls) and under a crush; sub-step
     counts below and above chipmunk's collision persistence (3) never mix in an earlier step's contacts."""
-    from swarm_envs.world import step_worlds
+    from swarm_envs.sim.world import step_worlds
 
     p = PLATFORMS["epuck"]
     rng = np.random.default_rng(11 + substeps)

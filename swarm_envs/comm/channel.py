@@ -74,8 +74,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from swarm_envs._vecmath import exp_array
-from swarm_envs.platforms import Platform, get_platform
+from swarm_envs.sim._vecmath import exp_array
+from swarm_envs.sim.platforms import Platform, get_platform
 
 __all__ = [
     "ADCModel",
@@ -190,7 +190,7 @@ def detector_intensity(
     Returns:
         (..., n_detectors) intensity ``y = min(1, sum_emitters gain)`` (dimensionless, 1 = saturation).
     """
-    from swarm_envs.geometry import wrap_angle
+    from swarm_envs.sim.geometry import wrap_angle
     from swarm_envs.ir.layer import pair_gains
 
     platform = get_platform(platform)
@@ -245,7 +245,7 @@ def detector_response(v: np.ndarray, y: np.ndarray, slot_s: float, c: float, b: 
     """Detector level after one bit slot of ``slot_s`` seconds at constant intensity ``y`` (module docstring).
 
     Exact solution of ``dv/dt = (y - v)(v + b)/c`` over the slot: with ``u0 = v + b`` and ``Y = y + b``,
-    ``v' = Y u0 / (u0 + (Y - u0) exp(-Y slot_s / c)) - b`` (``exp``: :func:`swarm_envs._vecmath.exp_array`,
+    ``v' = Y u0 / (u0 + (Y - u0) exp(-Y slot_s / c)) - b`` (``exp``: :func:`swarm_envs.sim._vecmath.exp_array`,
     within 1 ulp of the C library's). ``y`` is clipped to [0, 1] (no negative
     photocurrent); a dark detector whose level has decayed below DARK_LEVEL is set to exactly 0. ``c <= 0``
     returns the instantaneous level ``clip(y, 0, 1)``. Same arithmetic as the compiled slot loop.
@@ -257,6 +257,6 @@ def detector_response(v: np.ndarray, y: np.ndarray, slot_s: float, c: float, b: 
     kt = slot_s / c
     Y = y + b
     u0 = v + b
-    E = exp_array(-Y * kt)  # the library's exp (swarm_envs._vecmath), as the compiled slot loop
+    E = exp_array(-Y * kt)  # the library's exp (swarm_envs.sim._vecmath), as the compiled slot loop
     out = Y * u0 / (u0 + (Y - u0) * E) - b
     return np.where((y == 0.0) & ((out < DARK_LEVEL) | (v == 0.0)), 0.0, out)

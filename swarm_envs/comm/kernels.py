@@ -37,8 +37,8 @@ from typing import Any, NamedTuple
 import numpy as np
 from numba.typed import List as _typed_list
 
-from swarm_envs._numba import njit
-from swarm_envs._vecmath import exp_moderate
+from swarm_envs._compile._numba import njit
+from swarm_envs.sim._vecmath import exp_moderate
 
 __all__ = ["COUNTERS", "PER_ROBOT", "DELIVERY_FIELDS", "StepDraws", "GeneratorList", "draw_step", "draw_copies", "link_tables", "build_frames", "slot_loop", "decode_words"]
 
@@ -526,7 +526,7 @@ def _respond(ysum: np.ndarray, inoise: np.ndarray, level: np.ndarray, b: float, 
     arithmetic) for every detector, flat over (robot, detector): the light ``ysum`` plus the intensity
     noise ``inoise`` (same shape, or empty for none) clipped to [0, 1], the levels ``level`` updated in place;
     ``b`` the response bias, ``kt`` = slot duration / c > 0. Branch-free, with the library's own ``exp``
-    (:func:`swarm_envs._vecmath.exp_moderate`), so the compiler vectorises the loop. A dark detector at
+    (:func:`swarm_envs.sim._vecmath.exp_moderate`), so the compiler vectorises the loop. A dark detector at
     level 0 stays at 0 (its update, ``b b / b - b``, is within rounding of 0 and below DARK_LEVEL)."""
     noisy = inoise.shape[0] > 0
     for k in range(ysum.shape[0]):

@@ -56,7 +56,7 @@ from typing import Any
 
 import numpy as np
 
-from swarm_envs.copies import CopyRandom
+from swarm_envs.sim.copies import CopyRandom
 from swarm_envs.comm.bch import BCHCode, code as bch_code
 from swarm_envs.comm.channel import ADCModel, adc_model_for, detector_response
 from swarm_envs.comm.kernels import COUNTERS, DELIVERY_FIELDS, PER_ROBOT, GeneratorList, StepDraws, build_frames, draw_copies, link_tables, slot_loop
@@ -73,7 +73,7 @@ from swarm_envs.comm.protocol import (
     bits_to_uint,
     crc_table,
 )
-from swarm_envs.platforms import Platform, get_platform
+from swarm_envs.sim.platforms import Platform, get_platform
 
 __all__ = ["Network", "Deliveries", "PreparedStep", "BITRATES", "COMM_MODES", "BACKENDS"]
 
@@ -193,7 +193,7 @@ class Network:
         adc_model: override the platform's ADC model.
         crc_bits: 0, 8 or 16: width of the CRC over header + payload (:func:`swarm_envs.comm.protocol.crc`;
             frames failing it are dropped). Default None: the platform's own
-            (:attr:`~swarm_envs.platforms.Platform.frame_crc_bits`: CRC-16 on the r-one [L Table 3.3] and the
+            (:attr:`~swarm_envs.sim.platforms.Platform.frame_crc_bits`: CRC-16 on the r-one [L Table 3.3] and the
             Droplet, none on the e-puck as [T20]), at least 8 in flooding mode (our CRC-8 on the e-puck):
             without error detection a corrupted copy (e.g. from a collision) has a new (origin, seq) or payload
             and is re-flooded by everyone as a new message, a broadcast storm that the paper does not report
@@ -202,7 +202,7 @@ class Network:
             :mod:`swarm_envs.comm.kernels`; ``"numpy"``: the vectorised reference. Both consume the same
             pre-drawn random numbers (:func:`swarm_envs.comm.kernels.draw_copies`) and give the same results.
         n_copies: env copies of ``n_robots`` robots each (rows copy-major); ``rng`` is then a
-            :class:`swarm_envs.copies.CopyRandom` with one generator per copy. Frames carry a copy's own
+            :class:`swarm_envs.sim.copies.CopyRandom` with one generator per copy. Frames carry a copy's own
             robot numbers (header widths as in a single env), every random number of a copy comes from its
             own generator, and :meth:`reset_copies` restarts some copies only.
     """

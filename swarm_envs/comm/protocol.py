@@ -22,7 +22,7 @@ information bits (``B * k``, zero padded) are, most significant bit first::
 - ``sender``: id of the last hop; only present in flooding mode (where it may differ from origin).
 - ``payload``: the message.
 - ``crc``: optional CRC over all the bits before it (:func:`crc`), most significant bit first; a frame whose
-  CRC does not match is dropped. Per platform (:attr:`swarm_envs.platforms.Platform.frame_crc_bits`): the
+  CRC does not match is dropped. Per platform (:attr:`swarm_envs.sim.platforms.Platform.frame_crc_bits`): the
   r-one's messages carry a 16-bit CRC [L Sec. 3.2.1, Table 3.3], so do the Droplet firmware's; [T20]
   gives the e-puck none (its frames are protected only by the BCH code of every block, the header
   included), and flooding adds our CRC-8 there.
@@ -62,7 +62,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from swarm_envs.comm.bch import BCHCode, code as bch_code
-from swarm_envs.platforms import CRC_WIDTHS  # the allowed ``crc_bits`` of a frame (0: no CRC)
+from swarm_envs.sim.platforms import CRC_WIDTHS  # the allowed ``crc_bits`` of a frame (0: no CRC)
 
 __all__ = [
     "FrameFormat",

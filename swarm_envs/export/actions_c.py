@@ -1,6 +1,6 @@
 """Write ``actions.h`` / ``actions.c``: the policy's action in [-1, 1] -> the wheel speeds and message bits
 the platform takes, as the env maps actions (:class:`swarm_envs.core.SwarmCore` and
-:func:`swarm_envs.world.wheel_limited`).
+:func:`swarm_envs.sim.world.wheel_limited`).
 
 The env turns action ``(a0, a1, bits...)`` into the commanded linear speed ``a0 * max_speed`` (m/s) and
 angular speed ``a1 * max_angular_speed`` (rad/s), and each wheel's speed ``v -+ w * wheel_base / 2`` is
@@ -12,7 +12,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from swarm_envs.platforms import Platform
+from swarm_envs.sim.platforms import Platform
 
 __all__ = ["NATIVE_UNITS", "write_actions"]
 

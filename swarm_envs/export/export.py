@@ -15,7 +15,7 @@ from swarm_envs.export.policy_c import write_policy
 from swarm_envs.export.quantize import FixedNet, quantize
 from swarm_envs.export.run import ExportError, LoadedRun, load_run
 from swarm_envs.registry import task_class
-from swarm_envs.views import resolve_config
+from swarm_envs.adapters.views import resolve_config
 
 __all__ = ["export_run", "observation_bound", "fixed_network", "layout_table"]
 
@@ -80,7 +80,7 @@ def fixed_network(run: LoadedRun, actor: Actor, mode: str) -> FixedNet:
 
 def layout_table(run: LoadedRun) -> str:
     """Markdown rows: part, flat offset, shape, columns (the flat order of ``gymnasium.spaces.flatten``)."""
-    from swarm_envs.observation import ID_FIELDS, RB_FIELDS
+    from swarm_envs.sensing.observation import ID_FIELDS, RB_FIELDS
 
     columns = {
         "range_bearing": ", ".join(RB_FIELDS) + " (range m, age control steps)",

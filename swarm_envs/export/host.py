@@ -11,8 +11,8 @@ from pathlib import Path
 import numpy as np
 
 from swarm_envs.agents.base import Policy, flatten_batch
-from swarm_envs.observation import ObservationLayout
-from swarm_envs.platforms import Platform
+from swarm_envs.sensing.observation import ObservationLayout
+from swarm_envs.sim.platforms import Platform
 
 __all__ = ["compiler", "compile_shared", "object_sizes", "CPolicyLibrary", "CPolicy"]
 

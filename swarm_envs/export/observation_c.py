@@ -4,7 +4,7 @@
 tables a robot's firmware keeps (its range & bearing or sector-bearing neighbour table, the SwarmCom
 messages decoded since the last control step, its scale-free neighbour table and rigid flag, its bump
 flags and last action) ``obs_build`` writes the float32 vector the simulator's observation layout
-(:class:`swarm_envs.observation.ObservationLayout`, flattened in Gymnasium's sorted key order) gives for
+(:class:`swarm_envs.sensing.observation.ObservationLayout`, flattened in Gymnasium's sorted key order) gives for
 that config: the same row ranking, truncation, scaling, id encoding and clipping to the observation Box.
 The C uses no dynamic memory and only ``<math.h>`` and ``<stdint.h>``.
 
@@ -19,8 +19,8 @@ from typing import Any
 
 import numpy as np
 
-from swarm_envs.geometry import wrap_angle
-from swarm_envs.world import N_BUMP_SECTORS
+from swarm_envs.sim.geometry import wrap_angle
+from swarm_envs.sim.world import N_BUMP_SECTORS
 
 __all__ = ["write_observation_builder", "builder_constants", "firmware_tables", "PART_MACROS"]
 
@@ -46,7 +46,7 @@ def _make_env(env_id: str, env_kwargs: dict[str, Any]) -> Any:
 
 def builder_constants(env: Any) -> dict[str, Any]:
     """The sizes, capacities, offsets and bounds the C builder is generated with, for a built ``env``
-    (a :class:`swarm_envs.env.SwarmEnv` with ``sensing="full"``).
+    (a :class:`swarm_envs.adapters.env.SwarmEnv` with ``sensing="full"``).
 
     Keys: ``K``, ``M``, ``message_bits``, ``action_size``, ``n_world``, ``observe_ids``, ``size`` (length
     of the flat vector), ``offsets`` (part -> first index), ``low`` / ``high`` (float32 bounds of the flat
@@ -176,7 +176,7 @@ def _table_order(mine: np.ndarray, slots: np.ndarray | None, row: int, has_range
 
     A platform with range ranks its rows by range, so the table's order does not matter. A platform without
     range (r-one) ranks by age with equal ages in a random order the simulator draws each step
-    (:func:`swarm_envs.observation.ranked_slots`); the C builder breaks equal keys by table order, so here the
+    (:func:`swarm_envs.sensing.observation.ranked_slots`); the C builder breaks equal keys by table order, so here the
     table lists the readings the simulator ranked first, in its order, then the rest: a firmware that shuffles
     its table once per control step follows the same rule in distribution."""
     if has_range or slots is None:

@@ -18,11 +18,11 @@ from pathlib import Path
 
 import numpy as np
 
-from swarm_envs.env import DT
+from swarm_envs.adapters.env import DT
 from swarm_envs.export.network import Actor, Layer, LstmLayer, SetFeatures
 from swarm_envs.export.quantize import TANH_IN_FRAC, TANH_TABLE, FixedNet
-from swarm_envs.observation import ObservationLayout
-from swarm_envs.platforms import Platform
+from swarm_envs.sensing.observation import ObservationLayout
+from swarm_envs.sim.platforms import Platform
 
 __all__ = ["write_policy", "odometry_indices"]
 
@@ -57,7 +57,7 @@ def _d(value: float) -> str:
 def odometry_indices(layout: ObservationLayout) -> dict[str, np.ndarray]:
     """Flat indices the odometry reads and turns: ``range_bearing`` (K, 7), ``scale_free`` (K, 3), last action (2,)."""
     from swarm_envs.agents.policies import _part_indices
-    from swarm_envs.world import N_BUMP_SECTORS
+    from swarm_envs.sim.world import N_BUMP_SECTORS
 
     index = _part_indices(layout)
     return {"rb": index["range_bearing"], "sf": index["scale_free"], "action": index["proprio"][N_BUMP_SECTORS : N_BUMP_SECTORS + 2]}

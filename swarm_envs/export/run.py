@@ -8,8 +8,8 @@ from typing import Any
 
 import yaml
 
-from swarm_envs.observation import ObservationLayout
-from swarm_envs.platforms import Platform
+from swarm_envs.sensing.observation import ObservationLayout
+from swarm_envs.sim.platforms import Platform
 
 __all__ = ["ExportError", "LoadedRun", "load_run", "SUPPORTED"]
 

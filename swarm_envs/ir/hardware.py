@@ -20,7 +20,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from swarm_envs.platforms import Platform, get_platform
+from swarm_envs.sim.platforms import Platform, get_platform
 
 __all__ = ["Hardware", "draw_hardware"]
 

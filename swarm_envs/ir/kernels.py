@@ -6,7 +6,7 @@ pair by pair, skipping dark emitter-detector combinations early, and test each l
 candidate occluders (per-ray line of sight, docs/design.md#infrared-physical-layer). They implement exactly the models of
 :mod:`swarm_envs.ir.models` (the numpy methods there stay the reference, and the layer's path for a model
 without a kernel; ``tests/test_ir_kernels.py`` checks the two agree to 1e-12). The plain numpy references
-of the pair, occluder and frame kernels are in :mod:`swarm_envs.reference`.
+of the pair, occluder and frame kernels are in :mod:`swarm_envs._compile.reference`.
 """
 
 from __future__ import annotations
@@ -15,9 +15,9 @@ import math
 
 import numpy as np
 
-from swarm_envs._numba import njit  # numba.njit whose cache recovers from corrupted files
-from swarm_envs._vecmath import power_into
-from swarm_envs._worker import run_chunks
+from swarm_envs._compile._numba import njit  # numba.njit whose cache recovers from corrupted files
+from swarm_envs.sim._vecmath import power_into
+from swarm_envs._compile._worker import run_chunks
 
 __all__ = ["MODEL_IDS", "model_params", "gains_kernel", "gains_kernel_threaded", "ChunkRows", "occluders_kernel", "occluders_kernel_threaded", "neighbour_csr_kernel", "occluder_frames_kernel", "directed_pairs_kernel", "select_links_kernel"]
 
@@ -119,7 +119,7 @@ def _finish_far_rays(
 ) -> None:
     """The e-puck rows ``row0:row1`` of ``out`` (P, n_d, n_e), whose far rays (flat positions in ``out``
     ``far_at[:n_far]``, squared lengths ``far_L2``) hold their factor only (:func:`_gains_chunk`): multiplied
-    by ``L2^expo`` (:func:`swarm_envs._vecmath.power_into`, one vectorised pass), then each detector's
+    by ``L2^expo`` (:func:`swarm_envs.sim._vecmath.power_into`, one vectorised pass), then each detector's
     sum over emitters into ``sums`` rows, sequentially in emitter order from 0.0 (dark rays add 0.0,
     which changes no sum: the sums of the lit rays in that order, as documented)."""
     power_into(far_L2[:n_far], expo, power[:n_far])
@@ -251,7 +251,7 @@ def gains_kernel_threaded(
     hardware: tuple | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray] | tuple[np.ndarray, np.ndarray, np.ndarray, ChunkRows]:
     """:func:`gains_kernel` with ``compact=True`` on ``n_chunks`` threads (this one and the helper threads
-    of :func:`swarm_envs._worker.run_chunks`): the pairs are cut into contiguous chunks, each filled (and
+    of :func:`swarm_envs._compile._worker.run_chunks`): the pairs are cut into contiguous chunks, each filled (and
     compacted within its own rows) by one thread, then the chunks' lit rows are moved together in order
     (:func:`_gather_chunk_rows`, :func:`_gather_gain_rows`). Every row is computed by the same code as
     the serial kernel, so the result is the same bit for bit, whatever the number of chunks or threads.
@@ -591,7 +591,7 @@ def occluders_kernel_threaded(
     n_chunks: int,
 ) -> tuple[np.ndarray, np.ndarray]:
     """:func:`occluders_kernel` on ``n_chunks`` threads (this one and the helper threads of
-    :func:`swarm_envs._worker.run_chunks`): robots' lists sorted and pairs searched in contiguous chunks,
+    :func:`swarm_envs._compile._worker.run_chunks`): robots' lists sorted and pairs searched in contiguous chunks,
     one thread each, every pair by the same code into its own part of the buffer, then gathered in
     order; the same result bit for bit, whatever the number of chunks or threads."""
     N, P = positions.shape[0], rx.shape[0]
@@ -835,7 +835,7 @@ def directed_pairs_kernel(
     (world frame) and ``cos_h, sin_h`` the robots' heading cosines / sines: ``rel = (c d_x + s d_y,
     -s d_x + c d_y)`` (tx centre in rx's frame, c, s of rx), ``rel_heading`` = heading of tx - heading
     of rx wrapped to (-pi, pi] and ``distance = sqrt(d_x^2 + d_y^2)``: the same values as the numpy
-    reference (:func:`swarm_envs.reference.ir_directed_pairs`), bit for bit.
+    reference (:func:`swarm_envs._compile.reference.ir_directed_pairs`), bit for bit.
 
     Returns rx (P,), tx (P,), pair_of (P,) the row of ``pairs`` of each, rel (P, 2), (cos, sin) of the
     relative heading (P, 2) (from the robots' cosines and sines), rel_heading (P,), distance (P,), P = 2 U.

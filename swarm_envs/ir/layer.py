@@ -37,10 +37,10 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.spatial import cKDTree
 
-from swarm_envs.geometry import wrap_angle
+from swarm_envs.sim.geometry import wrap_angle
 from swarm_envs.ir import kernels
 from swarm_envs.ir.hardware import Hardware
-from swarm_envs.platforms import Platform, get_platform
+from swarm_envs.sim.platforms import Platform, get_platform
 
 __all__ = [
     "IRLinks", "compute_links", "compute_links_with_rows", "neighbour_csr", "pair_geometry", "pair_cosines", "pair_gains", "pair_occluders", "line_of_sight",
@@ -360,8 +360,8 @@ def pair_occluders(
 
     Vectorised over pairs: such a robot lies within ``sqrt(|rx tx|^2 / 4 + width^2)`` of one end, so the candidates
     are the neighbours of both ends within that distance (one KD-tree ``query_pairs`` in CSR form), tested
-    by a compiled kernel (plain numpy reference: :func:`swarm_envs.reference.occluder_lists` and
-    :func:`swarm_envs.reference.occluder_frames`).
+    by a compiled kernel (plain numpy reference: :func:`swarm_envs._compile.reference.occluder_lists` and
+    :func:`swarm_envs._compile.reference.occluder_frames`).
 
     Returns:
         offsets (P + 1,) int, robots (K,) int, centres (K, 2) in the receiver's body frame (m): pair p's
@@ -710,7 +710,7 @@ def gain_threads(n_pairs: int) -> int:
     """Threads for the gain kernel and occluder search of one scene of ``n_pairs`` candidate directed pairs: numba's thread
     count (``NUMBA_NUM_THREADS``, default all cores; ``numba.set_num_threads``) from
     :data:`THREADED_MIN_PAIRS` pairs on (about 370 e-puck robots at the flocking default density), else 1.
-    The chunks run on the calling thread and the helper threads of :func:`swarm_envs._worker.run_chunks`
+    The chunks run on the calling thread and the helper threads of :func:`swarm_envs._compile._worker.run_chunks`
     (the library's own, which wait on a lock when idle, so they take no core from the physics or the
     worker thread; numba's own parallel threads spin for milliseconds after each parallel region).
 
@@ -732,7 +732,7 @@ def _directed_pairs(
     """Both directions of the unordered ``pairs`` (U, 2) sorted by (rx, tx): (rx, tx, row of ``pairs``, tx
     centre in rx's frame (P, 2) (m), (cos, sin) of tx's heading in rx's frame (P, 2) from the robots' own
     cosines and sines, that heading (P,) (rad, wrapped), centre distance (P,) (m)); compiled (plain numpy
-    reference: :func:`swarm_envs.reference.ir_directed_pairs`)."""
+    reference: :func:`swarm_envs._compile.reference.ir_directed_pairs`)."""
     c, s = np.cos(headings), np.sin(headings)  # per robot, then per pair
     pairs = np.ascontiguousarray(pairs, dtype=np.int64)
     return kernels.directed_pairs_kernel(pairs, np.ascontiguousarray(positions), np.ascontiguousarray(headings), c, s)

@@ -1,8 +1,8 @@
 """Infrared hardware models: emitter directivity x detector directivity x medium attenuation.
 
 One small object per platform, obtained with ``platform.ir_model`` or
-:func:`swarm_envs.platforms.model_for` (made once per platform object; this module knows no platform presets:
-it registers its classes by hardware kind with :func:`swarm_envs.platforms.register_ir_model`). Every model
+:func:`swarm_envs.sim.platforms.model_for` (made once per platform object; this module knows no platform presets:
+it registers its classes by hardware kind with :func:`swarm_envs.sim.platforms.register_ir_model`). Every model
 has ``gain(distance_m, detector_angle, emitter_angle) -> ndarray`` (numpy broadcasting), the noiseless
 light one emitter delivers to one detector:
 
@@ -24,7 +24,7 @@ from typing import Any
 
 import numpy as np
 
-from swarm_envs.platforms import register_ir_model
+from swarm_envs.sim.platforms import register_ir_model
 
 __all__ = ["DropletIR", "DropletLowPowerIR", "EpuckIR", "RoneIR", "MODEL_CLASSES"]
 
@@ -287,8 +287,8 @@ class RoneIR:
         return "RoneIR()"
 
 
-#: Model class for each kind of IR hardware, registered with :func:`swarm_envs.platforms.register_ir_model`
-#: (:func:`swarm_envs.platforms.model_for` picks one per platform).
+#: Model class for each kind of IR hardware, registered with :func:`swarm_envs.sim.platforms.register_ir_model`
+#: (:func:`swarm_envs.sim.platforms.model_for` picks one per platform).
 MODEL_CLASSES: dict[str, type] = {"droplet": DropletIR, "epuck": EpuckIR, "rone": RoneIR}
 for _kind, _cls in MODEL_CLASSES.items():
     register_ir_model(_kind, _cls)

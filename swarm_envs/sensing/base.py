@@ -29,13 +29,13 @@ class NeighbourReadings:
     heading: np.ndarray = field(default_factory=_empty)
     age: np.ndarray = field(default_factory=_empty)
     #: optional, from a stack that already picked each robot's k nearest readings (the ideal one): ``slots``
-    #: (N, k) reading index per observation slot (-1 empty; :func:`swarm_envs.observation.nearest_slots`
+    #: (N, k) reading index per observation slot (-1 empty; :func:`swarm_envs.sensing.observation.nearest_slots`
     #: of ``rx`` by ``range``) and ``slot_cos_sin`` (N, k, 2) cos and sin of those bearings (of reading 0 in
     #: empty slots); the observation builder then reuses them instead of selecting again
     slots: np.ndarray | None = None
     slot_cos_sin: np.ndarray | None = None
     #: optional, from a stack that also built them (the full one, on its worker thread): ``rows`` (N, k, 7)
-    #: float32, the observation rows of ``slots`` (:func:`swarm_envs.observation.range_bearing_rows`)
+    #: float32, the observation rows of ``slots`` (:func:`swarm_envs.sensing.observation.range_bearing_rows`)
     rows: np.ndarray | None = None
 
     @property

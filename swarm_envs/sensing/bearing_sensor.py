@@ -41,8 +41,8 @@ from functools import lru_cache
 
 import numpy as np
 
-from swarm_envs.copies import CopyRandom
-from swarm_envs.platforms import Platform, get_platform
+from swarm_envs.sim.copies import CopyRandom
+from swarm_envs.sim.platforms import Platform, get_platform
 from swarm_envs.sensing.base import NeighbourReadings
 
 __all__ = [
@@ -360,7 +360,7 @@ class MessageBearings:
     Args:
         platform: the robots' platform (sector axes from its detectors / emitters).
         n_robots: robots per env copy.
-        rng: generator (or :class:`swarm_envs.copies.CopyRandom`, one per copy) for round phases and noise.
+        rng: generator (or :class:`swarm_envs.sim.copies.CopyRandom`, one per copy) for round phases and noise.
         n_copies: env copies (rows copy-major).
         period: round (beacon) period (steps).
         arc_range: (min, max) arc width (deg) for the noise model, or None (nominal gains, noiseless).

@@ -62,7 +62,7 @@ from typing import Any
 
 import numpy as np
 
-from swarm_envs.copies import CopyRandom
+from swarm_envs.sim.copies import CopyRandom
 from swarm_envs.sensing.kernels import decode_bits, encode_tables, roll_tables, store_deliveries
 
 __all__ = ["BearingExchange", "NeighbourKnowledge", "encode_rows", "decode_rows", "thesis_round_time", "readings_table", "dequantise"]
@@ -150,7 +150,7 @@ def encode_rows(ids: np.ndarray, bearings: np.ndarray, id_bits: int, count_bits:
 def decode_rows(bits: np.ndarray, id_bits: int, count_bits: int, max_entries: int, bearing_bits: int = 4) -> tuple[np.ndarray, np.ndarray]:
     """Inverse of :func:`encode_rows`: bits (R, >= needed) -> ids (R, max_entries) (-1 pad), bearings (rad).
     The integers are read by a kernel (:func:`swarm_envs.sensing.kernels.decode_bits`; numpy reference:
-    :func:`swarm_envs.reference.decode_rows`), the bearings by the formula here."""
+    :func:`swarm_envs._compile.reference.decode_rows`), the bearings by the formula here."""
     bits = np.ascontiguousarray(bits, dtype=np.uint8)
     if bits.ndim != 2:
         raise ValueError(f"decode_rows: bits must be (rows, bits), got shape {bits.shape}")
@@ -195,7 +195,7 @@ class BearingExchange:
         bearing_bits: bits per transmitted bearing (4 = 16 sectors of 22.5 degrees).
         kind: SwarmCom system message kind.
         rng: generator for the broadcast phases (network mode), or per-copy streams
-            (:class:`swarm_envs.copies.CopyRandom`) when the exchange runs several env copies.
+            (:class:`swarm_envs.sim.copies.CopyRandom`) when the exchange runs several env copies.
         n_copies: env copies of ``n_robots`` robots each (rows copy-major; ids in messages are a copy's own
             0..n_robots-1, so messages and their widths are those of a single env).
     """
@@ -315,7 +315,7 @@ class BearingExchange:
         tables (their last complete round): most recently heard first, at most ``max_entries``, ids in a
         copy's own numbering, in the format of :func:`encode_rows` (compiled:
         :func:`swarm_envs.sensing.kernels.encode_tables`; numpy reference:
-        :func:`swarm_envs.reference.encode_tables`)."""
+        :func:`swarm_envs._compile.reference.encode_tables`)."""
         robots = np.asarray(robots, dtype=np.int64)
         return encode_tables(
             self.pub_ids, self.pub_bear, self.pub_time, robots, self.offset.astype(np.int64), self.max_entries,
@@ -382,7 +382,7 @@ class BearingExchange:
         self.stats["received"] += int(recv.size)
         if ids.shape[1] != self.row_ids.shape[2]:  # an ideal-mode exchange keeps rows of k_max entries
             raise ValueError(f"decoded rows of {ids.shape[1]} entries do not fit the tables' rows of {self.row_ids.shape[2]}")
-        # one delivery after the other (numpy reference: swarm_envs.reference.store_deliveries)
+        # one delivery after the other (numpy reference: swarm_envs._compile.reference.store_deliveries)
         store_deliveries(
             recv, origin, own_b.astype(float), hit, ids, np.asarray(th, float), self._now, self.tab_ids, self.tab_bear,
             self.tab_time, self.row_ids, self.row_bear, self.row_time,
@@ -392,7 +392,7 @@ class BearingExchange:
         """Start a new round of ``robots`` [L Sec. 3.2.2]: the tables they filled during the round that ends
         become their published ones (what :meth:`knowledge` and their broadcasts read), and the tables they
         fill next start empty: "each robot clears all prior neighbor information" (compiled:
-        :func:`swarm_envs.sensing.kernels.roll_tables`; numpy reference: :func:`swarm_envs.reference.roll_tables`)."""
+        :func:`swarm_envs.sensing.kernels.roll_tables`; numpy reference: :func:`swarm_envs._compile.reference.roll_tables`)."""
         robots = np.asarray(robots, dtype=np.int64).reshape(-1)
         roll_tables(robots, *(getattr(self, name) for name in _FILL + _PUB), NEVER)
 

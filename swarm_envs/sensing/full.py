@@ -32,7 +32,7 @@ Each control step, in this order (data flows one way):
    cones from the measured 63-74 degree spread, mean 68 [L Sec. 3.2.1, Fig. 3.9(b)]. The ``rone`` has no
    range sensor: its ``range_bearing`` rows hold these readings with range 0, most recently decoded first
    (ties in a random order drawn each step from the copy's ranking stream,
-   :func:`swarm_envs.observation.ranked_slots`): the K kept are the K heard last, and a row's position
+   :func:`swarm_envs.sensing.observation.ranked_slots`): the K kept are the K heard last, and a row's position
    carries nothing of the decoded id.
 4. **Bearing exchange and scale-free coordinates** [L] (:class:`swarm_envs.sensing.exchange.BearingExchange`,
    :func:`swarm_envs.sensing.scale_free.coordinates_all`): bearings from ``bearing_source``
@@ -51,16 +51,16 @@ from typing import Any
 
 import numpy as np
 
-from swarm_envs._worker import worker
+from swarm_envs._compile._worker import worker
 from swarm_envs.comm.channel import recommended_relative_threshold
 from swarm_envs.comm.network import Network, PreparedStep
-from swarm_envs.copies import CopyRandom
-from swarm_envs.geometry import wrap_angle
+from swarm_envs.sim.copies import CopyRandom
+from swarm_envs.sim.geometry import wrap_angle
 from swarm_envs.ir.hardware import Hardware, draw_hardware
 from swarm_envs.ir.layer import compute_links_with_rows, gain_threads
 from swarm_envs.ir.models import RoneIR
-from swarm_envs.observation import nearest_slots, pack_nearest, range_bearing_rows, ranked_slots
-from swarm_envs.platforms import Platform
+from swarm_envs.sensing.observation import nearest_slots, pack_nearest, range_bearing_rows, ranked_slots
+from swarm_envs.sim.platforms import Platform
 from swarm_envs.sensing.base import MessageReadings, NeighbourReadings, ScaleFreeReadings, SensorFrame
 from swarm_envs.sensing.bearing_sensor import RONE_ARC_MEAN_DEG, RONE_ARC_RANGE_DEG, MessageBearings
 from swarm_envs.sensing.exchange import BearingExchange, thesis_round_time
@@ -104,7 +104,7 @@ _STAT_NAMES = ("tx_started", "deferrals", "rx_delivered", "rx_lost", "collisions
 
 
 def rb_on_worker_thread(n_links: int, n_copies: int) -> bool:
-    """Whether range & bearing runs on the worker thread (:mod:`swarm_envs._worker`) while SwarmCom runs on
+    """Whether range & bearing runs on the worker thread (:mod:`swarm_envs._compile._worker`) while SwarmCom runs on
     the calling thread: for a single scene (``n_copies == 1``) large enough for the gain kernel's threads
     (:func:`gain_threads` of its ``n_links`` links: numba on more than one thread, called from the main
     thread). The two read the same links, draw from their own streams and touch disjoint state, and their

@@ -11,9 +11,9 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import cKDTree
 
-from swarm_envs._numba import njit
-from swarm_envs.observation import nearest_slots, wrap_difference_scalar, wrapped_difference
-from swarm_envs.platforms import Platform
+from swarm_envs._compile._numba import njit
+from swarm_envs.sensing.observation import nearest_slots, wrap_difference_scalar, wrapped_difference
+from swarm_envs.sim.platforms import Platform
 from swarm_envs.sensing.base import MessageReadings, NeighbourReadings, ScaleFreeReadings, SensorFrame
 
 __all__ = ["IdealSensing", "candidate_pairs", "copy_pairs", "directed_pairs", "directed_links", "neighbour_pairs"]
@@ -69,7 +69,7 @@ def copy_pairs(positions: np.ndarray, max_range: float, copy_size: int) -> np.nd
 def directed_links(pairs: np.ndarray, n_rows: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Both directions of sorted (P, 2) pairs i < j as :func:`directed_pairs` gives them (sorted by
     (rx, tx)), plus the index of each link's pair; ``n_rows`` > every robot index. O(P), compiled (plain
-    numpy reference: :func:`swarm_envs.reference.directed_links`)."""
+    numpy reference: :func:`swarm_envs._compile.reference.directed_links`)."""
     pairs = np.ascontiguousarray(pairs, dtype=np.int64).reshape(-1, 2)
     if len(pairs) == 0:
         empty = np.zeros(0, dtype=np.int64)
@@ -80,7 +80,7 @@ def directed_links(pairs: np.ndarray, n_rows: int) -> tuple[np.ndarray, np.ndarr
 @njit(cache=True, nogil=True)
 def _link_geometry_kernel(positions: np.ndarray, headings: np.ndarray, rx: np.ndarray, tx: np.ndarray):  # pragma: no cover - compiled
     """Per link: offset ``p_tx - p_rx`` (dx, dy) (m), rx's heading and ``wrap_angle(h_tx - h_rx)`` (rad),
-    in one pass (:func:`swarm_envs.observation.wrap_difference_scalar`: the bits of ``wrap_angle``)."""
+    in one pass (:func:`swarm_envs.sensing.observation.wrap_difference_scalar`: the bits of ``wrap_angle``)."""
     P = len(rx)
     dx = np.empty(P, np.float64)
     dy = np.empty(P, np.float64)

@@ -1,6 +1,6 @@
 """Compiled (numba) kernels for the batched 2-hop scale-free algorithm [L Algs. 1-4], and the sensing glue.
 
-:func:`swarm_envs.reference.coordinates_all` is the reference of the 2-hop path: vectorised numpy over robots,
+:func:`swarm_envs._compile.reference.coordinates_all` is the reference of the 2-hop path: vectorised numpy over robots,
 but built from many (N, K, K) temporaries (slot sort, id matching, reachability by matrix squaring,
 lock-step BFS / Prim). These kernels do the integer and graph work robot by robot with K-sized local
 arrays; the transcendental and rounded formulas (inner angles, rounding, ANGLEBALANCE, law-of-sines logs,
@@ -15,20 +15,20 @@ Also the range & bearing sensor's and the bearing exchange's compiled glue, each
 compared bit for bit in ``tests/test_sensing_glue_kernels.py`` (or the files named): :func:`segment_sum`
 (``np.add.reduceat`` over rows), :func:`priority_independent_set` and
 :func:`priority_independent_set_sorted` (the contention schedule; reference: the Luby rounds of
-:func:`swarm_envs.reference.independent_set`), :func:`frame_words` (id and CRC words read
+:func:`swarm_envs._compile.reference.independent_set`), :func:`frame_words` (id and CRC words read
 from colliding request frames; reference :func:`swarm_envs.sensing.range_bearing.frame_words_numpy`),
 :func:`firing_sums`, :func:`adc_bits`, :func:`adc_pass`, :func:`pick_ids`, :func:`merge_readings`
 (the sensor's per-step sums, ADC reads, decode rule and reading table), :func:`encode_tables`,
 :func:`decode_bits`, :func:`roll_tables`, :func:`store_deliveries` (the exchange's messages and
-tables). The references that only the tests use are in :mod:`swarm_envs.reference`.
+tables). The references that only the tests use are in :mod:`swarm_envs._compile.reference`.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from swarm_envs._numba import njit  # numba.njit whose cache recovers from corrupted files
-from swarm_envs._sort import argsort_quick  # np.argsort as numba compiles it, quicker to compile
+from swarm_envs._compile._numba import njit  # numba.njit whose cache recovers from corrupted files
+from swarm_envs._compile._sort import argsort_quick  # np.argsort as numba compiles it, quicker to compile
 
 _INT64_MAX = int(np.iinfo(np.int64).max)  # a constant in the kernels (np.iinfo compiles its own helpers)
 
@@ -371,7 +371,7 @@ def _segment_sum(a, starts, init):  # pragma: no cover - compiled
 
 def sum_last(a: np.ndarray) -> np.ndarray:
     """Sum over the last axis, added left to right (``((a0 + a1) + a2) + ...``), compiled (reference:
-    :func:`swarm_envs.reference.sum_last`, numpy column additions in the same order, the same bits).
+    :func:`swarm_envs._compile.reference.sum_last`, numpy column additions in the same order, the same bits).
     (``a.sum(-1)`` reduces a short last axis slowly: ~4x slower for the (L, 8, 8) gain matrices.)"""
     a = np.asarray(a, dtype=float)
     if a.shape[-1] == 0:
@@ -562,7 +562,7 @@ def adc_pass(lam, rows, noise, p, scale, top):  # pragma: no cover - compiled
 def group_brightest(gains, starts, labels):  # pragma: no cover - compiled
     """Per contiguous group of rows (``starts``), the label of the row holding the group's largest entry
     (first such row on ties); ``gains`` (L, m) without NaN. Reference:
-    :func:`swarm_envs.reference.group_argmax` of the row maxima."""
+    :func:`swarm_envs._compile.reference.group_argmax` of the row maxima."""
     G = starts.size
     L, m = gains.shape
     out = np.empty(G, labels.dtype)
@@ -586,7 +586,7 @@ def group_brightest(gains, starts, labels):  # pragma: no cover - compiled
 @njit(cache=True, nogil=True)
 def pick_ids(heard, ident_h, crc_h, crc16, id_check, not_heard, conflict):  # pragma: no cover - compiled
     """Decode rule of :func:`swarm_envs.sensing.range_bearing.decode_ids` (reference
-    :func:`swarm_envs.reference.pick_ids`): per group, the id every checking channel
+    :func:`swarm_envs._compile.reference.pick_ids`): per group, the id every checking channel
     names, ``not_heard`` if none checks, ``conflict`` if they disagree. ``ident_h``/``crc_h`` are the words
     of the heard channels in ``np.nonzero(heard)`` order."""
     G, n_d = heard.shape
@@ -668,7 +668,7 @@ def merge_readings(old_key, old_f, old_i, max_age, new_key, new_f, new_i):  # pr
 def roll_tables(robots, tab_ids, tab_bear, tab_time, row_ids, row_bear, row_time,
                 pub_ids, pub_bear, pub_time, pub_row_ids, pub_row_bear, pub_row_time, never):  # pragma: no cover - compiled  # fmt: skip
     """In place :meth:`swarm_envs.sensing.exchange.BearingExchange.start_rounds` (reference:
-    :func:`swarm_envs.reference.roll_tables`): for each of ``robots`` the tables filled during its round (``tab_*``, ``row_*``) are
+    :func:`swarm_envs._compile.reference.roll_tables`): for each of ``robots`` the tables filled during its round (``tab_*``, ``row_*``) are
     copied to the published ones (``pub_*``) and emptied (ids -1, bearings NaN, times ``never``)."""
     k = tab_ids.shape[1]
     w = row_ids.shape[2]
@@ -692,7 +692,7 @@ def roll_tables(robots, tab_ids, tab_bear, tab_time, row_ids, row_bear, row_time
 @njit(cache=True, nogil=True)
 def encode_tables(tab_ids, tab_bear, tab_time, robots, offset, max_entries, id_bits, count_bits, bearing_bits):  # pragma: no cover - compiled
     """Bit rows of the bearing-exchange messages of ``robots`` (:meth:`swarm_envs.sensing.exchange.BearingExchange.encode`;
-    reference: :func:`swarm_envs.reference.encode_tables` with :func:`~swarm_envs.sensing.exchange.encode_rows`):
+    reference: :func:`swarm_envs._compile.reference.encode_tables` with :func:`~swarm_envs.sensing.exchange.encode_rows`):
     each robot's table slots, most recently heard first (stable in slot order), the first
     ``max_entries`` of them, present ones (id >= 0) compacted to the front; count then, per entry, the id
     minus the robot's ``offset`` and the bearing sector ``rint(theta / (2 pi / 2**bearing_bits)) mod
@@ -745,7 +745,7 @@ def encode_tables(tab_ids, tab_bear, tab_time, robots, offset, max_entries, id_b
 def decode_bits(bits, id_bits, count_bits, max_entries, bearing_bits):  # pragma: no cover - compiled
     """Integer part of :func:`swarm_envs.sensing.exchange.decode_rows`: count (capped at ``max_entries``),
     ids and bearing sectors of each row's first ``count`` entries (-1 beyond; bits beyond a row's
-    width read as 0; reference: :func:`swarm_envs.reference.decode_rows`). Returns ids, sectors (R,
+    width read as 0; reference: :func:`swarm_envs._compile.reference.decode_rows`). Returns ids, sectors (R,
     max_entries) int64."""
     R, W = bits.shape
     e = id_bits + bearing_bits
@@ -985,7 +985,7 @@ def slot_keys(ids, th, two_pi, id_max):  # pragma: no cover - compiled
 @njit(cache=True, nogil=True)
 def store_deliveries(r, o, own_b, hit, ids, th, now, tab_ids, tab_bear, tab_time, row_ids, row_bear, row_time):  # pragma: no cover - compiled
     """In place table update of :meth:`swarm_envs.sensing.exchange.BearingExchange.receive`, one delivery
-    after the other (reference: :func:`swarm_envs.reference.store_deliveries`, numpy waves of one delivery
+    after the other (reference: :func:`swarm_envs._compile.reference.store_deliveries`, numpy waves of one delivery
     per receiver, which is the same order per receiver): the entry of sender ``o[d]`` in receiver ``r[d]``'s table (else
     the oldest slot; empty slots are the oldest) gets its row ``ids[d]``, ``th[d]`` and, when the
     receiver has a bearing of the sender (``hit[d]``), that bearing and a fresh time; a delivery

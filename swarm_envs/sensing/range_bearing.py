@@ -76,11 +76,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from swarm_envs.copies import CopyRandom, CopyStream
+from swarm_envs.sim.copies import CopyRandom, CopyStream
 from swarm_envs.ir.hardware import Hardware
-from swarm_envs.geometry import wrap_angle
+from swarm_envs.sim.geometry import wrap_angle
 from swarm_envs.ir.layer import IRLinks, pair_gains
-from swarm_envs.platforms import Platform, get_platform
+from swarm_envs.sim.platforms import Platform, get_platform
 from swarm_envs.sensing.kernels import (
     PAIRWISE_INIT,
     FRAME_WORDS_MAX_GROUP,
@@ -236,7 +236,7 @@ def decode_ids(
         light, np.asarray(frames, dtype=bool), np.asarray(starts, dtype=np.int64), heard, noise,
         float(model.adc_scale), float(model.adc_max), float(model.no_reading_floor), ID_BITS,
     )
-    # the decode rule (numpy reference: swarm_envs.reference.pick_ids)
+    # the decode rule (numpy reference: swarm_envs._compile.reference.pick_ids)
     return pick_ids(heard, ident_h, crc_h, CRC16, bool(id_check), NOT_HEARD, CONFLICT)
 
 
@@ -317,8 +317,8 @@ def measure(
 
     Args:
         brightness: (P, n_d, n_e) noiseless full-power brightness (model units).
-        rng: random generator for the noise, or per-copy streams (:class:`swarm_envs.copies.CopyRandom`, or a
-            normal :class:`swarm_envs.copies.CopyStream`)
+        rng: random generator for the noise, or per-copy streams (:class:`swarm_envs.sim.copies.CopyRandom`, or a
+            normal :class:`swarm_envs.sim.copies.CopyStream`)
             with ``row_copy`` (P,) the env copy of each matrix (sorted): each copy's noise then comes from its
             own stream, as in a single env.
         sigma: noise standard deviation in ADC counts; default the model's ``default_noise_sigma``.
@@ -360,7 +360,7 @@ def _noise(
     rng: np.random.Generator | CopyRandom | CopyStream, sigma: float, shape: tuple[int, ...], row_copy: np.ndarray | None
 ) -> np.ndarray:
     """N(0, sigma^2) noise of ``shape``; rows from each copy's stream when ``rng`` is a CopyRandom or a
-    normal :class:`~swarm_envs.copies.CopyStream`."""
+    normal :class:`~swarm_envs.sim.copies.CopyStream`."""
     rows = np.zeros(shape[0], dtype=np.int64) if row_copy is None else row_copy
     if isinstance(rng, CopyStream):
         if rng.kind != "normal":

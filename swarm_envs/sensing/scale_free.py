@@ -69,7 +69,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from swarm_envs.sensing.exchange import BearingExchange, NeighbourKnowledge
-from swarm_envs.geometry import wrap_angle
+from swarm_envs.sim.geometry import wrap_angle
 from swarm_envs.sensing.kernels import PAIRWISE_INIT, slot_keys, two_hop_propagate, two_hop_triangles, unit_mean_positions
 
 __all__ = [
@@ -148,7 +148,7 @@ def coordinates_all(
     The slot sort, id matching, components and BFS / Prim run robot by robot in
     :mod:`swarm_envs.sensing.kernels`, every floating-point formula (inner angles rounded to
     1e-``ANGLE_DECIMALS`` rad, ANGLEBALANCE, law of sines, sensitivities, normalisation) in numpy here; the
-    result equals the vectorised numpy reference :func:`swarm_envs.reference.coordinates_all` bit for bit.
+    result equals the vectorised numpy reference :func:`swarm_envs._compile.reference.coordinates_all` bit for bit.
 
     Args:
         knowledge: see :class:`NeighbourKnowledge`.
@@ -440,7 +440,7 @@ def triangle_angles(
     """Inner angles of triangles (u, i, j) from the bearings ``theta_i(u), theta_i(j), theta_j(u), theta_j(i),
     theta_u(i), theta_u(j)`` (rad): ``Pij`` at i and ``Pji`` at j, rounded to 1e-ANGLE_DECIMALS rad and
     angle-balanced [L Alg. 2] when ``balance``, and ``good``: the non-degenerate ones (both away from 0 and pi).
-    Shared by :func:`coordinates_all` and its numpy reference (:func:`swarm_envs.reference.coordinates_all`)."""
+    Shared by :func:`coordinates_all` and its numpy reference (:func:`swarm_envs._compile.reference.coordinates_all`)."""
     Pij = np.round(np.abs(wrap_angle(i_u - i_j)), ANGLE_DECIMALS)
     Pji = np.round(np.abs(wrap_angle(j_u - j_i)), ANGLE_DECIMALS)
     pu = np.round(np.abs(wrap_angle(u_i - u_j)), ANGLE_DECIMALS)
@@ -485,7 +485,7 @@ class ScaleFreeSensor:
         angle_balance: bool = True,
         **exchange_kwargs,
     ) -> None:
-        from swarm_envs.platforms import get_platform
+        from swarm_envs.sim.platforms import get_platform
 
         self.platform = get_platform(platform)
         self.exchange = BearingExchange(n_robots, exchange, k_max=k_max, **exchange_kwargs)

@@ -18,7 +18,7 @@ metrics are ours.
 
 ``--message-range`` also measures each platform's reliable message range on our channel model (the
 distance up to which a facing pair exchanges frames with bit error probability below 0.01 at 310 bps, the
-measure of [T20 Sec. 7]; the values :data:`swarm_envs.task.MESSAGE_RANGE` records).
+measure of [T20 Sec. 7]; the values :data:`swarm_envs.tasks.task.MESSAGE_RANGE` records).
 """
 
 from __future__ import annotations
@@ -35,7 +35,7 @@ import swarm_envs
 from swarm_envs.agents.evaluation import confidence_interval, evaluate
 from swarm_envs.agents.scripted import make_scripted
 from swarm_envs.agents.tasks import headline, metric_reductions, scripted_policy
-from swarm_envs.settings import COMMON_SETTINGS, Int, OneLineArgumentParser, cli_type
+from swarm_envs.tasks.settings import COMMON_SETTINGS, Int, OneLineArgumentParser, cli_type
 
 __all__ = ["BEHAVIOURS", "run_episode_trajectory", "message_ranges", "main"]
 
@@ -141,7 +141,7 @@ def message_ranges(steps: int = 300, seed: int = 0) -> dict[str, float]:
     from swarm_envs.comm.channel import recommended_relative_threshold
     from swarm_envs.comm.network import Network
     from swarm_envs.ir.layer import compute_links
-    from swarm_envs.platforms import PLATFORMS
+    from swarm_envs.sim.platforms import PLATFORMS
 
     out = {}
     rng = np.random.default_rng(seed)

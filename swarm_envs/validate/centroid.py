@@ -51,12 +51,12 @@ from typing import Any
 import numpy as np
 
 from swarm_envs.ir.layer import compute_links
-from swarm_envs.platforms import get_platform
+from swarm_envs.sim.platforms import get_platform
 from swarm_envs.sensing.bearing_sensor import BearingReadings, draw_half_arcs, pair_half_arcs, sense_bearings
 from swarm_envs.sensing.exchange import BearingExchange
 from swarm_envs.sensing.scale_free import coordinates_all
 from swarm_envs.validate.report import Row, print_rows, rows_json
-from swarm_envs.settings import Int, OneLineArgumentParser, Real, cli_type
+from swarm_envs.tasks.settings import Int, OneLineArgumentParser, Real, cli_type
 
 PAPER_MEAN_CM = 14.03
 D_STEP = 0.11  # m [L Sec. 6.2.2]
@@ -293,7 +293,7 @@ def experiment_env(
     by :class:`PauseStepSeeker`. The distance to the anchors' current centroid (a seeker can push an anchor;
     the largest anchor displacement is reported) is recorded after each of a seeker's first ``rounds``
     steps; metrics as :func:`experiment`. ``settings`` override the env's."""
-    from swarm_envs.platforms import get_platform
+    from swarm_envs.sim.platforms import get_platform
     from swarm_envs.validate.envs import scene_core
 
     layouts = trial_layouts(seed, polygons, starts, r_range)

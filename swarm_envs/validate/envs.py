@@ -14,8 +14,8 @@ from typing import Any
 import numpy as np
 
 from swarm_envs.core import SwarmCore
-from swarm_envs.views import check_reset_options, make_layout, resolve_config
-from swarm_envs.platforms import get_platform
+from swarm_envs.adapters.views import check_reset_options, make_layout, resolve_config
+from swarm_envs.sim.platforms import get_platform
 from swarm_envs.registry import task_class
 from swarm_envs.sensing.exchange import NeighbourKnowledge
 

@@ -40,13 +40,13 @@ from typing import Any
 
 import numpy as np
 
-from swarm_envs.copies import CopyRandom
-from swarm_envs.geometry import wrap_angle
+from swarm_envs.sim.copies import CopyRandom
+from swarm_envs.sim.geometry import wrap_angle
 from swarm_envs.ir.layer import IRLinks, compute_links, pair_gains
-from swarm_envs.platforms import get_platform
+from swarm_envs.sim.platforms import get_platform
 from swarm_envs.sensing.range_bearing import RangeBearingSensor, brightness, read
 from swarm_envs.validate.report import Row, print_rows, rows_json
-from swarm_envs.settings import Int, OneLineArgumentParser, Real, cli_type
+from swarm_envs.tasks.settings import Int, OneLineArgumentParser, Real, cli_type
 
 DROPLET_DIAMETER_CM = 4.4
 
@@ -305,7 +305,7 @@ PAIR_SPACING = 1.0  # m between the pairs of one env copy: beyond the Droplet's 
 def unknown_settings(settings: dict[str, Any], task: str = ENV_TASK) -> list[str]:
     """The keys of ``settings`` that ``task`` does not have (sorted)."""
     from swarm_envs.registry import task_class
-    from swarm_envs.settings import COMMON_SETTINGS
+    from swarm_envs.tasks.settings import COMMON_SETTINGS
 
     known = {**COMMON_SETTINGS, **task_class(task).settings()}
     return sorted(k for k in settings if k not in known)

@@ -56,7 +56,7 @@ import numpy as np
 
 from swarm_envs.sensing.scale_free import coordinates_all, knowledge_from_matrix, null_space_lengths
 from swarm_envs.validate.report import Row, print_rows, rows_json
-from swarm_envs.settings import Int, OneLineArgumentParser, Real, cli_type
+from swarm_envs.tasks.settings import Int, OneLineArgumentParser, Real, cli_type
 
 PAPER = {
     "rigid_k1_deg4_min": 50.0,
@@ -210,7 +210,7 @@ def edge_error_experiment(
     error a given edge error implies. Returns the :class:`EdgeErrors` summary plus the kept ``scenes``
     (positions, headings) and the sector bearing error."""
     from swarm_envs.ir.layer import compute_links
-    from swarm_envs.platforms import get_platform
+    from swarm_envs.sim.platforms import get_platform
     from swarm_envs.sensing.bearing_sensor import RONE_ARC_MEAN_DEG, RONE_ARC_RANGE_DEG, draw_half_arcs, pair_half_arcs, sense_bearings
     from scipy.sparse.csgraph import connected_components
     from scipy.sparse import coo_matrix

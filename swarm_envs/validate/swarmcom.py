@@ -50,12 +50,12 @@ from scipy.spatial import cKDTree
 from swarm_envs.comm.bch import error_free_probability
 from swarm_envs.comm.channel import M_MAX, M_MIN, RESPONSE_BIAS, ADCModel, gain_to_intensity
 from swarm_envs.comm.network import Network
-from swarm_envs.copies import CopyRandom
-from swarm_envs.geometry import wrap_angle
+from swarm_envs.sim.copies import CopyRandom
+from swarm_envs.sim.geometry import wrap_angle
 from swarm_envs.ir.layer import compute_links, line_of_sight, occluder_width, pair_gains, pair_occluders
-from swarm_envs.platforms import get_platform
+from swarm_envs.sim.platforms import get_platform
 from swarm_envs.validate.report import Row, print_rows, rows_json
-from swarm_envs.settings import Int, OneLineArgumentParser, cli_type
+from swarm_envs.tasks.settings import Int, OneLineArgumentParser, cli_type
 
 PLATFORM = "epuck"
 SEP = 3.0  # m between independent scenes (> ir_range)

@@ -29,7 +29,7 @@ from llvmlite import ir
 from numba import types
 from numba.core.extending import intrinsic
 
-from swarm_envs._numba import njit
+from swarm_envs._compile._numba import njit
 
 __all__ = ["log_positive", "exp_moderate", "exp_into", "exp_array", "power_into"]
 

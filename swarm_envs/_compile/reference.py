@@ -15,7 +15,7 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
-from swarm_envs.geometry import wrap_angle
+from swarm_envs.sim.geometry import wrap_angle
 
 if TYPE_CHECKING:
     from swarm_envs.sensing.exchange import NeighbourKnowledge
@@ -40,11 +40,11 @@ __all__ = [
 ]
 
 
-# -- observations (swarm_envs.observation) -------------------------------------------------------------------
+# -- observations (swarm_envs.sensing.observation) -------------------------------------------------------------------
 def pack_nearest(n_rows: int, row: np.ndarray, key: np.ndarray, values: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray]:
-    """Reference of :func:`swarm_envs.observation.pack_nearest` (kernels ``_pack_nearest_kernel`` and
-    ``_nearest_slots_kernel`` of :mod:`swarm_envs.observation`, whose ``order`` is
-    :func:`~swarm_envs.observation.nearest_slots`): a stable sort of the links by row, then key (NaN last),
+    """Reference of :func:`swarm_envs.sensing.observation.pack_nearest` (kernels ``_pack_nearest_kernel`` and
+    ``_nearest_slots_kernel`` of :mod:`swarm_envs.sensing.observation`, whose ``order`` is
+    :func:`~swarm_envs.sensing.observation.nearest_slots`): a stable sort of the links by row, then key (NaN last),
     and the first ``k`` of each row. Returns ``(packed (n_rows, k, F), order (n_rows, k))``."""
     values = np.asarray(values, dtype=np.float64)
     if values.ndim == 1:
@@ -63,7 +63,7 @@ def pack_nearest(n_rows: int, row: np.ndarray, key: np.ndarray, values: np.ndarr
     return packed, order
 
 
-# -- ideal sensing and metrics (swarm_envs.sensing.ideal, swarm_envs.metrics) ----------------------------------
+# -- ideal sensing and metrics (swarm_envs.sensing.ideal, swarm_envs.tasks.metrics) ----------------------------------
 def directed_links(pairs: np.ndarray, n_rows: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Reference of :func:`swarm_envs.sensing.ideal.directed_links` (kernel ``_directed_links_kernel``):
     both directions of sorted (P, 2) pairs i < j, sorted by (rx, tx) with one argsort of a unique key, and
@@ -79,7 +79,7 @@ def directed_links(pairs: np.ndarray, n_rows: int) -> tuple[np.ndarray, np.ndarr
 
 
 def largest_component_fraction(positions: np.ndarray, link_distance: float, pairs: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """Reference of :func:`swarm_envs.metrics.largest_component_fraction` (kernel
+    """Reference of :func:`swarm_envs.tasks.metrics.largest_component_fraction` (kernel
     ``_component_stats_kernel``, a union-find): for (B, N, 2) positions, scipy's connected components of
     one graph over all copies (the KD-tree's pairs, :func:`swarm_envs.sensing.ideal.candidate_pairs`, unless
     ``pairs`` are given). Returns (largest-component fraction (B,), number of components (B,))."""

@@ -9,7 +9,7 @@ and returns them resolved: defaults filled in and every value in its canonical P
 ``float``, ``bool``, a tuple for ``code``), so numpy scalars are accepted where a number is meant and
 bools are refused. The envs, ``make_vec``, ``train.py``'s config check and the command-line tools all call
 it, so a bad value fails when the env is built, never at ``reset`` or mid-training. Geometry that needs
-the built arena (do the robots fit?) is checked by the task right after (:class:`swarm_envs.task.Task`).
+the built arena (do the robots fit?) is checked by the task right after (:class:`swarm_envs.tasks.task.Task`).
 
 Errors: unknown keys raise ``TypeError`` (like any unknown keyword argument); bad values raise
 :class:`SettingsError` (a ``ValueError``) whose ``key`` attribute names the setting.
@@ -32,8 +32,8 @@ import numpy as np
 from swarm_envs._text import shown
 from swarm_envs.comm.bch import SUPPORTED as BCH_CODES
 from swarm_envs.comm.protocol import MAX_PAYLOAD
-from swarm_envs.platforms import PLATFORMS, Platform, get_platform
-from swarm_envs.world import MAX_CLOSING, MAX_SUBSTEPS, default_substeps, min_substeps
+from swarm_envs.sim.platforms import PLATFORMS, Platform, get_platform
+from swarm_envs.sim.world import MAX_CLOSING, MAX_SUBSTEPS, default_substeps, min_substeps
 
 __all__ = [
     "Setting",
@@ -265,7 +265,7 @@ COMMON_SETTINGS: dict[str, Setting] = {
         help="number of agents",
     ),
     "platform": _PlatformSetting(
-        "epuck", why="a custom Platform's fields are checked when it is made (swarm_envs.platforms); here also "
+        "epuck", why="a custom Platform's fields are checked when it is made (swarm_envs.sim.platforms); here also "
         f"that its speed and size need at most {MAX_SUBSTEPS} physics sub-steps",
         help='``"droplet"`` (4.4 cm, 6 IR channels), ``"epuck"`` (7 cm, 8 sensors), ``"rone"`` (11 cm, 8 RX + 8 TX), or a ``Platform``',
     ),
@@ -296,7 +296,7 @@ COMMON_SETTINGS: dict[str, Setting] = {
         why=f"the SwarmCom frame's 8-bit length field counts at most {MAX_PAYLOAD} payload bits (swarm_envs.comm.protocol)",
         help="payload bits b an agent sends through its action (0: no message action)",
     ),
-    # the robot's own id and the neighbour / sender ids its sensing decoded (swarm_envs.observation)
+    # the robot's own id and the neighbour / sender ids its sensing decoded (swarm_envs.sensing.observation)
     "observe_ids": Flag(False, help="the robot's own id and the neighbour and sender ids its sensing decoded (``own_id``, ``*_ids`` parts)"),
     # SwarmCom messaging [T20]
     "bitrate": Choice(
@@ -377,7 +377,7 @@ COMMON_SETTINGS: dict[str, Setting] = {
     "motion_noise": Flag(True, help="the platform's motion error: per-wheel speed gains drawn per episode, per-step wheel-speed noise, the r-one's 15 mm/s dead zone [L Sec. 3.1] (``docs/design.md#motion-error``); ``False``: exact differential-drive kinematics"),
     "physics_substeps": Int(
         None, "pymunk sub-steps per control step", low=1, high=MAX_SUBSTEPS, allow_none=True,
-        why="None: the platform's default (8 Droplet, 21 e-puck, 32 r-one; swarm_envs.world.default_substeps), at "
+        why="None: the platform's default (8 Droplet, 21 e-puck, 32 r-one; swarm_envs.sim.world.default_substeps), at "
         "which robots overlap each other, and reach past a wall, by at most 2 % of a diameter at the default arena size, also when driven "
         "at full speed into each other and into the walls; at least the platform's minimum (3 Droplet, 8 e-puck, "
         f"11 r-one; fewer let robots close more than 5 % of a diameter per sub-step, or leave their arcs); at most {MAX_SUBSTEPS} "
@@ -419,7 +419,7 @@ def task_settings(own: Mapping[str, Any], owner: str = "task") -> dict[str, Sett
         else:
             raise TypeError(
                 f"{owner}: the new setting {key!r} needs a rule: declare it as Int(...), Real(...), Choice(...) "
-                "or Flag(...) from swarm_envs.task"
+                "or Flag(...) from swarm_envs.tasks.task"
             )
         try:
             setting.check(key, setting.default)
@@ -438,7 +438,7 @@ def validate_settings(task: Any, settings: Mapping[str, Any]) -> dict[str, Any]:
     bad value."""
     cls = getattr(task, "TASK", task)
     if not callable(getattr(cls, "settings", None)):
-        raise TypeError(f"validate_settings needs a swarm_envs.task.Task subclass or an env class, got {task!r:.80}")
+        raise TypeError(f"validate_settings needs a swarm_envs.tasks.task.Task subclass or an env class, got {task!r:.80}")
     rules = {**COMMON_SETTINGS, **cls.settings()}
     if not isinstance(settings, Mapping):
         raise TypeError(f"settings must be a dict of keyword arguments, got {type(settings).__name__}")

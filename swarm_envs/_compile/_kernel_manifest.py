@@ -1,6 +1,6 @@
-"""The numba kernels each scenario compiles, in order of first use (:mod:`swarm_envs._first_run`).
+"""The numba kernels each scenario compiles, in order of first use (:mod:`swarm_envs._compile._first_run`).
 
-Written by ``python -m swarm_envs._kernel_record``; do not edit. ``KERNELS``: (module, function,
+Written by ``python -m swarm_envs._compile._kernel_record``; do not edit. ``KERNELS``: (module, function,
 argument types) of kernels called from Python; ``SCENARIOS``: (task class, platform) -> (index into
 KERNELS, process seconds its compile took on the recording machine) in order of first use."""
 
@@ -26,8 +26,8 @@ KERNELS = [
     ('swarm_envs.sensing.kernels', 'two_hop_propagate', ('bool[2C]', 'int64[1C]', 'int64[1C]', 'int64[1C]', 'float64[1C]', 'float64[1C]', 'bool')),
     ('swarm_envs.sensing.kernels', 'unit_mean_positions', ('float64[2C]', 'bool[2C]', 'int64[2C]', 'float64[2C]', 'float64[2C]', 'float64')),
     ('swarm_envs.sensing.ideal', '_copy_pairs_kernel', ('float64[2C]', 'int64', 'float64')),
-    ('swarm_envs.metrics', '_component_stats_kernel', ('int64[2C]', 'int64', 'int64')),
-    ('swarm_envs.observation', '_clip_float32_kernel', ('float32[2C]', 'float32[1C]', 'float32[1C]')),
+    ('swarm_envs.tasks.metrics', '_component_stats_kernel', ('int64[2C]', 'int64', 'int64')),
+    ('swarm_envs.sensing.observation', '_clip_float32_kernel', ('float32[2C]', 'float32[1C]', 'float32[1C]')),
     ('swarm_envs.sensing.kernels', 'firing_sums', ('float64[2C]', 'int64[1C]', 'int64', 'float64')),
     ('swarm_envs.sensing.kernels', 'adc_bits', ('float64[2C]', 'float64[2C]', 'float64', 'float64', 'float64')),
     ('swarm_envs.sensing.kernels', '_frame_words', ('float64[2C]', 'bool[2C]', 'int64[1C]', 'bool[2C]', 'float64[2C]', 'float64', 'float64', 'float64', 'int64', 'float64')),
@@ -36,12 +36,12 @@ KERNELS = [
     ('swarm_envs.sensing.kernels', '_sum_last', ('float64[2C]',)),
     ('swarm_envs.sensing.kernels', 'decode_bits', ('uint8[2C]', 'int64', 'int64', 'int64', 'int64')),
     ('swarm_envs.sensing.kernels', 'store_deliveries', ('int64[1C]', 'int64[1C]', 'float64[1C]', 'bool[1C]', 'int64[2C]', 'float64[2C]', 'int64[1C]', 'int64[2C]', 'float64[2C]', 'int64[2C]', 'int64[3C]', 'float64[3C]', 'int64[2C]')),
-    ('swarm_envs.observation', '_nearest_slots_kernel', ('int64', 'int64[1C]', 'float64[1C]', 'int64')),
-    ('swarm_envs.observation', '_range_bearing_kernel', ('int64[2C]', 'float64[1C]', 'float64[3C]', 'float64[3C]', 'float64[1C]')),
-    ('swarm_envs.observation', '_pack_nearest_kernel', ('int64', 'int64[1C]', 'float64[1C]', 'float64[2C]', 'int64')),
+    ('swarm_envs.sensing.observation', '_nearest_slots_kernel', ('int64', 'int64[1C]', 'float64[1C]', 'int64')),
+    ('swarm_envs.sensing.observation', '_range_bearing_kernel', ('int64[2C]', 'float64[1C]', 'float64[3C]', 'float64[3C]', 'float64[1C]')),
+    ('swarm_envs.sensing.observation', '_pack_nearest_kernel', ('int64', 'int64[1C]', 'float64[1C]', 'float64[2C]', 'int64')),
     ('swarm_envs.ir.kernels', '_gains_serial', ('float64[2C]', 'float64[2C]', 'float64[2C,ro]', 'float64[1C,ro]', 'float64[2C,ro]', 'float64[1C,ro]', 'int64', 'float64[1C]', 'float64', 'int64[1C]', 'float64[2C]', 'float64', 'bool', 'int64[1C]', 'int64[1C]', 'float64[3C]', 'float64[3C]')),
-    ('swarm_envs.metrics', '_neighbourhood_sums_kernel', ('float64[2C]', 'int64[2C]')),
-    ('swarm_envs.observation', '_clip_float32_kernel', ('float64[2C]', 'float32[1C]', 'float32[1C]')),
+    ('swarm_envs.tasks.metrics', '_neighbourhood_sums_kernel', ('float64[2C]', 'int64[2C]')),
+    ('swarm_envs.sensing.observation', '_clip_float32_kernel', ('float64[2C]', 'float32[1C]', 'float32[1C]')),
 ]
 
 SCENARIOS = {

@@ -20,8 +20,8 @@ from typing import Any
 
 import numpy as np
 
-from swarm_envs.factories import task_module
-from swarm_envs.task import Arena, BatchState, Default, Int, Platform, Real, Task, bump_any, message_range, spawn_positions
+from swarm_envs.tasks.factories import task_module
+from swarm_envs.tasks.task import Arena, BatchState, Default, Int, Platform, Real, Task, bump_any, message_range, spawn_positions
 
 __all__ = ["SortedFollowingTask", "SortedFollowingEnv", "raw_env", "parallel_env", "env"]
 

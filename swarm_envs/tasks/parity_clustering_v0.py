@@ -20,8 +20,8 @@ from typing import Any
 
 import numpy as np
 
-from swarm_envs.factories import task_module
-from swarm_envs.task import DT, BatchState, Choice, Default, Platform, Real, Task, bump_any, largest_component_fraction, pairs_within
+from swarm_envs.tasks.factories import task_module
+from swarm_envs.tasks.task import DT, BatchState, Choice, Default, Platform, Real, Task, bump_any, largest_component_fraction, pairs_within
 
 __all__ = ["ParityClusteringTask", "ParityClusteringEnv", "raw_env", "parallel_env", "env"]
 

@@ -33,9 +33,9 @@ from dataclasses import dataclass, field
 import numpy as np
 from gymnasium import spaces
 
-from swarm_envs._numba import njit
-from swarm_envs.geometry import wrap_angle
-from swarm_envs.world import N_BUMP_SECTORS
+from swarm_envs._compile._numba import njit
+from swarm_envs.sim.geometry import wrap_angle
+from swarm_envs.sim.world import N_BUMP_SECTORS
 
 __all__ = [
     "ObservationLayout",
@@ -87,9 +87,9 @@ def id_rows(ids: np.ndarray, own: np.ndarray, n_world: int) -> np.ndarray:
 
 def wrapped_difference(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """``wrap_angle(a - b)`` (rad, in (-pi, pi]) elementwise; compiled for two 1-D arrays of one shape
-    (other shapes: :func:`swarm_envs.geometry.wrap_angle`).
+    (other shapes: :func:`swarm_envs.sim.geometry.wrap_angle`).
 
-    The kernel does the same IEEE operations as :func:`swarm_envs.geometry.wrap_angle` (``np.mod`` is
+    The kernel does the same IEEE operations as :func:`swarm_envs.sim.geometry.wrap_angle` (``np.mod`` is
     ``fmod``, exact, plus one addition of 2 pi for negative remainders), so the results are the same bits,
     several times faster than ``np.mod``.
     """
@@ -173,7 +173,7 @@ def pack_nearest(
     Returns ``(packed, order)``: ``packed`` zero-filled where a row has fewer than k entries, and
     ``order`` (n_rows, k) with the link index in each slot (-1 where empty). Slots are in increasing
     ``key`` order (NaN last), equal keys in link order. A compiled one-pass selection; its plain numpy
-    reference is :func:`swarm_envs.reference.pack_nearest`.
+    reference is :func:`swarm_envs._compile.reference.pack_nearest`.
     """
     values = np.asarray(values, dtype=np.float64)
     if values.ndim == 1:

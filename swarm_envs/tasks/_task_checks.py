@@ -1,9 +1,9 @@
-"""Checks of what a :class:`swarm_envs.task.Task` declares (class attributes) and returns into the env (hooks).
+"""Checks of what a :class:`swarm_envs.tasks.task.Task` declares (class attributes) and returns into the env (hooks).
 
 Every check raises a one-line ``TypeError`` (wrong type or dtype) or ``ValueError`` (wrong shape, value or
 name) that names the task class, the hook or class attribute, the key, and what was expected against what
 came. Accepted numbers (bool, integer or float dtypes) are cast to float64; a float64 array passes through
-as it is. The per-step check of :meth:`Task.rewards <swarm_envs.task.Task.rewards>` (:class:`RewardsCheck`)
+as it is. The per-step check of :meth:`Task.rewards <swarm_envs.tasks.task.Task.rewards>` (:class:`RewardsCheck`)
 costs one dtype and shape comparison and one finiteness reduction per returned array.
 """
 

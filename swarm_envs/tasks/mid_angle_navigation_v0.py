@@ -34,8 +34,8 @@ from typing import Any
 import numpy as np
 from scipy.spatial import cKDTree
 
-from swarm_envs.factories import task_module
-from swarm_envs.task import (
+from swarm_envs.tasks.factories import task_module
+from swarm_envs.tasks.task import (
     DT,
     Default,
     Platform,

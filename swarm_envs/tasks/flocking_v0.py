@@ -3,7 +3,7 @@
 Reward (global, default) = polarisation x cohesion - collision_penalty x (fraction of robots bumping),
 with polarisation = norm of the mean unit heading weighted by speed / max speed, cohesion = the mean over
 robots of the share of the other robots within the platform's reliable message range
-(:data:`swarm_envs.task.MESSAGE_RANGE`: e-puck 0.61 m, Droplet 0.43 m, r-one 1.0 m), the neighbourhood the
+(:data:`swarm_envs.tasks.task.MESSAGE_RANGE`: e-puck 0.61 m, Droplet 0.43 m, r-one 1.0 m), the neighbourhood the
 robots can keep in touch over: 1 only when every pair is that close, lower as the flock spreads or splits
 (the largest chained component over that range would be 1 in the default arenas whatever the robots do). ``reward_mode="local"``: each robot's polarisation is computed over itself and those
 neighbours and its own bump is penalised.
@@ -15,8 +15,8 @@ from typing import Any
 
 import numpy as np
 
-from swarm_envs.factories import task_module
-from swarm_envs.task import BatchState, Real, Task, bump_any, message_range, neighbourhood_sums, pairs_within
+from swarm_envs.tasks.factories import task_module
+from swarm_envs.tasks.task import BatchState, Real, Task, bump_any, message_range, neighbourhood_sums, pairs_within
 
 __all__ = ["FlockingTask", "FlockingEnv", "raw_env", "parallel_env", "env"]
 

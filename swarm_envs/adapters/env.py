@@ -1,8 +1,8 @@
 """The native PettingZoo ``ParallelEnv`` all swarm tasks share.
 
 Data flows one way each control step (``DT`` = 0.1 s):
-physics (:mod:`swarm_envs.world`) -> sensing stack (IR channel -> range & bearing, messages,
-scale-free coordinates) -> observation (:mod:`swarm_envs.observation`) -> reward (the task subclass).
+physics (:mod:`swarm_envs.sim.world`) -> sensing stack (IR channel -> range & bearing, messages,
+scale-free coordinates) -> observation (:mod:`swarm_envs.sensing.observation`) -> reward (the task subclass).
 Ground truth goes to ``infos`` (group ``"ground_truth"``) and :meth:`SwarmEnv.state` only.
 
 ``infos[agent]`` is a nested dict, one dict per group of :data:`INFO_GROUPS`, e.g.
@@ -23,13 +23,13 @@ from gymnasium import spaces
 from pettingzoo import ParallelEnv
 from pettingzoo.utils import BaseParallelWrapper
 
-from swarm_envs._task_checks import checked_markers
+from swarm_envs.tasks._task_checks import checked_markers
 from swarm_envs.core import DT, SwarmCore
-from swarm_envs.platforms import Platform, get_platform
+from swarm_envs.sim.platforms import Platform, get_platform
 from swarm_envs.sensing.base import SensorFrame
-from swarm_envs.task import Task
-from swarm_envs.views import check_finite_actions, check_reset_options, check_seed, info_arrays, make_layout, real_actions, resolve_config
-from swarm_envs.world import World
+from swarm_envs.tasks.task import Task
+from swarm_envs.adapters.views import check_finite_actions, check_reset_options, check_seed, info_arrays, make_layout, real_actions, resolve_config
+from swarm_envs.sim.world import World
 
 __all__ = [
     "SwarmEnv", "DT", "INFO_GROUPS", "STATE_ROBOT_FIELDS", "info_group", "flat_info", "FlatInfos",
@@ -46,7 +46,7 @@ class SwarmEnv(ParallelEnv):
 
     A thin PettingZoo view of the batched core (:class:`swarm_envs.core.SwarmCore`) with one copy, for
     any task: ``SwarmEnv(TaskClass, **settings)``, or a subclass that sets ``TASK`` (the suite's task
-    modules do: ``AggregationEnv(**settings)``). See :data:`swarm_envs.settings.COMMON_SETTINGS` for the
+    modules do: ``AggregationEnv(**settings)``). See :data:`swarm_envs.tasks.settings.COMMON_SETTINGS` for the
     keyword arguments every task takes, and the task's ``SETTINGS`` for its own.
 
     Actions are ``Box(-1, 1, (2 + message_bits,))``: (linear, angular) velocity as fractions of the
@@ -64,10 +64,10 @@ class SwarmEnv(ParallelEnv):
     def __init__(self, task: type[Task] | None = None, /, **kwargs: Any) -> None:
         task_cls = self.TASK if task is None else task
         if not (isinstance(task_cls, type) and issubclass(task_cls, Task)) or task_cls is Task:
-            raise TypeError(f"{type(self).__name__} needs a swarm_envs.task.Task subclass (SwarmEnv(TaskClass, ...)), got {task_cls!r:.80}")
+            raise TypeError(f"{type(self).__name__} needs a swarm_envs.tasks.task.Task subclass (SwarmEnv(TaskClass, ...)), got {task_cls!r:.80}")
         if task is not None and task is not self.TASK:
             self.metadata = {**self.metadata, "name": _snake_case(task_cls.__name__)}
-        # every setting is checked here, whatever the sensing mode (swarm_envs.settings)
+        # every setting is checked here, whatever the sensing mode (swarm_envs.tasks.settings)
         cfg = resolve_config(task_cls, kwargs)
         self.config = cfg
         self.platform: Platform = get_platform(cfg["platform"])
@@ -113,7 +113,7 @@ class SwarmEnv(ParallelEnv):
 
     def _markers(self) -> dict[str, np.ndarray]:
         """Task markers (name -> world point (2,) m, sorted by name): drawn by the renderer and part of
-        :meth:`state`. Checked (:func:`swarm_envs._task_checks.checked_markers`): a task returns the same
+        :meth:`state`. Checked (:func:`swarm_envs.tasks._task_checks.checked_markers`): a task returns the same
         names every step (the state has a fixed size)."""
         names, points = checked_markers(self.task, [self.task.markers(self.world.positions)])
         return dict(zip(names, points[0]))
@@ -289,13 +289,13 @@ class SwarmEnv(ParallelEnv):
         """Draw the whole arena: robots with headings, the IR links that carried a reading this step, task markers.
 
         ``render_mode="rgb_array"``: returns a (480, 480, 3) uint8 RGB image; ``"human"``: draws in a window and
-        returns None (:mod:`swarm_envs.render`; ``swarm-demo`` draws GIFs with a view that follows the robots)."""
+        returns None (:mod:`swarm_envs.adapters.render`; ``swarm-demo`` draws GIFs with a view that follows the robots)."""
         if self.render_mode is None:
             import gymnasium
 
             gymnasium.logger.warn("render() called without render_mode; pass render_mode='rgb_array' or 'human'")
             return None
-        from swarm_envs.render import Renderer, render_env
+        from swarm_envs.adapters.render import Renderer, render_env
 
         if self._renderer is None:
             self._renderer = Renderer(
@@ -376,4 +376,4 @@ class FlatInfos(BaseParallelWrapper):
         return obs, rewards, terminations, truncations, {agent: flat_info(info) for agent, info in infos.items()}
 
 
-from swarm_envs.task import bump_any  # noqa: E402,F401  (kept importable from here)
+from swarm_envs.tasks.task import bump_any  # noqa: E402,F401  (kept importable from here)

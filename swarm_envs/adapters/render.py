@@ -21,11 +21,11 @@ from typing import Any
 
 import numpy as np
 
-from swarm_envs._task_checks import checked_robot_groups
-from swarm_envs.observation import nearest_slots
-from swarm_envs.platforms import Platform
+from swarm_envs.tasks._task_checks import checked_robot_groups
+from swarm_envs.sensing.observation import nearest_slots
+from swarm_envs.sim.platforms import Platform
 from swarm_envs.sensing.base import SensorFrame
-from swarm_envs.world import Arena
+from swarm_envs.sim.world import Arena
 
 __all__ = [
     "Renderer",
@@ -132,7 +132,7 @@ def message_links(frame: SensorFrame) -> tuple[np.ndarray, np.ndarray]:
 def neighbour_overlay(
     robot: int, rows: np.ndarray, position: np.ndarray, heading: float, truths: np.ndarray
 ) -> NeighbourOverlay:
-    """Turn one robot's ``range_bearing`` rows (k, 7) (:data:`swarm_envs.observation.RB_FIELDS`) into world points.
+    """Turn one robot's ``range_bearing`` rows (k, 7) (:data:`swarm_envs.sensing.observation.RB_FIELDS`) into world points.
 
     ``position`` (2,) m and ``heading`` rad are the robot's true pose (the rows are in its body frame);
     ``truths`` (k, 2) m are the true positions of the robots the k rows name (NaN for empty rows).
@@ -152,7 +152,7 @@ def neighbour_overlay(
 
 
 def overlay_of(env: Any, agent: int = 0) -> NeighbourOverlay:
-    """:func:`neighbour_overlay` of agent number ``agent`` of a running :class:`swarm_envs.env.SwarmEnv`.
+    """:func:`neighbour_overlay` of agent number ``agent`` of a running :class:`swarm_envs.adapters.env.SwarmEnv`.
 
     The rows are the agent's ``range_bearing`` observation; each row is matched to the reading it was
     built from (the env's nearest-by-estimated-range slots) to find the robot the reading names."""
@@ -391,7 +391,7 @@ class Renderer:
             caption: text above the arena (wrapped to the width; ``\\n`` starts a line).
             legend: draw a legend of what is shown below the arena.
             groups: ((n,) group 0 or 1 of each robot, the two groups' legend labels): group 1 is drawn in a
-                second colour (:meth:`swarm_envs.task.Task.robot_groups`, e.g. odd ids).
+                second colour (:meth:`swarm_envs.tasks.task.Task.robot_groups`, e.g. odd ids).
         """
         pg = self.pygame
         surf = self.surface
@@ -483,7 +483,7 @@ class Renderer:
 
 
 def render_env(env: Any, renderer: Renderer, caption: str | None = None, overlay_agent: int | None = None, legend: bool = True) -> np.ndarray | None:
-    """Draw the current state of a :class:`swarm_envs.env.SwarmEnv` (after ``reset``) with ``renderer``.
+    """Draw the current state of a :class:`swarm_envs.adapters.env.SwarmEnv` (after ``reset``) with ``renderer``.
 
     Links are the readings decoded this step (:func:`fresh_links`) and the decoded application messages
     (:func:`message_links`, drawn when the env sends messages, ``message_bits > 0``); ``overlay_agent`` (an

@@ -15,8 +15,8 @@ from typing import Any
 
 import numpy as np
 
-from swarm_envs.factories import task_module
-from swarm_envs.task import BatchState, Default, Int, SettingsError, Task, lattice_positions, spawn_positions
+from swarm_envs.tasks.factories import task_module
+from swarm_envs.tasks.task import BatchState, Default, Int, SettingsError, Task, lattice_positions, spawn_positions
 
 __all__ = ["CentroidSeekingTask", "CentroidSeekingEnv", "raw_env", "parallel_env", "env"]
 

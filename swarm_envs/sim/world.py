@@ -68,8 +68,8 @@ import pymunk
 import pymunk.batch
 from scipy.spatial import cKDTree
 
-from swarm_envs.geometry import wrap_angle
-from swarm_envs.platforms import Platform
+from swarm_envs.sim.geometry import wrap_angle
+from swarm_envs.sim.platforms import Platform
 
 __all__ = [
     "Arena", "World", "step_worlds", "spawn_positions", "check_capacity", "lattice_lower_bound", "as_real_array",

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from swarm_envs._numba import njit
+from swarm_envs._compile._numba import njit
 
 __all__ = ["argsort_quick"]
 

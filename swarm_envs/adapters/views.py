@@ -1,5 +1,5 @@
-"""What the views of the batched core share: the PettingZoo env (:mod:`swarm_envs.env`) and the vector env
-(:mod:`swarm_envs.vector`, and through it the TorchRL env) check their settings, seeds, reset options and
+"""What the views of the batched core share: the PettingZoo env (:mod:`swarm_envs.adapters.env`) and the vector env
+(:mod:`swarm_envs.adapters.vector`, and through it the TorchRL env) check their settings, seeds, reset options and
 actions, build the observation layout and read the infos here, so the views agree and neither imports the
 other.
 """
@@ -13,18 +13,18 @@ from typing import Any
 import numpy as np
 
 from swarm_envs.core import SwarmCore
-from swarm_envs.observation import ObservationLayout
-from swarm_envs.platforms import Platform
+from swarm_envs.sensing.observation import ObservationLayout
+from swarm_envs.sim.platforms import Platform
 from swarm_envs.sensing.full import reading_max_age
-from swarm_envs.settings import validate_settings
-from swarm_envs.world import World, as_real_array
+from swarm_envs.tasks.settings import validate_settings
+from swarm_envs.sim.world import World, as_real_array
 
 __all__ = ["resolve_config", "make_layout", "check_seed", "check_reset_options", "real_actions", "check_finite_actions", "info_arrays"]
 
 
 def resolve_config(task: Any, kwargs: dict[str, Any]) -> dict[str, Any]:
     """Every setting of ``task`` (a ``Task`` subclass, env class or registered id) filled in and checked
-    (:func:`swarm_envs.settings.validate_settings`): unknown names raise ``TypeError``, bad values
+    (:func:`swarm_envs.tasks.settings.validate_settings`): unknown names raise ``TypeError``, bad values
     ``SettingsError`` (a ``ValueError``) naming the key."""
     return validate_settings(task, kwargs)
 

@@ -29,13 +29,13 @@ import numpy as np
 from gymnasium import spaces
 from gymnasium.vector import AutoresetMode, VectorEnv
 
-from swarm_envs._task_checks import checked_markers
+from swarm_envs.tasks._task_checks import checked_markers
 from swarm_envs.core import SwarmCore
-from swarm_envs.platforms import get_platform
-from swarm_envs.settings import SettingsError
-from swarm_envs.task import Task
-from swarm_envs.views import check_finite_actions, check_reset_options, check_seed, info_arrays, make_layout, real_actions, resolve_config
-from swarm_envs.world import COPY_LOG_BYTES
+from swarm_envs.sim.platforms import get_platform
+from swarm_envs.tasks.settings import SettingsError
+from swarm_envs.tasks.task import Task
+from swarm_envs.adapters.views import check_finite_actions, check_reset_options, check_seed, info_arrays, make_layout, real_actions, resolve_config
+from swarm_envs.sim.world import COPY_LOG_BYTES
 
 #: copies of one batched core at most, and robots over all its copies at most (memory grows with both)
 MAX_COPIES = 100_000
@@ -50,7 +50,7 @@ ROBOT_BYTES = 60_000
 #: per wall segment of a copy's physics space (a circle arena's 64 add ~87 KB)
 WALL_BYTES = 1_500
 #: per control step of an episode, besides 16 bytes per robot: a world's command log for exact copies
-#: (swarm_envs.world.COPY_LOG_BYTES; 0.4-0.6 KB per step measured)
+#: (swarm_envs.sim.world.COPY_LOG_BYTES; 0.4-0.6 KB per step measured)
 LOG_STEP_BYTES = 500
 
 __all__ = [
@@ -133,11 +133,11 @@ def _batch_space(space: spaces.Box, lead: tuple[int, ...]) -> spaces.Box:
 
 
 class SwarmVectorEnv(VectorEnv):
-    """``num_envs`` copies of ``task`` (a :class:`swarm_envs.task.Task` subclass, its env class or a registered id).
+    """``num_envs`` copies of ``task`` (a :class:`swarm_envs.tasks.task.Task` subclass, its env class or a registered id).
     Copies whose estimated memory exceeds the machine's available memory are refused (:func:`check_memory`).
 
     Args:
-        task: the task (e.g. :class:`swarm_envs.aggregation_v0.AggregationTask`).
+        task: the task (e.g. :class:`swarm_envs.tasks.aggregation_v0.AggregationTask`).
         num_envs: number of copies B.
         **kwargs: env settings, as for the single env.
     """
@@ -223,7 +223,7 @@ class SwarmVectorEnv(VectorEnv):
 
     def states(self) -> np.ndarray:
         """Global ground-truth state of every copy, ``(B, state_dim)`` float32: row b is what
-        :meth:`swarm_envs.env.SwarmEnv.state` returns for a single env in copy b's place (robots'
+        :meth:`swarm_envs.adapters.env.SwarmEnv.state` returns for a single env in copy b's place (robots'
         ``STATE_ROBOT_FIELDS`` in world order, the task's markers (m) sorted by name, episode progress).
         For centralised critics only: never part of an observation. Call after :meth:`reset`. The markers
         come from the task copy by copy (``Task.markers`` takes one copy's positions)."""

@@ -4,10 +4,10 @@ With ``cache=True`` numba compiles a kernel the first time it is called and keep
 disk; a fresh install (or a new numba version, or an edited kernel module) starts from an empty cache,
 and the first ``env.reset()`` with the modelled sensing compiles the few dozen kernels of its stack,
 about twenty seconds on one core. :func:`prepare`, called when an env's sensing is built, looks up the
-kernels its scenario (task class and platform) calls, recorded in :mod:`swarm_envs._kernel_manifest`
+kernels its scenario (task class and platform) calls, recorded in :mod:`swarm_envs._compile._kernel_manifest`
 with their compile times. When those not on disk yet would take more than :data:`NOTICE_SECONDS` to
 compile, it prints one line to stderr, once per process, and, when a core is idle, starts one background
-process (``python -m swarm_envs._first_run TASK PLATFORM``, at low priority) that compiles them into the
+process (``python -m swarm_envs._compile._first_run TASK PLATFORM``, at low priority) that compiles them into the
 same cache while this process compiles them too (:func:`compile_share`) before the env is built. Both
 processes take the kernels longest first (by recorded compile time); each claims a kernel (a claim file
 beside its cache) before compiling it and skips the kernels the other has claimed, so no kernel is
@@ -20,7 +20,7 @@ background process runs per cache directory (a lock file), and none on one core.
 starts it even when no core looks idle; unset, it starts when the 1-minute load average is below the
 number of cores minus a half.
 
-``python -m swarm_envs._kernel_record`` re-records the manifest (:mod:`swarm_envs._kernel_record`). A
+``python -m swarm_envs._compile._kernel_record`` re-records the manifest (:mod:`swarm_envs._compile._kernel_record`). A
 manifest that no longer matches a kernel costs only time: a signature that does not compile is skipped,
 a kernel it misses is compiled where it is first called.
 """
@@ -109,14 +109,14 @@ def scenario_kernels(task: str, platform: str) -> list[tuple[str, str, tuple[str
     compile seconds). ``task`` is the task class name; a pairing not recorded takes the first recording on
     its platform (the platform decides most of the sensing stack), else the task's on another platform (a
     custom platform). Empty when unknown."""
-    import swarm_envs._kernel_manifest as manifest
+    import swarm_envs._compile._kernel_manifest as manifest
 
     return [(*manifest.KERNELS[i], seconds) for i, seconds in _scenario_rows(task, platform)]
 
 
 def _scenario_rows(task: str, platform: str) -> tuple[tuple[int, float], ...]:
     """(index into the manifest's KERNELS, compile seconds) of the scenario (see :func:`scenario_kernels`)."""
-    import swarm_envs._kernel_manifest as manifest
+    import swarm_envs._compile._kernel_manifest as manifest
 
     rows = manifest.SCENARIOS.get((task, platform))
     if rows is None:
@@ -145,7 +145,7 @@ def _cached(dispatcher: Any, argtypes: tuple) -> bool:
 def cold_kernels(task: str, platform: str) -> list[tuple[Any, tuple, float, int]]:
     """(dispatcher, argument types, compile seconds, manifest index) of the scenario's kernels that are
     neither loaded nor in the disk cache, in order of first use. Entries that no longer resolve are left out."""
-    import swarm_envs._kernel_manifest as manifest
+    import swarm_envs._compile._kernel_manifest as manifest
 
     out = []
     for index, seconds in _scenario_rows(task, platform):
@@ -299,7 +299,7 @@ def _start_helper(task: str, platform: str, cold: Sequence[tuple[Any, tuple, flo
     env["PYTHONPATH"] = os.pathsep.join(filter(None, [package_root, env.get("PYTHONPATH")]))
     try:
         proc = subprocess.Popen(
-            [sys.executable, "-m", "swarm_envs._first_run", task, platform],
+            [sys.executable, "-m", "swarm_envs._compile._first_run", task, platform],
             env=env, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
         )
     except OSError:
@@ -406,7 +406,7 @@ def compile_in_background(task: str, platform: str) -> int:
 def main(argv: Sequence[str] | None = None) -> int:
     args = list(sys.argv[1:] if argv is None else argv)
     if len(args) != 2:
-        print("usage: python -m swarm_envs._first_run TASK PLATFORM", file=sys.stderr)
+        print("usage: python -m swarm_envs._compile._first_run TASK PLATFORM", file=sys.stderr)
         return 2
     try:
         compile_in_background(*args)

@@ -27,7 +27,7 @@ Example::
     from benchmarl.algorithms import MappoConfig
     from benchmarl.experiment import Experiment, ExperimentConfig
     from benchmarl.models.mlp import MlpConfig
-    from swarm_envs.benchmarl_tasks import SwarmTask
+    from swarm_envs.adapters.benchmarl_tasks import SwarmTask
 
     task = SwarmTask.FLOCKING.get_task(config={"n_robots": 10, "max_steps": 100, "sensing": "full"})
     Experiment(task=task, algorithm_config=MappoConfig.get_from_yaml(), model_config=MlpConfig.get_from_yaml(),
@@ -46,7 +46,7 @@ from benchmarl.environments.common import Task, TaskClass
 from torchrl.data import Composite
 from torchrl.envs import EnvBase, FlattenObservation, Transform
 
-from swarm_envs.torchrl_env import SwarmTorchRLEnv
+from swarm_envs.adapters.torchrl_env import SwarmTorchRLEnv
 
 __all__ = ["SwarmTask", "SwarmTaskClass", "TASK_DEFAULTS", "TASK_IDS", "GROUP"]
 

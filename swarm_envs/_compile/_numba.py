@@ -8,9 +8,9 @@ cache file that cannot be read (or holds code of another signature) is discarded
 :class:`NumbaCacheWarning`, the function is compiled again and the cache rewritten. Use it in every
 module with compiled kernels::
 
-    from swarm_envs._numba import njit   # instead of: from numba import njit
+    from swarm_envs._compile._numba import njit   # instead of: from numba import njit
 
-It also keeps the first run's compile time down (:mod:`swarm_envs._first_run`): every kernel gets the
+It also keeps the first run's compile time down (:mod:`swarm_envs._compile._first_run`): every kernel gets the
 same flags (``nogil=True``, ``error_model="numpy"`` unless given), so the library functions kernels call
 (``np.empty``, ...) compile once per session instead of once per set of flags, and a kernel called from
 another with constant arguments compiles once, not once per constant value.
@@ -21,7 +21,7 @@ those library functions once per shape and dtype and process, about 30 ms each o
 ``np.zeros`` compiles ``np.empty`` and a fill function besides (``tests/test_first_run.py`` checks the form).
 
 numba is a required dependency: the kernels are the simulator's only implementation of their steps (their
-plain numpy references, for the tests, are in :mod:`swarm_envs.reference`).
+plain numpy references, for the tests, are in :mod:`swarm_envs._compile.reference`).
 """
 
 from __future__ import annotations

@@ -1,9 +1,9 @@
-"""Recording the kernels each scenario compiles: ``python -m swarm_envs._kernel_record``.
+"""Recording the kernels each scenario compiles: ``python -m swarm_envs._compile._kernel_record``.
 
 Every scenario of :data:`RECORD_SCENARIOS` runs one episode in a fresh process with an empty numba cache,
-and the kernels it compiles from Python, with their argument types (:func:`swarm_envs._first_run.encode_type`)
+and the kernels it compiles from Python, with their argument types (:func:`swarm_envs._compile._first_run.encode_type`)
 and the process time each compile took, are written in order of first use to
-``swarm_envs/_kernel_manifest.py``, which :mod:`swarm_envs._first_run` reads. Run it after changing which
+``swarm_envs/_compile/_kernel_manifest.py``, which :mod:`swarm_envs._compile._first_run` reads. Run it after changing which
 kernels the sensing stack calls or their argument types (``tests/test_first_run.py`` checks that every
 recorded kernel still exists).
 """
@@ -20,7 +20,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from swarm_envs._first_run import BACKGROUND_VARIABLE, encode_type
+from swarm_envs._compile._first_run import BACKGROUND_VARIABLE, encode_type
 
 __all__ = ["RECORD_SCENARIOS", "record"]
 
@@ -83,7 +83,7 @@ def record(path: Path, scenarios: Sequence[tuple[str, str]] = RECORD_SCENARIOS, 
     for env_id, platform in scenarios:
         with tempfile.TemporaryDirectory() as cache:
             env = {**os.environ, "NUMBA_CACHE_DIR": cache, BACKGROUND_VARIABLE: "0"}
-            code = f"import json, swarm_envs._kernel_record as r; print(json.dumps(r._record_one({env_id!r}, {platform!r}, {steps})))"
+            code = f"import json, swarm_envs._compile._kernel_record as r; print(json.dumps(r._record_one({env_id!r}, {platform!r}, {steps})))"
             out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True).stdout
         calls = json.loads(out.strip().splitlines()[-1])
         task = task_class(env_id).__name__
@@ -102,9 +102,9 @@ def _write_manifest(path: Path, kernels: list, table: dict) -> None:
     import numba
 
     lines = [
-        '"""The numba kernels each scenario compiles, in order of first use (:mod:`swarm_envs._first_run`).',
+        '"""The numba kernels each scenario compiles, in order of first use (:mod:`swarm_envs._compile._first_run`).',
         "",
-        "Written by ``python -m swarm_envs._kernel_record``; do not edit. ``KERNELS``: (module, function,",
+        "Written by ``python -m swarm_envs._compile._kernel_record``; do not edit. ``KERNELS``: (module, function,",
         "argument types) of kernels called from Python; ``SCENARIOS``: (task class, platform) -> (index into",
         'KERNELS, process seconds its compile took on the recording machine) in order of first use."""',
         "",
@@ -125,7 +125,7 @@ def _write_manifest(path: Path, kernels: list, table: dict) -> None:
 def main(argv: Sequence[str] | None = None) -> int:
     args = list(sys.argv[1:] if argv is None else argv)
     if args:
-        print("usage: python -m swarm_envs._kernel_record   (records every scenario, writes swarm_envs/_kernel_manifest.py)", file=sys.stderr)
+        print("usage: python -m swarm_envs._compile._kernel_record   (records every scenario, writes swarm_envs/_compile/_kernel_manifest.py)", file=sys.stderr)
         return 2
     record(Path(__file__).with_name("_kernel_manifest.py"))
     return 0

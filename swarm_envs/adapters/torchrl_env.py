@@ -1,7 +1,7 @@
 """TorchRL: ``B`` copies of a swarm task as one batched multi-agent ``EnvBase`` over one batched core.
 
 :func:`make_torchrl` (also ``swarm_envs.make_torchrl``) returns a :class:`SwarmTorchRLEnv` with
-``batch_size=[B]`` that steps one :class:`swarm_envs.vector.SwarmVectorEnv`: one array program for all
+``batch_size=[B]`` that steps one :class:`swarm_envs.adapters.vector.SwarmVectorEnv`: one array program for all
 copies, arrays in and out, no Python loop over copies or agents here (the global state's task markers are
 computed copy by copy, :meth:`SwarmVectorEnv.states`). The tensordict layout is the one of
 TorchRL's own multi-agent envs (VMAS, PettingZoo): every robot is an agent of one group (``"agents"``
@@ -46,13 +46,13 @@ from torchrl.data import Bounded, Categorical, Composite, Unbounded
 from torchrl.envs import EnvBase
 
 from swarm_envs._text import shown
-from swarm_envs.torch_threads import set_torch_threads
-from swarm_envs.vector import SwarmVectorEnv
+from swarm_envs.adapters.torch_threads import set_torch_threads
+from swarm_envs.adapters.vector import SwarmVectorEnv
 from swarm_envs.registry import resolve
 
 __all__ = ["SwarmTorchRLEnv", "make_torchrl"]
 
-#: per-agent info groups of :class:`swarm_envs.vector.SwarmVectorEnv` (``(B, N, ...)`` arrays)
+#: per-agent info groups of :class:`swarm_envs.adapters.vector.SwarmVectorEnv` (``(B, N, ...)`` arrays)
 AGENT_INFO_GROUPS = ("reward_terms", "ground_truth", "sensing")
 
 
@@ -122,7 +122,7 @@ class SwarmTorchRLEnv(EnvBase):
         group: name of the agent group (the tensordict key of the per-agent entries).
         seed: if given, seeds the first reset (:meth:`set_seed`).
         torch_threads: torch's intra-op thread count, set at construction
-            (:func:`swarm_envs.torch_threads.set_torch_threads`: None = 1 on at most 2 cores, else
+            (:func:`swarm_envs.adapters.torch_threads.set_torch_threads`: None = 1 on at most 2 cores, else
             ``min(4, cores // 2)``, or ``OMP_NUM_THREADS`` if set); ``0`` leaves torch's setting alone.
         **env_kwargs: the task's settings, as for ``swarm_envs.make_vec`` (e.g. ``n_robots``, ``sensing``,
             ``flatten``, ``max_cycles``).

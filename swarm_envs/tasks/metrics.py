@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from swarm_envs._numba import njit
+from swarm_envs._compile._numba import njit
 
 __all__ = ["largest_component_fraction", "neighbourhood_sums"]
 
@@ -15,7 +15,7 @@ def largest_component_fraction(
     """For (B, N, 2) positions of B env copies: (largest-component fraction (B,), number of components
     (B,)), linking centres of one copy closer than ``link_distance`` (m), chained. One graph for all copies
     (pairs never cross copies), its components found by a compiled union-find (plain reference with scipy's
-    connected components: :func:`swarm_envs.reference.largest_component_fraction`). ``pairs``: those links
+    connected components: :func:`swarm_envs._compile.reference.largest_component_fraction`). ``pairs``: those links
     if the caller already has them (``copy_pairs`` over the B x N rows)."""
     from swarm_envs.sensing.ideal import copy_pairs
 

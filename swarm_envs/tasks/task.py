@@ -10,7 +10,7 @@ rewards and ``infos``, never as observations. The suite's own tasks are written 
 
     import numpy as np
     import swarm_envs
-    from swarm_envs.task import Real, Task, nearest_distances
+    from swarm_envs.tasks.task import Real, Task, nearest_distances
 
     class Spread(Task):
         SETTINGS = {"target": Real(0.3, low=0.0, unit="m")}
@@ -43,11 +43,11 @@ from typing import Any, ClassVar
 import numpy as np
 from scipy.spatial import cKDTree
 
-from swarm_envs._task_checks import REDUCTIONS, check_declarations, checked_count, checked_length
-from swarm_envs.metrics import largest_component_fraction, neighbourhood_sums
-from swarm_envs.platforms import Platform, get_platform
-from swarm_envs.settings import MAX_ROBOTS, Choice, Default, Flag, Int, Real, Setting, SettingsError, task_settings
-from swarm_envs.world import (
+from swarm_envs.tasks._task_checks import REDUCTIONS, check_declarations, checked_count, checked_length
+from swarm_envs.tasks.metrics import largest_component_fraction, neighbourhood_sums
+from swarm_envs.sim.platforms import Platform, get_platform
+from swarm_envs.tasks.settings import MAX_ROBOTS, Choice, Default, Flag, Int, Real, Setting, SettingsError, task_settings
+from swarm_envs.sim.world import (
     DT,
     N_BUMP_SECTORS,
     Arena,
@@ -138,11 +138,11 @@ class Task:
     drawings), :meth:`obstacles` (walls inside the
     arena), :meth:`static_messages` (what the static robots broadcast) and :meth:`switched_off` (robots
     taken out mid-episode). The constructor gets the resolved
-    settings (``self.config``: every common setting, see :data:`swarm_envs.settings.COMMON_SETTINGS`,
+    settings (``self.config``: every common setting, see :data:`swarm_envs.tasks.settings.COMMON_SETTINGS`,
     plus the task's own), the platform and the number of copies.
 
     The declarations are checked when the class is made, and whatever a hook returns into the env is checked
-    when it returns (shapes, dtypes, finiteness, names; :mod:`swarm_envs._task_checks`): a malformed one
+    when it returns (shapes, dtypes, finiteness, names; :mod:`swarm_envs.tasks._task_checks`): a malformed one
     raises a one-line ``TypeError`` or ``ValueError`` naming the class, the attribute or hook and the key.
 
     Args:

@@ -1,13 +1,13 @@
 """The PettingZoo entry points of a task module, made from its task: :func:`task_module`.
 
-A versioned task module (``swarm_envs/aggregation_v0.py``) is its :class:`swarm_envs.task.Task` subclass, the
+A versioned task module (``swarm_envs/tasks/aggregation_v0.py``) is its :class:`swarm_envs.tasks.task.Task` subclass, the
 prose of its documentation, and one line::
 
     raw_env, parallel_env, env = task_module(AggregationTask, DOC)
 
 ``parallel_env`` gets a keyword-only signature with the task's real defaults and type hints (built from its
 settings, so ``help()`` and IDEs show them) and a docstring whose ``## Arguments`` table is generated from
-the same :class:`swarm_envs.settings.Setting` objects; nothing is written twice.
+the same :class:`swarm_envs.tasks.settings.Setting` objects; nothing is written twice.
 """
 
 from __future__ import annotations
@@ -20,9 +20,9 @@ from typing import Any
 from pettingzoo import AECEnv
 from pettingzoo.utils.conversions import parallel_to_aec
 
-from swarm_envs.env import SwarmEnv
-from swarm_envs.settings import arguments_table, ordered_settings
-from swarm_envs.task import DT, Task
+from swarm_envs.adapters.env import SwarmEnv
+from swarm_envs.tasks.settings import arguments_table, ordered_settings
+from swarm_envs.tasks.task import DT, Task
 
 __all__ = ["task_module", "env_class", "parallel_env_doc", "spaces_doc", "SECTIONS"]
 
@@ -149,7 +149,7 @@ def task_module(
             ``## Description``, ``## Rewards``, ``## Starting State``, ``## Episode End`` and ``## Version
             History``. The generated sections go in between: ``## Action Space`` and ``## Observation Space``
             (:func:`spaces_doc`) before ``## Rewards``, ``## Arguments`` (from the task's settings,
-            :func:`swarm_envs.settings.arguments_table`) before ``## Version History``.
+            :func:`swarm_envs.tasks.settings.arguments_table`) before ``## Version History``.
         members: extra members of the env class (:func:`env_class`).
         payload: what the payload bits of a ``messages`` row carry (:func:`spaces_doc`).
 

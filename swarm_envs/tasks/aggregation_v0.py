@@ -12,8 +12,8 @@ from typing import Any
 
 import numpy as np
 
-from swarm_envs.factories import task_module
-from swarm_envs.task import BatchState, Task, largest_component_fraction
+from swarm_envs.tasks.factories import task_module
+from swarm_envs.tasks.task import BatchState, Task, largest_component_fraction
 
 __all__ = ["AggregationTask", "AggregationEnv", "raw_env", "parallel_env", "env"]
 

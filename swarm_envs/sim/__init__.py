@@ -1,0 +1,1 @@
+"""The simulated world: platforms, arena geometry, pymunk physics with motion error, per-copy state."""

@@ -1,0 +1,56 @@
+"""The old import paths of the modules that moved into sim/, tasks/, adapters/, _compile/ and sensing/: the
+six task modules are public aliases (the same module object, no warning); every other old path imports the
+moved module and raises one DeprecationWarning naming the new path."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+ALIASES = {'aggregation_v0': 'tasks.aggregation_v0', 'flocking_v0': 'tasks.flocking_v0', 'centroid_seeking_v0': 'tasks.centroid_seeking_v0', 'sorted_following_v0': 'tasks.sorted_following_v0', 'parity_clustering_v0': 'tasks.parity_clustering_v0', 'mid_angle_navigation_v0': 'tasks.mid_angle_navigation_v0'}
+DEPRECATED = {'world': 'sim.world', 'platforms': 'sim.platforms', 'geometry': 'sim.geometry', 'copies': 'sim.copies', 'observation': 'sensing.observation', 'task': 'tasks.task', 'settings': 'tasks.settings', 'metrics': 'tasks.metrics', 'factories': 'tasks.factories', 'views': 'adapters.views', 'render': 'adapters.render', 'env': 'adapters.env', 'vector': 'adapters.vector', 'torchrl_env': 'adapters.torchrl_env', 'benchmarl_tasks': 'adapters.benchmarl_tasks', 'torch_threads': 'adapters.torch_threads', 'reference': '_compile.reference'}
+
+PROBE = """
+import importlib, json, sys, warnings
+import swarm_envs
+out = {}
+for old, new in json.loads(sys.argv[1]).items():
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        try:
+            module = importlib.import_module("swarm_envs." + old)
+        except ModuleNotFoundError as error:  # an optional extra (torchrl, benchmarl) not installed
+            if (error.name or "").startswith("swarm_envs"):
+                raise
+            continue
+        again = importlib.import_module("swarm_envs." + old)
+    out[old] = [module is importlib.import_module("swarm_envs." + new), again is module,
+                [str(w.message) for w in caught if issubclass(w.category, DeprecationWarning)]]
+print(json.dumps(out))
+"""
+
+
+def _probe(mapping: dict[str, str]) -> dict[str, list]:
+    result = subprocess.run([sys.executable, "-c", PROBE, json.dumps(mapping)], cwd=ROOT, capture_output=True, text=True,
+                            timeout=300, env={"PYTHONPATH": str(ROOT), "PATH": ""})
+    assert result.returncode == 0, result.stderr[-3000:]
+    return json.loads(result.stdout.strip().splitlines()[-1])
+
+
+def test_task_modules_are_silent_aliases():
+    found = _probe(ALIASES)
+    assert set(found) == set(ALIASES)
+    for old, (same, again, warned) in found.items():
+        assert same and again, old
+        assert warned == [], (old, warned)
+
+
+def test_old_paths_warn_once_and_resolve():
+    found = _probe(DEPRECATED)
+    assert set(DEPRECATED) - set(found) <= {"torchrl_env", "benchmarl_tasks"}  # these need their extras
+    for old, (same, again, warned) in found.items():
+        assert same and again, old
+        assert len(warned) == 1 and f"swarm_envs.{DEPRECATED[old]}" in warned[0], (old, warned)
