@@ -637,9 +637,9 @@ class MidAngleNavigation(_Stateful):
         rw_lin, rw_ang = self._random_walk(~steering)
         lin, ang = np.where(steering, lin, rw_lin), np.where(steering, ang, rw_ang)
         # a bump: turn away, then drive straight for evade_steps before steering again
-        was_escaping = np.abs(self._escape) >= 1e-9
         escaping, e_lin, e_ang = self._bump_escape(obs["proprio"])
-        self._evade[was_escaping & ~escaping] = self.evade_steps
+        turn_done = escaping & (np.abs(self._escape) < 1e-9)  # this step ends the escape turn
+        self._evade[turn_done] = self.evade_steps
         evading = ~escaping & (self._evade > 0)
         self._evade[evading] -= 1
         lin = np.where(escaping, e_lin, np.where(evading, self.speed, lin))

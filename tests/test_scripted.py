@@ -112,6 +112,23 @@ def test_bump_escape_turns_away_without_driving():
     assert steps[-1][0] > 0
 
 
+def test_mid_angle_seeker_drives_straight_for_evade_steps_after_its_escape_turn():
+    env = make_env("mid_angle_navigation", sensing="ideal")
+    policy = make_scripted("mid_angle_navigation", env)
+    policy.reset(1)
+    obs = {k: np.zeros((1,) + v.shape, np.float32) for k, v in env.layout.dict_space().spaces.items()}
+    obs["proprio"][0, 0] = 1.0  # frontal bump
+    first = policy.act_batch(obs)[0]
+    obs["proprio"][0, 0] = 0.0
+    actions = [first] + [policy.act_batch(obs)[0].copy() for _ in range(40)]
+    turning = [a[0] == 0 and a[1] != 0 for a in actions]
+    n_turn = turning.index(False)
+    assert n_turn >= 1 and not any(turning[n_turn:n_turn + policy.evade_steps])
+    straight = [a[0] == pytest.approx(policy.speed) and a[1] == 0 for a in actions[n_turn:]]
+    assert straight[:policy.evade_steps] == [True] * policy.evade_steps  # then the seeker steers (here: random walk)
+    assert not straight[policy.evade_steps]
+
+
 def test_helpers():
     ang, has = circular_mean(np.array([[1.0, 0.0, 1.0]]), np.array([[0.0, 1.0, 0.0]]), np.array([[1, 1, 0]], bool))
     assert has[0] and ang[0] == pytest.approx(np.pi / 4)
