@@ -1,4 +1,5 @@
-"""Seeding: same seed -> identical trajectories over 300 steps; different seeds differ."""
+"""Seeding: same seed -> identical trajectories (100 steps of every env in the default run, 300 in the slow
+run); different seeds differ."""
 
 import numpy as np
 import pytest
@@ -20,11 +21,12 @@ def rollout(env_id: str, seed: int, sensing: str, steps: int = 300, **kwargs):
     return record
 
 
+@pytest.mark.parametrize("steps", [100, pytest.param(300, marks=pytest.mark.slow)])
 @pytest.mark.parametrize("env_id", swarm_envs.list_envs())
 @pytest.mark.parametrize("sensing", SENSING)
-def test_same_seed_same_trajectory(env_id, sensing):
-    a = rollout(env_id, 7, sensing)
-    b = rollout(env_id, 7, sensing)
+def test_same_seed_same_trajectory(env_id, sensing, steps):
+    a = rollout(env_id, 7, sensing, steps)
+    b = rollout(env_id, 7, sensing, steps)
     assert_tree_equal(a, b)
 
 

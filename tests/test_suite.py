@@ -94,6 +94,7 @@ def test_t_interval_is_students():
     assert math.isnan(t_interval([0.3])[1])
 
 
+@pytest.mark.slow
 def test_suite_end_to_end_resumes_and_reports(tmp_path, capsys):
     """One variant with its sensing cost and one seed, on a tiny budget: every run, the tables and the curves;
     a second call starts no run."""
