@@ -59,9 +59,9 @@ def test_epuck_front_sensors_face_each_other():
 def test_rone_binary_sectors():
     rone = get_platform("rone")
     g = pair_gains(np.array([[0.5, 0.0]]), np.array([np.pi]), rone)[0]
-    # bearing 0 lies in receivers 0 (22.5 deg) and 7 (-22.5 deg); TX faces RX (heading pi), so its
-    # forward transmitter 0 points at RX and its neighbours (45 deg off) miss it
-    assert {(int(a), int(b)) for a, b in zip(*np.nonzero(g))} == {(0, 0), (7, 0)}
+    # bearing 0 lies in receivers 0 (22.5 deg) and 7 (-22.5 deg); TX faces RX (heading pi): its transmitters
+    # 7, 0, 1 (within 90 deg of RX, their outward half-planes) reach them, 2 and 6 (just beyond 90) do not
+    assert {(int(a), int(b)) for a, b in zip(*np.nonzero(g))} == {(i, j) for i in (0, 7) for j in (7, 0, 1)}
     assert set(np.unique(g)) == {0.0, 1.0}
     # beyond ir_range (centre distance) nothing
     assert pair_gains(np.array([[1.05, 0.0]]), np.array([np.pi]), rone).max() == 0.0

@@ -93,5 +93,8 @@ def test_rone_binary_cones():
     assert m.gain(0.5, 0.0, 0.0) == 1.0
     assert m.gain(0.5, half - 1e-3, -half + 1e-3) == 1.0
     assert m.gain(0.5, half + 1e-3, 0.0) == 0.0
-    assert m.gain(0.5, 0.0, -half - 1e-3) == 0.0
+    # transmitters light their outward half-plane [L Sec. 3.2.1 "radially uniform"; RoneIR]
+    assert m.gain(0.5, 0.0, -half - 1e-3) == 1.0
+    assert m.gain(0.5, 0.0, np.pi / 2 - 1e-3) == 1.0
+    assert m.gain(0.5, 0.0, -np.pi / 2 - 1e-3) == 0.0
     assert m.gain(1.2, 0.0, 0.0) == 0.0

@@ -160,9 +160,10 @@ def test_a_receiver_whose_own_copy_was_corrupted_does_not_count():
     pos = np.array([[0.0, 0.0], [0.3, 0.0]])
     hd = np.array([0.0, np.deg2rad(150.0)])
     links = compute_links(pos, hd, RONE)
-    # robot 0's receiver 0 (axis 22.5 deg) hears robot 1's transmitters 0 and 1, its receiver 7 (-22.5 deg) only 1
+    # robot 0's receiver 0 (axis 22.5 deg) hears robot 1's transmitters 7, 0 and 1, its receiver 7 (-22.5 deg)
+    # transmitters 1 and 2 (each transmitter lights its outward half-plane; the receivers' arcs pick the emitters)
     rx_mask, tx_mask = link_masks(links, RONE, np.flatnonzero((links.rx == 0) & (links.tx == 1)))
-    assert rx_mask.tolist() == [0b10000001] and tx_mask.tolist() == [0b11]
+    assert rx_mask.tolist() == [0b10000001] and tx_mask.tolist() == [0b10000111]
 
     def measure(interference):
         mb = MessageBearings(RONE, 2, np.random.default_rng(0))
@@ -170,17 +171,17 @@ def test_a_receiver_whose_own_copy_was_corrupted_does_not_count():
         r = mb.fresh
         return None if len(r.rx) == 0 else tuple(np.round(np.rad2deg([r.bearing[0], r.heading[0]]), 9))
 
-    assert measure(0) == (0.0, 157.5)  # both receivers: their midpoint; transmitters 0 and 1: 22.5 deg
+    assert measure(0) == (0.0, 157.5)  # both receivers: their midpoint; transmitters 7, 0, 1, 2: 22.5 deg
     assert measure(1 << 3) == (0.0, 157.5)  # light on a receiver the frame did not reach changes nothing
-    assert measure(1 << 0) == (-22.5, 112.5)  # receiver 0's copy lost: receiver 7 alone, transmitter 1 alone
-    assert measure(1 << 7) == (22.5, 180.0)  # receiver 7's copy lost: receiver 0, transmitters 0 and 1
+    assert measure(1 << 0) == (-22.5, 90.0)  # receiver 0's copy lost: receiver 7 alone, transmitters 1 and 2
+    assert measure(1 << 7) == (22.5, -157.5)  # receiver 7's copy lost: receiver 0, transmitters 7, 0 and 1
     assert measure((1 << 0) | (1 << 7)) is None  # no clean copy: nothing measured
 
 
 def _hidden_terminals():
     """Robots 1 and 2 both reach robot 0 but not each other (a wall between them), so CSMA cannot keep
     their frames apart at robot 0: 1 lights receivers 7 and 0 of robot 0, 2 lights receiver 0."""
-    a1, a2, r = np.deg2rad(-8.0), np.deg2rad(12.0), 0.6
+    a1, a2, r = np.deg2rad(-8.0), np.deg2rad(20.0), 0.6
     pos = np.array([[0.0, 0.0], [r * np.cos(a1), r * np.sin(a1)], [r * np.cos(a2), r * np.sin(a2)]])
     hd = np.array([0.0, a1 + np.pi, a2 + np.pi])
     w = 0.5 * (a1 + a2)
@@ -240,10 +241,11 @@ def test_arc_noise_keeps_the_firmware_sectors_and_only_moves_boundary_cases():
     P = len(links.rx)
     rows = np.arange(P)
     nominal = link_masks(links, RONE, rows)
-    same = link_masks(links, RONE, rows, np.full((P, 16), np.deg2rad(68.0) / 2))
+    tx_half = np.full((P, 8), np.pi / 2)  # the transmitters' half-plane (RoneIR)
+    same = link_masks(links, RONE, rows, np.concatenate([np.full((P, 8), np.deg2rad(68.0) / 2), tx_half], axis=1))
     np.testing.assert_array_equal(same[0], nominal[0])  # the nominal arcs reproduce the IR layer's masks
     np.testing.assert_array_equal(same[1], nominal[1])
-    half = 0.5 * np.deg2rad(rng.uniform(*RONE_ARC_RANGE_DEG, (P, 16)))
+    half = np.concatenate([0.5 * np.deg2rad(rng.uniform(*RONE_ARC_RANGE_DEG, (P, 8))), tx_half], axis=1)
     noisy_rx, _ = link_masks(links, RONE, rows, half)
     lut = sector_lut()
     b0, b1 = lut[nominal[0]], lut[noisy_rx]

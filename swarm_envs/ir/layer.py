@@ -466,7 +466,7 @@ def compute_links(
         platform: platform of all robots.
         max_range: candidate cut-off on centre distance (m); default ``platform.ir_range``.
         drop_zero: drop pairs whose gain matrix is all zero (e.g. beyond the range, every ray occluded, or
-            r-one pairs outside each other's cones). Default True.
+            r-one pairs outside the receivers' arcs or behind the transmitters). Default True.
         occlusion: ``"ray"`` (docs/design.md#infrared-physical-layer, default): each emitter-detector ray is blocked by a third robot's disc
             it crosses; ``"centre"``: the centre-line rule, a pair is blocked entirely when its centre
             segment crosses a third robot's disc, else all its rays are clear; ``"none"``: no occlusion

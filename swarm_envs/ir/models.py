@@ -237,16 +237,24 @@ class RoneIR:
     """r-one binary IR reception [L Sec. 3.2.1, 3.2.3]; gain 1 (heard) or 0.
 
     A receiver hears a transmitter iff the direction to it lies within the receiver's 68-degree arc
-    (|detector_angle| <= 34 deg, ``platform.sensor_arc``) and the receiver lies within the transmitter's
-    cone (|emitter_angle| <= 34 deg) and the distance is at most ``max_range``.
+    (|detector_angle| <= 34 deg, ``platform.sensor_arc``; the shield limits "the detection of a single IR
+    receiver to a 68 deg arc" [L Sec. 3.2.1, Fig. 3.9]) and the receiver lies in front of the transmitter
+    (|emitter_angle| <= 90 deg) and the distance is at most ``max_range``.
 
-    Assumption (ours; the thesis only gives the receiver arc): the transmitters have the same 68-degree
-    cone as the receivers. With 8 transmitters at 45 deg spacing the cones overlap by 23 deg, giving 16
-    orientation sectors, the same 22.5-degree resolution as the receivers.
+    Transmitters: [L Sec. 3.2.1] says only that they "emit a radially uniform energy pattern". Our reading
+    (an assumption): each transmitter emits uniformly over its outward half-plane (the 180 degrees in front
+    of it) and the robot's own body blocks the inner side, so the 8 transmitters together light every
+    direction; the thesis gives no transmitter shield, cone width or fall-off, and the binary model has no
+    intensity. Because emitters and detectors sit on the body perimeter, a narrower transmitter cone would
+    leave close neighbours (centre distance below ~19 cm with a 68-degree cone) unheard, which the thesis's
+    contact-range behaviours contradict. A direction is lit by 4 adjacent transmitters (5 on a boundary), so
+    the transmitter-index orientation estimate has a 45-degree resolution in the far field
+    (docs/design.md#bearing-only-sensing).
 
     ``distance`` here is the emitter-detector distance; ``max_range`` defaults to ``platform.ir_range``
     (1 m). The IR layer additionally cuts at centre distance ``platform.ir_range``
     (:func:`swarm_envs.ir.layer.pair_gains`), so the effective cut is the smaller of the two.
+    ``emitter_arc`` (rad) overrides the transmitter's full emission angle (default pi, the half-plane).
     """
 
     name = "rone"
@@ -259,7 +267,7 @@ class RoneIR:
         self.platform = platform
         arc = getattr(platform, "sensor_arc", None) or np.deg2rad(68.0)
         self.sensor_half_arc = 0.5 * float(arc)
-        self.emitter_half_arc = 0.5 * float(emitter_arc if emitter_arc is not None else arc)
+        self.emitter_half_arc = 0.5 * float(emitter_arc if emitter_arc is not None else np.pi)
         self.max_range = float(getattr(platform, "ir_range", 1.0))
         self._eps = 1e-9  # so a direction exactly on the 34-degree boundary counts as inside
 
@@ -268,7 +276,7 @@ class RoneIR:
         return (np.abs(np.asarray(a, dtype=float)) <= self.sensor_half_arc + self._eps).astype(float)
 
     def emitter(self, b: Any) -> np.ndarray:
-        """1.0 where |b| <= half the (assumed) transmitter cone (34 deg), else 0.0."""
+        """1.0 where |b| <= half the transmitter's emission angle (90 deg: its outward half-plane), else 0.0."""
         return (np.abs(np.asarray(b, dtype=float)) <= self.emitter_half_arc + self._eps).astype(float)
 
     def gain(self, distance_m: Any, detector_angle: Any, emitter_angle: Any) -> np.ndarray:

@@ -6,14 +6,19 @@ contiguous run* of receivers that heard the message (indices taken cyclically, s
 adjacent) and reports the angle of the sum of their unit vectors: one receiver gives its axis, two give
 the midpoint of their axes, three give the middle axis, and so on.
 
-The neighbour's orientation uses the same rule on the indices of its 8 transmitters (at ``45 k`` degrees;
-every message carries the index of the transmitter that sent it [L Sec. 3.2.3, "encoded orientation
-bit"]). The transmitter run gives the direction from the neighbour w back to the receiver u *in w's frame*,
+The neighbour's orientation comes from the indices of its 8 transmitters (at ``45 k`` degrees; every
+message carries the index of the transmitter that sent it [L Sec. 3.2.3, "encoded orientation bit"]). Each
+transmitter lights its outward half-plane (:class:`swarm_envs.ir.models.RoneIR`), so in the far field a
+receiver is reached by 4 adjacent transmitters (5 on a boundary): a 45-degree orientation resolution. Close
+up, the receivers' 68-degree arcs select different emitters on the neighbour's perimeter (facing at 14 cm,
+the two lit receivers hear transmitters 1 and 7 but not 0), so the heard indices can have gaps; the rule
+(ours) takes the smallest cyclic run of transmitters containing all heard ones (:func:`cover_mask`) and
+reports the angle of the sum of their unit vectors. The transmitter run gives the direction from the neighbour w back to the receiver u *in w's frame*,
 an estimate of ``theta_w(u)``; the neighbour's heading in u's frame is then
 ``psi = theta_u(w) + pi - theta_w(u)`` (the reciprocal-bearing identity, cf. [F14 Eq. (10)]).
 
-Choices the thesis does not state (ours): when two runs are equally long, the run that starts at the
-lowest receiver index wins; a mask with all 8 receivers lit has no contiguous run with a defined
+Choices the thesis does not state (ours): the transmitter rule above; when two runs are equally long, the
+run that starts at the lowest index wins; a mask with all 8 receivers lit has no contiguous run with a defined
 direction (the unit vectors sum to zero) and gives NaN, as does an empty mask.
 
 Inputs come from the shared IR layer (:func:`swarm_envs.ir.layer.compute_links`): a receiver i "heard"
@@ -48,6 +53,7 @@ from swarm_envs.sensing.base import NeighbourReadings
 __all__ = [
     "sector_bearing",
     "run_mask",
+    "cover_mask",
     "sector_lut",
     "BearingReadings",
     "sense_bearings",
@@ -114,8 +120,21 @@ def run_mask(mask: int, n: int = 8) -> int:
     return out
 
 
-@lru_cache(maxsize=8)
-def _lut(angles_key: tuple[float, ...]) -> np.ndarray:
+def cover_mask(mask: int, n: int = 8) -> int:
+    """The smallest cyclic run of channels that contains every set bit of ``mask`` (n bits), as a mask: all
+    channels but the longest cyclic run of clear bits (ties -> the clear run starting at the lowest index).
+
+    ``0`` for an empty mask; the full mask for all n bits set.
+    """
+    mask = int(mask) & ((1 << n) - 1)
+    full = (1 << n) - 1
+    if mask in (0, full):
+        return mask
+    return full & ~run_mask(full & ~mask, n)
+
+
+@lru_cache(maxsize=16)
+def _lut(angles_key: tuple[float, ...], cover: bool = False) -> np.ndarray:
     angles = np.asarray(angles_key)
     n = len(angles)
     lut = np.full(1 << n, np.nan)
@@ -123,34 +142,40 @@ def _lut(angles_key: tuple[float, ...]) -> np.ndarray:
     for m in range(1, 1 << n):
         if m == (1 << n) - 1:
             continue  # all receivers: no direction
-        r = run_mask(m, n)
+        r = cover_mask(m, n) if cover else run_mask(m, n)
+        if r == (1 << n) - 1:
+            continue
         sel = np.array([(r >> i) & 1 for i in range(n)], dtype=bool)
         lut[m] = np.arctan2(uy[sel].sum(), ux[sel].sum())
     lut.setflags(write=False)
     return lut
 
 
-def sector_lut(axis_angles: np.ndarray | None = None) -> np.ndarray:
+def sector_lut(axis_angles: np.ndarray | None = None, cover: bool = False) -> np.ndarray:
     """The lookup table ``(2**n,)`` mask -> reported angle (rad, NaN for no reading).
 
     axis_angles: (n,) channel axes (rad), bit i of a mask = channel i; default the r-one receivers.
+    cover: use the smallest cyclic run containing every heard channel (:func:`cover_mask`, the transmitter
+    rule) instead of the longest contiguous run (:func:`run_mask`, the receiver rule).
     """
     a = RONE_RX_ANGLES if axis_angles is None else np.asarray(axis_angles, dtype=float)
-    return _lut(tuple(float(x) for x in a))
+    return _lut(tuple(float(x) for x in a), bool(cover))
 
 
-def sector_bearing(mask_bits: np.ndarray | int, axis_angles: np.ndarray | None = None) -> np.ndarray:
+def sector_bearing(mask_bits: np.ndarray | int, axis_angles: np.ndarray | None = None, cover: bool = False) -> np.ndarray:
     """Firmware sector rule [L Sec. 3.2.1]: angle (rad, (-pi, pi]) of the sum of the unit vectors of the
-    longest contiguous (cyclic) run of channels in ``mask_bits`` (bit i = channel i heard).
+    longest contiguous (cyclic) run of channels in ``mask_bits`` (bit i = channel i heard); with ``cover``
+    of the smallest cyclic run containing them all (the transmitter rule, module doc).
 
     Args:
         mask_bits: int or int array of channel bitmasks.
         axis_angles: channel axes (rad); default the r-one receivers at 22.5 + 45 k degrees. Pass
-            :data:`RONE_TX_ANGLES` for the transmitter (orientation) rule.
+            :data:`RONE_TX_ANGLES` and ``cover=True`` for the transmitter (orientation) rule.
+        cover: see above.
 
-    Returns: float array of the same shape (NaN where the mask is empty or full).
+    Returns: float array of the same shape (NaN where the mask is empty or the run is all channels).
     """
-    lut = sector_lut(axis_angles)
+    lut = sector_lut(axis_angles, cover)
     return lut[np.asarray(mask_bits, dtype=np.int64)]
 
 
@@ -189,7 +214,7 @@ def _bits_to_mask(heard: np.ndarray) -> np.ndarray:
 def _readings(rx: np.ndarray, tx: np.ndarray, rx_mask: np.ndarray, tx_mask: np.ndarray, platform: Platform) -> BearingReadings:
     """Firmware rule on the masks: sector bearing, transmitter bearing and the neighbour's heading."""
     bearing = sector_bearing(rx_mask, platform.detector_directions)
-    tx_bearing = sector_bearing(tx_mask, platform.emitter_directions)
+    tx_bearing = sector_bearing(tx_mask, platform.emitter_directions, cover=True)
     heading = np.pi - np.mod(np.pi - (bearing + np.pi - tx_bearing), 2.0 * np.pi)
     return BearingReadings(
         rx=np.asarray(rx),
@@ -217,7 +242,7 @@ def link_masks(
         platform: the robots' platform.
         rows: (R,) link indices (default all links).
         half_arcs: None for the nominal masks (``gains > threshold``); else (R, n_d + n_e) half-widths (rad)
-            of each receiver's arc and each transmitter's cone for that reading (r-one binary model,
+            of each receiver's arc and each transmitter's emission angle for that reading (r-one binary model,
             :class:`swarm_envs.ir.models.RoneIR`): the masks are recomputed from the link's emitter-detector
             angles (:func:`swarm_envs.ir.layer.pair_geometry`), range and this step's per-ray occlusion.
 
@@ -246,7 +271,7 @@ def sense_bearings(
             platform with at most 16 channels works, e.g. the Droplet's 6 for a coarse ablation).
         threshold: a receiver hears / a transmitter is heard where the gain exceeds this (the r-one's
             gains are 0/1).
-        half_arcs: optional (P, n_d + n_e) receiver-arc / transmitter-cone half-widths (rad) per link, the
+        half_arcs: optional (P, n_d + n_e) receiver-arc / transmitter-emission half-widths (rad) per link, the
             hardware-noise model (:func:`link_masks`); None = the IR layer's nominal gains.
 
     Returns: :class:`BearingReadings` (vectorised, no loop over links).
@@ -260,17 +285,21 @@ def draw_half_arcs(
     rng: np.random.Generator, n: int, platform: Platform | str = "rone", arc_range: tuple[float, float] = RONE_ARC_RANGE_DEG,
     arc_mean: float | None = RONE_ARC_MEAN_DEG,
 ) -> np.ndarray:
-    """(n, n_d + n_e) half-widths (rad) of receiver arcs and transmitter cones, each drawn from ``arc_range``
-    with mean ``arc_mean`` (deg, :func:`arc_widths_deg`; default the r-one's measured 63-74 degrees, mean 68
-    [L Sec. 3.2.1, Fig. 3.9(b)]): one row per robot (its hardware, :func:`pair_half_arcs`) or per reading."""
+    """(n, n_d + n_e) half-widths (rad) of receiver arcs and transmitter emission angles: the receivers' drawn
+    from ``arc_range`` with mean ``arc_mean`` (deg, :func:`arc_widths_deg`; default the r-one's measured 63-74
+    degrees, mean 68 [L Sec. 3.2.1, Fig. 3.9(b)], the receiver shield's tolerances), the transmitters' the
+    model's nominal half-plane (:class:`swarm_envs.ir.models.RoneIR`; the thesis measures no transmitter
+    spread): one row per robot (its hardware, :func:`pair_half_arcs`) or per reading."""
     platform = get_platform(platform)
-    u = rng.random((int(n), platform.n_detectors + platform.n_emitters))
-    return 0.5 * np.deg2rad(arc_widths_deg(u, arc_range, arc_mean))
+    u = rng.random((int(n), platform.n_detectors))
+    rx = 0.5 * np.deg2rad(arc_widths_deg(u, arc_range, arc_mean))
+    tx_half = float(getattr(platform.ir_model, "emitter_half_arc", 0.5 * np.pi))
+    return np.concatenate([rx, np.full((int(n), platform.n_emitters), tx_half)], axis=1)
 
 
 def pair_half_arcs(robot_arcs: np.ndarray, rx: np.ndarray, tx: np.ndarray, platform: Platform | str = "rone") -> np.ndarray:
     """(P, n_d + n_e) half-widths (rad) for links ``rx[p] <- tx[p]``: the receiver's own detector arcs and the
-    transmitter's own emitter cones, from per-robot arcs ``robot_arcs`` (N, n_d + n_e) (:func:`draw_half_arcs`
+    transmitter's own emission angles, from per-robot arcs ``robot_arcs`` (N, n_d + n_e) (:func:`draw_half_arcs`
     with one row per robot)."""
     platform = get_platform(platform)
     nd = platform.n_detectors
@@ -339,7 +368,7 @@ class MessageBearings:
     than 2 rounds less a step.
 
     Hardware noise (``arc_range``, default on in the env's ``bearing_noise``): each robot's 8 receiver arcs
-    and 8 transmitter cones are its own, drawn from ``arc_range`` (with mean ``arc_mean``,
+    are its own, drawn from ``arc_range`` (with mean ``arc_mean``,
     :func:`arc_widths_deg`) when its env copy is reset
     (deg; [L Sec. 3.2.1, Fig. 3.9(b)]: the arc "varies from 63 to 74 with a mean of 68 over 10 trials", a
     "physical model of the IR receivers' geometric tolerances", i.e. of the shield, fixed on a robot)
@@ -348,9 +377,8 @@ class MessageBearings:
     error histogram [L Fig. 3.13(a)] has no numbers in the text we have, and of the other source it names,
     "the transmitter power" [L Sec. 3.2.1], it gives no magnitude; the arc spread is the only measured
     hardware figure, so it is the whole noise model (assumptions: the triangular law, the one with the
-    reported minimum, maximum and mean, arcs symmetric about
-    the channel axis, and the same spread for the transmitters, whose cone RoneIR already assumes equal to
-    the receivers' arc).
+    reported minimum, maximum and mean, and arcs symmetric about the channel axis; the transmitters keep
+    RoneIR's nominal half-plane, the spread being the receiver shield's).
 
     Beacons (:meth:`send_beacons`): every robot broadcasts a header-only frame (its id, no payload) as
     system traffic at the start of each of its rounds, for stacks whose bearing exchange does not already

@@ -28,8 +28,8 @@ Each control step, in this order (data flows one way):
    beacon ([L Sec. 3.2.3]: the announcement message carries the encoded orientation bit; [L Sec. 5.2.2]
    step 1 "broadcast id, record bearings" and step 2 share it, and the rounds of the bearings are the
    exchange's), otherwise a header-only beacon.
-   ``bearing_noise`` (default on, r-one) gives each robot, at reset, its own receiver arcs and transmitter
-   cones from the measured 63-74 degree spread, mean 68 [L Sec. 3.2.1, Fig. 3.9(b)]. The ``rone`` has no
+   ``bearing_noise`` (default on, r-one) gives each robot, at reset, its own receiver arcs from the
+   measured 63-74 degree spread, mean 68 [L Sec. 3.2.1, Fig. 3.9(b)]. The ``rone`` has no
    range sensor: its ``range_bearing`` rows hold these readings with range 0, most recently decoded first
    (ties in a random order drawn each step from the copy's ranking stream,
    :func:`swarm_envs.sensing.observation.ranked_slots`): the K kept are the K heard last, and a row's position

@@ -14,7 +14,8 @@ Sources:
   the sensor's direction. Layout from the public Webots e-puck model. Motion error (stepper motors: open
   loop at the commanded step rate): 1 % wheel-gain spread and 2 % per-step noise, assumed.
 - ``rone``: Lynch thesis [L Sec. 3.2]: 11 cm diameter, 8 IR receivers at 22.5 + 45 k degrees with
-  68-degree arcs, 8 transmitters at 45 k degrees. Motion error: no wheel turns below the minimum
+  68-degree arcs, 8 transmitters at 45 k degrees, each lighting its outward half-plane ("a radially
+  uniform energy pattern" [L Sec. 3.2.1]; the half-plane is our reading, swarm_envs.ir.models.RoneIR). Motion error: no wheel turns below the minimum
   controllable speed of 15 mm/s [L Sec. 3.1]; 2 % wheel-gain spread and 2 % per-step noise, assumed.
 
 Messaging bit rate (``ir_bitrate``, the default of the ``bitrate`` setting): e-puck 310 bps, the rate of
