@@ -374,7 +374,10 @@ class FullSensing:
             xy, valid, rigid = self._null_space(knowledge)
         row, slot = np.nonzero(valid)
         points = xy[row, slot]
-        distance = np.hypot(points[:, 0], points[:, 1])
+        # ranked by the distance of the coordinates as the observation holds them (float32), so that equal
+        # distances are equal for a firmware computing them from those values too
+        rounded = points.astype(np.float32).astype(np.float64)
+        distance = np.hypot(rounded[:, 0], rounded[:, 1])
         if self.has_range:
             packed, order = pack_nearest(self.n, row, distance, points, self.k)
         else:  # bearing-only: equal scale-free distances (one neighbour, symmetric triangles) in a random order
