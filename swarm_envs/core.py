@@ -20,7 +20,8 @@ one copy never advances or re-draws anything of another.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import Any
+from concurrent.futures import Future
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -33,6 +34,21 @@ from swarm_envs.tasks.task import BatchState, Task
 from swarm_envs.sim.world import DT, N_BUMP_SECTORS, World, motion_error, step_worlds, wheel_gains
 
 __all__ = ["SwarmCore", "DT"]
+
+
+class _Command(NamedTuple):
+    """What the act phase hands to physics and sensing (rows: all robots of all copies)."""
+
+    act: np.ndarray  #: (n_total, action_size) actions after the switches, in [-1, 1]
+    moving: np.ndarray  #: (B,) bool copies that move this step (not in their reset step)
+    row_moving: np.ndarray  #: (n_total,) bool robots of the moving copies
+    linear: np.ndarray  #: (moving robots,) commanded linear speed after motion error, m/s
+    angular: np.ndarray  #: (moving robots,) commanded angular speed after motion error, rad/s
+    payloads: np.ndarray | None  #: (n_total, message_bits) bool message bits, None without messages
+    sending: np.ndarray | None  #: (n_total,) bool robots that queue their payload
+    off: np.ndarray  #: (n_total,) bool robots switched off (Task.switched_off)
+    emit_off: np.ndarray  #: (n_total,) bool transmitters off (Task.transmit_off)
+    detect_off: np.ndarray  #: (n_total,) bool receivers off (Task.receive_off)
 
 
 class SwarmCore:
@@ -132,13 +148,31 @@ class SwarmCore:
 
     # -- stepping ------------------------------------------------------------------------------------
     def step(self, actions: np.ndarray | None) -> None:
-        """One control step of every copy.
+        """One control step of every copy, in the phases of the data flow: act (commands, payloads, switches,
+        motion error) -> physics -> sense -> reward; the observation is built from the new frame when it is
+        first read (:meth:`observations`).
 
         Copies started since the last step do not move: this step senses their initial state (their reset
         observation). The others apply ``actions`` (n_total, action_size), already checked and clipped to
         [-1, 1] (rows of static robots are ignored), through the platform's motion error (``motion_noise``).
+
+        Thread plan: in a large single scene (the sensing's last step said so), the part of the sensing step
+        that reads nothing the physics changes (queueing messages, drawing the channel's random numbers) runs
+        on the worker thread during the physics, and the task's rewards (ground truth only) during the
+        sensing. Chipmunk and the kernels release the GIL; the results are the same as in sequence.
         """
         starting = self._starting.copy()
+        command = self._act(actions, starting)
+        overlap = bool(getattr(self.sensing, "large_scene", False))
+        prepared = self._physics(command, overlap)
+        self._sense_and_reward(command, prepared, starting, overlap)
+        self._starting[:] = False
+        if self._firmware:
+            self._run_firmware(starting)
+
+    def _act(self, actions: np.ndarray | None, starting: np.ndarray) -> _Command:
+        """The act phase: the step's wheel commands after switches and motion error, the message payloads and
+        the infrared switches (``starting`` (B,) marks the copies whose reset step this is)."""
         moving = ~starting
         size = self.layout.action_size
         act = np.zeros((self.n_total, size)) if actions is None else np.asarray(actions, dtype=float).reshape(self.n_total, size)
@@ -156,36 +190,42 @@ class SwarmCore:
         if self._motion is not None and moving.any():  # two draws per robot of every moving copy, whatever its command
             draws = self._motion.draw(self.copy_of_robot[row_moving], (2,))
             linear, angular = motion_error(p, linear, angular, self.wheel_gains[row_moving], draws)
-        # a large single scene (the sensing's last step said so): the part of the sensing step that reads
-        # nothing the physics changes (queueing the messages, drawing the channel's random numbers) on the
-        # worker thread while the physics runs here (chipmunk and the kernels release the GIL; same result)
-        large = getattr(self.sensing, "large_scene", False)
-        prepared = worker().submit(self.sensing.prepare_step, payloads, sending) if large else None
+        return _Command(act, moving, row_moving, linear, angular, payloads, sending, off, emit_off, detect_off)
+
+    def _physics(self, command: _Command, overlap: bool) -> Future | None:
+        """The physics phase: the moving copies' worlds advance one control step and the ground truth is
+        gathered. With ``overlap``, the sensing's preparation runs on the worker thread meanwhile; returns
+        its future."""
+        prepared = worker().submit(self.sensing.prepare_step, command.payloads, command.sending) if overlap else None
         try:
-            step_worlds([self.worlds[b] for b in np.flatnonzero(moving)], linear, angular, DT)
+            step_worlds([self.worlds[b] for b in np.flatnonzero(command.moving)], command.linear, command.angular, DT)
         finally:  # never leave the worker running on the sensing's state
             if prepared is not None:
                 prepared.exception()  # waits
-        self.last_actions[row_moving] = act[row_moving]
+        self.last_actions[command.row_moving] = command.act[command.row_moving]
         self._gather()
-        self.num_cycles[moving] += 1
+        self.num_cycles[command.moving] += 1
+        return prepared
+
+    def _sense_and_reward(self, command: _Command, prepared: Future | None, starting: np.ndarray, overlap: bool) -> None:
+        """The sense phase (a new :class:`SensorFrame` from the sensing stack) and the reward phase (the task
+        on the ground truth), the rewards on the worker thread during the sensing with ``overlap``."""
         state = self.state()
-        # and the rewards, from the ground truth only, on the worker thread while the sensing runs here
-        rewards = worker().submit(self.task.rewards, state, starting) if large else None
-        silent = off if off.any() else None
-        switches = {"emit_off": emit_off if emit_off.any() else None, "detect_off": detect_off if detect_off.any() else None}
+        rewards = worker().submit(self.task.rewards, state, starting) if overlap else None
+        silent = command.off if command.off.any() else None
+        switches = {
+            "emit_off": command.emit_off if command.emit_off.any() else None,
+            "detect_off": command.detect_off if command.detect_off.any() else None,
+        }
         try:
             if prepared is None:
-                self.frame = self.sensing.step(self.positions, self.headings, payloads, sending, silent=silent, **switches)
+                self.frame = self.sensing.step(self.positions, self.headings, command.payloads, command.sending, silent=silent, **switches)
             else:
                 self.frame = self.sensing.step(self.positions, self.headings, prepared=prepared.result(), silent=silent, **switches)
         finally:  # never leave the worker running on the task's state
             if rewards is not None:
                 rewards.exception()  # waits
         self.rewards, self.terms, self.metrics = self._check_rewards(self.task.rewards(state, starting) if rewards is None else rewards.result())
-        self._starting[:] = False
-        if self._firmware:
-            self._run_firmware(starting)
 
     def _switched_off(self, cycles: np.ndarray) -> np.ndarray:
         """(n_total,) bool robots the task switches off during the step ``cycles`` (B,) (Task.switched_off)."""
