@@ -41,6 +41,9 @@ def test_flatten_and_messages_layout(env_id):
 
 def test_task_module_factories():
     """Each task module's PettingZoo factories (the registry itself: tests/test_registry.py)."""
+    import swarm_envs.tasks.aggregation_v0, swarm_envs.tasks.centroid_seeking_v0, swarm_envs.tasks.flocking_v0  # noqa: E401,F401
+    import swarm_envs.tasks.mid_angle_navigation_v0, swarm_envs.tasks.parity_clustering_v0, swarm_envs.tasks.sorted_following_v0  # noqa: E401,F401
+
     for module in (
         swarm_envs.tasks.aggregation_v0, swarm_envs.tasks.flocking_v0, swarm_envs.tasks.centroid_seeking_v0,
         swarm_envs.tasks.sorted_following_v0, swarm_envs.tasks.parity_clustering_v0, swarm_envs.tasks.mid_angle_navigation_v0,
