@@ -28,7 +28,7 @@ import numpy as np
 from swarm_envs.tasks._task_checks import RewardsCheck, checked_mask, checked_spawn
 from swarm_envs._compile._worker import worker
 from swarm_envs.sim.copies import CopyStream
-from swarm_envs.sensing.observation import ObservationLayout, id_rows, nearest_slots, own_id_rows, pack_nearest, range_bearing_rows
+from swarm_envs.sensing.observation import ObservationLayout, assemble_observation
 from swarm_envs.sensing.base import SensorFrame
 from swarm_envs.tasks.task import BatchState, Task
 from swarm_envs.sim.world import DT, N_BUMP_SECTORS, World, motion_error, step_worlds, wheel_gains
@@ -289,59 +289,10 @@ class SwarmCore:
         cache = self._observation_cache
         if cache is not None and cache[0] is self.frame:
             return cache[1], cache[2]
-        frame = self.frame
-        n, k, m, b = self.n_total, self.layout.n_neighbours, self.layout.n_messages, self.layout.message_bits
-        nb = frame.neighbours
-        # the k nearest readings per robot; only those are turned into observation rows. Parts are built
-        # in float32 (values cast from float64 as build would), then clipped by build. A stack that already
-        # selected the k nearest (the ideal one) hands them over in NeighbourReadings.slots / slot_cos_sin
-        slots, cos_sin = nb.slots, nb.slot_cos_sin
-        if slots is not None and slots.shape == (n, k) and nb.rows is not None and nb.rows.shape[:2] == (n, k):
-            range_bearing = nb.rows  # built by the stack (FullSensing, on its worker thread)
-        else:
-            if slots is None or slots.shape != (n, k):
-                slots, cos_sin = nearest_slots(n, nb.rx, nb.range, k), None
-            range_bearing = range_bearing_rows(slots, nb.range, nb.bearing, nb.heading, nb.age, cos_sin)
-        msg = frame.messages
-        if len(msg.receiver):
-            key = msg.distance_hint if msg.distance_hint is not None else np.arange(len(msg.receiver), dtype=float)
-            msg_values = np.concatenate(
-                [np.ones((len(msg.receiver), 1)), msg.bearing[:, None] / np.pi, msg.payload.reshape(len(msg.receiver), b)], axis=1
-            )
-            messages, message_slots = pack_nearest(n, msg.receiver, key, msg_values, m)
-        else:
-            messages, message_slots = np.zeros((n, m, 2 + b), np.float32), np.full((n, m), -1)
-        sf = frame.scale_free
-        scale_free = np.empty(sf.xy.shape[:-1] + (3,), np.float32)
-        scale_free[..., 0] = sf.valid
-        scale_free[..., 1:] = np.where(sf.valid[..., None], sf.xy, 0.0)
-        proprio = np.empty((n, N_BUMP_SECTORS + self.last_actions.shape[1]), np.float32)
-        proprio[:, :N_BUMP_SECTORS] = self.bumps
-        proprio[:, N_BUMP_SECTORS:] = self.last_actions
-        ids = self._id_parts(slots, nb.tx, message_slots, msg.sender, sf.ids) if self.layout.observe_ids or self._firmware else {}
-        parts = self.layout.build(range_bearing, messages, scale_free, sf.rigid.astype(np.float32), proprio, ids)
-        self._observation_cache = (frame, parts, ids)
+        with_ids = self.layout.observe_ids or self._firmware
+        parts, ids = assemble_observation(self.frame, self.layout, self.bumps, self.last_actions, self.n_world, with_ids)
+        self._observation_cache = (self.frame, parts, ids)
         return parts, ids
-
-    def _id_parts(
-        self, slots: np.ndarray, tx: np.ndarray, message_slots: np.ndarray, sender: np.ndarray, scale_free_ids: np.ndarray | None
-    ) -> dict[str, np.ndarray]:
-        """The id parts (``observe_ids``) of every robot: its own id and, per observation row, the id the
-        sensing stack decoded (``NeighbourReadings.tx`` of the row's reading, ``MessageReadings.sender`` of
-        the row's message, ``ScaleFreeReadings.ids``), as a copy's own robot numbers."""
-        n_world = self.n_world
-        own = np.arange(self.n_total) % n_world
-
-        def decoded(index: np.ndarray, rows: np.ndarray) -> np.ndarray:  # robot rows of the slots -> ids, -1 empty
-            return np.where(index >= 0, rows[np.maximum(index, 0)] % n_world if len(rows) else -1, -1)
-
-        sf_ids = np.full((self.n_total, self.layout.n_neighbours), -1) if scale_free_ids is None else np.where(scale_free_ids >= 0, scale_free_ids % n_world, -1)
-        return {
-            "own_id": own_id_rows(own, n_world),
-            "range_bearing_ids": id_rows(decoded(slots, tx), own, n_world),
-            "message_ids": id_rows(decoded(message_slots, sender), own, n_world),
-            "scale_free_ids": id_rows(sf_ids, own, n_world),
-        }
 
     def agent_rows(self) -> np.ndarray:
         """(B, n_agents) row index of every agent of every copy."""

@@ -35,6 +35,7 @@ from gymnasium import spaces
 
 from swarm_envs._compile._numba import njit
 from swarm_envs.sim.geometry import wrap_angle
+from swarm_envs.sensing.base import SensorFrame
 from swarm_envs.sim.world import N_BUMP_SECTORS
 
 __all__ = [
@@ -49,6 +50,7 @@ __all__ = [
     "ID_PARTS",
     "SCALE_FREE_CLIP",
     "wrapped_difference",
+    "assemble_observation",
 ]
 
 RB_FIELDS = ("valid", "range", "cos_bearing", "sin_bearing", "cos_heading", "sin_heading", "age")
@@ -422,3 +424,66 @@ def _clip_to_box(values: np.ndarray, low: np.ndarray, high: np.ndarray) -> np.nd
         )
         return flat.reshape(values.shape)
     return np.clip(np.asarray(values, np.float32), low, high)
+
+
+def assemble_observation(
+    frame: SensorFrame, layout: ObservationLayout, bumps: np.ndarray, last_actions: np.ndarray, n_world: int, with_ids: bool
+) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:
+    """Every robot's observation from one sensing frame: (the layout's parts, the id parts (empty unless
+    ``with_ids``)), leading axis = robot of all copies (``n_world`` robots per copy).
+
+    The K nearest readings per robot become ``range_bearing`` rows (a stack that already chose its slots and
+    built the rows, as the full stack does, hands them over in ``NeighbourReadings.slots`` / ``rows``);
+    messages are kept in the frame's order (``MessageReadings.distance_hint`` when the stack gives one);
+    ``proprio`` is the bump flags ``bumps`` (n, 8) and ``last_actions`` (n, action_size). Parts are built in
+    float32 and clipped to the layout's box by :meth:`ObservationLayout.build`.
+    """
+    nb = frame.neighbours
+    n, k, m, b = len(bumps), layout.n_neighbours, layout.n_messages, layout.message_bits
+    slots, cos_sin = nb.slots, nb.slot_cos_sin
+    if slots is not None and slots.shape == (n, k) and nb.rows is not None and nb.rows.shape[:2] == (n, k):
+        range_bearing = nb.rows
+    else:
+        if slots is None or slots.shape != (n, k):
+            slots, cos_sin = nearest_slots(n, nb.rx, nb.range, k), None
+        range_bearing = range_bearing_rows(slots, nb.range, nb.bearing, nb.heading, nb.age, cos_sin)
+    msg = frame.messages
+    if len(msg.receiver):
+        key = msg.distance_hint if msg.distance_hint is not None else np.arange(len(msg.receiver), dtype=float)
+        msg_values = np.concatenate(
+            [np.ones((len(msg.receiver), 1)), msg.bearing[:, None] / np.pi, msg.payload.reshape(len(msg.receiver), b)], axis=1
+        )
+        messages, message_slots = pack_nearest(n, msg.receiver, key, msg_values, m)
+    else:
+        messages, message_slots = np.zeros((n, m, 2 + b), np.float32), np.full((n, m), -1)
+    sf = frame.scale_free
+    scale_free = np.empty(sf.xy.shape[:-1] + (3,), np.float32)
+    scale_free[..., 0] = sf.valid
+    scale_free[..., 1:] = np.where(sf.valid[..., None], sf.xy, 0.0)
+    proprio = np.empty((n, N_BUMP_SECTORS + last_actions.shape[1]), np.float32)
+    proprio[:, :N_BUMP_SECTORS] = bumps
+    proprio[:, N_BUMP_SECTORS:] = last_actions
+    ids = _decoded_id_parts(slots, nb.tx, message_slots, msg.sender, sf.ids, n_world, k) if with_ids else {}
+    parts = layout.build(range_bearing, messages, scale_free, sf.rigid.astype(np.float32), proprio, ids)
+    return parts, ids
+
+
+def _decoded_id_parts(
+    slots: np.ndarray, tx: np.ndarray, message_slots: np.ndarray, sender: np.ndarray, scale_free_ids: np.ndarray | None, n_world: int, k: int
+) -> dict[str, np.ndarray]:
+    """The id parts (``observe_ids``) of every robot: its own id and, per observation row, the id the
+    sensing stack decoded (``NeighbourReadings.tx`` of the row's reading, ``MessageReadings.sender`` of the
+    row's message, ``ScaleFreeReadings.ids``), as a copy's own robot numbers."""
+    n = len(slots)
+    own = np.arange(n) % n_world
+
+    def decoded(index: np.ndarray, rows: np.ndarray) -> np.ndarray:  # robot rows of the slots -> ids, -1 empty
+        return np.where(index >= 0, rows[np.maximum(index, 0)] % n_world if len(rows) else -1, -1)
+
+    sf_ids = np.full((n, k), -1) if scale_free_ids is None else np.where(scale_free_ids >= 0, scale_free_ids % n_world, -1)
+    return {
+        "own_id": own_id_rows(own, n_world),
+        "range_bearing_ids": id_rows(decoded(slots, tx), own, n_world),
+        "message_ids": id_rows(decoded(message_slots, sender), own, n_world),
+        "scale_free_ids": id_rows(sf_ids, own, n_world),
+    }
