@@ -30,6 +30,7 @@ from swarm_envs._compile._worker import worker
 from swarm_envs.sim.copies import CopyStream
 from swarm_envs.sensing.observation import ObservationLayout, assemble_observation
 from swarm_envs.sensing.base import SensorFrame
+from swarm_envs.sensing.stacks import build_stack
 from swarm_envs.tasks.task import BatchState, Task
 from swarm_envs.sim.world import DT, N_BUMP_SECTORS, World, motion_error, step_worlds, wheel_gains
 
@@ -73,7 +74,7 @@ class SwarmCore:
         from swarm_envs._compile._first_run import prepare  # (not at import: ``python -m swarm_envs._compile._first_run`` runs it)
 
         prepare(type(task).__name__, self.platform.name, cfg["sensing"])  # a cold numba cache: the notice, a second core
-        self.sensing = _make_sensing(cfg, self.platform, self.n_world, self.B, obstacles)
+        self.sensing = build_stack(cfg["sensing"], self.platform, self.n_world, cfg, self.B, obstacles)
         self.generators = [np.random.default_rng() for _ in range(self.B)]
         #: the motion error (``motion_noise``): each copy's stream of standard normal draws (its robots' wheel
         #: gains at the episode start, then two draws per robot every step it moves) and the gains (n_total, 2)
@@ -298,12 +299,3 @@ class SwarmCore:
         """(B, n_agents) row index of every agent of every copy."""
         return np.arange(self.B)[:, None] * self.n_world + self.task.agent_robots[None, :]
 
-
-def _make_sensing(cfg: dict[str, Any], platform, n_world: int, n_copies: int, obstacles: np.ndarray | None = None):
-    if cfg["sensing"] == "ideal":
-        from swarm_envs.sensing.ideal import IdealSensing
-
-        return IdealSensing(platform, n_world, cfg["n_neighbours"], cfg["message_bits"], n_copies, obstacles=obstacles)
-    from swarm_envs.sensing.full import FullSensing
-
-    return FullSensing(platform, n_world, cfg, n_copies, obstacles=obstacles)

@@ -108,3 +108,18 @@ def test_the_thread_plan_does_not_change_results(env_id, monkeypatch):
             trace += [_part(obs), rew.copy()]
         runs.append(trace)
     assert_tree_equal(runs[0], runs[1])
+
+
+def test_the_core_builds_its_sensing_stack_from_the_registry():
+    from swarm_envs.sensing.stacks import SENSING_STACKS, build_stack
+    from swarm_envs.sim.platforms import get_platform
+    from swarm_envs.tasks.settings import COMMON_SETTINGS
+
+    assert COMMON_SETTINGS["sensing"].choices == tuple(SENSING_STACKS)
+    for name, target in SENSING_STACKS.items():
+        vec = _vec(sensing=name, num_envs=1)
+        assert f"{type(vec.core.sensing).__module__}:{type(vec.core.sensing).__name__}" == target
+        stack = build_stack(name, get_platform("epuck"), 4, vec.config, n_copies=2)
+        assert type(stack) is type(vec.core.sensing)
+    with pytest.raises(ValueError, match="unknown sensing stack 'exact'"):
+        build_stack("exact", get_platform("epuck"), 4, vec.config)

@@ -214,6 +214,13 @@ class FullSensing:
         elif self.bearings is not None:
             self.network.kinds.code(BEACON_KIND)
 
+    @classmethod
+    def from_config(
+        cls, platform: Platform, n_robots: int, config: dict[str, Any], n_copies: int = 1, obstacles: np.ndarray | None = None
+    ) -> FullSensing:
+        """The stack for a task's resolved settings ``config`` (:mod:`swarm_envs.sensing.stacks`)."""
+        return cls(platform, n_robots, config, n_copies, obstacles=obstacles)
+
     def reset(self, copies: np.ndarray, rngs: list[np.random.Generator]) -> None:
         """Fresh sensor, channel and exchange state of env ``copies``, from independent child streams
         (range & bearing, channel, exchange, sector bearings, hardware variation, row-ranking ties) of each

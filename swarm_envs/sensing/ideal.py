@@ -8,6 +8,8 @@ neighbour distance.
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 from scipy.spatial import cKDTree
 
@@ -282,6 +284,13 @@ class IdealSensing:
         self.copy = np.repeat(np.arange(self.n_copies), self.copy_size)
         self.k = n_neighbours
         self.message_bits = message_bits
+
+    @classmethod
+    def from_config(
+        cls, platform: Platform, n_robots: int, config: dict[str, Any], n_copies: int = 1, obstacles: np.ndarray | None = None
+    ) -> IdealSensing:
+        """The stack for a task's resolved settings ``config`` (:mod:`swarm_envs.sensing.stacks`)."""
+        return cls(platform, n_robots, config["n_neighbours"], config["message_bits"], n_copies, obstacles=obstacles)
 
     def reset(self, copies: np.ndarray | None = None, rngs: list[np.random.Generator] | None = None) -> None:
         """Nothing to reset: the ideal stack is stateless and noiseless."""

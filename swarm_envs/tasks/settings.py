@@ -32,6 +32,7 @@ import numpy as np
 from swarm_envs._text import shown
 from swarm_envs.comm.bch import SUPPORTED as BCH_CODES
 from swarm_envs.comm.protocol import MAX_PAYLOAD
+from swarm_envs.sensing.stacks import SENSING_STACKS
 from swarm_envs.sim.platforms import PLATFORMS, Platform, get_platform
 from swarm_envs.sim.world import MAX_CLOSING, MAX_SUBSTEPS, default_substeps, min_substeps
 
@@ -269,7 +270,7 @@ COMMON_SETTINGS: dict[str, Setting] = {
         f"that its speed and size need at most {MAX_SUBSTEPS} physics sub-steps",
         help='``"droplet"`` (4.4 cm, 6 IR channels), ``"epuck"`` (7 cm, 8 sensors), ``"rone"`` (11 cm, 8 RX + 8 TX), or a ``Platform``',
     ),
-    "sensing": Choice("full", choices=("full", "ideal"), help='``"full"``: the modelled IR stack; ``"ideal"``: exact, noiseless, lossless values (true ids with ``observe_ids``) in the same layout'),
+    "sensing": Choice("full", choices=tuple(SENSING_STACKS), help='``"full"``: the modelled IR stack; ``"ideal"``: exact, noiseless, lossless values (true ids with ``observe_ids``) in the same layout'),
     "max_cycles": Int(
         500, "control steps of 0.1 s per episode", low=1, high=10**9,
         why="10^9 steps are 3.2 years of simulated time; episode memory grows with the steps taken, never with this bound",
