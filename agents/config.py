@@ -37,7 +37,7 @@ import yaml
 
 from swarm_envs._text import shown
 
-__all__ = ["ConfigError", "DEFAULTS", "BOUNDS", "load_config", "apply_overrides", "validate", "resolve", "bounds_table", "run_config_path", "progress_bar_on"]
+__all__ = ["ConfigError", "DEFAULTS", "BOUNDS", "load_config", "apply_overrides", "validate", "resolve", "bounds_table", "run_config_path", "progress_bar_on", "merge_settings"]
 
 
 class ConfigError(ValueError):
@@ -177,7 +177,9 @@ def _type_ok(value: Any, default: Any) -> bool:
     return isinstance(value, type(default))
 
 
-def _merge(base: dict, update: dict, path: str = "") -> dict:
+def merge_settings(base: dict, update: dict, path: str = "") -> dict:
+    """A deep copy of the nested settings ``base`` with ``update`` merged in, key by key (``path``: the
+    dotted prefix of ``base``, for error messages)."""
     out = copy.deepcopy(base)
     for key, value in (update or {}).items():
         dotted = f"{path}{key}"
@@ -191,7 +193,7 @@ def _merge(base: dict, update: dict, path: str = "") -> dict:
         if isinstance(base[key], dict) and dotted not in ("agent.scripted_kwargs",):
             if not isinstance(value, dict):
                 raise ConfigError(f"config key {dotted!r} must be a mapping, got {shown(value)}")
-            out[key] = _merge(base[key], value, dotted + ".")
+            out[key] = merge_settings(base[key], value, dotted + ".")
         else:
             out[key] = value
     return out
@@ -434,7 +436,7 @@ def apply_overrides(cfg: dict[str, Any], overrides: list[str]) -> dict[str, Any]
         value = _parse_value(key.strip(), text)
         if not free and isinstance(node.get(last), dict) and isinstance(value, dict):
             # a section given as a mapping updates it, as a section of a config file does: its other keys keep their values
-            value = _merge(node[last], value, key.strip() + ".")
+            value = merge_settings(node[last], value, key.strip() + ".")
         node[last] = value
     return cfg
 
@@ -476,7 +478,7 @@ def load_config(path: str | Path | None, overrides: list[str] | None = None) -> 
             )
         if not isinstance(raw, dict):
             raise ConfigError(f"config file {str(path)!r} must hold a mapping at the top level")
-    cfg = _merge(DEFAULTS, raw)
+    cfg = merge_settings(DEFAULTS, raw)
     cfg = apply_overrides(cfg, overrides or [])
     return validate(cfg)
 

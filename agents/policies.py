@@ -46,6 +46,7 @@ __all__ = [
     "build_model",
     "algorithm_class",
     "TrainedPolicy",
+    "part_indices",
 ]
 
 #: the row blocks of the observation that :class:`SetEncoder` pools over: base part, its id part
@@ -80,7 +81,7 @@ class PolicySpec:
 
 
 # -- odometry ---------------------------------------------------------------------------------------------
-def _part_indices(layout: ObservationLayout) -> dict[str, np.ndarray]:
+def part_indices(layout: ObservationLayout) -> dict[str, np.ndarray]:
     """``{part: flat indices in the part's shape}``: the layout's own unflattening of ``0 .. D - 1``."""
     size = sum(int(np.prod(box.shape)) for box in layout.dict_space().spaces.values())
     return layout.unflatten(np.arange(size))
@@ -106,7 +107,7 @@ class Odometry:
     """
 
     def __init__(self, layout: ObservationLayout, platform: Platform) -> None:
-        index = _part_indices(layout)
+        index = part_indices(layout)
         self.rb_index, self.sf_index = index["range_bearing"], index["scale_free"]  # (K, 7), (K, 3)
         self.action_index = index["proprio"][N_BUMP_SECTORS : N_BUMP_SECTORS + 2]  # last (linear, angular) command
         self.history = int(layout.max_age) + 1
@@ -205,7 +206,7 @@ def row_groups(layout: ObservationLayout) -> dict[str, Any]:
     """What :class:`SetEncoder` needs of a layout, as plain numbers (saved with the model): per row block,
     the flat indices of each row's features (base part, then its id part, whose rows are the same
     neighbours); and the indices of the rest (``proprio``, ``rigid``, ``own_id``)."""
-    index = _part_indices(layout)
+    index = part_indices(layout)
     groups, used = [], []
     for base, ids in ROW_PARTS:
         rows = index[base] if ids not in index else np.concatenate([index[base], index[ids]], axis=1)

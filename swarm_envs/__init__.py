@@ -18,7 +18,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from swarm_envs import _moved  # noqa: F401  (old module paths: the task aliases, deprecated paths)
+import swarm_envs._moved  # noqa: F401  (old module paths: the task aliases, deprecated paths)
 from swarm_envs.ir import models as _ir_models  # noqa: F401  (registers the IR models with swarm_envs.sim.platforms)
 from swarm_envs.adapters.env import SwarmEnv
 from swarm_envs.sim.platforms import PLATFORMS, Platform, get_platform

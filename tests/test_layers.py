@@ -22,3 +22,25 @@ def test_import_contracts_are_kept():
     result = subprocess.run([sys.executable, "-c", code], cwd=ROOT, env=env, capture_output=True, text=True, timeout=600)
     assert result.returncode == 0, result.stdout[-4000:] + result.stderr[-2000:]
     assert "Contracts: 2 kept, 0 broken." in result.stdout
+
+
+def _private_name_imports(folder: Path) -> list[str]:
+    """``from swarm_envs.x import _name`` (or ``agents``) in the modules under ``folder``: one module reading
+    another's private name."""
+    import ast
+
+    found = []
+    for path in sorted(folder.rglob("*.py")):
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if isinstance(node, ast.ImportFrom) and (node.module or "").split(".")[0] in ("swarm_envs", "agents"):
+                found += [f"{path.relative_to(ROOT)}:{node.lineno} {node.module}.{a.name}" for a in node.names if a.name.startswith("_") and not a.name.startswith("__")]
+    return found
+
+
+@pytest.mark.parametrize("folder", ["swarm_envs", "agents"])
+def test_no_module_imports_another_modules_private_names(folder):
+    assert _private_name_imports(ROOT / folder) == []
+
+
+def test_the_private_import_check_finds_one():
+    assert _private_name_imports(ROOT / "swarm_envs" / "export") == [] and _private_name_imports(ROOT / "tests") != []

@@ -56,10 +56,10 @@ def _d(value: float) -> str:
 
 def odometry_indices(layout: ObservationLayout) -> dict[str, np.ndarray]:
     """Flat indices the odometry reads and turns: ``range_bearing`` (K, 7), ``scale_free`` (K, 3), last action (2,)."""
-    from swarm_envs.agents.policies import _part_indices
+    from swarm_envs.agents.policies import part_indices
     from swarm_envs.sim.world import N_BUMP_SECTORS
 
-    index = _part_indices(layout)
+    index = part_indices(layout)
     return {"rb": index["range_bearing"], "sf": index["scale_free"], "action": index["proprio"][N_BUMP_SECTORS : N_BUMP_SECTORS + 2]}
 
 

@@ -49,7 +49,7 @@ def load_run(run_dir: str | Path, fixed: str | None = None) -> LoadedRun:
     missing = [p.name for p in (config, model_path) if not p.is_file()]
     if missing:
         raise ExportError(f"run folder '{run_dir}' has no {' and no '.join(missing)} (train.py writes both into its output folder)")
-    from swarm_envs.agents.config import DEFAULTS, ConfigError, _merge, validate
+    from swarm_envs.agents.config import DEFAULTS, ConfigError, merge_settings, validate
     from swarm_envs.agents.policies import PolicySpec
     from swarm_envs.agents.tasks import env_id, import_modules
     from swarm_envs.agents.train import TrainError, env_kwargs_of, load_checkpoint
@@ -62,7 +62,7 @@ def load_run(run_dir: str | Path, fixed: str | None = None) -> LoadedRun:
         raise ExportError(f"'{config}' does not hold a train.py config (a mapping at the top level)")
     try:
         import_modules(raw.get("imports") or [])
-        cfg = validate(_merge(DEFAULTS, raw))
+        cfg = validate(merge_settings(DEFAULTS, raw))
     except (ConfigError, ImportError) as err:
         raise ExportError(f"'{config}': {err}") from None
     spec = PolicySpec.from_agent(cfg["agent"])
