@@ -329,7 +329,7 @@ def _span(dotted: str) -> str:
 
 def _check_batch(cfg: dict[str, Any], env: dict[str, int]) -> None:
     """The rollout fits make_vec's bounds and memory, and the batch fits the rollout."""
-    from swarm_envs.adapters.vector import MAX_TOTAL_ROBOTS, available_memory
+    from swarm_envs.adapters.memory import MAX_TOTAL_ROBOTS, available_memory
 
     a, t = cfg["agent"], cfg["train"]
     if t["n_envs"] * env["n_world"] > MAX_TOTAL_ROBOTS:
@@ -365,11 +365,11 @@ def _check_env_settings(task: str, env: dict[str, Any], scripted: tuple[str, dic
     reset) for the checks that need its arena (robots and anchors fit; the build's fit test is exact, so
     every seed resets), and the ``scripted`` (name, keyword arguments) baseline once on it. Returns its
     sizes (``n_agents``, ``n_world``, ``obs_size``, ``act_size``) and ``copy_bytes``, the estimated memory of one env
-    copy (:func:`swarm_envs.adapters.vector.copy_memory`); raises :class:`ConfigError`."""
+    copy (:func:`swarm_envs.adapters.memory.copy_memory`); raises :class:`ConfigError`."""
     import swarm_envs
     from swarm_envs.agents.tasks import env_id
     from swarm_envs.tasks.settings import SettingsError
-    from swarm_envs.adapters.vector import copy_memory
+    from swarm_envs.adapters.memory import copy_memory
 
     kwargs = {**env, "flatten": True}
     if isinstance(kwargs.get("code"), list):

@@ -2,7 +2,7 @@
 
 Every robot of every env copy is one row: row ``c * n_agents + i`` is agent ``possible_agents[i]`` of copy
 ``c``, so one policy network acts for all robots (parameter sharing). ``num_envs = n_copies * n_agents``.
-All copies are stepped by one :class:`swarm_envs.adapters.vector.SwarmVectorEnv` (one array program, no loop over
+All copies are stepped by one :class:`swarm_envs.adapters.batch.CoreBatch` (one array program, no loop over
 copies here).
 
 - observations: the flat observation (``flatten=True`` is forced), float32 ``(num_envs, D)``;
@@ -66,7 +66,7 @@ class SwarmVecEnv(VecEnv):
         torch_threads: int | None = None,
     ) -> None:
         from swarm_envs.adapters.torch_threads import set_torch_threads
-        from swarm_envs.adapters.vector import SwarmVectorEnv
+        from swarm_envs.adapters.batch import CoreBatch
 
         if torch_threads != 0:
             set_torch_threads(torch_threads)
@@ -77,7 +77,7 @@ class SwarmVecEnv(VecEnv):
             raise ValueError(f"n_workers must be an integer in [1, n_copies={n_copies}], got {n_workers!r}")
         env_cls, defaults = _env_entry(env)
         kwargs = {**defaults, **(env_kwargs or {}), "flatten": True}
-        self.vec = SwarmVectorEnv(env_cls, int(n_copies), **kwargs) if n_workers == 1 else _WorkerVec(env_cls, int(n_copies), kwargs, int(n_workers))
+        self.vec = CoreBatch(env_cls, int(n_copies), **kwargs) if n_workers == 1 else _WorkerVec(env_cls, int(n_copies), kwargs, int(n_workers))
         self.agents = list(self.vec.possible_agents)
         self.n_agents = len(self.agents)
         self.n_copies = int(n_copies)
@@ -176,11 +176,11 @@ def _merge(parts: list[Any]) -> Any:
 def _worker(conn, env_cls: type, n_copies: int, kwargs: dict[str, Any]) -> None:  # pragma: no cover - runs in a child
     import signal
 
-    from swarm_envs.adapters.vector import SwarmVectorEnv
+    from swarm_envs.adapters.batch import CoreBatch
 
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the trainer's to handle; it closes the workers
 
-    vec = SwarmVectorEnv(env_cls, n_copies, **kwargs)
+    vec = CoreBatch(env_cls, n_copies, **kwargs)
     while True:
         cmd, arg = conn.recv()
         if cmd == "reset":
@@ -196,13 +196,13 @@ def _worker(conn, env_cls: type, n_copies: int, kwargs: dict[str, Any]) -> None:
 
 
 class _WorkerVec:
-    """``n_copies`` copies split over ``n_workers`` processes, each a :class:`swarm_envs.adapters.vector.SwarmVectorEnv`
+    """``n_copies`` copies split over ``n_workers`` processes, each a :class:`swarm_envs.adapters.batch.CoreBatch`
     of a contiguous block of copies; the same reset/step interface as one vector env."""
 
     def __init__(self, env_cls: type, n_copies: int, kwargs: dict[str, Any], n_workers: int) -> None:
         import multiprocessing as mp
 
-        from swarm_envs.adapters.vector import SwarmVectorEnv
+        from swarm_envs.adapters.batch import CoreBatch
 
         ctx = mp.get_context("forkserver" if "forkserver" in mp.get_all_start_methods() else "spawn")
         self.blocks = np.array_split(np.arange(n_copies), n_workers)
@@ -214,7 +214,7 @@ class _WorkerVec:
             child.close()
             self.conns.append(parent)
             self.procs.append(proc)
-        probe = SwarmVectorEnv(env_cls, 1, **kwargs)  # spaces and layout, without stepping
+        probe = CoreBatch(env_cls, 1, **kwargs)  # spaces and layout, without stepping
         self.possible_agents, self.layout, self.platform = probe.possible_agents, probe.layout, probe.platform
         self.agent_observation_space, self.agent_action_space = probe.agent_observation_space, probe.agent_action_space
         self.max_cycles, self.config = probe.max_cycles, probe.config

@@ -26,6 +26,7 @@ import numpy as np
 from swarm_envs._text import shown
 from swarm_envs.adapters.env import SwarmEnv
 from swarm_envs.tasks.task import Task
+from swarm_envs.adapters.batch import CoreBatch
 from swarm_envs.adapters.vector import AgentsAsEnvs, SwarmVectorEnv
 
 __all__ = ["EnvSpec", "register", "spec", "list_envs", "task_class", "resolve", "make", "make_vec", "ENV_IDS", "ID_PATTERN"]
@@ -204,5 +205,5 @@ def make_vec(env: str | type, num_envs: int, *, agents_as_envs: bool = False, **
     if not isinstance(agents_as_envs, (bool, np.bool_)):
         raise TypeError(f"agents_as_envs must be True or False, got {agents_as_envs!r:.80}")
     entry, defaults = resolve(env)
-    vec = SwarmVectorEnv(entry, num_envs, **{**defaults, **kwargs})
-    return AgentsAsEnvs(vec) if bool(agents_as_envs) else vec
+    settings = {**defaults, **kwargs}
+    return AgentsAsEnvs(CoreBatch(entry, num_envs, **settings)) if bool(agents_as_envs) else SwarmVectorEnv(entry, num_envs, **settings)

@@ -13,7 +13,7 @@ from pathlib import Path
 import pytest
 
 import swarm_envs
-import swarm_envs.adapters.vector as vector
+import swarm_envs.adapters.memory as memory
 from swarm_envs.tasks.settings import SettingsError
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -21,7 +21,7 @@ GIB = 2**30
 
 
 def test_make_vec_refuses_copies_beyond_the_available_memory(monkeypatch):
-    monkeypatch.setattr(vector, "available_memory", lambda: 16 * GIB)
+    monkeypatch.setattr(memory, "available_memory", lambda: 16 * GIB)
     with pytest.raises(SettingsError) as err:
         swarm_envs.make_vec("swarm_envs/Aggregation-v0", 100_000, n_robots=1)
     message = str(err.value)
@@ -56,8 +56,8 @@ def test_the_accepted_maximum_of_copies_is_refused_up_front_on_this_machine():
 
 def test_the_copies_the_memory_holds_build(monkeypatch):
     """The estimate decides: as many copies as it fits build, one more is refused."""
-    per_copy = vector.copy_memory(swarm_envs.make("swarm_envs/Flocking-v0").task)
-    monkeypatch.setattr(vector, "available_memory", lambda: 3 * per_copy)
+    per_copy = memory.copy_memory(swarm_envs.make("swarm_envs/Flocking-v0").task)
+    monkeypatch.setattr(memory, "available_memory", lambda: 3 * per_copy)
     vec = swarm_envs.make_vec("swarm_envs/Flocking-v0", 3)
     vec.reset(seed=0)
     with pytest.raises(SettingsError, match="use at most 3 copies"):
@@ -65,7 +65,7 @@ def test_the_copies_the_memory_holds_build(monkeypatch):
 
 
 def test_an_unknown_available_memory_checks_nothing(monkeypatch):
-    monkeypatch.setattr(vector, "available_memory", lambda: None)
+    monkeypatch.setattr(memory, "available_memory", lambda: None)
     assert swarm_envs.make_vec("swarm_envs/Aggregation-v0", 2).num_envs == 2
 
 
@@ -74,16 +74,16 @@ def test_the_estimate_grows_with_copies_robots_walls_episode_and_the_tasks_own_a
     ten = swarm_envs.make("swarm_envs/Aggregation-v0", n_robots=10).task
     circle = swarm_envs.make("swarm_envs/Aggregation-v0", n_robots=1, arena="circle").task
     long = swarm_envs.make("swarm_envs/Aggregation-v0", n_robots=1, max_cycles=5000).task
-    assert vector.copy_memory(ten) - vector.copy_memory(one) >= 9 * vector.ROBOT_BYTES
-    assert vector.copy_memory(circle) - vector.copy_memory(one) == 60 * vector.WALL_BYTES  # 64 segments instead of 4
-    assert vector.copy_memory(long) > vector.copy_memory(one) + 4000 * vector.LOG_STEP_BYTES
+    assert memory.copy_memory(ten) - memory.copy_memory(one) >= 9 * memory.ROBOT_BYTES
+    assert memory.copy_memory(circle) - memory.copy_memory(one) == 60 * memory.WALL_BYTES  # 64 segments instead of 4
+    assert memory.copy_memory(long) > memory.copy_memory(one) + 4000 * memory.LOG_STEP_BYTES
     # MidAngleNavigation's relays remember a hop count per pair of static robots: 24 bytes per pair
     mid = swarm_envs.make("swarm_envs/MidAngleNavigation-v0", arena_size=40.0).task
-    assert vector.copy_memory(mid) > 24 * mid.n_static**2 + mid.n_world * vector.ROBOT_BYTES
+    assert memory.copy_memory(mid) > 24 * mid.n_static**2 + mid.n_world * memory.ROBOT_BYTES
 
 
 def test_available_memory_reads_the_machine():
-    available = vector.available_memory()
+    available = memory.available_memory()
     if sys.platform.startswith("linux"):
         total = next(int(line.split()[1]) * 1024 for line in open("/proc/meminfo") if line.startswith("MemTotal:"))
         assert 0 < available <= total
@@ -92,7 +92,7 @@ def test_available_memory_reads_the_machine():
 def test_train_config_refuses_more_copies_than_the_memory_holds(monkeypatch):
     from swarm_envs.agents.config import ConfigError, load_config
 
-    monkeypatch.setattr(vector, "available_memory", lambda: 1 * GIB)
+    monkeypatch.setattr(memory, "available_memory", lambda: 1 * GIB)
     with pytest.raises(ConfigError, match=r"config key 'train.n_envs': 100000 env copies .* the machine has 1.00 GiB available"):
         load_config(ROOT / "configs" / "aggregation.yaml", ["train.n_envs=100000", "env.n_robots=1"])
     load_config(ROOT / "configs" / "aggregation.yaml", ["train.n_envs=8"])
@@ -101,7 +101,7 @@ def test_train_config_refuses_more_copies_than_the_memory_holds(monkeypatch):
 MEASURE = textwrap.dedent(
     """
     import gc, sys, numpy as np, swarm_envs
-    from swarm_envs.adapters.vector import copy_memory
+    from swarm_envs.adapters.memory import copy_memory
     def rss():
         return next(int(l.split()[1]) * 1024 for l in open("/proc/self/status") if l.startswith("VmHWM:"))
     B, n, steps = (int(a) for a in sys.argv[1:4])

@@ -139,7 +139,7 @@ def test_restarting_one_copy_leaves_the_others_unchanged(sensing):
         out = []
         for t in range(30):
             if t == limit_copy0:
-                vec._needs_reset[0] = True  # as if copy 0's episode had ended: it restarts on this step
+                vec.batch._needs_reset[0] = True  # as if copy 0's episode had ended: it restarts on this step
             obs, _, _, _, infos = vec.step(actions[t])
             out.append((obs["range_bearing"][1].copy(), obs["messages"][1].copy(), obs["scale_free"][1].copy(), infos["ground_truth"]["position"][1].copy()))
         return out

@@ -1,9 +1,9 @@
 """TorchRL: ``B`` copies of a swarm task as one batched multi-agent ``EnvBase`` over one batched core.
 
 :func:`make_torchrl` (also ``swarm_envs.make_torchrl``) returns a :class:`SwarmTorchRLEnv` with
-``batch_size=[B]`` that steps one :class:`swarm_envs.adapters.vector.SwarmVectorEnv`: one array program for all
+``batch_size=[B]`` that steps one :class:`swarm_envs.adapters.batch.CoreBatch`: one array program for all
 copies, arrays in and out, no Python loop over copies or agents here (the global state's task markers are
-computed copy by copy, :meth:`SwarmVectorEnv.states`). The tensordict layout is the one of
+computed copy by copy, :meth:`CoreBatch.states`). The tensordict layout is the one of
 TorchRL's own multi-agent envs (VMAS, PettingZoo): every robot is an agent of one group (``"agents"``
 by default, agents ``robot_0 .. robot_{N-1}``), per-agent entries have shape ``[B, N, ...]``:
 
@@ -17,7 +17,7 @@ by default, agents ``robot_0 .. robot_{N-1}``), per-agent entries have shape ``[
   ``ground_truth_position`` (m), ``ground_truth_heading`` (rad), ``ground_truth_velocity`` (m/s),
   ``sensing_<statistic>`` (full sensing);
 - ``("info", name)`` ``[B]``: the task's metrics per copy (e.g. ``polarisation``) and ``episode_step``;
-- ``"state"`` ``[B, state_dim]``: the global ground-truth state (:meth:`SwarmVectorEnv.states`, row b
+- ``"state"`` ``[B, state_dim]``: the global ground-truth state (:meth:`CoreBatch.states`, row b
   equal to ``SwarmEnv.state()`` of copy b), for centralised critics only.
 
 The info entries are flat (one level under ``"info"``), which is what BenchMARL's logger reads.
@@ -47,12 +47,12 @@ from torchrl.envs import EnvBase
 
 from swarm_envs._text import shown
 from swarm_envs.adapters.torch_threads import set_torch_threads
-from swarm_envs.adapters.vector import SwarmVectorEnv
+from swarm_envs.adapters.batch import CoreBatch
 from swarm_envs.registry import resolve
 
 __all__ = ["SwarmTorchRLEnv", "make_torchrl"]
 
-#: per-agent info groups of :class:`swarm_envs.adapters.vector.SwarmVectorEnv` (``(B, N, ...)`` arrays)
+#: per-agent info groups of :class:`swarm_envs.adapters.batch.CoreBatch` (``(B, N, ...)`` arrays)
 AGENT_INFO_GROUPS = ("reward_terms", "ground_truth", "sensing")
 
 
@@ -145,7 +145,7 @@ class SwarmTorchRLEnv(EnvBase):
         if torch_threads != 0:
             set_torch_threads(torch_threads)
         entry, defaults = resolve(env_id)  # an id (with its default settings) or a Task / SwarmEnv class
-        vec = SwarmVectorEnv(entry, num_envs, **{**defaults, **env_kwargs})
+        vec = CoreBatch(entry, num_envs, **{**defaults, **env_kwargs})
         super().__init__(device=device, batch_size=torch.Size([vec.num_envs]))
         self.env_id = env_id
         self.vec = vec
