@@ -52,7 +52,7 @@ def main() -> None:
     timed(vec.core.sensing, "step", "sensing")
     timed(vec.core, "observations", "observations")
     timed(vec.core.task, "rewards", "rewards")
-    timed(vec, "_infos", "infos")
+    timed(vec.batch, "infos", "infos")
     vec.reset(seed=0)
     rng = np.random.default_rng(0)
     shape = (args.copies, vec.n_agents, vec.layout.action_size)
