@@ -34,7 +34,8 @@ from swarm_envs.agents.base import Policy, flatten_batch
 from swarm_envs.adapters.env import DT
 from swarm_envs.sensing.observation import ObservationLayout
 from swarm_envs.sim.platforms import Platform
-from swarm_envs.sim.world import N_BUMP_SECTORS, wheel_limited
+from swarm_envs.sim.world import N_BUMP_SECTORS
+from swarm_envs.sim.motion import wheel_limited
 
 __all__ = [
     "PolicySpec",

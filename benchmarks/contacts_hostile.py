@@ -44,7 +44,7 @@ def _hostile_module() -> ModuleType:
 def worst(seeds: int, crowds: tuple[int, ...] = (10, 30, 100)) -> None:
     scenes = _hostile_module()
     from swarm_envs.sim.platforms import PLATFORMS
-    from swarm_envs.sim.world import default_substeps
+    from swarm_envs.sim.control import default_substeps
 
     print(f"\n### Deepest overlap / wall reach (% of the diameter) over {seeds} seeds x {scenes.STEPS} steps at full speed")
     print("| platform (sub-steps) | " + " | ".join(f"{s} {n}" for s in scenes.SCENES for n in crowds) + " | worst |")

@@ -1,7 +1,7 @@
 """The physics sub-step count (``physics_substeps``): overlaps, wall penetration, cost and accuracy.
 
 Part 1, the worst case of the defaults: for each platform at its default sub-steps (``physics_substeps=None``,
-:func:`swarm_envs.sim.world.default_substeps`), at 8 and at its minimum, the deepest robot-robot overlap and
+:func:`swarm_envs.sim.control.default_substeps`), at 8 and at its minimum, the deepest robot-robot overlap and
 the deepest reach past a wall (the real wall polygon), in % of the diameter, over many seeds and 10 s
 scenes: everyone at full speed towards the centre (a crush) or towards the nearest wall, at the default
 density (``arena_size=None``: the platform's spacing x sqrt(N)) with 10, 30 and 100 robots, and dense
@@ -32,7 +32,10 @@ from scipy.spatial import cKDTree
 
 from swarm_envs.sim.platforms import PLATFORMS
 from swarm_envs.tasks.task import SPACING
-from swarm_envs.sim.world import Arena, World, default_substeps, min_substeps, spawn_positions, wrap_angle
+from swarm_envs.sim.world import World, wrap_angle
+from swarm_envs.sim.control import default_substeps, min_substeps
+from swarm_envs.sim.spawning import spawn_positions
+from swarm_envs.sim.arena import Arena
 
 STEPS = 50
 COUNTS = (1, 2, 4, 8, 16)

@@ -15,7 +15,8 @@ import numpy as np
 import swarm_envs
 from swarm_envs.tasks.settings import SettingsError
 from swarm_envs.tasks.task import Real, Task
-from swarm_envs.sim.world import Arena, check_capacity, spawn_positions
+from swarm_envs.sim.spawning import check_capacity, spawn_positions
+from swarm_envs.sim.arena import Arena
 
 
 class GatherBeyondWall(Task):

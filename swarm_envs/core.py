@@ -2,7 +2,7 @@
 
 Every per-step array covers all ``B x n_world`` robots (robot ``b * n_world + i`` is robot ``i`` of copy
 ``b``). Data flows one way each control step (``DT`` = 0.1 s): the commands through the platform's motion error
-(:func:`swarm_envs.sim.world.motion_error`, ``motion_noise``) -> physics (one pymunk ``Space`` per copy,
+(:func:`swarm_envs.sim.motion.motion_error`, ``motion_noise``) -> physics (one pymunk ``Space`` per copy,
 :func:`swarm_envs.sim.world.step_worlds`) -> sensing stack over all robots at once (IR links, range & bearing, SwarmCom,
 bearing exchange, scale-free coordinates; no link, message or random draw crosses copies) -> observation
 arrays -> rewards (the task, on ``(B, ...)`` views).
@@ -32,7 +32,9 @@ from swarm_envs.sensing.observation import ObservationLayout, assemble_observati
 from swarm_envs.sensing.base import SensorFrame
 from swarm_envs.sensing.stacks import build_stack
 from swarm_envs.tasks.task import BatchState, Task
-from swarm_envs.sim.world import DT, N_BUMP_SECTORS, World, motion_error, step_worlds, wheel_gains
+from swarm_envs.sim.world import N_BUMP_SECTORS, World, step_worlds
+from swarm_envs.sim.motion import motion_error, wheel_gains
+from swarm_envs.sim.control import DT
 
 __all__ = ["SwarmCore", "DT"]
 

@@ -15,7 +15,9 @@ from scipy.spatial import cKDTree
 
 from swarm_envs.sim.platforms import PLATFORMS
 from swarm_envs.tasks.task import SPACING
-from swarm_envs.sim.world import MAX_OVERLAP, Arena, World, spawn_positions
+from swarm_envs.sim.world import MAX_OVERLAP, World
+from swarm_envs.sim.spawning import spawn_positions
+from swarm_envs.sim.arena import Arena
 from swarm_envs.sim.geometry import wrap_angle
 
 SCENES = ("centre", "corner", "walls", "pairs")

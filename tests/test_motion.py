@@ -16,7 +16,10 @@ import swarm_envs
 from swarm_envs.core import DT
 from swarm_envs.sim.platforms import PLATFORMS, get_platform
 from swarm_envs.tasks.task import SPACING
-from swarm_envs.sim.world import MAX_OVERLAP, Arena, World, motion_error, spawn_positions, wheel_gains
+from swarm_envs.sim.world import MAX_OVERLAP, World
+from swarm_envs.sim.motion import motion_error, wheel_gains
+from swarm_envs.sim.spawning import spawn_positions
+from swarm_envs.sim.arena import Arena
 from swarm_envs.sim.geometry import wrap_angle
 
 ENV = "swarm_envs/Aggregation-v0"

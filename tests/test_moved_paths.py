@@ -16,6 +16,7 @@ DEPRECATED = {'world': 'sim.world', 'platforms': 'sim.platforms', 'geometry': 's
 PROBE = """
 import importlib, json, sys, warnings
 import swarm_envs
+from swarm_envs._moved import SPLIT
 out = {}
 for old, new in json.loads(sys.argv[1]).items():
     with warnings.catch_warnings(record=True) as caught:
@@ -27,8 +28,10 @@ for old, new in json.loads(sys.argv[1]).items():
                 raise
             continue
         again = importlib.import_module("swarm_envs." + old)
-    out[old] = [module is importlib.import_module("swarm_envs." + new), again is module,
-                [str(w.message) for w in caught if issubclass(w.category, DeprecationWarning)]]
+    parts = [importlib.import_module("swarm_envs." + m) for m in [new, *SPLIT.get(old, ())]]
+    # the moved module itself, or (a module split in several) one offering every public name of the parts
+    same = module is parts[0] or all(getattr(module, n) is getattr(p, n) for p in parts for n in p.__all__)
+    out[old] = [same, again is module, [str(w.message) for w in caught if issubclass(w.category, DeprecationWarning)]]
 print(json.dumps(out))
 """
 
@@ -54,3 +57,13 @@ def test_old_paths_warn_once_and_resolve():
     for old, (same, again, warned) in found.items():
         assert same and again, old
         assert len(warned) == 1 and f"swarm_envs.{DEPRECATED[old]}" in warned[0], (old, warned)
+
+
+def test_names_of_a_split_module_stay_importable_from_its_old_path():
+    code = ("import warnings; warnings.simplefilter('ignore');"
+            "from swarm_envs.world import Arena, World, DT, spawn_positions, motion_error, motor_limits;"
+            "from swarm_envs.sim.arena import Arena as A; from swarm_envs.sim.spawning import spawn_positions as s;"
+            "from swarm_envs.vector import SwarmVectorEnv, copy_memory; from swarm_envs.adapters.memory import copy_memory as c;"
+            "assert Arena is A and spawn_positions is s and copy_memory is c; print('ok')")
+    result = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True, timeout=300, env={"PYTHONPATH": str(ROOT), "PATH": ""})
+    assert result.stdout.strip() == "ok", result.stderr[-2000:]

@@ -17,7 +17,8 @@ import pytest
 import swarm_envs
 from swarm_envs import aggregation_v0, centroid_seeking_v0, flocking_v0
 from swarm_envs.sim.platforms import PLATFORMS
-from swarm_envs.sim.world import Arena, _best_lattice, spawn_positions
+from swarm_envs.sim.spawning import _best_lattice, spawn_positions
+from swarm_envs.sim.arena import Arena
 from tests.conftest import assert_tree_equal
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -125,7 +126,7 @@ def test_headings_alone_keep_the_task_spawn_and_positions_alone_are_seeded():
 @pytest.mark.parametrize("shape", Arena.SHAPES)
 @pytest.mark.parametrize("size", [0.05, 0.1, 0.2, 0.33, 0.75, 1.5, 3.0])
 def test_capacity_lower_bound_is_a_lower_bound(shape, size):
-    from swarm_envs.sim.world import lattice_lower_bound
+    from swarm_envs.sim.spawning import lattice_lower_bound
 
     arena = Arena(shape, size)
     for radius, gap in ((0.035, 0.0035), (0.022, 0.0), (0.055, 0.011)):
@@ -133,12 +134,12 @@ def test_capacity_lower_bound_is_a_lower_bound(shape, size):
 
 
 def test_spawner_does_not_enumerate_a_roomy_arena(monkeypatch):
-    import swarm_envs.sim.world as world
+    import swarm_envs.sim.spawning as spawning
 
     def enumerate_lattice(*args, **kwargs):
         raise AssertionError("the spawner enumerated the whole arena")
 
-    monkeypatch.setattr(world, "_best_lattice", enumerate_lattice)
+    monkeypatch.setattr(spawning, "_best_lattice", enumerate_lattice)
     for size in (100.0, 1e4):
         for shape in Arena.SHAPES:
             pos = spawn_positions(np.random.default_rng(0), 10, 0.035, Arena(shape, size))

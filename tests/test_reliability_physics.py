@@ -12,7 +12,10 @@ import swarm_envs
 from swarm_envs.sim.platforms import PLATFORMS
 from swarm_envs.tasks.settings import SettingsError
 from swarm_envs.tasks.task import SPACING
-from swarm_envs.sim.world import MAX_OVERLAP, Arena, World, default_substeps, min_substeps, spawn_positions
+from swarm_envs.sim.world import MAX_OVERLAP, World
+from swarm_envs.sim.control import default_substeps, min_substeps
+from swarm_envs.sim.spawning import spawn_positions
+from swarm_envs.sim.arena import Arena
 from swarm_envs.sim.geometry import wrap_angle
 
 

@@ -16,7 +16,8 @@ from hypothesis import strategies as st  # noqa: E402
 import swarm_envs  # noqa: E402
 from swarm_envs.sim.platforms import PLATFORMS  # noqa: E402
 from swarm_envs.tasks.settings import SettingsError  # noqa: E402
-from swarm_envs.sim.world import Arena, check_capacity, fit_count, spawn_positions  # noqa: E402
+from swarm_envs.sim.spawning import check_capacity, fit_count, spawn_positions  # noqa: E402
+from swarm_envs.sim.arena import Arena
 
 FLOCKING, AGGREGATION, CENTROID = "swarm_envs/Flocking-v0", "swarm_envs/Aggregation-v0", "swarm_envs/CentroidSeeking-v0"
 

@@ -12,7 +12,7 @@ from swarm_envs.adapters import render
 from swarm_envs.agents.evaluation import make_env
 from swarm_envs.demo import DEFAULT_SHOWCASE, SHOWCASE, TASKS
 from swarm_envs.sim.platforms import get_platform
-from swarm_envs.sim.world import Arena
+from swarm_envs.sim.arena import Arena
 
 README = (Path(__file__).resolve().parents[1] / "README.md").read_text(encoding="utf-8")
 

@@ -4,7 +4,9 @@ import numpy as np
 import pytest
 
 from swarm_envs.sim.platforms import PLATFORMS
-from swarm_envs.sim.world import Arena, World, spawn_positions
+from swarm_envs.sim.world import World
+from swarm_envs.sim.spawning import spawn_positions
+from swarm_envs.sim.arena import Arena
 from swarm_envs.sim.geometry import wrap_angle
 
 

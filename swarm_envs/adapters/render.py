@@ -25,7 +25,7 @@ from swarm_envs.tasks._task_checks import checked_robot_groups
 from swarm_envs.sensing.observation import nearest_slots
 from swarm_envs.sim.platforms import Platform
 from swarm_envs.sensing.base import SensorFrame
-from swarm_envs.sim.world import Arena
+from swarm_envs.sim.arena import Arena
 
 __all__ = [
     "Renderer",

@@ -17,7 +17,8 @@ from swarm_envs.sensing.observation import ObservationLayout
 from swarm_envs.sim.platforms import Platform
 from swarm_envs.sensing.full import reading_max_age
 from swarm_envs.tasks.settings import validate_settings
-from swarm_envs.sim.world import World, as_real_array
+from swarm_envs.sim.world import World
+from swarm_envs.sim.arena import as_real_array
 
 __all__ = ["resolve_config", "make_layout", "check_seed", "check_reset_options", "real_actions", "check_finite_actions", "info_arrays"]
 

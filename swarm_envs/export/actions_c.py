@@ -1,6 +1,6 @@
 """Write ``actions.h`` / ``actions.c``: the policy's action in [-1, 1] -> the wheel speeds and message bits
 the platform takes, as the env maps actions (:class:`swarm_envs.core.SwarmCore` and
-:func:`swarm_envs.sim.world.wheel_limited`).
+:func:`swarm_envs.sim.motion.wheel_limited`).
 
 The env turns action ``(a0, a1, bits...)`` into the commanded linear speed ``a0 * max_speed`` (m/s) and
 angular speed ``a1 * max_angular_speed`` (rad/s), and each wheel's speed ``v -+ w * wheel_base / 2`` is

@@ -67,7 +67,7 @@ MAX_BITRATE = 20_000
 MAX_RADIUS = 1.0
 #: m/s: the largest wheel speed; with the sub-step counts the physics allows (``physics_substeps`` <= 1000)
 #: faster robots would close more than their contacts can stop within one sub-step
-#: (:func:`swarm_envs.sim.world.default_substeps` also bounds it for small robots)
+#: (:func:`swarm_envs.sim.control.default_substeps` also bounds it for small robots)
 MAX_SPEED = 10.0
 #: kg: the heaviest robot; pymunk needs a finite positive mass, and the motor forces scale with it
 MAX_MASS = 1000.0

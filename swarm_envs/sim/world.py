@@ -10,21 +10,21 @@ collision callbacks would report, see :func:`_substeps`).
 
 Contacts and sub-steps. pymunk finds a contact only once two discs overlap, so two robots driving
 head-on at full speed overlap by up to the distance they close within one sub-step before their contact
-stops them (and chains of pushing robots add a little). :func:`default_substeps` therefore sizes the
+stops them (and chains of pushing robots add a little). :func:`swarm_envs.sim.control.default_substeps` therefore sizes the
 sub-step to the platform: the smallest count (at least 8) at which two robots close at most
-:data:`DEFAULT_CLOSING` (1.75 %) of a diameter per sub-step -- 8 for the Droplet, 21 for the e-puck, 32
+:data:`swarm_envs.sim.control.DEFAULT_CLOSING` (1.75 %) of a diameter per sub-step -- 8 for the Droplet, 21 for the e-puck, 32
 for the r-one -- which keeps every overlap and every wall penetration within :data:`MAX_OVERLAP` (2 %) of
 a diameter (``benchmarks/physics_substeps.py`` measures the worst case over dense crushes,
 ``benchmarks/contacts_hostile.py`` over 600 steps of full-speed driving into each other and the walls).
-The env settings refuse fewer sub-steps than :func:`min_substeps` (robots closing more than
-:data:`MAX_CLOSING` of a diameter per sub-step).
+The env settings refuse fewer sub-steps than :func:`swarm_envs.sim.control.min_substeps` (robots closing more than
+:data:`swarm_envs.sim.control.MAX_CLOSING` of a diameter per sub-step).
 
 Motor force. A robot's velocity changes only when a command arrives, once per control step: the motors
-make that change within the first sub-step, with the force of :func:`motor_limits` (the largest change a
+make that change within the first sub-step, with the force of :func:`swarm_envs.sim.control.motor_limits` (the largest change a
 command can ask for, within one sub-step, with a 25 % margin), and a free robot needs no force for the
 rest of the step (the model has no rolling friction or drag). Only a robot pushing against another robot
 or a wall keeps its motors working after the first sub-step, and there they push with at most
-:func:`push_force`, the same velocity change made over the whole control step: 0.53 N for the e-puck,
+:func:`swarm_envs.sim.control.push_force`, the same velocity change made over the whole control step: 0.53 N for the e-puck,
 2.4 N for the r-one, 0.02 N for the Droplet, each less than the robot's weight and so within what its
 wheels (or legs) can transmit to the floor (at most friction coefficient x weight). The first sub-step's
 force held throughout would be 11 N for the e-puck and 77 N for the r-one, 7 and 26 times their weight:
@@ -44,7 +44,7 @@ control velocities are set to ``(D - h u) / (dt - h)`` and ``(w dt - h omega) / 
 sub-step, u / omega the body's velocity at the step start): a free robot then ends every control step
 exactly on its differential-drive arc.
 
-Motion error: :func:`motion_error` turns commanded velocities into the ones a platform's wheels deliver
+Motion error: :func:`swarm_envs.sim.motion.motion_error` turns commanded velocities into the ones a platform's wheels deliver
 (per-wheel gains, per-step noise, a dead zone; ``docs/design.md#motion-error``). The batched core applies it
 before :func:`step_worlds`, so a world steps, and logs for its exact copies, the delivered velocities; a
 world stepped directly moves exactly as commanded.
@@ -57,10 +57,7 @@ arithmetic runs as one numpy program over all their robots, and each space is wr
 
 from __future__ import annotations
 
-import math
 import warnings
-from dataclasses import dataclass
-
 from collections.abc import Sequence
 
 import numpy as np
@@ -68,33 +65,29 @@ import pymunk
 import pymunk.batch
 from scipy.spatial import cKDTree
 
+from swarm_envs.sim.arena import (
+    Arena,
+    as_real_array,
+    check_obstacles,
+    distance_to_segments,
+)
+from swarm_envs.sim.control import (
+    MAX_SUBSTEPS,
+    default_substeps,
+    motor_limits,
+    push_force,
+)
 from swarm_envs.sim.geometry import wrap_angle
+from swarm_envs.sim.motion import wheel_limited
 from swarm_envs.sim.platforms import Platform
 
-__all__ = [
-    "Arena", "World", "step_worlds", "spawn_positions", "check_capacity", "lattice_lower_bound", "as_real_array",
-    "N_BUMP_SECTORS", "DT", "default_substeps", "min_substeps", "motor_limits", "fit_count", "lattice_positions",
-    "check_obstacles", "obstacle_points", "distance_to_segments", "wheel_gains", "motion_error", "push_force",
-]
+__all__ = ["World", "step_worlds", "N_BUMP_SECTORS"]
 
 #: bytes of commands a world keeps per episode for exact copies (16 per robot and step; 64 MB = 400,000
 #: steps of 10 robots); a longer episode's copy falls back to pymunk's copy of the space
 COPY_LOG_BYTES = 64 << 20
 N_BUMP_SECTORS = 8  # bump sensor: one flag per 45-degree sector of the body (sector 0 centred ahead)
 _ROBOT, _WALL = 1, 2
-#: straight walls of a circular arena (a regular polygon around the circle)
-WALL_SEGMENTS = 64
-#: s, one control step of the envs = the Droplet R&B update rate [F14 Sec. V]; the physics defaults are sized for it
-DT = 0.1
-#: fraction of a diameter two robots driving head-on at full speed close per sub-step at the default count
-DEFAULT_CLOSING = 0.0175
-#: the fewest sub-steps a platform gets by default
-MIN_DEFAULT_SUBSTEPS = 8
-#: fraction of a diameter two robots may close per sub-step at most (any ``physics_substeps``): with more,
-#: crushes of hundreds of robots overlap by half a diameter (:data:`PLACEMENT_OVERLAP`)
-MAX_CLOSING = 0.05
-#: sub-steps per control step at most (the ``physics_substeps`` setting's bound: cost grows linearly)
-MAX_SUBSTEPS = 1000
 #: fraction of a diameter robots overlap (or enter a wall) at most at the default sub-steps and densities
 MAX_OVERLAP = 0.02
 #: fraction of a diameter two robots of a placement (``reset(options=...)``) may overlap: a deeper overlap
@@ -105,8 +98,6 @@ MAX_OVERLAP = 0.02
 PLACEMENT_OVERLAP = 0.5
 #: fraction of a diameter a robot of a placement may reach past a wall (its centre stays half a radius inside)
 PLACEMENT_WALL_DEPTH = 0.25
-#: motor force over the largest velocity change of one sub-step (:func:`motor_limits`)
-MOTOR_MARGIN = 1.25
 #: pymunk solver iterations per sub-step (contacts and motor joints)
 SOLVER_ITERATIONS = 10
 #: fraction of an overlap left after one second of contact correction: 30 % of it is removed every 1/60 s
@@ -124,436 +115,14 @@ _CONTACT_FIELDS = (
     | pymunk.batch.ArbiterFields.NORMAL
 )
 try:  # chipmunk's step and pymunk.batch's C iterators, called directly (pymunk's wrappers add bookkeeping)
-    from pymunk._chipmunk_cffi import ffi as _ffi, lib as _chipmunk
+    from pymunk._chipmunk_cffi import ffi as _ffi
+    from pymunk._chipmunk_cffi import lib as _chipmunk
 
     _READ_ARBITER = _ffi.addressof(_chipmunk, "pmSpaceArbiterIteratorFuncBatched")
     _GET_BODY = _ffi.addressof(_chipmunk, "pmSpaceBodyGetIteratorFuncBatched")
     _SET_BODY = _ffi.addressof(_chipmunk, "pmSpaceBodySetIteratorFuncBatched")
 except (ImportError, AttributeError):  # pragma: no cover - another pymunk layout: the public API is used
     _ffi = _chipmunk = _READ_ARBITER = _GET_BODY = _SET_BODY = None
-
-
-@dataclass(frozen=True)
-class Arena:
-    """A walled arena centred on the origin.
-
-    Attributes:
-        shape: ``"square"`` (side ``size``) or ``"circle"`` (diameter ``size``).
-        size: side length or diameter (m).
-    """
-
-    shape: str
-    size: float
-
-    SHAPES = ("square", "circle")
-
-    def __post_init__(self) -> None:
-        if self.shape not in self.SHAPES:
-            raise ValueError(f"unknown arena shape {self.shape!r}; allowed values: {list(self.SHAPES)}")
-        if not np.isfinite(self.size) or self.size <= 0:
-            raise ValueError(f"arena size must be a positive number of metres, got {self.size!r}")
-
-    @property
-    def half(self) -> float:
-        return 0.5 * self.size
-
-    @property
-    def area(self) -> float:
-        return self.size**2 if self.shape == "square" else np.pi * self.half**2
-
-    def contains(self, points: np.ndarray, margin: float = 0.0) -> np.ndarray:
-        """True where a disc of radius ``margin`` at ``points`` (..., 2) lies inside the walls."""
-        points = np.asarray(points, dtype=float)
-        if self.shape == "square":
-            return np.all(np.abs(points) <= self.half - margin + 1e-12, axis=-1)
-        return np.linalg.norm(points, axis=-1) <= self.half - margin + 1e-12
-
-    def wall_depth(self, points: np.ndarray, radius: float) -> np.ndarray:
-        """How far (m) discs of ``radius`` at ``points`` (..., 2) reach past the physical walls (<= 0 inside);
-        for a circle the walls are the polygon of :meth:`wall_segments`, whose corners lie a little outside
-        the circle."""
-        points = np.asarray(points, dtype=float)
-        if self.shape == "square":
-            return np.abs(points).max(axis=-1) + radius - self.half
-        sides = WALL_SEGMENTS
-        normals = (2 * np.arange(sides) + 1) * np.pi / sides  # side k faces the middle of corners k and k + 1
-        reach = points[..., 0, None] * np.cos(normals) + points[..., 1, None] * np.sin(normals)
-        return reach.max(axis=-1) + radius - self.half
-
-    def wall_segments(self, n_circle_segments: int | None = None) -> np.ndarray:
-        """Wall segments (S, 2, 2) in metres; a circle is a regular polygon circumscribing it."""
-        if self.shape == "square":
-            h = self.half
-            corners = np.array([[-h, -h], [h, -h], [h, h], [-h, h]])
-        else:
-            # circumscribed polygon: its inscribed circle is the arena, so a disc placed in the circle is
-            # inside the walls (a pushed robot can reach a little past the circle, into a corner)
-            n_circle_segments = n_circle_segments or WALL_SEGMENTS
-            rad = self.half / np.cos(np.pi / n_circle_segments)
-            ang = 2 * np.pi * np.arange(n_circle_segments) / n_circle_segments
-            corners = rad * np.stack([np.cos(ang), np.sin(ang)], -1)
-        return np.stack([corners, np.roll(corners, -1, axis=0)], axis=1)
-
-    def sample(self, rng: np.random.Generator, n: int, margin: float) -> np.ndarray:
-        """Uniform random points (n, 2) whose discs of radius ``margin`` lie inside."""
-        inner = self.half - margin
-        if self.shape == "square":
-            return rng.uniform(-inner, inner, size=(n, 2))
-        r = inner * np.sqrt(rng.uniform(0, 1, n))
-        a = rng.uniform(-np.pi, np.pi, n)
-        return np.stack([r * np.cos(a), r * np.sin(a)], -1)
-
-
-def closing_per_substep(platform: Platform, substeps: int) -> float:
-    """Distance (m) two robots driving head-on at full speed close within one sub-step of the control step."""
-    return 2.0 * platform.max_speed * DT / substeps
-
-
-def default_substeps(platform: Platform) -> int:
-    """The platform's default sub-steps per control step: the fewest (at least :data:`MIN_DEFAULT_SUBSTEPS`)
-    at which two robots close at most :data:`DEFAULT_CLOSING` of a diameter per sub-step."""
-    need = 2.0 * platform.max_speed * DT / (DEFAULT_CLOSING * platform.diameter)
-    return max(MIN_DEFAULT_SUBSTEPS, math.ceil(need - 1e-9))
-
-
-def min_substeps(platform: Platform) -> int:
-    """The fewest sub-steps per control step the platform may use: two robots close at most
-    :data:`MAX_CLOSING` of a diameter per sub-step, and at least 3 (the motors then keep every robot on its
-    exact arc, :func:`motor_limits`)."""
-    need = 2.0 * platform.max_speed * DT / (MAX_CLOSING * platform.diameter)
-    return max(3, math.ceil(need - 1e-9))
-
-
-def motor_limits(platform: Platform, substeps: int) -> tuple[float, float]:
-    """The motors' largest force (N) and torque (N m) in the first sub-step of a control step, where the
-    commanded velocity change is made (:func:`push_force` bounds the force after it): :data:`MOTOR_MARGIN`
-    times the largest velocity change the control velocities of the module docstring ask for within one
-    sub-step, linear and angular.
-
-    A control velocity is ``c = (D - h u) / (dt - h)`` with ``|D| <= v dt`` and ``u`` the previous one, so
-    ``|c| <= v dt / (dt - 2 h)`` however the commands alternate, and a change ``c - u`` is at most twice
-    that (3 or more sub-steps; with 2 the bound grows without limit, with 1 the motors act a step late)."""
-    h = DT / substeps
-    reach = 2.0 * DT / (DT - 2 * h) if substeps >= 3 else 2.0 * substeps
-    moment = pymunk.moment_for_circle(platform.mass, 0.0, platform.radius)
-    force = MOTOR_MARGIN * platform.mass * reach * platform.max_speed / h
-    torque = MOTOR_MARGIN * moment * reach * platform.max_angular_speed / h
-    return force, torque
-
-
-def push_force(platform: Platform, substeps: int) -> float:
-    """The motors' largest force (N) after the first sub-step of a control step (module docstring): the
-    force of :func:`motor_limits` spread over the control step instead of one sub-step, ``force / substeps``,
-    i.e. the same largest velocity change made within one control step. A free robot needs no force then;
-    this bounds how hard a robot pushes against robots and walls."""
-    force, _ = motor_limits(platform, substeps)
-    return force / substeps
-
-
-def wheel_gains(platform: Platform, draws: np.ndarray) -> np.ndarray:
-    """(..., 2) per-wheel speed gains (left, right) of robots for an episode, ``max(1 + wheel_gain_std z, 0)``
-    from standard normal ``draws`` z (..., 2): the calibration error of the motion-error model
-    (:func:`motion_error`)."""
-    return np.maximum(1.0 + platform.wheel_gain_std * np.asarray(draws, dtype=float), 0.0)
-
-
-def motion_error(platform: Platform, linear: np.ndarray, angular: np.ndarray, gains: np.ndarray, draws: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The linear (m/s) and angular (rad/s) velocities (n,) the wheels deliver for the commanded ``linear``
-    and ``angular`` (n,) under the platform's motion error (``docs/design.md#motion-error``).
-
-    Each wheel's commanded speed u (``v -+ w b / 2``, limited to ``max_speed``) does not turn the wheel
-    below ``min_wheel_speed`` (gear-train friction, a dead zone [L Sec. 3.1]); otherwise the wheel turns at
-    ``u g max(1 + wheel_noise_std z, 0)``, limited to ``max_speed``, with ``gains`` g (n, 2) the robot's
-    per-wheel gains of the episode (:func:`wheel_gains`) and ``draws`` z (n, 2) standard normal draws of this
-    control step (left, right). Unequal gains make a robot told to drive straight drive an arc (heading
-    drift); the noise is slip and speed jitter. A wheel commanded to stand still stands still."""
-    half = 0.5 * platform.wheel_base
-    vmax = platform.max_speed
-    wheels = np.stack([linear - angular * half, linear + angular * half], axis=-1)
-    np.clip(wheels, -vmax, vmax, out=wheels)
-    if platform.min_wheel_speed > 0:
-        wheels[np.abs(wheels) < platform.min_wheel_speed] = 0.0
-    wheels *= gains * np.maximum(1.0 + platform.wheel_noise_std * draws, 0.0)
-    np.clip(wheels, -vmax, vmax, out=wheels)
-    left, right = wheels[:, 0], wheels[:, 1]
-    return 0.5 * (left + right), (right - left) / (2 * half)
-
-
-#: the gap (fraction of the radius) random placement keeps between robots and from the walls
-SPAWN_GAP = 0.1
-#: random placement rounds in a row that place no robot before the spawner turns to a lattice
-SPAWN_STALL_ROUNDS = 8
-#: lattices tried by :func:`_best_lattice`: hexagonal with rows along x, hexagonal with rows along y, square
-LATTICES = ("hex", "hex_rotated", "square")
-#: shifts per axis of a lattice cell tried by :func:`_best_lattice` (besides the wall-aligned and centred ones)
-LATTICE_SHIFTS = 8
-
-
-def _lattice(kind: str, pitch: float, extent: float, shift: tuple[float, float]) -> np.ndarray:
-    """Points (k, 2) of a lattice of ``kind`` (:data:`LATTICES`) with nearest-neighbour distance ``pitch``
-    (m), shifted by ``shift`` (m), covering the square [-extent, extent]^2."""
-    row = pitch * np.sqrt(3) / 2 if kind != "square" else pitch
-    n_i, n_j = int(np.ceil(extent / pitch)) + 2, int(np.ceil(extent / row)) + 2
-    i, j = np.meshgrid(np.arange(-n_i, n_i + 1), np.arange(-n_j, n_j + 1))
-    offset = 0.5 * (j % 2) if kind != "square" else 0.0
-    pts = np.stack([(i + offset) * pitch + shift[0], j * row + shift[1]], -1).reshape(-1, 2)
-    return pts[:, ::-1].copy() if kind == "hex_rotated" else pts
-
-
-def _shifts(kind: str, pitch: float, inner: float) -> list[tuple[float, float]]:
-    """Shifts of a lattice to try: centred, aligned with the walls (a point on the lowest row and column a
-    centre may take, ``-inner``, for either row parity) and a grid over the lattice cell."""
-    row = pitch * np.sqrt(3) / 2 if kind != "square" else pitch
-    along, across = (pitch, row) if kind != "hex_rotated" else (row, pitch)
-    period = (2 * along if kind == "hex_rotated" else along, 2 * across if kind == "hex" else across)
-    aligned = [(-inner + a, -inner + b) for a in (0.0, 0.5 * pitch) for b in (0.0, row if kind != "square" else 0.0)]
-    grid = [(a, b) for a in np.linspace(0, period[0], LATTICE_SHIFTS, endpoint=False) for b in np.linspace(0, period[1], LATTICE_SHIFTS, endpoint=False)]
-    return [(0.0, 0.0), (0.5 * pitch, 0.0), (0.0, 0.5 * pitch)] + aligned + grid
-
-
-def _best_lattice(region: Arena, radius: float, gap: float, avoid: np.ndarray | None = None, avoid_distance: float = 0.0) -> np.ndarray:
-    """The lattice placement of discs of ``radius`` (m) with ``gap`` (m) between neighbours that fits the
-    most discs in ``region`` (at least ``avoid_distance`` m from every point of ``avoid``), over the
-    :data:`LATTICES` and their :func:`_shifts`: the densest placement the spawner falls back to, and the
-    fit test of the build. Deterministic; O(area / pitch^2) per lattice and shift."""
-    pitch = 2 * radius + gap
-    inner = region.half - radius - 0.5 * gap  # centres stay within this distance of the middle
-    best = np.empty((0, 2))
-    if inner < 0:
-        return best
-    if avoid is None and (region.shape, region.size, radius, gap) in _LATTICE_CACHE:
-        return _LATTICE_CACHE[region.shape, region.size, radius, gap]
-    for kind in LATTICES:
-        for shift in _shifts(kind, pitch, inner):
-            pts = _lattice(kind, pitch, region.half, shift)
-            pts = pts[region.contains(pts, radius + 0.5 * gap)]
-            if avoid is not None and len(avoid) and len(pts):
-                pts = pts[_far_from(pts, avoid, avoid_distance)]
-            if len(pts) > len(best):
-                best = pts
-    best.setflags(write=False)
-    if avoid is None:
-        if len(_LATTICE_CACHE) >= 64:
-            _LATTICE_CACHE.clear()
-        _LATTICE_CACHE[region.shape, region.size, radius, gap] = best
-    return best
-
-
-#: the best lattice of recent (shape, size, radius, gap): a crowded scene spawns from it at every reset
-_LATTICE_CACHE: dict[tuple, np.ndarray] = {}
-
-
-def lattice_lower_bound(region: Arena, radius: float, gap: float) -> int:
-    """A lower bound on how many discs any shifted hexagonal lattice (pitch 2 radius + gap) fits in
-    ``region``, in O(1): rows x points per row inside the largest inscribed square."""
-    pitch = 2 * radius + gap
-    inner = region.half - radius - 0.5 * gap  # centres stay within this distance of the middle
-    if region.shape == "circle":
-        inner /= np.sqrt(2.0)  # the inscribed square of the disc of centres
-    if inner <= 0:
-        return 0
-    # an arithmetic progression with step s has at least floor(L / s) points in any interval of length L
-    return int(np.floor(2 * inner / (pitch * np.sqrt(3) / 2))) * int(np.floor(2 * inner / pitch))
-
-
-def _lattice_block(region: Arena, radius: float, gap: float, n: int) -> np.ndarray:
-    """At least ``n`` <= :func:`lattice_lower_bound` lattice points (hexagonal, pitch 2 radius + gap) in the
-    smallest centred square that holds them inside ``region``: O(n), whatever the region's size."""
-    pitch = 2 * radius + gap
-    row = pitch * np.sqrt(3) / 2
-    inner = region.half - radius - 0.5 * gap
-    if region.shape == "circle":
-        inner /= np.sqrt(2.0)
-    half = inner
-    for rows in range(1, n + 1):  # the narrowest square of rows x columns >= n (the lower bound's count)
-        w = 0.5 * rows * row
-        if np.floor(2 * w / row) * np.floor(2 * w / pitch) >= n:
-            half = min(inner, w + 1e-9 * pitch)
-            break
-    pts = _lattice("hex", pitch, half, (0.0, 0.0))
-    return pts[np.all(np.abs(pts) <= half, axis=1)]
-
-
-def lattice_positions(
-    region: Arena, radius: float, gap: float = 0.0, n: int | None = None, avoid: np.ndarray | None = None, avoid_distance: float = 0.0
-) -> np.ndarray:
-    """The lattice points (k, 2) m the spawner falls back to: discs of ``radius`` (m) with ``gap`` (m)
-    between neighbours inside ``region``, at least ``avoid_distance`` (m) from every point of ``avoid``.
-    The densest lattice placement (:func:`_best_lattice`; deterministic), or, when ``n`` is given and the
-    region is roomy, an O(n) block of at least ``n`` points of one lattice (fewer only if ``avoid`` is
-    crowded). A spawner that picks its robots among these points succeeds whenever there are enough."""
-    avoid = None if avoid is None or not len(avoid) else np.asarray(avoid, dtype=float)
-    extra = 0 if avoid is None else 7 * len(avoid)  # an open disc of one pitch holds at most 4 lattice points
-    if n is not None and n + extra <= lattice_lower_bound(region, radius, gap):
-        pts = _lattice_block(region, radius, gap, n + extra)
-        return pts if avoid is None else pts[_far_from(pts, avoid, avoid_distance)]
-    return _best_lattice(region, radius, gap, avoid, avoid_distance)
-
-
-def fit_count(n: int, radius: float, region: Arena, gap: float = 0.0) -> int:
-    """How many discs of ``radius`` (m) with ``gap`` (m) between neighbours the spawner can place in
-    ``region`` for sure, up to ``n`` (a lattice placement, :func:`_best_lattice`). O(1) when the region is
-    roomy (:func:`lattice_lower_bound` >= n); otherwise the lattices are enumerated, which costs O(n)
-    because the region is then small."""
-    if n <= lattice_lower_bound(region, radius, gap):
-        return n
-    return min(n, len(_best_lattice(region, radius, gap)))
-
-
-def check_capacity(n: int, radius: float, region: Arena, gap: float = 0.0) -> None:
-    """Raise ``ValueError`` saying how many fit when :func:`spawn_positions` cannot place ``n`` discs of
-    ``radius`` (m) in ``region`` for every seed, i.e. when no lattice of :func:`_best_lattice` with ``gap``
-    (m; default 0, discs touching) holds them. If it passes, ``spawn_positions`` succeeds for every seed."""
-    fit = fit_count(n, radius, region, gap)
-    if n > fit:
-        raise ValueError(
-            f"cannot place {n} robots of diameter {2 * radius:.3f} m in a {region.shape} region of size "
-            f"{region.size:.4g} m: at most {fit} fit (the densest lattice placement, robots "
-            + (f"{gap * 1e3:.1f} mm apart" if gap else "touching") + "); use fewer robots or a larger arena_size"
-        )
-
-
-def spawn_positions(
-    rng: np.random.Generator,
-    n: int,
-    radius: float,
-    arena: Arena,
-    region: Arena | None = None,
-    gap: float | None = None,
-    max_tries: int = 50,
-    avoid: np.ndarray | None = None,
-    avoid_distance: float = 0.0,
-    lattice_gap: float = 0.0,
-) -> np.ndarray:
-    """Seeded non-overlapping disc positions (n, 2) in metres inside ``region`` (default: the arena),
-    each at least ``avoid_distance`` (m) from every point of ``avoid`` (k, 2) m (e.g. robots already placed).
-
-    Random sequential placement (batched candidates, KD-tree checks) keeping ``gap`` (m; default
-    :data:`SPAWN_GAP` radius) between discs: cost O(n log n), independent of the region's area. Where that
-    stalls (:data:`SPAWN_STALL_ROUNDS` rounds without progress, or ``max_tries`` rounds), a random subset
-    of a randomly shifted hexagonal lattice with the same gap, and last a random subset of the densest
-    lattice placement with ``lattice_gap`` (m; default 0, touching; :func:`_best_lattice`, or an O(n) block
-    of it in a roomy region). Without ``avoid`` this always succeeds when :func:`check_capacity` (with
-    ``lattice_gap``) passes and raises its ``ValueError`` otherwise; with ``avoid`` it raises
-    ``ValueError`` when even the lattice cannot keep away from those points.
-    """
-    region = region or arena
-    gap = SPAWN_GAP * radius if gap is None else gap
-    min_dist = 2 * radius + gap
-    if avoid is not None and not len(avoid):
-        avoid = None
-    if avoid is None:
-        check_capacity(n, radius, region, lattice_gap)
-    placed = np.empty((0, 2))
-    stalled = 0
-    room = region.half - radius - 0.5 * gap > 0  # random placement keeps the gap from the walls too
-    for _ in range(max_tries if room else 0):
-        need = n - len(placed)
-        if need == 0 or stalled >= SPAWN_STALL_ROUNDS:
-            break
-        cand = region.sample(rng, 4 * need + 8, radius + 0.5 * gap)
-        if avoid is not None:
-            cand = cand[_far_from(cand, avoid, avoid_distance)]
-        if len(placed):
-            d, _ = cKDTree(placed).query(cand, k=1)
-            cand = cand[d >= min_dist]
-        # greedy accept among the candidates themselves, in random order
-        keep: list[int] = []
-        if len(cand):
-            close = cKDTree(cand).query_pairs(min_dist, output_type="ndarray")
-            blocked = np.zeros(len(cand), dtype=bool)
-            neighbours: list[list[int]] = [[] for _ in range(len(cand))]
-            for a, b in close:
-                neighbours[a].append(b)
-                neighbours[b].append(a)
-            for idx in range(len(cand)):
-                if not blocked[idx]:
-                    keep.append(idx)
-                    blocked[neighbours[idx]] = True
-                    if len(keep) == need:
-                        break
-        stalled = 0 if keep else stalled + 1
-        placed = np.concatenate([placed, cand[keep]], axis=0)
-    if len(placed) == n:
-        return placed
-    roomy = avoid is None and n <= lattice_lower_bound(region, radius, lattice_gap)
-    if not roomy or (region.size / min_dist) ** 2 <= 50 * n:  # enumerating the region costs O(n)
-        for _ in range(10):  # a random subset of a randomly shifted lattice with the random placement's gap
-            pts = _lattice("hex", min_dist, region.half, tuple(rng.uniform(0, min_dist, 2)))
-            pts = pts[region.contains(pts, radius + 0.5 * gap)]
-            if avoid is not None and len(pts):
-                pts = pts[_far_from(pts, avoid, avoid_distance)]
-            if len(pts) >= n:
-                return pts[np.sort(rng.choice(len(pts), n, replace=False))]
-    lattice = lattice_positions(region, radius, lattice_gap, n, avoid, avoid_distance)
-    if len(lattice) < n:
-        raise ValueError(
-            f"could not place {n} robots of radius {radius:.3f} m away from the {len(avoid)} given points: at most "
-            f"{len(lattice)} fit; use a larger arena_size"
-        )
-    return lattice[np.sort(rng.choice(len(lattice), n, replace=False))]
-
-
-def check_obstacles(segments: object, arena: Arena, name: str = "obstacles") -> np.ndarray:
-    """``segments`` as a float (S, 2, 2) array of obstacle segments (m) whose end points lie inside
-    ``arena``; ``ValueError`` naming ``name`` otherwise."""
-    arr = as_real_array(segments, name)
-    if arr.size == 0:
-        return np.zeros((0, 2, 2))
-    if arr.ndim != 3 or arr.shape[1:] != (2, 2):
-        raise ValueError(f"{name} must be segments of shape (S, 2, 2) metres, got shape {arr.shape}")
-    if not np.all(np.isfinite(arr)):
-        raise ValueError(f"{name} must be finite")
-    if not np.all(arena.contains(arr.reshape(-1, 2))):
-        raise ValueError(f"{name}: every end point must lie inside the {arena.shape} arena of size {arena.size} m")
-    return arr
-
-
-def distance_to_segments(points: np.ndarray, segments: np.ndarray) -> np.ndarray:
-    """(...,) distance (m) from each of ``points`` (..., 2) to the nearest of ``segments`` (S, 2, 2) (inf
-    without segments)."""
-    points = np.asarray(points, dtype=float)
-    if len(segments) == 0:
-        return np.full(points.shape[:-1], np.inf)
-    a, b = segments[:, 0], segments[:, 1]
-    ab = b - a
-    length2 = np.maximum((ab * ab).sum(-1), 1e-300)
-    rel = points[..., None, :] - a
-    t = np.clip((rel * ab).sum(-1) / length2, 0.0, 1.0)
-    gap = rel - t[..., None] * ab
-    return np.sqrt((gap * gap).sum(-1)).min(axis=-1)
-
-
-def obstacle_points(segments: np.ndarray, radius: float) -> tuple[np.ndarray, float]:
-    """Points along ``segments`` (S, 2, 2) m every radius / 2, and the distance (m) a robot centre of
-    ``radius`` keeps from all of them to stay clear of the segments with a tenth of a radius to spare:
-    ``avoid`` and ``avoid_distance`` for :func:`spawn_positions` ((0, 2) points without segments)."""
-    if len(segments) == 0:
-        return np.zeros((0, 2)), 0.0
-    spacing = 0.5 * radius
-    points = []
-    for a, b in np.asarray(segments, dtype=float):
-        n = max(1, int(np.ceil(np.linalg.norm(b - a) / spacing)))
-        points.append(a + np.linspace(0.0, 1.0, n + 1)[:, None] * (b - a))
-    # a centre farther than r' from every point of a segment sampled every s is >= sqrt(r'^2 - s^2/4) from it
-    return np.concatenate(points), float(np.hypot(1.1 * radius, 0.5 * spacing))
-
-
-def _far_from(points: np.ndarray, others: np.ndarray, distance: float) -> np.ndarray:
-    """(len(points),) bool: the point is at least ``distance`` from every one of ``others``."""
-    d, _ = cKDTree(others).query(points, k=1)
-    return d >= distance
-
-
-def as_real_array(values: object, name: str) -> np.ndarray:
-    """``values`` as a float array; raises ``ValueError`` for non-real (string, complex, object) input."""
-    try:
-        arr = np.asarray(values)
-    except (TypeError, ValueError) as err:
-        raise ValueError(f"{name} must be a real-valued array, got {values!r}") from err
-    if arr.dtype.kind not in "iuf":
-        raise ValueError(f"{name} must be a real-valued (int or float) array, got dtype {arr.dtype}")
-    return arr.astype(float)
 
 
 class World:
@@ -818,15 +387,6 @@ class World:
     def step(self, linear: np.ndarray, angular: np.ndarray, dt: float) -> None:
         """Advance ``dt`` seconds with commanded linear (m/s) and angular (rad/s) velocities (n,)."""
         step_worlds([self], linear, angular, dt)
-
-
-def wheel_limited(platform: Platform, linear: np.ndarray, angular: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Commanded (v m/s, w rad/s) clipped so neither wheel of ``platform`` exceeds its max speed."""
-    half_base = 0.5 * platform.wheel_base
-    vmax = platform.max_speed
-    left = np.clip(linear - angular * half_base, -vmax, vmax)
-    right = np.clip(linear + angular * half_base, -vmax, vmax)
-    return 0.5 * (left + right), (right - left) / (2 * half_base)
 
 
 def step_worlds(worlds: Sequence[World], linear: np.ndarray, angular: np.ndarray, dt: float) -> None:

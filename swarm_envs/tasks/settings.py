@@ -34,7 +34,7 @@ from swarm_envs.comm.bch import SUPPORTED as BCH_CODES
 from swarm_envs.comm.protocol import MAX_PAYLOAD
 from swarm_envs.sensing.stacks import SENSING_STACKS
 from swarm_envs.sim.platforms import PLATFORMS, Platform, get_platform
-from swarm_envs.sim.world import MAX_CLOSING, MAX_SUBSTEPS, default_substeps, min_substeps
+from swarm_envs.sim.control import MAX_CLOSING, MAX_SUBSTEPS, default_substeps, min_substeps
 
 __all__ = [
     "Setting",
@@ -378,7 +378,7 @@ COMMON_SETTINGS: dict[str, Setting] = {
     "motion_noise": Flag(True, help="the platform's motion error: per-wheel speed gains drawn per episode, per-step wheel-speed noise, the r-one's 15 mm/s dead zone [L Sec. 3.1] (``docs/design.md#motion-error``); ``False``: exact differential-drive kinematics"),
     "physics_substeps": Int(
         None, "pymunk sub-steps per control step", low=1, high=MAX_SUBSTEPS, allow_none=True,
-        why="None: the platform's default (8 Droplet, 21 e-puck, 32 r-one; swarm_envs.sim.world.default_substeps), at "
+        why="None: the platform's default (8 Droplet, 21 e-puck, 32 r-one; swarm_envs.sim.control.default_substeps), at "
         "which robots overlap each other, and reach past a wall, by at most 2 % of a diameter at the default arena size, also when driven "
         "at full speed into each other and into the walls; at least the platform's minimum (3 Droplet, 8 e-puck, "
         f"11 r-one; fewer let robots close more than 5 % of a diameter per sub-step, or leave their arcs); at most {MAX_SUBSTEPS} "

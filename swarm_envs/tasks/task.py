@@ -47,17 +47,10 @@ from swarm_envs.tasks._task_checks import REDUCTIONS, check_declarations, checke
 from swarm_envs.tasks.metrics import largest_component_fraction, neighbourhood_sums
 from swarm_envs.sim.platforms import Platform, get_platform
 from swarm_envs.tasks.settings import MAX_ROBOTS, Choice, Default, Flag, Int, Real, Setting, SettingsError, task_settings
-from swarm_envs.sim.world import (
-    DT,
-    N_BUMP_SECTORS,
-    Arena,
-    check_capacity,
-    check_obstacles,
-    distance_to_segments,
-    lattice_positions,
-    obstacle_points,
-    spawn_positions,
-)
+from swarm_envs.sim.world import N_BUMP_SECTORS
+from swarm_envs.sim.control import DT
+from swarm_envs.sim.spawning import check_capacity, lattice_positions, spawn_positions
+from swarm_envs.sim.arena import Arena, check_obstacles, distance_to_segments, obstacle_points
 
 __all__ = [
     "Task",
