@@ -190,8 +190,8 @@ def detector_intensity(
     Returns:
         (..., n_detectors) intensity ``y = min(1, sum_emitters gain)`` (dimensionless, 1 = saturation).
     """
-    from swarm_envs.sim.geometry import wrap_angle
     from swarm_envs.ir.layer import pair_gains
+    from swarm_envs.sim.geometry import wrap_angle
 
     platform = get_platform(platform)
     tx_xy, rx_xy = np.asarray(tx_xy, dtype=float), np.asarray(rx_xy, dtype=float)

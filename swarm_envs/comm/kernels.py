@@ -211,7 +211,13 @@ def _set_generator(gens, b, g):
 
 try:  # NumPy's float32 ziggurat, compiled inline (numba's bindings of the bit generator and NumPy's tables),
     # and numba's copy of NumPy's bounded-integer sampler
-    from numba.np.random._constants import fi_float, ki_float, wi_float, ziggurat_nor_inv_r_f, ziggurat_nor_r_f
+    from numba.np.random._constants import (
+        fi_float,
+        ki_float,
+        wi_float,
+        ziggurat_nor_inv_r_f,
+        ziggurat_nor_r_f,
+    )
     from numba.np.random.generator_core import next_float, next_uint32
     from numba.np.random.random_methods import buffered_bounded_lemire_uint32
 

@@ -18,7 +18,7 @@ step boundaries). In every slot, vectorised over all robots:
    decoded (BCH) and the frame is aborted, continued or delivered.
 
 Backends: ``backend="numba"`` (the default) runs all slots of a step in one compiled call
-(:func:`swarm_envs.comm.kernels.slot_loop`); ``backend="numpy"`` runs the vectorised loop below, the
+(:func:`swarm_envs.comm.kernels.slot_loop`); ``backend="numpy"`` runs the vectorised loop of :mod:`swarm_envs.comm.reference_slots`, the
 tested reference. Every random number of a step (ADC and intensity noise, CSMA access delays and backoffs)
 is drawn before the slot loop by :func:`swarm_envs.comm.kernels.draw_copies` in arrays indexed by robot, so
 both backends consume the same numbers and the stream does not depend on the robots' activity. Deliveries
@@ -51,18 +51,26 @@ step therefore keeps only the freshest messages when the channel cannot carry th
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
-from swarm_envs.sim.copies import CopyRandom
 from swarm_envs.comm.bch import BCHCode, code as bch_code
-from swarm_envs.comm.channel import ADCModel, adc_model_for, detector_response
-from swarm_envs.comm.kernels import COUNTERS, DELIVERY_FIELDS, PER_ROBOT, GeneratorList, StepDraws, build_frames, draw_copies, link_tables, slot_loop
+from swarm_envs.comm.channel import ADCModel, adc_model_for
+from swarm_envs.comm.deliveries import Deliveries, PreparedStep
+from swarm_envs.comm.kernels import (
+    COUNTERS,
+    DELIVERY_FIELDS,
+    PER_ROBOT,
+    GeneratorList,
+    StepDraws,
+    build_frames,
+    draw_copies,
+    link_tables,
+    slot_loop,
+)
 from swarm_envs.comm.protocol import (
     CSMA,
-    IDLE,
     MAX_PAYLOAD,
     RECV,
     SEQ_BITS,
@@ -70,101 +78,17 @@ from swarm_envs.comm.protocol import (
     DetectorBank,
     FrameFormat,
     KindRegistry,
-    bits_to_uint,
+    concat_padded,
     crc_table,
 )
+from swarm_envs.sim.copies import CopyRandom
 from swarm_envs.sim.platforms import Platform, get_platform
 
-__all__ = ["Network", "Deliveries", "PreparedStep", "BITRATES", "COMM_MODES", "BACKENDS"]
+__all__ = ["Network", "BITRATES", "COMM_MODES", "BACKENDS"]
 
 BITRATES = (310, 650, 1080, 1160, 1670, 1800)  # bps offered by the e-puck hardware [T20 Sec. 5]
 COMM_MODES = ("broadcast", "flooding")
 BACKENDS = ("numpy", "numba")
-
-
-
-@dataclass
-class Deliveries:
-    """Frames delivered to the application during one step (D rows).
-
-    Attributes:
-        receiver: (D,) robot that received the message.
-        origin: (D,) robot that created the message (header).
-        sender: (D,) last hop (header; = origin in broadcast mode).
-        seq: (D,) sequence number (mod 128).
-        detector: (D,) index of the receiver's detector with the smallest ADC value during the frame
-            (the brightest one: a coarse bearing of the sender).
-        kind: (D,) object array of kind names (``"app"`` or the system kind).
-        length: (D,) payload length (bits).
-        payload: (D, Lmax) bool, row i valid up to ``length[i]``.
-        slot: (D,) global bit slot at which the frame's start symbol was received.
-        corrupt: (D,) ground truth: the decoded header/payload differs from what was sent (possible
-            because [15,15], [15,11], [15,1] detect nothing). For metrics only, not an observation.
-        transmitter: (D,) ground truth: the robot whose light started the frame (the strongest transmitter
-            emitting a start symbol at the receiver when it detected the start; -1 for a noise start). Not an
-            observation: a sensor may use it only to know *whose light* lit its receivers (physics), never
-            to name the sender (use ``origin``).
-        interference: (D,) ground truth: bitmask of the receiver's detectors (bit d = detector d) that
-            another robot's light reached, at least ``relative_threshold`` counts of it, in a slot of the frame
-            in which the frame's transmitter was dark: the detectors whose own copy of the frame that light
-            corrupted (light adds on an on-off channel, so light in a slot where the frame's own bit is on
-            changes nothing there). Physics, like ``transmitter``: a per-receiver decoder (the r-one's, [L Sec.
-            3.2.1]) uses it to know which receivers' copies were clean; not an observation.
-        stats: counters of this step (scalars) and per-robot arrays ``<name>_per_robot`` (N,).
-    """
-
-    receiver: np.ndarray
-    origin: np.ndarray
-    sender: np.ndarray
-    seq: np.ndarray
-    detector: np.ndarray
-    kind: np.ndarray
-    length: np.ndarray
-    payload: np.ndarray
-    slot: np.ndarray
-    corrupt: np.ndarray
-    transmitter: np.ndarray | None = None
-    interference: np.ndarray | None = None
-    stats: dict[str, Any] = field(default_factory=dict)
-
-    def __len__(self) -> int:
-        return int(self.receiver.shape[0])
-
-    def payloads(self) -> list[np.ndarray]:
-        """Payloads as a list of 1-D bool arrays of their own lengths."""
-        return [self.payload[i, : self.length[i]] for i in range(len(self))]
-
-    def for_kind(self, kind: str) -> "Deliveries":
-        m = self.kind == kind
-        return Deliveries(
-            *(getattr(self, f)[m] for f in ("receiver", "origin", "sender", "seq", "detector", "kind", "length", "payload", "slot", "corrupt")),
-            transmitter=None if self.transmitter is None else self.transmitter[m],
-            interference=None if self.interference is None else self.interference[m],
-            stats=self.stats,
-        )
-
-
-@dataclass(frozen=True)
-class PreparedStep:
-    """A step's slot count and random numbers drawn ahead (:meth:`Network.prepare_step`): ``slots`` bit
-    slots, the network's slot clock ``first_slot`` and remainder ``carry_before`` it was drawn at, the
-    remainder ``carry_after`` the step leaves, and ``draws``."""
-
-    slots: int
-    first_slot: int
-    carry_before: float
-    carry_after: float
-    draws: StepDraws
-
-
-def _ranges(start: np.ndarray, stop: np.ndarray) -> np.ndarray:
-    """Concatenate ``arange(start[i], stop[i])`` for all i (vectorised)."""
-    counts = stop - start
-    total = int(counts.sum())
-    if total == 0:
-        return np.zeros(0, dtype=np.int64)
-    offs = np.repeat(start - np.concatenate([[0], np.cumsum(counts)[:-1]]), counts)
-    return offs + np.arange(total)
 
 
 class Network:
@@ -518,20 +442,10 @@ class Network:
                 gains = np.asarray(links.gains, dtype=np.float64)
         if self.backend == "numba":
             tx_ptr, rx, G, sig_ptr, sig_rx = link_tables(n, rx, tx, gains, float(a.intensity_scale), self.ambient, float(a.m_min), self.m_tr)
-        else:
-            # all emitters on, summed from 0.0 in emitter order (as the kernel); links grouped by transmitter
-            acc = np.zeros(gains.shape[:2])
-            for e in range(gains.shape[-1]):
-                acc += gains[..., e]
-            G = a.intensity_scale * acc  # (P, nd)
-            order = np.argsort(tx, kind="stable")
-            rx, tx, G = rx[order], tx[order], G[order]
-            tx_ptr = np.searchsorted(tx, np.arange(n + 1))
-            flat = (rx[:, None] * nd + np.arange(nd)[None, :]).ravel()
-            strength = G.max(axis=1) if G.size else np.zeros(0)
-            significant = strength * (self.ambient[rx] - a.m_min) > self.m_tr
-            sig_rx = rx[significant]
-            sig_ptr = np.searchsorted(tx[significant], np.arange(n + 1))
+        else:  # the numpy reference (tests compare the kernels with it)
+            from swarm_envs.comm.reference_slots import link_tables_numpy
+
+            tx_ptr, rx, tx, G, flat, sig_ptr, sig_rx = link_tables_numpy(self, rx, tx, gains)
 
         if prepared is None:
             prepared = self.prepare_step()
@@ -543,7 +457,9 @@ class Network:
         if self.backend == "numba":
             deliveries = self._slots_kernel(S, draws, tx_ptr, rx, G, sig_ptr, sig_rx)
         else:
-            deliveries = self._slots_numpy(S, draws, tx_ptr, rx, tx, G, flat, sig_ptr, sig_rx)
+            from swarm_envs.comm.reference_slots import slots_numpy
+
+            deliveries = slots_numpy(self, S, draws, tx_ptr, rx, tx, G, flat, sig_ptr, sig_rx)
         self._count("slots", values=S)
         return self._finish_step(deliveries)
 
@@ -611,315 +527,9 @@ class Network:
         out["payload"] = d_pay[:D, :Lmax].copy()
         return [out]
 
-    def _slots_numpy(self, S, draws, tx_ptr, rx, tx, G, flat, sig_ptr, sig_rx) -> list[dict[str, np.ndarray]]:
-        """The vectorised numpy slot loop (the reference of the compiled kernel)."""
-        n, nd = self.n, self.n_det
-        a = self.adc_model
-        noise = draws.noise
-        span = (self.ambient - a.m_min)[:, None]
-        deliveries: list[dict[str, np.ndarray]] = []
-        first_check = self.fmt.first_check_slots
-        # per link: the receiver's detectors that its light reaches with at least m_tr counts (bit d = detector d)
-        lit_bits = ((G * (self.ambient[rx] - a.m_min)[:, None] > self.m_tr).astype(np.int64) << np.arange(nd, dtype=np.int64)).sum(1) if G.size else np.zeros(0, np.int64)
-        for s in range(S):
-            # 1. CSMA
-            pending = (self.q_count > 0) & ~self.sending
-            if pending.any():
-                busy = (self.det.state == RECV) | self.det.last_s1
-                go, defer = self.csma.decide(pending, busy, draws.backoff[:, s])
-                if defer.size:
-                    self._count("deferrals", defer)
-                if go.size:
-                    self._start_tx(go)
-            # 2. emission
-            snd = np.flatnonzero(self.sending)
-            bit = self.cur_bits[snd, self.cur_pos[snd]] if snd.size else np.zeros(0, bool)
-            on = snd[bit]
-            foreign = self._foreign_light(on, tx_ptr, rx, tx, lit_bits)
-            # 3. intensity (superposition over emitting transmitters)
-            if self.response_kt > 0:  # detector response across slots (channel.detector_response)
-                if on.size:
-                    li = _ranges(tx_ptr[on], tx_ptr[on + 1])
-                    ysum = np.bincount(flat.reshape(-1, nd)[li].ravel(), weights=G[li].ravel(), minlength=n * nd).reshape(n, nd)
-                else:
-                    ysum = np.zeros((n, nd))
-                if self.intensity_sigma > 0:
-                    ysum = ysum + draws.intensity_noise[s]
-                yt = np.clip(ysum, 0.0, 1.0)
-                v0 = self.rx_level
-                v = detector_response(v0, yt, 1.0 / self.bitrate, a.response_c, a.response_bias)
-                self.rx_level = v
-                m = np.floor(span * (1.0 - v) + a.m_min + noise[s])
-            elif on.size:
-                li = _ranges(tx_ptr[on], tx_ptr[on + 1])
-                ysum = np.bincount(flat.reshape(-1, nd)[li].ravel(), weights=G[li].ravel(), minlength=n * nd).reshape(n, nd)
-                if self.intensity_sigma > 0:
-                    ysum = ysum + draws.intensity_noise[s]
-                y = np.minimum(ysum, 1.0)
-                m = np.floor(span * (1.0 - y) + a.m_min + noise[s])
-            else:
-                y = None
-                if self.intensity_sigma > 0:
-                    yy = np.minimum(draws.intensity_noise[s], 1.0)
-                    m = np.floor(span * (1.0 - yy) + a.m_min + noise[s])
-                else:
-                    m = np.floor(span + a.m_min + noise[s])
-            np.clip(m, 0, a.m_sup, out=m)
-            # 4./5. detectors
-            listen = ~self.sending
-            ev = self.det.sample(m, listen, first_check, self.slot)
-            if ev["deaf"].size:
-                self.det.finish(ev["deaf"])
-            started, got = ev["started"], ev["got_bit"]
-            if started.size:
-                self._count("rx_starts", values=started.size)
-                self._truth_on_start(started, on, tx_ptr, tx, rx, G)
-            if got.size:
-                if self.det.buf.shape[1] > self.gt_buf.shape[1]:
-                    self._ensure_frame_capacity(self.det.buf.shape[1])
-                self._truth_bits(got)
-                self._interference(got, foreign)
-                if snd.size:
-                    sl = _ranges(sig_ptr[snd], sig_ptr[snd + 1])
-                    if sl.size:
-                        cnt = np.bincount(sig_rx[sl], minlength=n)
-                        self.collided[got] |= cnt[got] >= 2
-            # advance transmitters
-            if snd.size:
-                self.cur_pos[snd] += 1
-                fin = snd[self.cur_pos[snd] >= self.cur_slots[snd]]
-                if fin.size:
-                    self.sending[fin] = False
-                    self._count("tx_completed", values=fin.size)
-                    self.csma.arm(fin[self.q_count[fin] > 0], draws.backoff[:, s])  # fresh access delay (fairness)
-            if ev["check"].size:
-                d = self._check_points(ev["check"])
-                if d is not None:
-                    deliveries.append(d)
-            self.slot += 1
-        return deliveries
-
-    def _start_tx(self, go: np.ndarray) -> None:
-        h = self.q_head[go]
-        F = self.q_bits.shape[2]
-        self.cur_bits[go, :F] = self.q_bits[go, h, :]
-        self.cur_slots[go] = self.q_slots[go, h]
-        self.cur_pos[go] = 0
-        self.cur_id[go] = self.frame_counter + np.arange(go.size)
-        self.frame_counter += go.size
-        self.sending[go] = True
-        self.q_head[go] = (h + 1) % self.Q
-        self.q_count[go] -= 1
-        # a robot that was receiving drops its frame (half duplex); CSMA normally prevents this
-        recv = go[self.det.state[go] == RECV]
-        if recv.size:
-            self.det.finish(recv)
-        self._count("tx_started", go)
-
-    def _foreign_light(self, on: np.ndarray, tx_ptr, rx, tx, lit_bits) -> np.ndarray:
-        """(N,) per robot receiving a frame: bitmask of its detectors lit in this slot by robots ``on``
-        (emitting) other than the frame's transmitter (``gt_tx``)."""
-        out = np.zeros(self.n, dtype=np.int64)
-        if on.size:
-            li = _ranges(tx_ptr[on], tx_ptr[on + 1])
-            r = rx[li]
-            f = (self.det.state[r] == RECV) & (tx[li] != self.gt_tx[r])
-            np.bitwise_or.at(out, r[f], lit_bits[li[f]])
-        return out
-
-    def _interference(self, got: np.ndarray, foreign: np.ndarray) -> None:
-        """Deliveries.interference: foreign light of this slot counts at robots ``got`` (that stored a bit)
-        whose frame's transmitter is dark in this slot."""
-        t = self.gt_tx[got]
-        ts = np.maximum(t, 0)
-        on = (t >= 0) & self.sending[ts] & self.cur_bits[ts, np.minimum(self.cur_pos[ts], self.cur_bits.shape[1] - 1)]
-        dark = got[~on]
-        self.rx_foreign[dark] |= foreign[dark]
-
-    def _truth_on_start(self, started, on, tx_ptr, tx, rx, G) -> None:
-        """Ground truth: the strongest transmitter emitting s1 at each robot that just detected a start."""
-        self.rx_foreign[started] = 0
-        self.gt_tx[started] = -1
-        self.gt_id[started] = -1
-        self.collided[started] = False
-        if on.size:
-            li = _ranges(tx_ptr[on], tx_ptr[on + 1])
-            is_started = np.zeros(self.n, dtype=bool)
-            is_started[started] = True
-            li = li[is_started[rx[li]]]
-            r, t, st = rx[li], tx[li], G[li].max(axis=1)
-            o = np.lexsort((-st, r))
-            r, t, st = r[o], t[o], st[o]
-            firsts = np.r_[True, r[1:] != r[:-1]] if r.size else np.zeros(0, dtype=bool)
-            r, t, st = r[firsts], t[firsts], st[firsts]
-            sig = st * (self.ambient[r] - self.adc_model.m_min) > 0.5  # at least half a count of light
-            best = np.full(self.n, -1, dtype=np.int64)
-            best[r[sig]] = t[sig]
-            self.gt_tx[started] = best[started]
-            ok = self.gt_tx[started] >= 0
-            srt = started[ok]
-            tt = self.gt_tx[srt]
-            # aligned only if the transmitter is emitting its own start symbol right now
-            aligned = self.cur_pos[tt] == 0
-            self.gt_id[srt[aligned]] = self.cur_id[tt[aligned]]
-        nfalse = int((self.gt_tx[started] < 0).sum())
-        if nfalse:
-            self._count("rx_false_starts", values=nfalse)
-
-    def _truth_bits(self, got: np.ndarray) -> None:
-        k = self.det.nbits[got] - 1
-        t = self.gt_tx[got]
-        valid = t >= 0
-        tb = np.zeros(got.size, dtype=bool)
-        if valid.any():
-            tv = t[valid]
-            same = self.sending[tv] & (self.cur_id[tv] == self.gt_id[got[valid]])
-            bits = self.cur_bits[tv, np.minimum(self.cur_pos[tv], self.cur_bits.shape[1] - 1)]
-            tb[valid] = same & bits
-        self.gt_buf[got, k] = tb
-
-    # ------------------------------------------------------------------ frame check points
-    def _check_points(self, robots: np.ndarray) -> dict[str, np.ndarray] | None:
-        out = None
-        det, fmt, c = self.det, self.fmt, self.code
-        valid_types = self.kinds.valid_codes()
-        todo = robots
-        while todo.size:
-            nxt = []
-            ph = det.phase[todo]
-            # phase 0: marker/type check
-            p0 = todo[ph == 0]
-            if p0.size:
-                if c.k == c.n:
-                    info = det.buf[p0, :4]
-                else:
-                    info, _ = c.decode(det.buf[p0, : c.n])
-                good = info[:, 0].copy()
-                if info.shape[1] >= 4:
-                    good &= valid_types[bits_to_uint(info[:, 1:4])]
-                self._abort(p0[~good])
-                g = p0[good]
-                det.phase[g] = 1
-                det.expect[g] = fmt.header_blocks * c.n
-                nxt.append(g[det.expect[g] == det.nbits[g]])
-            # phase 1: header decode -> frame length
-            p1 = todo[ph == 1]
-            if p1.size:
-                hb = fmt.header_blocks
-                info, ok = c.decode_stream(det.buf[p1, : hb * c.n])
-                h = fmt.parse_header(info)
-                good = ok & (h["marker"] == 1) & valid_types[h["type"]] & (h["origin"] < self.copy_size) & (h["sender"] < self.copy_size)
-                self._abort(p1[~good])
-                g = p1[good]
-                total = fmt.n_blocks(h["length"][good]) * c.n
-                det.ensure_capacity(int(total.max()) if total.size else 0)
-                self._ensure_frame_capacity(int(total.max()) + 1 if total.size else 0)
-                det.phase[g] = 2
-                det.expect[g] = total
-                nxt.append(g[det.expect[g] == det.nbits[g]])
-            # phase 2: frame complete -> decode and deliver
-            p2 = todo[ph == 2]
-            if p2.size:
-                d = self._complete(p2)
-                if d is not None:
-                    out = d if out is None else {k: np.concatenate([out[k], d[k]]) if k != "payload" else _cat_pad(out[k], d[k]) for k in out}
-            todo = np.concatenate(nxt) if nxt else np.zeros(0, dtype=np.int64)
-        return out
-
-    def _score_bits(self, robots: np.ndarray) -> None:
-        """Ground-truth scoring of aligned frames at their end (delivered or aborted): raw bit errors over
-        the bits received, and errors of every complete 15-bit block after BCH decoding."""
-        al = robots[self.gt_id[robots] >= 0]
-        if not al.size:
-            return
-        nb = self.det.nbits[al]
-        W = int(nb.max())
-        rxb, tb = self.det.buf[al, :W], self.gt_buf[al, :W]
-        mask = np.arange(W)[None, :] < nb[:, None]
-        err = ((rxb != tb) & mask).sum(axis=1)
-        self._count("bits_checked", al, nb)
-        self._count("bit_errors", al, err)
-        if self.collided[al].any():
-            self._count("collisions", al[self.collided[al]])
-        c = self.code
-        B = W // c.n
-        if B:
-            nblk = nb // c.n
-            shape = (al.size, B, c.n)
-            info, _ = c.decode(rxb[:, : B * c.n].reshape(shape))
-            tinfo, _ = c.decode(tb[:, : B * c.n].reshape(shape))
-            bad = (info != tinfo).any(axis=2) & (np.arange(B)[None, :] < nblk[:, None])
-            self._count("blocks_checked", al, nblk)
-            self._count("block_errors", al, bad.sum(axis=1))
-
-    def _abort(self, robots: np.ndarray) -> None:
-        if not robots.size:
-            return
-        self._score_bits(robots)
-        lost = robots[self.gt_id[robots] >= 0]
-        if lost.size:
-            self._count("rx_lost", lost)
-        self._count("rx_aborted", values=robots.size)
-        self.det.finish(robots)
-
-    def _complete(self, robots: np.ndarray) -> dict[str, np.ndarray] | None:
-        det, fmt, c = self.det, self.fmt, self.code
-        self._score_bits(robots)
-        nbits = det.nbits[robots]
-        out: dict[str, list] = {k: [] for k in ("receiver", "origin", "sender", "seq", "type", "length", "payload", "detector", "slot", "corrupt", "done_slot", "transmitter", "interference")}
-        for nb in np.unique(nbits):
-            R = robots[nbits == nb]
-            info, ok = c.decode_stream(det.buf[R, :nb])
-            h = fmt.parse_header(info)
-            # ground truth comparison (aligned frames only)
-            al = self.gt_id[R] >= 0
-            corrupt = np.zeros(R.size, dtype=bool)
-            if al.any():
-                tinfo, _ = c.decode_stream(self.gt_buf[R[al], :nb])
-                used = fmt.header_bits + h["length"][al]
-                mask = np.arange(info.shape[1])[None, :] < used[:, None]
-                corrupt[al] = ((info[al] != tinfo) & mask).any(axis=1)
-            crc = fmt.crc_ok(info, h["length"]) | ~ok
-            if not crc.all():
-                self._count("rx_crc_failed", values=int((~crc).sum()))
-                ok = ok & crc
-            bad = ~ok
-            if bad.any():
-                self._count("rx_decode_failed", values=int(bad.sum()))
-                lost = R[bad & al]
-                if lost.size:
-                    self._count("rx_lost", lost)
-            g = ok
-            if not g.any():
-                continue
-            H = fmt.header_bits
-            L = h["length"][g]
-            Lmax = int(L.max()) if L.size else 0
-            pay = info[g, H : H + Lmax] & (np.arange(Lmax)[None, :] < L[:, None])
-            out["receiver"].append(R[g])
-            out["origin"].append(h["origin"][g])
-            out["sender"].append(h["sender"][g])
-            out["seq"].append(h["seq"][g])
-            out["type"].append(h["type"][g])
-            out["length"].append(L)
-            out["payload"].append(pay)
-            out["detector"].append(det.best_det[R[g]])
-            out["slot"].append(det.start_slot[R[g]])
-            out["corrupt"].append(corrupt[g])
-            out["done_slot"].append(np.full(int(g.sum()), self.slot, dtype=np.int64))
-            out["transmitter"].append(self.gt_tx[R[g]])
-            out["interference"].append(self.rx_foreign[R[g]])
-        det.finish(robots)
-        if not out["receiver"]:
-            return None
-        res = {k: (np.concatenate(v) if k != "payload" else _cat_pad_list(v)) for k, v in out.items()}
-        self._count("rx_decoded", values=res["receiver"].size)
-        return res
-
-    # ------------------------------------------------------------------ end of step
     def _finish_step(self, parts: list[dict[str, np.ndarray]]) -> Deliveries:
         if parts:
-            d = {k: (np.concatenate([p[k] for p in parts]) if k != "payload" else _cat_pad_list([p[k] for p in parts])) for k in parts[0]}
+            d = {k: (np.concatenate([p[k] for p in parts]) if k != "payload" else concat_padded([p[k] for p in parts])) for k in parts[0]}
         else:
             d = {k: np.zeros(0, dtype=np.int64) for k in ("receiver", "origin", "sender", "seq", "type", "length", "detector", "slot", "done_slot", "transmitter", "interference")}
             d["corrupt"] = np.zeros(0, dtype=bool)
@@ -1004,14 +614,3 @@ class Network:
             "block_error_rate": s["block_errors"] / max(1, s["blocks_checked"]),
             "delivered_per_started": s["rx_delivered"] / max(1, s["tx_started"]),
         }
-
-
-def _cat_pad(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    return _cat_pad_list([a, b])
-
-
-def _cat_pad_list(arrs: list[np.ndarray]) -> np.ndarray:
-    if len(arrs) == 1:  # the compiled backend's single part: nothing to pad
-        return arrs[0]
-    W = max((x.shape[1] for x in arrs), default=0)
-    return np.concatenate([np.pad(x, ((0, 0), (0, W - x.shape[1]))) if x.shape[1] < W else x for x in arrs], axis=0) if arrs else np.zeros((0, 0), bool)

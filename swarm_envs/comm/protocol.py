@@ -65,6 +65,7 @@ from swarm_envs.comm.bch import BCHCode, code as bch_code
 from swarm_envs.sim.platforms import CRC_WIDTHS  # the allowed ``crc_bits`` of a frame (0: no CRC)
 
 __all__ = [
+    "concat_padded",
     "FrameFormat",
     "KindRegistry",
     "DetectorBank",
@@ -85,6 +86,15 @@ TYPE_BITS = 3
 LENGTH_BITS = 8
 SEQ_BITS = 7
 MAX_PAYLOAD = (1 << LENGTH_BITS) - 1
+
+
+def concat_padded(arrs: list[np.ndarray]) -> np.ndarray:
+    """Payload bit rows (k_i, W_i) of several deliveries stacked into one (sum k_i, max W_i) array, shorter
+    rows padded with False."""
+    if len(arrs) == 1:  # a single part: nothing to pad
+        return arrs[0]
+    W = max((x.shape[1] for x in arrs), default=0)
+    return np.concatenate([np.pad(x, ((0, 0), (0, W - x.shape[1]))) if x.shape[1] < W else x for x in arrs], axis=0) if arrs else np.zeros((0, 0), bool)
 
 
 def uint_to_bits(values: np.ndarray, width: int) -> np.ndarray:

@@ -31,7 +31,7 @@ Message-borne readings (:class:`MessageBearings`, docs/design.md#bearing-only-se
 exist only for a message that was received: the receivers whose own copy of the frame was clean give the
 bearing and the transmitter indices encoded in their copies give the orientation [L Sec. 3.2.1, 3.2.3].
 :class:`MessageBearings` measures them on the frames the SwarmCom receiver decoded
-(:class:`swarm_envs.comm.network.Deliveries`; a receiver's copy is lost where another robot's light reached
+(:class:`swarm_envs.comm.deliveries.Deliveries`; a receiver's copy is lost where another robot's light reached
 it during the frame, ``Deliveries.interference``), names the neighbour by the frame's decoded header
 ``origin`` (never the true id), and rebuilds each robot's readings every neighbour round from that round's
 frames [L Sec. 3.2.2]. :func:`link_masks` gives the lit receivers / reached transmitters of one link,
@@ -475,7 +475,7 @@ class MessageBearings:
         the number of readings taken.
 
         Args:
-            deliveries: :class:`swarm_envs.comm.network.Deliveries` of this step (``receiver``, ``origin``,
+            deliveries: :class:`swarm_envs.comm.deliveries.Deliveries` of this step (``receiver``, ``origin``,
                 ``transmitter``, and ``interference`` if the channel reports it; none means no receiver's
                 copy was corrupted).
             links: the :class:`swarm_envs.ir.layer.IRLinks` the network stepped with.

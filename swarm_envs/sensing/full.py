@@ -53,7 +53,8 @@ import numpy as np
 
 from swarm_envs._compile._worker import worker
 from swarm_envs.comm.channel import recommended_relative_threshold
-from swarm_envs.comm.network import Network, PreparedStep
+from swarm_envs.comm.network import Network
+from swarm_envs.comm.deliveries import PreparedStep
 from swarm_envs.sim.copies import CopyRandom
 from swarm_envs.sim.geometry import wrap_angle
 from swarm_envs.ir.hardware import Hardware, draw_hardware
