@@ -5,7 +5,8 @@ import pytest
 
 from swarm_envs.comm.bch import SUPPORTED, code as bch_code
 from swarm_envs.comm.channel import ADCModel
-from swarm_envs.comm.kernels import GeneratorList, _draw_copies_py, decode_words, draw_copies, draw_step
+from swarm_envs.comm.kernels import decode_words
+from swarm_envs.comm.draws import GeneratorList, _draw_copies_py, draw_copies, draw_step
 from swarm_envs.comm.network import Network
 from swarm_envs.ir.layer import compute_links
 

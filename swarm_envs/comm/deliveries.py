@@ -8,7 +8,7 @@ from typing import Any
 
 import numpy as np
 
-from swarm_envs.comm.kernels import StepDraws
+from swarm_envs.comm.draws import StepDraws
 
 __all__ = ["Deliveries", "PreparedStep"]
 

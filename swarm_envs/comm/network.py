@@ -20,7 +20,7 @@ step boundaries). In every slot, vectorised over all robots:
 Backends: ``backend="numba"`` (the default) runs all slots of a step in one compiled call
 (:func:`swarm_envs.comm.kernels.slot_loop`); ``backend="numpy"`` runs the vectorised loop of :mod:`swarm_envs.comm.reference_slots`, the
 tested reference. Every random number of a step (ADC and intensity noise, CSMA access delays and backoffs)
-is drawn before the slot loop by :func:`swarm_envs.comm.kernels.draw_copies` in arrays indexed by robot, so
+is drawn before the slot loop by :func:`swarm_envs.comm.draws.draw_copies` in arrays indexed by robot, so
 both backends consume the same numbers and the stream does not depend on the robots' activity. Deliveries
 are returned in a canonical order (by completion slot, then receiver).
 
@@ -58,17 +58,8 @@ import numpy as np
 from swarm_envs.comm.bch import BCHCode, code as bch_code
 from swarm_envs.comm.channel import ADCModel, adc_model_for
 from swarm_envs.comm.deliveries import Deliveries, PreparedStep
-from swarm_envs.comm.kernels import (
-    COUNTERS,
-    DELIVERY_FIELDS,
-    PER_ROBOT,
-    GeneratorList,
-    StepDraws,
-    build_frames,
-    draw_copies,
-    link_tables,
-    slot_loop,
-)
+from swarm_envs.comm.kernels import COUNTERS, DELIVERY_FIELDS, PER_ROBOT, build_frames, link_tables, slot_loop
+from swarm_envs.comm.draws import GeneratorList, StepDraws, draw_copies
 from swarm_envs.comm.protocol import (
     CSMA,
     MAX_PAYLOAD,
@@ -97,7 +88,7 @@ class Network:
     Args:
         platform: robot platform (its IR model gives the gains, :func:`adc_model_for` the ADC).
         n_robots: swarm size N.
-        rng: random generator (start-up ambient samples at reset, then :func:`~swarm_envs.comm.kernels.draw_copies`
+        rng: random generator (start-up ambient samples at reset, then :func:`~swarm_envs.comm.draws.draw_copies`
             once per step).
         bitrate: bits per second (e-puck: 310 default, 650, 1080, 1160, 1670, 1800 [T20 Sec. 5]; r-one 1250
             [L Sec. 3.2.1]); with the e-puck's detector response
@@ -124,7 +115,7 @@ class Network:
             (validation (c) shows both).
         backend: ``"numba"`` (the default): the compiled slot loop of
             :mod:`swarm_envs.comm.kernels`; ``"numpy"``: the vectorised reference. Both consume the same
-            pre-drawn random numbers (:func:`swarm_envs.comm.kernels.draw_copies`) and give the same results.
+            pre-drawn random numbers (:func:`swarm_envs.comm.draws.draw_copies`) and give the same results.
         n_copies: env copies of ``n_robots`` robots each (rows copy-major); ``rng`` is then a
             :class:`swarm_envs.sim.copies.CopyRandom` with one generator per copy. Frames carry a copy's own
             robot numbers (header widths as in a single env), every random number of a copy comes from its
@@ -465,7 +456,7 @@ class Network:
 
     def draw_step(self, S: int) -> StepDraws:
         """Every random number of a step of S slots, drawn before the slot loop (same for both backends): all
-        copies in one call, copy b from its own generator (:func:`swarm_envs.comm.kernels.draw_copies`)."""
+        copies in one call, copy b from its own generator (:func:`swarm_envs.comm.draws.draw_copies`)."""
         a = self.adc_model
         gens = self.rng.generators
         if self._gen_list is None:
