@@ -288,7 +288,7 @@ def test_reset_of_one_copy_reseeds_its_id_stream():
 def test_compiled_contention_schedule_equals_the_luby_rounds():
     """The compiled greedy independent set (kernels.priority_independent_set) equals the numpy Luby rounds
     on random scenes, and is a maximal independent set of the link graph."""
-    from swarm_envs.sensing.kernels import priority_independent_set
+    from swarm_envs.sensing.range_bearing_kernels import priority_independent_set
 
     rng = np.random.default_rng(4)
     for n, side in [(1, 0.1), (5, 0.1), (40, 0.3), (300, 1.0), (300, 3.0)]:
@@ -310,7 +310,7 @@ def test_compiled_frame_words_equal_the_numpy_reference(platform):
     groups of colliding frames (1 to 40 links per group: reduceat's short and pairwise sums), with light
     around the floor so that noise and superposition decide bits."""
     from swarm_envs.sim.platforms import get_platform
-    from swarm_envs.sensing.kernels import frame_words
+    from swarm_envs.sensing.range_bearing_kernels import frame_words
 
     model = get_platform(platform).ir_model
     n_d = get_platform(platform).n_detectors

@@ -1,4 +1,4 @@
-"""The compiled 2-hop scale-free path (swarm_envs.sensing.kernels) equals the numpy reference
+"""The compiled 2-hop scale-free path (swarm_envs.sensing.scale_free_kernels) equals the numpy reference
 (swarm_envs._compile.reference.coordinates_all) bit for bit."""
 
 from __future__ import annotations
@@ -86,7 +86,7 @@ def test_defaults_and_tiny_inputs_equal_the_reference():
 
 
 def test_segment_sum_equals_reduceat():
-    from swarm_envs.sensing.kernels import segment_sum
+    from swarm_envs.sensing.numpy_sums import segment_sum
 
     rng = np.random.default_rng(5)
     for shape in [(1, 3), (7, 8), (40, 8, 8), (300, 32), (400, 2)]:  # segments up to > 128 rows
@@ -105,7 +105,7 @@ def test_segment_sum_equals_reduceat():
 
 
 def test_sum_last_equals_its_numpy_reference():
-    from swarm_envs.sensing.kernels import sum_last
+    from swarm_envs.sensing.numpy_sums import sum_last
 
     rng = np.random.default_rng(6)
     for shape in [(5,), (0, 8), (7, 1), (40, 8, 8), (3, 6, 6)]:

@@ -1,4 +1,4 @@
-"""Compiled glue of the range & bearing sensor and the bearing exchange (swarm_envs.sensing.kernels) against
+"""Compiled glue of the range & bearing sensor and the bearing exchange (swarm_envs.sensing.range_bearing_kernels, exchange_kernels) against
 their numpy references (swarm_envs._compile.reference, or the formulas written out here), bit for bit."""
 
 from __future__ import annotations
@@ -21,7 +21,7 @@ def test_adc_pass_equals_the_numpy_ladder_pass():
     """kernels.adc_pass = clip(round(p * lam * scale + noise), 0, top) and its saturation flag, with
     negative noise (a rounded -0.0 must stay -0.0 as in numpy's clip), saturating rows, no noise,
     and a subset of rows."""
-    from swarm_envs.sensing.kernels import adc_pass
+    from swarm_envs.sensing.range_bearing_kernels import adc_pass
 
     rng = np.random.default_rng(3)
     for scale, top in [(1.0, 255.0), (0.37, 1023.0)]:
@@ -44,7 +44,7 @@ def test_adc_pass_equals_the_numpy_ladder_pass():
 
 
 def test_group_brightest_equals_group_argmax_of_row_maxima():
-    from swarm_envs.sensing.kernels import group_brightest
+    from swarm_envs.sensing.range_bearing_kernels import group_brightest
 
     rng = np.random.default_rng(5)
     for _ in range(50):
@@ -59,7 +59,7 @@ def test_group_brightest_equals_group_argmax_of_row_maxima():
 
 @pytest.mark.parametrize("id_check", [True, False])
 def test_pick_ids_equals_the_numpy_decode_rule(id_check):
-    from swarm_envs.sensing.kernels import pick_ids
+    from swarm_envs.sensing.range_bearing_kernels import pick_ids
 
     rng = np.random.default_rng(6)
     outcomes = set()
@@ -77,7 +77,7 @@ def test_pick_ids_equals_the_numpy_decode_rule(id_check):
 
 
 def test_merge_readings_equals_the_numpy_reference():
-    from swarm_envs.sensing.kernels import merge_readings
+    from swarm_envs.sensing.range_bearing_kernels import merge_readings
 
     rng = np.random.default_rng(7)
     for _ in range(100):
@@ -177,7 +177,8 @@ def test_compiled_message_encoding_equals_encode_rows(n, k_max):
 def test_firing_sums_equal_the_gathered_numpy_sums():
     """kernels.firing_sums = segment_sum / sum_last / brightest row of the firing links' gains, bit for bit, for groups of
     1 to 40 links (reduceat's short and pairwise branches)."""
-    from swarm_envs.sensing.kernels import PAIRWISE_INIT, firing_sums, segment_sum, sum_last
+    from swarm_envs.sensing.range_bearing_kernels import firing_sums
+    from swarm_envs.sensing.numpy_sums import PAIRWISE_INIT, segment_sum, sum_last
 
     rng = np.random.default_rng(11)
     for n_d in (6, 8):
@@ -200,7 +201,7 @@ def test_firing_sums_equal_the_gathered_numpy_sums():
 
 
 def test_adc_bits_equal_the_numpy_start_bit_reading():
-    from swarm_envs.sensing.kernels import adc_bits
+    from swarm_envs.sensing.range_bearing_kernels import adc_bits
 
     rng = np.random.default_rng(12)
     for scale, top, floor in [(1.0, 255.0, 7.0), (0.37, 1023.0, 3.0)]:
@@ -217,7 +218,7 @@ def test_sorted_independent_set_equals_the_adjacency_version():
     """kernels.priority_independent_set_sorted (edges sorted by u, possibly one-directional) equals
     priority_independent_set and the numpy Luby rounds; unsorted edges are refused."""
     from swarm_envs.ir.layer import compute_links
-    from swarm_envs.sensing.kernels import priority_independent_set, priority_independent_set_sorted
+    from swarm_envs.sensing.range_bearing_kernels import priority_independent_set, priority_independent_set_sorted
 
     rng = np.random.default_rng(13)
     for n, side in [(1, 0.1), (5, 0.1), (40, 0.3), (300, 1.0), (300, 3.0)]:
@@ -237,7 +238,7 @@ def test_sorted_independent_set_equals_the_adjacency_version():
 def test_slot_keys_equal_the_numpy_keys():
     """kernels.slot_keys = the validity, np.mod bearing keys and id keys of coordinates_all, bit for bit,
     on bearings that include exact multiples of 2 pi, -0.0, tiny negatives, NaN and inf."""
-    from swarm_envs.sensing.kernels import slot_keys
+    from swarm_envs.sensing.scale_free_kernels import slot_keys
 
     rng = np.random.default_rng(14)
     two_pi = 2.0 * np.pi
@@ -261,7 +262,7 @@ def test_compiled_delivery_store_equals_the_numpy_waves():
     """kernels.store_deliveries (one delivery after the other) leaves the same tables as the numpy waves of
     reference.store_deliveries (one delivery per receiver and wave), with receivers hearing several senders, a
     sender twice, and deliveries without an own bearing."""
-    from swarm_envs.sensing.kernels import store_deliveries
+    from swarm_envs.sensing.exchange_kernels import store_deliveries
 
     rng = np.random.default_rng(15)
     for _ in range(30):

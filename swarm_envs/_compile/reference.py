@@ -187,11 +187,11 @@ def occluder_frames(
     return out, np.stack([c * d[:, 0] + s * d[:, 1], -s * d[:, 0] + c * d[:, 1]], axis=-1).reshape(-1, 2)
 
 
-# -- scale-free coordinates (swarm_envs.sensing.scale_free, kernels in swarm_envs.sensing.kernels) --------------
+# -- scale-free coordinates (swarm_envs.sensing.scale_free, kernels in swarm_envs.sensing.scale_free_kernels) --------------
 def coordinates_all(knowledge: NeighbourKnowledge, noise_sensitivity: bool = True, angle_balance: bool = True) -> ScaleFreeResult:
     """Reference of :func:`swarm_envs.sensing.scale_free.coordinates_all` (kernels ``slot_keys``,
     ``two_hop_triangles``, ``two_hop_propagate`` and ``unit_mean_positions`` of
-    :mod:`swarm_envs.sensing.kernels`): 2-hop scale-free coordinates for every robot at once [L Algs. 1-4],
+    :mod:`swarm_envs.sensing.range_bearing_kernels`): 2-hop scale-free coordinates for every robot at once [L Algs. 1-4],
     the same float formulas, bit for bit.
 
     Vectorised numpy over robots, no Python loop over robots: reported ids are matched to slots with one
@@ -345,9 +345,9 @@ def coordinates_all(knowledge: NeighbourKnowledge, noise_sensitivity: bool = Tru
     )
 
 
-# -- range & bearing sensor (swarm_envs.sensing.range_bearing, kernels in swarm_envs.sensing.kernels) ----------
+# -- range & bearing sensor (swarm_envs.sensing.range_bearing, kernels in swarm_envs.sensing.range_bearing_kernels)
 def sum_last(a: np.ndarray) -> np.ndarray:
-    """Reference of :func:`swarm_envs.sensing.kernels.sum_last` (kernel ``_sum_last``): the sum over the last
+    """Reference of :func:`swarm_envs.sensing.numpy_sums.sum_last` (kernel ``_sum_last``): the sum over the last
     axis by numpy column additions, left to right (``((a0 + a1) + a2) + ...``)."""
     out = a[..., 0].copy()
     for j in range(1, a.shape[-1]):
@@ -356,8 +356,8 @@ def sum_last(a: np.ndarray) -> np.ndarray:
 
 
 def independent_set(prio: np.ndarray, u: np.ndarray, v: np.ndarray) -> np.ndarray:
-    """Reference of :func:`swarm_envs.sensing.kernels.priority_independent_set` and
-    :func:`~swarm_envs.sensing.kernels.priority_independent_set_sorted` (the contention schedule of
+    """Reference of :func:`swarm_envs.sensing.range_bearing_kernels.priority_independent_set` and
+    :func:`~swarm_envs.sensing.range_bearing_kernels.priority_independent_set_sorted` (the contention schedule of
     :meth:`swarm_envs.sensing.range_bearing.RangeBearingSensor.fire_mask`): (N,) bool greedy maximal
     independent set in decreasing priority (distinct ``prio``) of the graph with edges (u[e], v[e]), by
     vectorised Luby rounds: an undecided node joins when its priority beats every undecided neighbour's;
@@ -381,8 +381,8 @@ def independent_set(prio: np.ndarray, u: np.ndarray, v: np.ndarray) -> np.ndarra
 
 
 def group_argmax(values: np.ndarray, starts: np.ndarray, labels: np.ndarray) -> np.ndarray:
-    """Reference of :func:`swarm_envs.sensing.kernels.group_brightest` (with ``values`` the row maxima of its
-    gains; also the ``best`` rows of :func:`~swarm_envs.sensing.kernels.firing_sums`): per contiguous group
+    """Reference of :func:`swarm_envs.sensing.range_bearing_kernels.group_brightest` (with ``values`` the row maxima of its
+    gains; also the ``best`` rows of :func:`~swarm_envs.sensing.range_bearing_kernels.firing_sums`): per contiguous group
     (``starts``, sorted, non-empty groups), the label of the row with the largest value (first on ties);
     ``values`` without NaN."""
     n = values.size
@@ -393,7 +393,7 @@ def group_argmax(values: np.ndarray, starts: np.ndarray, labels: np.ndarray) -> 
 
 
 def pick_ids(heard: np.ndarray, ident_h: np.ndarray, crc_h: np.ndarray, id_check: bool = True) -> np.ndarray:
-    """Reference of :func:`swarm_envs.sensing.kernels.pick_ids`, the decode rule of
+    """Reference of :func:`swarm_envs.sensing.range_bearing_kernels.pick_ids`, the decode rule of
     :func:`swarm_envs.sensing.range_bearing.decode_ids`: ``heard`` (G, n_d) bool, ``ident_h``/``crc_h`` (H,)
     the id and CRC words of the heard channels in ``np.nonzero(heard)`` order. Returns (G,) the id all
     checking channels name, :data:`~swarm_envs.sensing.range_bearing.NOT_HEARD` or
@@ -415,7 +415,7 @@ def pick_ids(heard: np.ndarray, ident_h: np.ndarray, crc_h: np.ndarray, id_check
     return np.where(lo == big, NOT_HEARD, np.where(lo == top, lo, CONFLICT))
 
 
-# -- bearing exchange (swarm_envs.sensing.exchange, kernels in swarm_envs.sensing.kernels) ---------------------
+# -- bearing exchange (swarm_envs.sensing.exchange, kernels in swarm_envs.sensing.exchange_kernels) ------------
 def _bits_uint(b: np.ndarray) -> np.ndarray:
     """(..., w) bits, MSB first -> (...,) uint."""
     b = np.asarray(b, dtype=np.int64)
@@ -425,7 +425,7 @@ def _bits_uint(b: np.ndarray) -> np.ndarray:
 
 def decode_rows(bits: np.ndarray, id_bits: int, count_bits: int, max_entries: int, bearing_bits: int = 4) -> tuple[np.ndarray, np.ndarray]:
     """Reference of :func:`swarm_envs.sensing.exchange.decode_rows` (kernel
-    :func:`swarm_envs.sensing.kernels.decode_bits`): bits (R, >= needed, zero padded to that) -> ids (R,
+    :func:`swarm_envs.sensing.exchange_kernels.decode_bits`): bits (R, >= needed, zero padded to that) -> ids (R,
     max_entries) (-1 pad), bearings (rad), by reshaping the entries and weighting their bits."""
     from swarm_envs.sensing.exchange import dequantise
 
@@ -447,7 +447,7 @@ def encode_tables(
     tab_ids: np.ndarray, tab_bear: np.ndarray, tab_time: np.ndarray, robots: np.ndarray, offset: np.ndarray,
     max_entries: int, id_bits: int, count_bits: int, bearing_bits: int,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Reference of :func:`swarm_envs.sensing.kernels.encode_tables` (the messages of
+    """Reference of :func:`swarm_envs.sensing.exchange_kernels.encode_tables` (the messages of
     :meth:`swarm_envs.sensing.exchange.BearingExchange.encode`), same arguments: each robot's table slots
     sorted most recently heard first (stable), the first ``max_entries``, ids minus the robot's ``offset``,
     encoded by :func:`swarm_envs.sensing.exchange.encode_rows`. Returns bits (R, n_bits) uint8 and the
@@ -469,7 +469,7 @@ def roll_tables(
     row_bear: np.ndarray, row_time: np.ndarray, pub_ids: np.ndarray, pub_bear: np.ndarray, pub_time: np.ndarray,
     pub_row_ids: np.ndarray, pub_row_bear: np.ndarray, pub_row_time: np.ndarray, never: int,
 ) -> None:
-    """Reference of :func:`swarm_envs.sensing.kernels.roll_tables`
+    """Reference of :func:`swarm_envs.sensing.exchange_kernels.roll_tables`
     (:meth:`swarm_envs.sensing.exchange.BearingExchange.start_rounds`), same arguments, in place: the
     ``robots``' filled tables are copied to the published ones by fancy indexing, then emptied (ids -1,
     bearings NaN, times ``never``)."""
@@ -485,7 +485,7 @@ def store_deliveries(
     tab_ids: np.ndarray, tab_bear: np.ndarray, tab_time: np.ndarray, row_ids: np.ndarray, row_bear: np.ndarray,
     row_time: np.ndarray,
 ) -> None:
-    """Reference of :func:`swarm_envs.sensing.kernels.store_deliveries` (the table update of
+    """Reference of :func:`swarm_envs.sensing.exchange_kernels.store_deliveries` (the table update of
     :meth:`swarm_envs.sensing.exchange.BearingExchange.receive`), same arguments, in place: the deliveries
     in waves of at most one per receiver (the kernel's order per receiver); in a wave each delivery's
     sender entry (else the oldest slot; empty slots are the oldest) gets its row and, when the receiver

@@ -63,7 +63,7 @@ from typing import Any
 import numpy as np
 
 from swarm_envs.sim.copies import CopyRandom
-from swarm_envs.sensing.kernels import decode_bits, encode_tables, roll_tables, store_deliveries
+from swarm_envs.sensing.exchange_kernels import decode_bits, encode_tables, roll_tables, store_deliveries
 
 __all__ = ["BearingExchange", "NeighbourKnowledge", "encode_rows", "decode_rows", "thesis_round_time", "readings_table", "dequantise"]
 
@@ -149,7 +149,7 @@ def encode_rows(ids: np.ndarray, bearings: np.ndarray, id_bits: int, count_bits:
 
 def decode_rows(bits: np.ndarray, id_bits: int, count_bits: int, max_entries: int, bearing_bits: int = 4) -> tuple[np.ndarray, np.ndarray]:
     """Inverse of :func:`encode_rows`: bits (R, >= needed) -> ids (R, max_entries) (-1 pad), bearings (rad).
-    The integers are read by a kernel (:func:`swarm_envs.sensing.kernels.decode_bits`; numpy reference:
+    The integers are read by a kernel (:func:`swarm_envs.sensing.exchange_kernels.decode_bits`; numpy reference:
     :func:`swarm_envs._compile.reference.decode_rows`), the bearings by the formula here."""
     bits = np.ascontiguousarray(bits, dtype=np.uint8)
     if bits.ndim != 2:
@@ -314,7 +314,7 @@ class BearingExchange:
         """Message bits (R, n_bits) uint8 (zero padded) and payload lengths (R,) of ``robots``' published
         tables (their last complete round): most recently heard first, at most ``max_entries``, ids in a
         copy's own numbering, in the format of :func:`encode_rows` (compiled:
-        :func:`swarm_envs.sensing.kernels.encode_tables`; numpy reference:
+        :func:`swarm_envs.sensing.exchange_kernels.encode_tables`; numpy reference:
         :func:`swarm_envs._compile.reference.encode_tables`)."""
         robots = np.asarray(robots, dtype=np.int64)
         return encode_tables(
@@ -392,7 +392,7 @@ class BearingExchange:
         """Start a new round of ``robots`` [L Sec. 3.2.2]: the tables they filled during the round that ends
         become their published ones (what :meth:`knowledge` and their broadcasts read), and the tables they
         fill next start empty: "each robot clears all prior neighbor information" (compiled:
-        :func:`swarm_envs.sensing.kernels.roll_tables`; numpy reference: :func:`swarm_envs._compile.reference.roll_tables`)."""
+        :func:`swarm_envs.sensing.exchange_kernels.roll_tables`; numpy reference: :func:`swarm_envs._compile.reference.roll_tables`)."""
         robots = np.asarray(robots, dtype=np.int64).reshape(-1)
         roll_tables(robots, *(getattr(self, name) for name in _FILL + _PUB), NEVER)
 

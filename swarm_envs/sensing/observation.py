@@ -86,7 +86,6 @@ def id_rows(ids: np.ndarray, own: np.ndarray, n_world: int) -> np.ndarray:
     return out
 
 
-
 def wrapped_difference(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """``wrap_angle(a - b)`` (rad, in (-pi, pi]) elementwise; compiled for two 1-D arrays of one shape
     (other shapes: :func:`swarm_envs.sim.geometry.wrap_angle`).

@@ -81,21 +81,8 @@ from swarm_envs.ir.hardware import Hardware
 from swarm_envs.sim.geometry import wrap_angle
 from swarm_envs.ir.layer import IRLinks, pair_gains
 from swarm_envs.sim.platforms import Platform, get_platform
-from swarm_envs.sensing.kernels import (
-    PAIRWISE_INIT,
-    FRAME_WORDS_MAX_GROUP,
-    adc_bits,
-    adc_pass,
-    firing_sums,
-    frame_words,
-    group_brightest,
-    merge_readings,
-    pick_ids,
-    priority_independent_set,
-    priority_independent_set_sorted,
-    segment_sum,
-    sum_last,
-)
+from swarm_envs.sensing.range_bearing_kernels import FRAME_WORDS_MAX_GROUP, adc_bits, adc_pass, firing_sums, frame_words, group_brightest, merge_readings, pick_ids, priority_independent_set, priority_independent_set_sorted
+from swarm_envs.sensing.numpy_sums import PAIRWISE_INIT, segment_sum, sum_last
 
 __all__ = [
     "POWER_LADDER",
@@ -245,7 +232,7 @@ def frame_words_numpy(
     scale: float, top: float, floor: float, id_bits: int = ID_BITS,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Id and CRC words read on the heard channels (reference of the compiled
-    :func:`swarm_envs.sensing.kernels.frame_words`, and the path of groups larger than it takes).
+    :func:`swarm_envs.sensing.range_bearing_kernels.frame_words`, and the path of groups larger than it takes).
 
     Channel h (``np.nonzero(heard)`` order: group g, detector i) reads bit k of the frame at level
     ``sum_links frames[l, 1 + k] * light[l, i]`` over its group's links (summed as ``np.add.reduceat``),
@@ -795,7 +782,7 @@ def merge_readings_numpy(
     old_key: np.ndarray, old_f: np.ndarray, old_i: np.ndarray, max_age: int, new_key: np.ndarray, new_f: np.ndarray,
     new_i: np.ndarray,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Reading table update (reference of the compiled :func:`swarm_envs.sensing.kernels.merge_readings`;
+    """Reading table update (reference of the compiled :func:`swarm_envs.sensing.range_bearing_kernels.merge_readings`;
     any order of ``new_key``): old rows (sorted ``old_key``, float columns ``old_f`` (3, K) = range, bearing,
     heading; int columns ``old_i`` (3, K) = age, true tx, overlap) age by one and are dropped when older
     than ``max_age`` or refreshed by a new key; new rows enter with age 0; the result is stably sorted

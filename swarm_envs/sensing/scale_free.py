@@ -70,7 +70,8 @@ import numpy as np
 
 from swarm_envs.sensing.exchange import BearingExchange, NeighbourKnowledge
 from swarm_envs.sim.geometry import wrap_angle
-from swarm_envs.sensing.kernels import PAIRWISE_INIT, slot_keys, two_hop_propagate, two_hop_triangles, unit_mean_positions
+from swarm_envs.sensing.scale_free_kernels import slot_keys, two_hop_propagate, two_hop_triangles, unit_mean_positions
+from swarm_envs.sensing.numpy_sums import PAIRWISE_INIT
 
 __all__ = [
     "coordinates",
@@ -93,7 +94,6 @@ DEGENERATE_ANGLE = 1e-6  # rad: a triangle whose angle at z or w is this close t
 NULL_RTOL = 1e-9  # relative singular-value tolerance for the null space of A
 RESTRICT_TOL = 1e-6  # singular-value tolerance for the rank of N' (rows of an orthonormal basis)
 ANGLE_DECIMALS = 10  # 2-hop inner angles are rounded to 1e-10 rad (tie-breaking, see coordinates_all)
-
 
 
 # --------------------------------------------------------------------------------------------------
@@ -146,7 +146,7 @@ def coordinates_all(
     """2-hop scale-free coordinates for every robot at once [L Algs. 1-4] (module docstring).
 
     The slot sort, id matching, components and BFS / Prim run robot by robot in
-    :mod:`swarm_envs.sensing.kernels`, every floating-point formula (inner angles rounded to
+    :mod:`swarm_envs.sensing.scale_free_kernels`, every floating-point formula (inner angles rounded to
     1e-``ANGLE_DECIMALS`` rad, ANGLEBALANCE, law of sines, sensitivities, normalisation) in numpy here; the
     result equals the vectorised numpy reference :func:`swarm_envs._compile.reference.coordinates_all` bit for bit.
 
@@ -420,8 +420,6 @@ def coordinates(
         xy[nbrs] = np.stack([lengths * np.cos(th), lengths * np.sin(th)], -1)
         return xy, rigid
     raise ValueError(f"unknown method {method!r}; allowed: 'two_hop', 'null_space'")
-
-
 
 
 def unit_mean_lengths(logf: np.ndarray, valid: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
