@@ -6,7 +6,7 @@ import pytest
 from scipy.spatial import cKDTree
 
 from swarm_envs._compile import reference
-from swarm_envs.ir import kernels, layer
+from swarm_envs.ir import gain_kernels, layer, pair_kernels, ray_kernels
 from swarm_envs.ir.models import DropletLowPowerIR
 from swarm_envs.sim.platforms import get_platform
 
@@ -42,7 +42,7 @@ def _occluded_pairs(platform, rng, P, dark=None):
     offsets = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
     pair = np.repeat(np.arange(P), counts)
     xy = R[pair] * rng.uniform(0.2, 0.8, (len(pair), 1)) + rng.normal(0, platform.radius, (len(pair), 2))
-    kind, params = kernels.model_params(platform.ir_model)
+    kind, params = gain_kernels.model_params(platform.ir_model)
     args = (
         R, np.stack([np.cos(psi), np.sin(psi)], axis=-1), platform.detector_positions, platform.detector_directions, platform.emitter_positions,
         platform.emitter_directions, kind, params, float(platform.ir_range), offsets, xy, float(platform.radius),
@@ -56,8 +56,8 @@ def test_gains_kernel_compact_rows_are_the_lit_pairs(name):
     platform = get_platform(name)
     P = 3000
     R, psi, offsets, xy, args = _occluded_pairs(platform, np.random.default_rng(21), P)
-    full, lit_full, sums_full = kernels.gains_kernel(*args, False)
-    compact, lit, sums = kernels.gains_kernel(*args, True)
+    full, lit_full, sums_full = gain_kernels.gains_kernel(*args, False)
+    compact, lit, sums = gain_kernels.gains_kernel(*args, True)
     expected = np.flatnonzero(full.reshape(P, -1).max(axis=1) > 0)
     assert 0 < len(expected) < P
     np.testing.assert_array_equal(lit, expected)
@@ -78,16 +78,16 @@ def test_threaded_gain_kernel_equals_the_serial_kernel_bit_for_bit(name):
     P = 2500
     # a run of out-of-range pairs: a whole chunk can be dark
     *_, args = _occluded_pairs(platform, np.random.default_rng(31), P, dark=slice(1000, 1400))
-    serial, lit, sums = kernels.gains_kernel(*args, True)
+    serial, lit, sums = gain_kernels.gains_kernel(*args, True)
     assert 0 < len(lit) < P
     for chunks in (1, 2, 3, 7, 40, P + 5):
-        threaded, lit_t, sums_t = kernels.gains_kernel_threaded(*args, chunks)
+        threaded, lit_t, sums_t = gain_kernels.gains_kernel_threaded(*args, chunks)
         np.testing.assert_array_equal(lit_t, lit)
         np.testing.assert_array_equal(threaded, serial)
         np.testing.assert_array_equal(sums_t, sums)
         # the gain rows left where the chunks put them: lit and sums final on return, any rows readable by
         # lit index before the gather (in any order, repeated, none), all of them after it
-        later, lit_b, sums_b, rows = kernels.gains_kernel_threaded(*args, chunks, True)
+        later, lit_b, sums_b, rows = gain_kernels.gains_kernel_threaded(*args, chunks, True)
         np.testing.assert_array_equal(lit_b, lit)
         np.testing.assert_array_equal(sums_b, sums)
         assert rows.n_rows == len(lit)
@@ -146,7 +146,7 @@ def test_emitter_sums_are_the_sequential_sums_of_the_gains(name, occlusion, kern
     rows, for every platform, occlusion rule and both gain paths (the kernel, and numpy for a model without
     one), with and without dropped pairs, and empty."""
     if not kernel:
-        monkeypatch.setattr(kernels, "MODEL_IDS", {})
+        monkeypatch.setattr(gain_kernels, "MODEL_IDS", {})
     platform = get_platform(name)
     rng = np.random.default_rng(14)
     pos, hd = _dense_scene(platform, 60, 1.2 * platform.ir_range, rng)
@@ -229,7 +229,7 @@ def test_per_ray_occlusion_kernel_equals_numpy_reference(name):
 
 def test_occluder_lists_equal_the_exact_segment_test_near_the_disc_edge():
     """occluders_kernel decides candidates within 1e-6 of the width by the exact segment test: the same
-    lists as _segment_hits_disc over every third robot, for third robots placed at the width (to +-1e-15
+    lists as segment_hits_disc over every third robot, for third robots placed at the width (to +-1e-15
     .. 1e-3 relative) from the centre segment, inside it, beyond either end and near the ends. (The numpy
     reference, swarm_envs._compile.reference.occluder_lists, rounds the segment differently and may disagree within
     ~1e-16 of the width.)"""
@@ -257,7 +257,7 @@ def test_occluder_lists_equal_the_exact_segment_test_near_the_disc_edge():
         pa, s = pos[a[p]], pos[b[p]] - pos[a[p]]
         expected = [
             k for k in range(len(pos))
-            if k != a[p] and k != b[p] and kernels._segment_hits_disc(pa[0], pa[1], pa[0] + s[0], pa[1] + s[1], pos[k, 0], pos[k, 1], width**2)
+            if k != a[p] and k != b[p] and ray_kernels.segment_hits_disc(pa[0], pa[1], pa[0] + s[0], pa[1] + s[1], pos[k, 0], pos[k, 1], width**2)
         ]
         np.testing.assert_array_equal(idx[offsets[p] : offsets[p + 1]], expected)
         n_edge += len(expected)
@@ -301,7 +301,7 @@ def test_neighbour_lists_from_the_candidate_pairs_give_the_same_occluders(name):
     np.testing.assert_array_equal(via_pairs[0], via_tree[0])
     np.testing.assert_array_equal(via_pairs[1], via_tree[1])
     reach2 = 0.25 * length**2 + w**2 + 2e-9
-    starts, counts, nbrs = kernels.neighbour_csr_kernel(pos, pairs.astype(np.int64), reach2)
+    starts, counts, nbrs = pair_kernels.neighbour_csr_kernel(pos, pairs.astype(np.int64), reach2)
     ref = layer.neighbour_csr(pos, np.sqrt(reach2), tree)
     np.testing.assert_array_equal(counts, ref[1])
     for r in range(len(pos)):
@@ -309,7 +309,7 @@ def test_neighbour_lists_from_the_candidate_pairs_give_the_same_occluders(name):
 
 
 def test_disc_test_verdicts_equal_the_exact_segment_test_near_the_disc_edge():
-    """_hits_disc (the gain kernel's occlusion test) skips the division except near the radius: its verdicts equal _segment_hits_disc's,
+    """hits_disc (the gain kernel's occlusion test) skips the division except near the radius: its verdicts equal segment_hits_disc's,
     including rays that graze the disc within rounding and discs near either end."""
     rng = np.random.default_rng(31)
     r = 0.035
@@ -327,8 +327,8 @@ def test_disc_test_verdicts_equal_the_exact_segment_test_near_the_disc_edge():
         x1, y1 = x0 + dx, y0 + dy
         dx, dy = x1 - x0, y1 - y0  # as the kernel computes the ray
         r2 = r * r
-        fast = kernels._hits_disc(x0, y0, x1, y1, dx, dy, dx * dx + dy * dy, cx, cy, r2, r2 * (1 + kernels._DISC_TOL), r2 * (1 - kernels._DISC_TOL))
-        exact = kernels._segment_hits_disc(x0, y0, x1, y1, cx, cy, r * r)
+        fast = ray_kernels.hits_disc(x0, y0, x1, y1, dx, dy, dx * dx + dy * dy, cx, cy, r2, r2 * (1 + ray_kernels.DISC_TOL), r2 * (1 - ray_kernels.DISC_TOL))
+        exact = ray_kernels.segment_hits_disc(x0, y0, x1, y1, cx, cy, r * r)
         assert fast == exact
         n += exact
     assert 100 < n < 2900

@@ -103,11 +103,11 @@ def largest_component_fraction(positions: np.ndarray, link_distance: float, pair
     return largest / N, count
 
 
-# -- IR layer (swarm_envs.ir.layer, kernels in swarm_envs.ir.kernels) ------------------------------------------
+# -- IR layer (swarm_envs.ir.layer, kernels in swarm_envs.ir.*_kernels) -------------------------------------
 def ir_directed_pairs(
     pairs: np.ndarray, positions: np.ndarray, headings: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Reference of :func:`swarm_envs.ir.kernels.directed_pairs_kernel` (``swarm_envs.ir.layer._directed_pairs``):
+    """Reference of :func:`swarm_envs.ir.pair_kernels.directed_pairs_kernel` (``swarm_envs.ir.layer._directed_pairs``):
     both directions of the unordered ``pairs`` (U, 2) sorted by (rx, tx) with one argsort, and their frames.
     Returns (rx, tx, row of ``pairs``, tx centre in rx's frame (P, 2) (m), (cos, sin) of tx's heading in
     rx's frame (P, 2) from the robots' own cosines and sines, that heading (P,) (rad, :func:`wrap_angle`),
@@ -129,7 +129,7 @@ def ir_directed_pairs(
 def occluder_lists(
     positions: np.ndarray, a: np.ndarray, b: np.ndarray, width: float, tree: cKDTree | None = None
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Reference of the occluder search (:func:`swarm_envs.ir.kernels.occluders_kernel` on the neighbour
+    """Reference of the occluder search (:func:`swarm_envs.ir.occluder_kernels.occluders_kernel` on the neighbour
     lists of ``swarm_envs.ir.layer._occluder_lists``; the robots :func:`swarm_envs.ir.layer.pair_occluders`
     and :func:`swarm_envs.ir.layer.line_of_sight` find): the third robots closer than ``width`` (m) to
     segment a[p]-b[p], as CSR (offsets (P + 1,), robots (K,) sorted per pair). The candidates are the
@@ -173,7 +173,7 @@ def occluder_lists(
 def occluder_frames(
     positions: np.ndarray, headings: np.ndarray, rx: np.ndarray, pair_of: np.ndarray, offsets: np.ndarray, idx: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Reference of :func:`swarm_envs.ir.kernels.occluder_frames_kernel`: the occluders of pair
+    """Reference of :func:`swarm_envs.ir.occluder_kernels.occluder_frames_kernel`: the occluders of pair
     ``pair_of[p]`` (CSR ``offsets``, ``idx``) as centres in receiver ``rx[p]``'s frame. Returns (offsets
     (P + 1,), centres (K, 2))."""
     rx = np.ascontiguousarray(rx, dtype=np.int64)

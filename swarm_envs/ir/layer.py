@@ -38,7 +38,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from swarm_envs.sim.geometry import wrap_angle
-from swarm_envs.ir import kernels
+from swarm_envs.ir import gain_kernels, occluder_kernels, pair_kernels
 from swarm_envs.ir.hardware import Hardware
 from swarm_envs.sim.platforms import Platform, get_platform
 
@@ -197,8 +197,8 @@ def pair_gains(
 ) -> np.ndarray:
     """Noiseless gains (P, n_detectors, n_emitters) of the platform's IR model for P pairs.
 
-    Equal to ``model.gain(*pair_geometry(...))``: a compiled kernel (:mod:`swarm_envs.ir.kernels`) for the
-    package's IR models (:data:`swarm_envs.ir.kernels.MODEL_IDS`), numpy from cosines for any other model
+    Equal to ``model.gain(*pair_geometry(...))``: a compiled kernel (:mod:`swarm_envs.ir.gain_kernels`) for the
+    package's IR models (:data:`swarm_envs.ir.gain_kernels.MODEL_IDS`), numpy from cosines for any other model
     (:func:`pair_cosines`, ``model.gain_from_cos``). Pairs whose
     centre distance exceeds ``platform.ir_range`` get zero gain (the platform's "no infrared beyond"
     cut-off). ``model`` overrides the platform's IR model (e.g. the Droplet's low-power emitters,
@@ -245,7 +245,7 @@ def _gains(
     threads: int = 1,
     deferred: bool = False,
     hardware: tuple[np.ndarray, np.ndarray, Hardware] | None = None,
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, kernels.ChunkRows | None]:
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, gain_kernels.ChunkRows | None]:
     """(gains, lit, sums) of :func:`pair_gains` with checked inputs: ``lit`` the pairs with a nonzero gain,
     ``gains`` every pair's rows, or with ``compact`` only the ``lit`` rows (compiled kernel; numpy for a model
     without one), and
@@ -253,13 +253,13 @@ def _gains(
     ``emitter_sums``). ``cos_sin`` (P, 2): cos and sin of ``psi`` if known (the kernel uses them; default
     from ``psi``). ``threads`` > 1 (with ``compact``): the compiled kernel splits the pairs over that many
     threads (:func:`gain_threads`; same result bit for bit). ``deferred`` (with threads): the gain rows are
-    not gathered; the fourth result is then their :class:`kernels.ChunkRows` (else None), and ``gains``
-    holds its values once its ``gather()`` has run (:func:`kernels.gains_kernel_threaded`). ``hardware``:
+    not gathered; the fourth result is then their :class:`gain_kernels.ChunkRows` (else None), and ``gains``
+    holds its values once its ``gather()`` has run (:func:`gain_kernels.gains_kernel_threaded`). ``hardware``:
     optional (rx (P,), tx (P,), :class:`Hardware` of the robots they index): per-robot channel deviations
     (docs/design.md#hardware-variation)."""
-    if type(model).__name__ in kernels.MODEL_IDS:
+    if type(model).__name__ in gain_kernels.MODEL_IDS:
         hw = None if hardware is None else (hardware[0], hardware[1], *hardware[2].tables(platform))
-        kind, params = kernels.model_params(model)
+        kind, params = gain_kernels.model_params(model)
         if cos_sin is None:
             cos_sin = np.stack([np.cos(psi), np.sin(psi)], axis=-1)
         args = (
@@ -269,9 +269,9 @@ def _gains(
         )
         if compact and threads > 1:
             if deferred:
-                return kernels.gains_kernel_threaded(*args, int(threads), True, hw)
-            return (*kernels.gains_kernel_threaded(*args, int(threads), False, hw), None)
-        return (*kernels.gains_kernel(*args, compact, hw), None)
+                return gain_kernels.gains_kernel_threaded(*args, int(threads), True, hw)
+            return (*gain_kernels.gains_kernel_threaded(*args, int(threads), False, hw), None)
+        return (*gain_kernels.gains_kernel(*args, compact, hw), None)
     g = _pair_gains_numpy(R, psi, platform, model, None if hardware is None else hardware[2].pairs(hardware[0], hardware[1]))
     if xy.shape[0]:
         g = g * _clear_rays_numpy(R, psi, platform, offsets, xy)
@@ -406,12 +406,12 @@ def _occluder_lists(
     reach2 = 0.25 * float(max_length) ** 2 + float(width) ** 2 + 2e-9
     reach = float(np.sqrt(reach2))
     if near_pairs is not None and reach < near_range * (1.0 - 1e-9):  # lists from the pairs, no second query
-        starts, counts, nbrs = kernels.neighbour_csr_kernel(positions, np.ascontiguousarray(near_pairs, dtype=np.int64), reach2)
+        starts, counts, nbrs = pair_kernels.neighbour_csr_kernel(positions, np.ascontiguousarray(near_pairs, dtype=np.int64), reach2)
     else:
         starts, counts, nbrs = neighbour_csr(positions, reach, tree)
     if threads > 1:
-        return kernels.occluders_kernel_threaded(positions, float(width), a, b, starts, counts, nbrs, int(threads))
-    return kernels.occluders_kernel(positions, float(width), a, b, starts, counts, nbrs)
+        return occluder_kernels.occluders_kernel_threaded(positions, float(width), a, b, starts, counts, nbrs, int(threads))
+    return occluder_kernels.occluders_kernel(positions, float(width), a, b, starts, counts, nbrs)
 
 
 def _occluder_frames(
@@ -420,7 +420,7 @@ def _occluder_frames(
     """The occluders of pair ``pair_of[p]`` as centres in receiver ``rx[p]``'s frame: (offsets (P + 1,), (K, 2))."""
     rx = np.ascontiguousarray(rx, dtype=np.int64)
     pair_of = np.ascontiguousarray(pair_of, dtype=np.int64)
-    return kernels.occluder_frames_kernel(positions, np.cos(headings), np.sin(headings), rx, pair_of, offsets, idx)
+    return occluder_kernels.occluder_frames_kernel(positions, np.cos(headings), np.sin(headings), rx, pair_of, offsets, idx)
 
 
 def line_of_sight(
@@ -505,10 +505,10 @@ def compute_links_with_rows(
     hardware: Hardware | None = None,
     emit_off: np.ndarray | None = None,
     detect_off: np.ndarray | None = None,
-) -> tuple[IRLinks, kernels.ChunkRows | None]:
+) -> tuple[IRLinks, gain_kernels.ChunkRows | None]:
     """:func:`compute_links`, and with ``deferred`` (for :class:`swarm_envs.sensing.full.FullSensing`), when
     the scene uses threads (:func:`gain_threads`; else None), the gain rows as the kernel's chunks left them
-    (:class:`kernels.ChunkRows`): everything else in the links is final, and ``links.gains`` holds its
+    (:class:`gain_kernels.ChunkRows`): everything else in the links is final, and ``links.gains`` holds its
     values only after ``rows.gather()``; until then read rows with ``rows.take(link indices)``."""
     if occlusion not in OCCLUSION_RULES:
         raise ValueError(f"occlusion must be one of {OCCLUSION_RULES}, got {occlusion!r}")
@@ -562,7 +562,7 @@ def compute_links_with_rows(
     rows = np.arange(rx.shape[0])
     if drop_zero and lit.shape[0] < rx.shape[0]:
         rows = lit
-        rx, tx, rel, rel_heading, distance = kernels.select_links_kernel(lit, rx, tx, rel, rel_heading, distance)
+        rx, tx, rel, rel_heading, distance = pair_kernels.select_links_kernel(lit, rx, tx, rel, rel_heading, distance)
     links = IRLinks(rx, tx, distance, rel, rel_heading, gains, N, None if occluders is None else (*occluders, rows), sums)
     switched = any(m is not None and np.any(m) for m in (silent, emit_off, detect_off))
     if (obstacles is not None and len(obstacles)) or switched:
@@ -735,7 +735,7 @@ def _directed_pairs(
     reference: :func:`swarm_envs._compile.reference.ir_directed_pairs`)."""
     c, s = np.cos(headings), np.sin(headings)  # per robot, then per pair
     pairs = np.ascontiguousarray(pairs, dtype=np.int64)
-    return kernels.directed_pairs_kernel(pairs, np.ascontiguousarray(positions), np.ascontiguousarray(headings), c, s)
+    return pair_kernels.directed_pairs_kernel(pairs, np.ascontiguousarray(positions), np.ascontiguousarray(headings), c, s)
 
 
 def _empty_links(n_d: int, n_e: int, n_robots: int) -> IRLinks:

@@ -286,7 +286,7 @@ class FullSensing:
         elif payloads is not None:
             raise ValueError("payloads were queued by prepare_step; pass either payloads or prepared")
         # the IR links; in a large scene the gain matrices stay where the gain kernel's chunks left them
-        # (swarm_envs.ir.kernels.ChunkRows): range & bearing reads the rows it needs from there, SwarmCom
+        # (swarm_envs.ir.gain_kernels.ChunkRows): range & bearing reads the rows it needs from there, SwarmCom
         # reads only the emitter sums, and nothing here reads links.gains before gain_rows.gather()
         links, gain_rows = compute_links_with_rows(
             positions, headings, self.platform, copy=self.copy_of if self.n_copies > 1 else None, deferred=True, obstacles=self.obstacles,

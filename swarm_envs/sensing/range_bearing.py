@@ -685,7 +685,7 @@ class RangeBearingSensor:
         ``fired``: optional (N,) bool robots that fire this step instead of the schedule's choice (for
         validation and tests; no priorities are drawn then). ``gain_rows``: optional reader of the links'
         gain matrices, ``gain_rows(link indices) -> (S, n_d, n_e)`` equal to ``links.gains[indices]``
-        (default; e.g. :meth:`swarm_envs.ir.kernels.ChunkRows.take` before the rows are gathered)."""
+        (default; e.g. :meth:`swarm_envs.ir.gain_kernels.ChunkRows.take` before the rows are gathered)."""
         N = self.n_robots
         if fired is None:
             fired = self.fire_mask(links)

@@ -1,12 +1,14 @@
-"""Compiled (numba) kernels for the IR layer's hot path.
+"""Compiled (numba) gain kernels, the IR layer's hot path: every lit emitter-detector ray of every candidate
+pair, with its line of sight.
 
 The IR layer's per-step work is a loop over P visible pairs x n_detectors x n_emitters that numpy can
 only do through many (P, n_d, n_e) temporaries (memory-bound). These kernels do the same arithmetic
 pair by pair, skipping dark emitter-detector combinations early, and test each lit ray against the pair's
 candidate occluders (per-ray line of sight, docs/design.md#infrared-physical-layer). They implement exactly the models of
 :mod:`swarm_envs.ir.models` (the numpy methods there stay the reference, and the layer's path for a model
-without a kernel; ``tests/test_ir_kernels.py`` checks the two agree to 1e-12). The plain numpy references
-of the pair, occluder and frame kernels are in :mod:`swarm_envs._compile.reference`.
+without a kernel; ``tests/test_ir_kernels.py`` checks the two agree to 1e-12). The pair and occluder kernels
+are in :mod:`swarm_envs.ir.pair_kernels` and :mod:`swarm_envs.ir.occluder_kernels`; their plain numpy references
+in :mod:`swarm_envs._compile.reference`.
 """
 
 from __future__ import annotations
@@ -18,8 +20,9 @@ import numpy as np
 from swarm_envs._compile._numba import njit  # numba.njit whose cache recovers from corrupted files
 from swarm_envs.sim._vecmath import power_into
 from swarm_envs._compile._worker import run_chunks
+from swarm_envs.ir.ray_kernels import DISC_TOL, hits_disc
 
-__all__ = ["MODEL_IDS", "model_params", "gains_kernel", "gains_kernel_threaded", "ChunkRows", "occluders_kernel", "occluders_kernel_threaded", "neighbour_csr_kernel", "occluder_frames_kernel", "directed_pairs_kernel", "select_links_kernel"]
+__all__ = ["MODEL_IDS", "model_params", "gains_kernel", "gains_kernel_threaded", "ChunkRows"]
 
 #: model class name -> kernel model id
 MODEL_IDS = {"DropletIR": 0, "EpuckIR": 1, "RoneIR": 2, "DropletLowPowerIR": 3}
@@ -73,44 +76,7 @@ def _gain(kind: int, p0: float, p1: float, p2: float, p3: float, p4: float, p5: 
     return _droplet_sensor(a, p0) * _droplet_emitter(b, p1) * amp
 
 
-@njit(cache=True, inline="always", error_model="numpy")
-def _segment_hits_disc(x0: float, y0: float, x1: float, y1: float, cx: float, cy: float, r2: float) -> bool:
-    """Whether the segment (x0, y0)-(x1, y1) passes closer than sqrt(r2) to (cx, cy) (open disc)."""
-    sx, sy = x1 - x0, y1 - y0
-    px, py = cx - x0, cy - y0
-    L2 = sx * sx + sy * sy
-    t = (px * sx + py * sy) / L2 if L2 > 0.0 else 0.0
-    t = min(1.0, max(0.0, t))
-    qx, qy = px - t * sx, py - t * sy
-    return qx * qx + qy * qy < r2
-
-
 _SIGN_TOL = 1e-12  # m: cosine numerators farther than this from 0 have the sign of the reference's cosines
-_DISC_TOL = 1e-6  # relative: a ray's line this far outside / inside the disc radius gets the reference's verdict
-
-
-@njit(cache=True, inline="always", error_model="numpy")
-def _hits_disc(
-    x0: float, y0: float, x1: float, y1: float, dx: float, dy: float, L2: float, cx: float, cy: float, r2: float, r2_hi: float, r2_lo: float
-) -> bool:
-    """:func:`_segment_hits_disc` for a segment with ``dx = x1 - x0``, ``dy = y1 - y0``, ``L2 = dx * dx + dy * dy``
-    computed so by the caller, and ``r2_hi, r2_lo = r2 (1 +- _DISC_TOL)``: the same verdict, without the
-    division except within a relative 1e-6 of the radius (there it decides). When the nearest point is an
-    end (t clamped to 0 or 1) the arithmetic is the same; otherwise the squared distance of the centre
-    from the segment's line is ``cr^2 / L2`` (cr the cross product), compared with r2 with a margin far
-    above rounding (~1e-14 relative)."""
-    px, py = cx - x0, cy - y0
-    dot = px * dx + py * dy
-    if dot <= 0.0:  # t clamps to 0: nearest point is the start
-        return px * px + py * py < r2
-    if dot >= L2:  # t clamps to 1: nearest point is the end
-        qx, qy = px - dx, py - dy
-        return qx * qx + qy * qy < r2
-    cr = px * dy - py * dx
-    cr2 = cr * cr
-    if cr2 >= r2_hi * L2:
-        return False
-    return cr2 <= r2_lo * L2 or _segment_hits_disc(x0, y0, x1, y1, cx, cy, r2)
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
@@ -386,14 +352,14 @@ def _gains_chunk(
     factor is > 1e-124 (nd, ne >= 1e-12 m) and the power >= 0.4 (L2 < 1.2 m^2), so the ray is lit
     exactly when the factor is > 0. Droplet and r-one rays: :func:`_gain`, summed as they come.
 
-    **Occlusion** (docs/design.md#infrared-physical-layer): a ray is blocked when :func:`_hits_disc` finds an occluder's disc on it.
+    **Occlusion** (docs/design.md#infrared-physical-layer): a ray is blocked when :func:`hits_disc` finds an occluder's disc on it.
 
     **Hardware variation** (``hw_rx`` non-empty; :func:`gains_kernel`): each pair loads its receiver's
     detector axes and its transmitter's emitter axes (and the front-only bounds' constants) from the
     tables, and multiplies each ray's gain by the two channels' multipliers."""
     nd, ne = det_pos.shape[0], em_pos.shape[0]
     r2 = occ_radius * occ_radius
-    r2_hi, r2_lo = r2 * (1.0 + _DISC_TOL), r2 * (1.0 - _DISC_TOL)
+    r2_hi, r2_lo = r2 * (1.0 + DISC_TOL), r2 * (1.0 - DISC_TOL)
     prm = np.empty(8, np.float64)
     prm[:] = 0.0
     for i in range(params.shape[0]):  # element copy (a slice assignment from an array compiles numba's shape-error text)
@@ -505,7 +471,7 @@ def _gains_chunk(
                             continue
                     blocked = False
                     for q in range(q0, q1):
-                        if _hits_disc(x0, y0, ex[j], ey[j], dx, dy, L2, occ_xy[q, 0], occ_xy[q, 1], r2, r2_hi, r2_lo):
+                        if hits_disc(x0, y0, ex[j], ey[j], dx, dy, L2, occ_xy[q, 0], occ_xy[q, 1], r2, r2_hi, r2_lo):
                             blocked = True
                             break
                     if blocked:
@@ -549,350 +515,3 @@ def _gains_chunk(
     return n_lit
 
 
-@njit(cache=True, error_model="numpy", nogil=True)
-def occluders_kernel(
-    positions: np.ndarray,
-    width: float,
-    rx: np.ndarray,
-    tx: np.ndarray,
-    starts: np.ndarray,
-    counts: np.ndarray,
-    nbrs: np.ndarray,
-) -> tuple[np.ndarray, np.ndarray]:
-    """Third robots whose centre is closer than ``width`` to the centre segment rx[p]-tx[p], as CSR.
-
-    Candidates are the neighbour lists (CSR ``starts``, ``counts``, ``nbrs``) of both ends, which must
-    reach ``sqrt(|rx tx|^2 / 4 + width^2 + 1e-9)``: a centre closer than ``width`` to the segment is closer than
-    ``sqrt(|rx tx|^2 / 4 + width^2)`` (Pythagoras, foot point on the nearer half) to its nearer end, so
-    each end's list, sorted by distance here, is read only up to that pair's own reach, and each end
-    tests only the candidates whose projection on the segment falls in its own half (none twice). Returns offsets (P + 1,) and robot indices (K,), each pair's sorted.
-
-    The disc test is :func:`_hits_disc`'s (the verdict of :func:`_segment_hits_disc`: nearest end, or the
-    cross product against the width with a 1e-6 relative margin) evaluated without branching on its
-    outcome, candidates kept by an index increment; the few within the margin get the exact test after
-    the pair's loop.
-    """
-    N = positions.shape[0]
-    near, dist2 = nbrs.copy(), np.empty(nbrs.shape[0], np.float64)
-    _sort_neighbours(0, N, positions, starts, counts, near, dist2)
-    base, cnt, idx = _occluder_buffers(rx, tx, counts, 1)
-    _occluders_chunk(0, rx.shape[0], base[0], positions, width, rx, tx, starts, counts, near, dist2, cnt, idx)
-    return _occluders_gather(base, cnt, idx, 1)
-
-
-def occluders_kernel_threaded(
-    positions: np.ndarray,
-    width: float,
-    rx: np.ndarray,
-    tx: np.ndarray,
-    starts: np.ndarray,
-    counts: np.ndarray,
-    nbrs: np.ndarray,
-    n_chunks: int,
-) -> tuple[np.ndarray, np.ndarray]:
-    """:func:`occluders_kernel` on ``n_chunks`` threads (this one and the helper threads of
-    :func:`swarm_envs._compile._worker.run_chunks`): robots' lists sorted and pairs searched in contiguous chunks,
-    one thread each, every pair by the same code into its own part of the buffer, then gathered in
-    order; the same result bit for bit, whatever the number of chunks or threads."""
-    N, P = positions.shape[0], rx.shape[0]
-    n_chunks = max(1, int(n_chunks))
-    near, dist2 = nbrs.copy(), np.empty(nbrs.shape[0])
-    run_chunks(lambda k: _sort_neighbours_kernel((N * k) // n_chunks, (N * (k + 1)) // n_chunks, positions, starts, counts, near, dist2), n_chunks)
-    base, cnt, idx = _occluder_buffers_kernel(rx, tx, counts, n_chunks)
-    run_chunks(
-        lambda k: _occluders_chunk_kernel(
-            (P * k) // n_chunks, (P * (k + 1)) // n_chunks, base[k], positions, float(width), rx, tx, starts, counts, near, dist2, cnt, idx
-        ),
-        n_chunks,
-    )
-    return _occluders_gather_kernel(base, cnt, idx, n_chunks)
-
-
-# entry points of the threaded search: the inlined helpers below, each compiled on its own
-@njit(cache=True, error_model="numpy", nogil=True)
-def _sort_neighbours_kernel(r0: int, r1: int, positions: np.ndarray, starts: np.ndarray, counts: np.ndarray, near: np.ndarray, dist2: np.ndarray) -> None:
-    _sort_neighbours(r0, r1, positions, starts, counts, near, dist2)
-
-
-@njit(cache=True, error_model="numpy", nogil=True)
-def _occluder_buffers_kernel(rx: np.ndarray, tx: np.ndarray, counts: np.ndarray, n_chunks: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    return _occluder_buffers(rx, tx, counts, n_chunks)
-
-
-@njit(cache=True, error_model="numpy", nogil=True)
-def _occluders_chunk_kernel(
-    p0: int, p1: int, K: int, positions: np.ndarray, width: float, rx: np.ndarray, tx: np.ndarray, starts: np.ndarray,
-    counts: np.ndarray, near: np.ndarray, dist2: np.ndarray, cnt: np.ndarray, idx: np.ndarray,
-) -> None:
-    _occluders_chunk(p0, p1, K, positions, width, rx, tx, starts, counts, near, dist2, cnt, idx)
-
-
-@njit(cache=True, error_model="numpy", nogil=True)
-def _occluders_gather_kernel(base: np.ndarray, cnt: np.ndarray, idx: np.ndarray, n_chunks: int) -> tuple[np.ndarray, np.ndarray]:
-    return _occluders_gather(base, cnt, idx, n_chunks)
-
-
-@njit(cache=True, inline="always", error_model="numpy", nogil=True)
-def _sort_neighbours(r0: int, r1: int, positions: np.ndarray, starts: np.ndarray, counts: np.ndarray, near: np.ndarray, dist2: np.ndarray) -> None:
-    """Neighbour lists of robots ``r0:r1`` (``near``, in place) by increasing distance, squared distances
-    into ``dist2`` (insertion sort: the lists are short)."""
-    for r in range(r0, r1):
-        s0 = starts[r]
-        for q in range(s0, s0 + counts[r]):
-            k = near[q]
-            d2 = (positions[k, 0] - positions[r, 0]) ** 2 + (positions[k, 1] - positions[r, 1]) ** 2
-            q2 = q
-            while q2 > s0 and dist2[q2 - 1] > d2:
-                dist2[q2] = dist2[q2 - 1]
-                near[q2] = near[q2 - 1]
-                q2 -= 1
-            dist2[q2] = d2
-            near[q2] = k
-
-
-@njit(cache=True, inline="always", error_model="numpy", nogil=True)
-def _occluder_buffers(rx: np.ndarray, tx: np.ndarray, counts: np.ndarray, n_chunks: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Buffers of an occluder search in ``n_chunks`` chunks of pairs: the start of each chunk's part of
-    ``idx`` (n_chunks + 1,), per-pair counts (P,) and ``idx``, sized by the candidates of both ends of
-    every pair (a pair's occluders are among them)."""
-    P = rx.shape[0]
-    base = np.empty(n_chunks + 1, np.int64)
-    base[:] = 0
-    for k in range(n_chunks):
-        acc = 0
-        for p in range((P * k) // n_chunks, (P * (k + 1)) // n_chunks):
-            acc += counts[rx[p]] + counts[tx[p]]
-        base[k + 1] = base[k] + acc
-    cnt = np.empty(P, np.int64)
-    cnt[:] = 0
-    return base, cnt, np.empty(max(1, base[n_chunks]), np.int64)
-
-
-@njit(cache=True, inline="always", error_model="numpy", nogil=True)
-def _occluders_chunk(
-    p0: int, p1: int, K: int, positions: np.ndarray, width: float, rx: np.ndarray, tx: np.ndarray, starts: np.ndarray,
-    counts: np.ndarray, near: np.ndarray, dist2: np.ndarray, cnt: np.ndarray, idx: np.ndarray,
-) -> None:
-    """Occluders of pairs ``p0:p1`` (:func:`occluders_kernel`), each pair's sorted, one after the other into
-    ``idx`` from ``K`` on; their numbers into ``cnt``."""
-    w2 = width * width
-    w2_hi, w2_lo = w2 * (1.0 + _DISC_TOL), w2 * (1.0 - _DISC_TOL)
-    grey = np.empty(max(1, 2 * positions.shape[0]), np.int64)  # one pair's candidates near the disc edge
-    for p in range(p0, p1):
-        K0 = K
-        a, b = rx[p], tx[p]
-        ax, ay = positions[a, 0], positions[a, 1]
-        sx, sy = positions[b, 0] - ax, positions[b, 1] - ay
-        L2 = sx * sx + sy * sy
-        # a centre within width of the segment is within sqrt(L2 / 4 + width^2) of the end its foot point
-        # is nearer to (or within width of an end); margin far above rounding
-        reach2 = 0.25 * L2 + w2 + 1e-9
-        half = 0.5 * L2
-        # the segment as _segment_hits_disc(ax, ay, ax + sx, ay + sy, ...) computes it
-        x1, y1 = ax + sx, ay + sy
-        tx_, ty_ = x1 - ax, y1 - ay
-        T2 = tx_ * tx_ + ty_ * ty_
-        n_grey = 0
-        for e in range(2):
-            end = a if e == 0 else b
-            for q in range(starts[end], starts[end] + counts[end]):
-                if dist2[q] > reach2:
-                    break
-                k = near[q]
-                px, py = positions[k, 0] - ax, positions[k, 1] - ay
-                # each candidate from one end only: a's half (projection <= L2 / 2) from a, the rest from b
-                mine = ((px * sx + py * sy <= half) == (e == 0)) & (k != a) & (k != b)
-                # the verdict of _hits_disc (== _segment_hits_disc) without a branch on its outcome
-                dot = px * tx_ + py * ty_
-                qx, qy = px - tx_, py - ty_
-                cr = px * ty_ - py * tx_
-                cr2 = cr * cr
-                at_start = dot <= 0.0
-                at_end = (dot >= T2) & (not at_start)
-                inner = (not at_start) & (not at_end)
-                hit = (at_start & (px * px + py * py < w2)) | (at_end & (qx * qx + qy * qy < w2)) | (inner & (cr2 <= w2_lo * T2))
-                idx[K] = k
-                K += np.int64(mine & hit)
-                # within 1e-6 of the radius the exact test decides, after the loop (rare)
-                grey[n_grey] = k
-                n_grey += np.int64(mine & inner & (cr2 < w2_hi * T2) & (cr2 > w2_lo * T2))
-        for t in range(n_grey):
-            k = grey[t]
-            if _segment_hits_disc(ax, ay, x1, y1, positions[k, 0], positions[k, 1], w2):
-                idx[K] = k
-                K += 1
-        for q in range(K0 + 1, K):  # insertion sort: each pair's occluders in robot order
-            q2 = q
-            while q2 > K0 and idx[q2 - 1] > idx[q2]:
-                idx[q2 - 1], idx[q2] = idx[q2], idx[q2 - 1]
-                q2 -= 1
-        cnt[p] = K - K0
-
-
-@njit(cache=True, inline="always", error_model="numpy", nogil=True)
-def _occluders_gather(base: np.ndarray, cnt: np.ndarray, idx: np.ndarray, n_chunks: int) -> tuple[np.ndarray, np.ndarray]:
-    """CSR (offsets (P + 1,), robots (K,)) from the chunks' parts of ``idx`` (:func:`_occluder_buffers`)."""
-    P = cnt.shape[0]
-    offsets = np.empty(P + 1, np.int64)
-    offsets[:] = 0
-    for p in range(P):
-        offsets[p + 1] = offsets[p] + cnt[p]
-    out = np.empty(offsets[P], np.int64)
-    for k in range(n_chunks):
-        first = (P * k) // n_chunks
-        n = offsets[(P * (k + 1)) // n_chunks] - offsets[first]
-        for q in range(n):  # element copy (a slice assignment from an array compiles numba's shape-error text)
-            out[offsets[first] + q] = idx[base[k] + q]
-    return offsets, out
-
-
-@njit(cache=True, error_model="numpy", nogil=True)
-def neighbour_csr_kernel(positions: np.ndarray, pairs: np.ndarray, reach2: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Neighbour lists as CSR (starts (N,), counts (N,), neighbours) from the unordered ``pairs`` (U, 2):
-    both ends of every pair whose squared centre distance (computed as :func:`occluders_kernel` does)
-    is at most ``reach2`` (m^2). Equal to the lists of a KD-tree query within ``sqrt(reach2)`` when
-    ``pairs`` holds every pair closer than a larger range (up to the order within a list)."""
-    N, U = positions.shape[0], pairs.shape[0]
-    keep = np.empty(U, np.int64)
-    counts = np.empty(N, np.int64)
-    counts[:] = 0
-    n = 0
-    for u in range(U):
-        a, b = pairs[u, 0], pairs[u, 1]
-        d2 = (positions[b, 0] - positions[a, 0]) ** 2 + (positions[b, 1] - positions[a, 1]) ** 2
-        keep[n] = u
-        n += np.int64(d2 <= reach2)
-    for t in range(n):
-        counts[pairs[keep[t], 0]] += 1
-        counts[pairs[keep[t], 1]] += 1
-    starts = np.empty(N, np.int64)
-    fill = np.empty(N, np.int64)
-    acc = 0
-    for r in range(N):
-        starts[r] = acc
-        fill[r] = acc
-        acc += counts[r]
-    nbrs = np.empty(acc, np.int64)
-    for t in range(n):
-        a, b = pairs[keep[t], 0], pairs[keep[t], 1]
-        nbrs[fill[a]] = b
-        fill[a] += 1
-        nbrs[fill[b]] = a
-        fill[b] += 1
-    return starts, counts, nbrs
-
-
-@njit(cache=True, error_model="numpy", nogil=True)
-def occluder_frames_kernel(
-    positions: np.ndarray, cos_h: np.ndarray, sin_h: np.ndarray, rx: np.ndarray, pair_of: np.ndarray, offsets: np.ndarray, idx: np.ndarray
-) -> tuple[np.ndarray, np.ndarray]:
-    """Occluders of pair ``pair_of[p]`` (CSR ``offsets``, ``idx``) as centres in receiver rx[p]'s body
-    frame (``cos_h``, ``sin_h``: the robots' heading cosines and sines): returns offsets (P + 1,) and
-    centres (K, 2)."""
-    P = rx.shape[0]
-    out_off = np.empty(P + 1, np.int64)
-    out_off[:] = 0
-    for p in range(P):
-        out_off[p + 1] = out_off[p] + offsets[pair_of[p] + 1] - offsets[pair_of[p]]
-    xy = np.empty((out_off[P], 2), np.float64)
-    for p in range(P):
-        a, u = rx[p], pair_of[p]
-        c, s = cos_h[a], sin_h[a]
-        q2 = out_off[p]
-        for q in range(offsets[u], offsets[u + 1]):
-            dx, dy = positions[idx[q], 0] - positions[a, 0], positions[idx[q], 1] - positions[a, 1]
-            xy[q2, 0] = c * dx + s * dy
-            xy[q2, 1] = -s * dx + c * dy
-            q2 += 1
-    return out_off, xy
-
-
-@njit(cache=True, error_model="numpy", nogil=True)
-def select_links_kernel(
-    lit: np.ndarray, rx: np.ndarray, tx: np.ndarray, rel: np.ndarray, rel_heading: np.ndarray, distance: np.ndarray
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Rows ``lit`` of the links' arrays in one pass: ``(rx[lit], tx[lit], rel[lit], rel_heading[lit],
-    distance[lit])`` (numpy's fancy indexing, one array at a time, is ~5x slower at 36k links)."""
-    n = lit.shape[0]
-    rx_, tx_ = np.empty(n, rx.dtype), np.empty(n, tx.dtype)
-    rel_, rh_, d_ = np.empty((n, 2), np.float64), np.empty(n, np.float64), np.empty(n, np.float64)
-    for k in range(n):
-        p = lit[k]
-        rx_[k], tx_[k] = rx[p], tx[p]
-        rel_[k, 0], rel_[k, 1] = rel[p, 0], rel[p, 1]
-        rh_[k], d_[k] = rel_heading[p], distance[p]
-    return rx_, tx_, rel_, rh_, d_
-
-
-@njit(cache=True, error_model="numpy", nogil=True)
-def directed_pairs_kernel(
-    pairs: np.ndarray, positions: np.ndarray, headings: np.ndarray, cos_h: np.ndarray, sin_h: np.ndarray
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Both directions of U unordered pairs ``pairs`` (U, 2), sorted by (rx, tx), and their geometry.
-
-    Two counting-sort passes (by tx, then stably by rx): the same order as sorting the unique keys
-    ``rx * N + tx``. Per directed pair p, with ``d = x[tx] - x[rx]``
-    (world frame) and ``cos_h, sin_h`` the robots' heading cosines / sines: ``rel = (c d_x + s d_y,
-    -s d_x + c d_y)`` (tx centre in rx's frame, c, s of rx), ``rel_heading`` = heading of tx - heading
-    of rx wrapped to (-pi, pi] and ``distance = sqrt(d_x^2 + d_y^2)``: the same values as the numpy
-    reference (:func:`swarm_envs._compile.reference.ir_directed_pairs`), bit for bit.
-
-    Returns rx (P,), tx (P,), pair_of (P,) the row of ``pairs`` of each, rel (P, 2), (cos, sin) of the
-    relative heading (P, 2) (from the robots' cosines and sines), rel_heading (P,), distance (P,), P = 2 U.
-    """
-    U, N = pairs.shape[0], positions.shape[0]
-    P = 2 * U
-    start = np.empty(N + 1, np.int64)
-    start[:] = 0
-    for u in range(U):
-        start[pairs[u, 0] + 1] += 1
-        start[pairs[u, 1] + 1] += 1
-    for r in range(N):
-        start[r + 1] += start[r]
-    # each robot is the receiver of as many directed pairs as it is the transmitter of: one bucket layout
-    fill = start[:N].copy()
-    by_tx_rx = np.empty(P, np.int64)  # pass 1: directed pairs bucketed by transmitter
-    by_tx_u = np.empty(P, np.int64)
-    for u in range(U):
-        for k in range(2):
-            a, b = pairs[u, k], pairs[u, 1 - k]
-            q = fill[b]
-            fill[b] += 1
-            by_tx_rx[q] = a
-            by_tx_u[q] = u
-    for i in range(N):  # element copy: a slice assignment from an array compiles numba's shape-error text
-        fill[i] = start[i]
-    rx = np.empty(P, np.int64)
-    tx = np.empty(P, np.int64)
-    pair_of = np.empty(P, np.int64)
-    for b in range(N):  # pass 2, stable: by receiver, each bucket in transmitter order
-        for q0 in range(start[b], start[b + 1]):
-            a = by_tx_rx[q0]
-            q = fill[a]
-            fill[a] += 1
-            rx[q] = a
-            tx[q] = b
-            pair_of[q] = by_tx_u[q0]
-    rel = np.empty((P, 2), np.float64)
-    rel_cs = np.empty((P, 2), np.float64)
-    rel_heading = np.empty(P, np.float64)
-    distance = np.empty(P, np.float64)
-    two_pi = 2.0 * np.pi
-    for p in range(P):
-        a, b = rx[p], tx[p]
-        dx, dy = positions[b, 0] - positions[a, 0], positions[b, 1] - positions[a, 1]
-        c, s = cos_h[a], sin_h[a]
-        rel[p, 0] = c * dx + s * dy
-        rel[p, 1] = -s * dx + c * dy
-        rel_cs[p, 0] = cos_h[b] * c + sin_h[b] * s
-        rel_cs[p, 1] = sin_h[b] * c - cos_h[b] * s
-        y = np.pi - (headings[b] - headings[a])
-        if y >= two_pi and y < 2.0 * two_pi:  # y % 2 pi without fmod; y - 2 pi is exact here (Sterbenz)
-            y -= two_pi
-        elif y < 0.0 and y > -two_pi:
-            y += two_pi
-        elif y < 0.0 or y >= two_pi:
-            y %= two_pi
-        rel_heading[p] = np.pi - y
-        distance[p] = math.sqrt(dx * dx + dy * dy)
-    return rx, tx, pair_of, rel, rel_cs, rel_heading, distance
