@@ -6,7 +6,7 @@ import pytest
 from scipy.spatial import cKDTree
 
 from swarm_envs._compile import reference
-from swarm_envs.ir import gain_kernels, layer, pair_kernels, ray_kernels
+from swarm_envs.ir import gain_kernels, layer, links, occlusion, pair_kernels, ray_kernels
 from swarm_envs.ir.models import DropletLowPowerIR
 from swarm_envs.sim.platforms import get_platform
 
@@ -65,7 +65,7 @@ def test_gains_kernel_compact_rows_are_the_lit_pairs(name):
     np.testing.assert_array_equal(compact, full[expected])
     np.testing.assert_array_equal(sums_full, _sequential_sums(full))
     np.testing.assert_array_equal(sums, sums_full[expected])
-    ref = layer._pair_gains_numpy(R, psi, platform, platform.ir_model) * layer._clear_rays_numpy(R, psi, platform, offsets, xy)
+    ref = layer._pair_gains_numpy(R, psi, platform, platform.ir_model) * links.clear_rays_numpy(R, psi, platform, offsets, xy)
     np.testing.assert_array_equal(full > 0, ref > 0)
     np.testing.assert_allclose(full, ref, rtol=1e-9, atol=1e-12)
 
@@ -168,7 +168,7 @@ def test_centre_line_of_sight_kernel_equals_numpy_reference():
     pos = rng.uniform(0, 2.0, (150, 2))
     tree = cKDTree(pos)
     pairs = tree.query_pairs(1.0, output_type="ndarray")
-    fast = layer.line_of_sight(pos, 0.035, pairs[:, 0], pairs[:, 1], tree)
+    fast = occlusion.line_of_sight(pos, 0.035, pairs[:, 0], pairs[:, 1], tree)
     ref = np.diff(reference.occluder_lists(pos, pairs[:, 0], pairs[:, 1], 0.035, tree)[0]) == 0
     assert 0.05 < ref.mean() < 0.95
     np.testing.assert_array_equal(fast, ref)
@@ -186,10 +186,10 @@ def _dense_scene(platform, n, side, rng):
 def _reference_links(pos, hd, platform, pairs, tree):
     """compute_links (per-ray occlusion, dark pairs dropped) from the numpy references: (rx, tx, gains)."""
     rx, tx, pair_of, rel, _, rel_heading, _ = reference.ir_directed_pairs(pairs, pos, hd)
-    offsets, idx = reference.occluder_lists(pos, pairs[:, 0], pairs[:, 1], layer.occluder_width(platform), tree)
+    offsets, idx = reference.occluder_lists(pos, pairs[:, 0], pairs[:, 1], occlusion.occluder_width(platform), tree)
     occ_offsets, xy = reference.occluder_frames(pos, hd, rx, pair_of, offsets, idx)
     gains = layer._pair_gains_numpy(rel, rel_heading, platform, platform.ir_model)
-    gains = gains * layer._clear_rays_numpy(rel, rel_heading, platform, occ_offsets, xy)
+    gains = gains * links.clear_rays_numpy(rel, rel_heading, platform, occ_offsets, xy)
     lit = gains.reshape(len(gains), -1).max(axis=1) > 0
     return rx[lit], tx[lit], gains[lit]
 
@@ -203,8 +203,8 @@ def test_per_ray_occlusion_kernel_equals_numpy_reference(name):
     tree = cKDTree(pos)
     pairs = tree.query_pairs(platform.ir_range, output_type="ndarray")
     rx, tx = np.concatenate([pairs[:, 0], pairs[:, 1]]), np.concatenate([pairs[:, 1], pairs[:, 0]])
-    w = layer.occluder_width(platform)
-    fast_occ = layer.pair_occluders(pos, hd, rx, tx, w, tree)
+    w = occlusion.occluder_width(platform)
+    fast_occ = occlusion.pair_occluders(pos, hd, rx, tx, w, tree)
     fast_links = layer.compute_links(pos, hd, platform)
     ref_offsets, ref_idx = reference.occluder_lists(pos, rx, tx, w, tree)
     ref_xy = reference.occluder_frames(pos, hd, rx, np.arange(len(rx)), ref_offsets, ref_idx)[1]
@@ -251,7 +251,7 @@ def test_occluder_lists_equal_the_exact_segment_test_near_the_disc_edge():
     pos = np.array(pos)
     pairs = np.array(pairs, dtype=np.int64)
     a, b = np.ascontiguousarray(pairs[:, 0]), np.ascontiguousarray(pairs[:, 1])
-    offsets, idx = layer._occluder_lists(pos, a, b, width, None)
+    offsets, idx = occlusion.occluder_lists(pos, a, b, width, None)
     n_edge = 0
     for p in range(len(a)):
         pa, s = pos[a[p]], pos[b[p]] - pos[a[p]]
@@ -273,12 +273,12 @@ def test_threaded_occluder_search_equals_the_serial_search_bit_for_bit(name):
     tree = cKDTree(pos)
     pairs = tree.query_pairs(platform.ir_range, output_type="ndarray")
     a, b = np.ascontiguousarray(pairs[:, 0], dtype=np.int64), np.ascontiguousarray(pairs[:, 1], dtype=np.int64)
-    w = layer.occluder_width(platform)
+    w = occlusion.occluder_width(platform)
     length = float(np.hypot(*(pos[b] - pos[a]).T).max())
-    serial = layer._occluder_lists(pos, a, b, w, tree, length, pairs, platform.ir_range)
+    serial = occlusion.occluder_lists(pos, a, b, w, tree, length, pairs, platform.ir_range)
     assert len(serial[1]) > 100 and (np.diff(serial[0]) == 0).any()
     for chunks in (1, 2, 3, 7, len(a) + 5):
-        threaded = layer._occluder_lists(pos, a, b, w, tree, length, pairs, platform.ir_range, chunks)
+        threaded = occlusion.occluder_lists(pos, a, b, w, tree, length, pairs, platform.ir_range, chunks)
         np.testing.assert_array_equal(threaded[0], serial[0])
         np.testing.assert_array_equal(threaded[1], serial[1])
 
@@ -293,16 +293,16 @@ def test_neighbour_lists_from_the_candidate_pairs_give_the_same_occluders(name):
     tree = cKDTree(pos)
     pairs = tree.query_pairs(platform.ir_range, output_type="ndarray")
     a, b = np.ascontiguousarray(pairs[:, 0], dtype=np.int64), np.ascontiguousarray(pairs[:, 1], dtype=np.int64)
-    w = layer.occluder_width(platform)
+    w = occlusion.occluder_width(platform)
     length = float(np.hypot(*(pos[b] - pos[a]).T).max())
-    via_tree = layer._occluder_lists(pos, a, b, w, tree, length)
-    via_pairs = layer._occluder_lists(pos, a, b, w, tree, length, pairs, platform.ir_range)
+    via_tree = occlusion.occluder_lists(pos, a, b, w, tree, length)
+    via_pairs = occlusion.occluder_lists(pos, a, b, w, tree, length, pairs, platform.ir_range)
     assert len(via_tree[1]) > 100
     np.testing.assert_array_equal(via_pairs[0], via_tree[0])
     np.testing.assert_array_equal(via_pairs[1], via_tree[1])
     reach2 = 0.25 * length**2 + w**2 + 2e-9
     starts, counts, nbrs = pair_kernels.neighbour_csr_kernel(pos, pairs.astype(np.int64), reach2)
-    ref = layer.neighbour_csr(pos, np.sqrt(reach2), tree)
+    ref = occlusion.neighbour_csr(pos, np.sqrt(reach2), tree)
     np.testing.assert_array_equal(counts, ref[1])
     for r in range(len(pos)):
         assert sorted(nbrs[starts[r] : starts[r] + counts[r]]) == sorted(ref[2][ref[0][r] : ref[0][r] + ref[1][r]])

@@ -5,7 +5,8 @@ import math
 import numpy as np
 import pytest
 
-from swarm_envs.ir.layer import compute_links, line_of_sight, occluder_width, pair_gains, pair_geometry
+from swarm_envs.ir.layer import compute_links, pair_gains, pair_geometry
+from swarm_envs.ir.occlusion import line_of_sight, occluder_width
 from swarm_envs.sim.geometry import wrap_angle
 from swarm_envs.sim.platforms import get_platform
 

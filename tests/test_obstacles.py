@@ -7,7 +7,9 @@ import numpy as np
 import pytest
 
 import swarm_envs
-from swarm_envs.ir.layer import _emitter_sums, block_links, compute_links, rays_blocked
+from swarm_envs.ir.layer import compute_links
+from swarm_envs.ir.blocking import block_links, rays_blocked
+from swarm_envs.ir.links import emitter_sums
 from swarm_envs.sim.platforms import get_platform
 from swarm_envs.tasks.task import Task, distance_to_segments, obstacle_points
 
@@ -69,7 +71,7 @@ def test_block_links_zeroes_exactly_the_rays_crossing_a_wall(platform_name):
     full = compute_links(positions, headings, platform, drop_zero=False)
     blocked = block_links(full, positions, headings, platform, segments, drop_zero=False)
     np.testing.assert_array_equal(blocked.gains, _reference_gains(full, positions, headings, platform, segments))
-    np.testing.assert_array_equal(blocked.emitter_sums, _emitter_sums(blocked.gains))
+    np.testing.assert_array_equal(blocked.emitter_sums, emitter_sums(blocked.gains))
     changed = (blocked.gains != full.gains).reshape(len(full), -1).any(axis=1)
     assert changed.any() and not changed.all()
     assert np.array_equal(blocked.ray_clear(platform) & (full.gains > 0), blocked.gains > 0)

@@ -3,7 +3,8 @@
 import numpy as np
 import pytest
 
-from swarm_envs.ir.layer import IRLinks, compute_links
+from swarm_envs.ir.layer import compute_links
+from swarm_envs.ir.links import IRLinks
 from swarm_envs.sim.geometry import wrap_angle
 from swarm_envs.sensing.range_bearing import (
     POWER_LADDER,

@@ -7,7 +7,8 @@ import pytest
 
 from swarm_envs._compile import reference
 from swarm_envs.sim.copies import CopyRandom
-from swarm_envs.ir.layer import IRLinks, compute_links, pair_gains
+from swarm_envs.ir.layer import compute_links, pair_gains
+from swarm_envs.ir.links import IRLinks
 from swarm_envs.sim.geometry import wrap_angle
 from swarm_envs.sensing import range_bearing as rbmod
 from swarm_envs.sensing.range_bearing import (

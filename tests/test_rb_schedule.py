@@ -8,7 +8,8 @@ import pytest
 
 import swarm_envs
 from swarm_envs.sim.copies import CopyRandom
-from swarm_envs.ir.layer import IRLinks, compute_links
+from swarm_envs.ir.layer import compute_links
+from swarm_envs.ir.links import IRLinks
 from swarm_envs.sensing.range_bearing import TIMER_JITTER, TIMER_PERIOD, RangeBearingSensor
 from swarm_envs.validate.envs import scene_core
 

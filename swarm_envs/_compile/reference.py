@@ -130,12 +130,12 @@ def occluder_lists(
     positions: np.ndarray, a: np.ndarray, b: np.ndarray, width: float, tree: cKDTree | None = None
 ) -> tuple[np.ndarray, np.ndarray]:
     """Reference of the occluder search (:func:`swarm_envs.ir.occluder_kernels.occluders_kernel` on the neighbour
-    lists of ``swarm_envs.ir.layer._occluder_lists``; the robots :func:`swarm_envs.ir.layer.pair_occluders`
-    and :func:`swarm_envs.ir.layer.line_of_sight` find): the third robots closer than ``width`` (m) to
+    lists of ``swarm_envs.ir.layer._occluder_lists``; the robots :func:`swarm_envs.ir.occlusion.pair_occluders`
+    and :func:`swarm_envs.ir.occlusion.line_of_sight` find): the third robots closer than ``width`` (m) to
     segment a[p]-b[p], as CSR (offsets (P + 1,), robots (K,) sorted per pair). The candidates are the
     KD-tree neighbours of both ends within ``sqrt(longest^2 / 4 + width^2)``, tested as flat (pair,
     candidate) arrays."""
-    from swarm_envs.ir.layer import neighbour_csr
+    from swarm_envs.ir.occlusion import neighbour_csr
 
     positions = np.ascontiguousarray(positions, dtype=float).reshape(-1, 2)
     a = np.ascontiguousarray(a, dtype=np.int64).reshape(-1)

@@ -408,7 +408,7 @@ class Network:
 
     def step(self, links: Any, prepared: PreparedStep | None = None) -> Deliveries:
         """Simulate one control step of ``bitrate * dt`` bit slots over the given IR links
-        (:class:`swarm_envs.ir.layer.IRLinks` of the current poses) and return what was delivered.
+        (:class:`swarm_envs.ir.links.IRLinks` of the current poses) and return what was delivered.
         ``prepared``: this step's draws from :meth:`prepare_step` (default: drawn now; same numbers)."""
         self._step_stats = self._new_step_stats()
         n, nd = self.n, self.n_det

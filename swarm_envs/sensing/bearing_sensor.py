@@ -238,7 +238,7 @@ def link_masks(
     """Receivers lit and transmitters heard on links ``rows`` of this step (bitmasks, bit i = channel i).
 
     Args:
-        links: :class:`swarm_envs.ir.layer.IRLinks` of the step.
+        links: :class:`swarm_envs.ir.links.IRLinks` of the step.
         platform: the robots' platform.
         rows: (R,) link indices (default all links).
         half_arcs: None for the nominal masks (``gains > threshold``); else (R, n_d + n_e) half-widths (rad)
@@ -266,7 +266,7 @@ def sense_bearings(
     linked neighbour); the env's r-one readings are measured on decoded frames only (:class:`MessageBearings`).
 
     Args:
-        links: :class:`swarm_envs.ir.layer.IRLinks` (uses ``rx``, ``tx``, ``gains (P, n_d, n_e)``).
+        links: :class:`swarm_envs.ir.links.IRLinks` (uses ``rx``, ``tx``, ``gains (P, n_d, n_e)``).
         platform: platform whose detector / emitter axes define the sectors (the r-one by default; any
             platform with at most 16 channels works, e.g. the Droplet's 6 for a coarse ablation).
         threshold: a receiver hears / a transmitter is heard where the gain exceeds this (the r-one's
@@ -321,7 +321,8 @@ def _link_hits(links, platform: Platform, rows: np.ndarray, half_arcs: np.ndarra
     n_d, n_e = platform.n_detectors, platform.n_emitters
     if half_arcs is None:
         return np.asarray(links.gains, dtype=float).reshape(-1, n_d, n_e)[rows] > 0.0
-    from swarm_envs.ir.layer import IRLinks, pair_geometry
+    from swarm_envs.ir.layer import pair_geometry
+    from swarm_envs.ir.links import IRLinks
 
     half_arcs = np.asarray(half_arcs, dtype=float).reshape(rows.size, n_d + n_e)
     sub = IRLinks(
@@ -478,7 +479,7 @@ class MessageBearings:
             deliveries: :class:`swarm_envs.comm.deliveries.Deliveries` of this step (``receiver``, ``origin``,
                 ``transmitter``, and ``interference`` if the channel reports it; none means no receiver's
                 copy was corrupted).
-            links: the :class:`swarm_envs.ir.layer.IRLinks` the network stepped with.
+            links: the :class:`swarm_envs.ir.links.IRLinks` the network stepped with.
         """
         if deliveries is None or len(deliveries.receiver) == 0:
             return 0

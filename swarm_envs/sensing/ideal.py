@@ -315,7 +315,7 @@ class IdealSensing:
         if silent is not None and np.any(silent):
             pairs = pairs[~(silent[pairs[:, 0]] | silent[pairs[:, 1]])]
         if self.obstacles is not None and len(pairs):
-            from swarm_envs.ir.layer import rays_blocked
+            from swarm_envs.ir.blocking import rays_blocked
 
             pairs = pairs[~rays_blocked(positions[pairs[:, 0]], positions[pairs[:, 1]], self.obstacles)]
         rx, tx, link = directed_links(pairs, self.n)

@@ -12,7 +12,7 @@ Pipeline for one (receiver RX, transmitter TX) pair:
    generic over the number and layout of channels (Droplet 6x6, e-puck 8x8).
 
 :class:`RangeBearingSensor` runs this each 0.1 s control step for all pairs of an
-:class:`~swarm_envs.ir.layer.IRLinks`, with the firing schedule of docs/design.md#range-and-bearing and reading ages.
+:class:`~swarm_envs.ir.links.IRLinks`, with the firing schedule of docs/design.md#range-and-bearing and reading ages.
 
 Noise level (``sigma``). [F14 Sec. IV] calls the calibrated error "approximately Gaussian with mu = 0";
 the sigma is lost in the PDF. We use sigma = 2 ADC counts for the Droplet: it is "a few counts", it
@@ -79,7 +79,8 @@ import numpy as np
 from swarm_envs.sim.copies import CopyRandom, CopyStream
 from swarm_envs.ir.hardware import Hardware
 from swarm_envs.sim.geometry import wrap_angle
-from swarm_envs.ir.layer import IRLinks, pair_gains
+from swarm_envs.ir.layer import pair_gains
+from swarm_envs.ir.links import IRLinks
 from swarm_envs.sim.platforms import Platform, get_platform
 from swarm_envs.sensing.range_bearing_kernels import FRAME_WORDS_MAX_GROUP, adc_bits, adc_pass, firing_sums, frame_words, group_brightest, merge_readings, pick_ids, priority_independent_set, priority_independent_set_sorted
 from swarm_envs.sensing.numpy_sums import PAIRWISE_INIT, segment_sum, sum_last

@@ -293,7 +293,7 @@ def segments_crossed(starts: np.ndarray, ends: np.ndarray, segments: np.ndarray)
     """(...,) bool: the straight line from ``starts`` (..., 2) to ``ends`` (..., 2) (m) crosses or touches
     one of ``segments`` (S, 2, 2) (m), e.g. a task's :meth:`Task.obstacles` (the test the IR layer uses
     for light)."""
-    from swarm_envs.ir.layer import rays_blocked
+    from swarm_envs.ir.blocking import rays_blocked
 
     segments = np.asarray(segments, dtype=float).reshape(-1, 2, 2)
     if len(segments) == 0:

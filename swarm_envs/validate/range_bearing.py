@@ -42,7 +42,8 @@ import numpy as np
 
 from swarm_envs.sim.copies import CopyRandom
 from swarm_envs.sim.geometry import wrap_angle
-from swarm_envs.ir.layer import IRLinks, compute_links, pair_gains
+from swarm_envs.ir.layer import compute_links, pair_gains
+from swarm_envs.ir.links import IRLinks
 from swarm_envs.sim.platforms import get_platform
 from swarm_envs.sensing.range_bearing import RangeBearingSensor, brightness, read
 from swarm_envs.validate.report import Row, print_rows, rows_json

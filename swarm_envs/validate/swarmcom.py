@@ -52,7 +52,8 @@ from swarm_envs.comm.channel import M_MAX, M_MIN, RESPONSE_BIAS, ADCModel, gain_
 from swarm_envs.comm.network import Network
 from swarm_envs.sim.copies import CopyRandom
 from swarm_envs.sim.geometry import wrap_angle
-from swarm_envs.ir.layer import compute_links, line_of_sight, occluder_width, pair_gains, pair_occluders
+from swarm_envs.ir.layer import compute_links, pair_gains
+from swarm_envs.ir.occlusion import line_of_sight, occluder_width, pair_occluders
 from swarm_envs.sim.platforms import get_platform
 from swarm_envs.validate.report import Row, print_rows, rows_json
 from swarm_envs.tasks.settings import Int, OneLineArgumentParser, cli_type
@@ -249,7 +250,7 @@ def centre_links(pos: np.ndarray, head: np.ndarray, max_range: float = DISC_R, o
     """The links (receiver k, transmitter 0) of every robot within ``max_range`` (m) of robot 0: the
     receivers (P,) and their noiseless gains (P, n_detectors, n_emitters) with robot 0 lit on all
     emitters, from the simulator's physics (:func:`swarm_envs.ir.layer.pair_gains` with the occluders of
-    :func:`swarm_envs.ir.layer.pair_occluders`, [T20 Eqs. (7)-(14)]). ``occlusion``: ``"ray"`` (per-ray
+    :func:`swarm_envs.ir.occlusion.pair_occluders`, [T20 Eqs. (7)-(14)]). ``occlusion``: ``"ray"`` (per-ray
     line of sight, as simulated) or ``"centre"`` (a pair is cut when a third robot crosses the segment
     between the two centres)."""
     p = get_platform(PLATFORM)
