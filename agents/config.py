@@ -37,7 +37,7 @@ import yaml
 
 from swarm_envs._text import shown
 
-__all__ = ["ConfigError", "DEFAULTS", "BOUNDS", "load_config", "apply_overrides", "validate", "resolve", "bounds_table", "run_config_path", "progress_bar_on", "merge_settings"]
+__all__ = ["ConfigError", "DEFAULTS", "BOUNDS", "load_config", "apply_overrides", "validate", "resolve", "bounds_table", "run_config_path", "progress_bar_on", "merge_settings", "env_kwargs_of"]
 
 
 class ConfigError(ValueError):
@@ -508,3 +508,11 @@ def run_config_path(model: str | Path) -> Path | None:
     run = model.parent.parent if model.parent.name == "checkpoints" else model.parent
     path = run / "config.yaml"
     return path if path.is_file() else None
+
+
+def env_kwargs_of(cfg: dict[str, Any]) -> dict[str, Any]:
+    """The env keyword arguments of a config (YAML lists -> tuples where the env wants tuples)."""
+    kwargs = dict(cfg["env"])
+    if isinstance(kwargs.get("code"), list):
+        kwargs["code"] = tuple(kwargs["code"])
+    return kwargs

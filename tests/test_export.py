@@ -40,7 +40,7 @@ def make_run(out: Path, config: str, overrides: list[str]) -> Path:
     from swarm_envs.agents.policies import PolicySpec, build_model, wrap_training_env
     from swarm_envs.agents.sb3_vec_env import SwarmVecEnv
     from swarm_envs.agents.tasks import env_id
-    from swarm_envs.agents.train import env_kwargs_of
+    from swarm_envs.agents.config import env_kwargs_of
 
     cfg = load_config(ROOT / config, ["train.n_envs=1", "agent.batch_size=8", *overrides])
     venv = SwarmVecEnv(env_id(cfg["task"]), 1, env_kwargs_of(cfg))

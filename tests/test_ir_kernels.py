@@ -6,7 +6,8 @@ import pytest
 from scipy.spatial import cKDTree
 
 from swarm_envs._compile import reference
-from swarm_envs.ir import gain_kernels, layer, links, occlusion, pair_kernels, ray_kernels
+from swarm_envs.ir import gain_kernels, layer, occlusion, pair_kernels, ray_kernels
+from swarm_envs.ir import links as ir_links
 from swarm_envs.ir.models import DropletLowPowerIR
 from swarm_envs.sim.platforms import get_platform
 
@@ -65,7 +66,7 @@ def test_gains_kernel_compact_rows_are_the_lit_pairs(name):
     np.testing.assert_array_equal(compact, full[expected])
     np.testing.assert_array_equal(sums_full, _sequential_sums(full))
     np.testing.assert_array_equal(sums, sums_full[expected])
-    ref = layer._pair_gains_numpy(R, psi, platform, platform.ir_model) * links.clear_rays_numpy(R, psi, platform, offsets, xy)
+    ref = layer._pair_gains_numpy(R, psi, platform, platform.ir_model) * ir_links.clear_rays_numpy(R, psi, platform, offsets, xy)
     np.testing.assert_array_equal(full > 0, ref > 0)
     np.testing.assert_allclose(full, ref, rtol=1e-9, atol=1e-12)
 
@@ -189,7 +190,7 @@ def _reference_links(pos, hd, platform, pairs, tree):
     offsets, idx = reference.occluder_lists(pos, pairs[:, 0], pairs[:, 1], occlusion.occluder_width(platform), tree)
     occ_offsets, xy = reference.occluder_frames(pos, hd, rx, pair_of, offsets, idx)
     gains = layer._pair_gains_numpy(rel, rel_heading, platform, platform.ir_model)
-    gains = gains * links.clear_rays_numpy(rel, rel_heading, platform, occ_offsets, xy)
+    gains = gains * ir_links.clear_rays_numpy(rel, rel_heading, platform, occ_offsets, xy)
     lit = gains.reshape(len(gains), -1).max(axis=1) > 0
     return rx[lit], tx[lit], gains[lit]
 

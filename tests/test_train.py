@@ -12,7 +12,7 @@ from pathlib import Path
 import pytest
 import yaml
 
-from swarm_envs.agents import train
+from swarm_envs.agents import train, training_log
 from swarm_envs.agents.config import DEFAULTS, ConfigError, apply_overrides, load_config
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -147,10 +147,10 @@ def test_train_end_to_end(trained):
 def test_learning_curve_csv_and_progress(trained):
     out, stdout, stderr = trained
     header, rows = _read_csv(out / "progress.csv")
-    for key in ("time/total_timesteps", "rollout/ep_rew_mean", "rollout/ep_len_mean", "time/fps", train.RATE_KEY, "train/loss",
+    for key in ("time/total_timesteps", "rollout/ep_rew_mean", "rollout/ep_len_mean", "time/fps", training_log.RATE_KEY, "train/loss",
                 "train/value_loss"):
         assert key in header, key
-    assert all(float(r[header.index(train.RATE_KEY)]) > 0 for r in rows)
+    assert all(float(r[header.index(training_log.RATE_KEY)]) > 0 for r in rows)
     steps = [int(r[header.index("time/total_timesteps")]) for r in rows]
     assert steps == [256, 512, 768, 1024]  # one row per rollout of 64 steps x 4 robots, up to the real total
     lengths = {float(r[header.index("rollout/ep_len_mean")]) for r in rows}
@@ -341,12 +341,12 @@ def test_eval_only_without_a_run_config_checks_the_sizes(trained, tmp_path, caps
 
 
 def test_training_rate_starts_after_the_first_step(monkeypatch):
-    """The logged rate (train.RATE_KEY) counts from the end of the first env step, where a cold numba cache
+    """The logged rate (training_log.RATE_KEY) counts from the end of the first env step, where a cold numba cache
     compiles: 30 s of reset + first step (4 robots), then 63 steps in 0.63 s, action_repeat 2."""
     from stable_baselines3.common.logger import Logger
 
     now = [0.0]
-    monkeypatch.setattr(train.time, "perf_counter", lambda: now[0])
+    monkeypatch.setattr(training_log.time, "perf_counter", lambda: now[0])
 
     class Model:
         num_timesteps = 0
@@ -356,7 +356,7 @@ def test_training_rate_starts_after_the_first_step(monkeypatch):
             return None
 
     model = Model()
-    cb = train.rate_callback(repeat=2)
+    cb = training_log.rate_callback(repeat=2)
     cb.init_callback(model)
     cb.on_training_start({}, {})
     now[0], model.num_timesteps = 30.0, 4  # reset and first step, compiling
@@ -366,7 +366,7 @@ def test_training_rate_starts_after_the_first_step(monkeypatch):
         model.num_timesteps += 4
         cb.on_step()
     cb.on_rollout_end()
-    rate = model.logger.name_to_value[train.RATE_KEY]
+    rate = model.logger.name_to_value[training_log.RATE_KEY]
     assert rate == pytest.approx(252 * 2 / 0.63)  # robot-steps after the first step / seconds after it
     assert rate > 40 * (256 * 2 / now[0])  # SB3's time/fps definition (from the start of learn) gives ~17
 

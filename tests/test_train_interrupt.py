@@ -135,20 +135,20 @@ def _ctrl_c_in_compiled_code(levels: int = 1):
 
 
 def test_ctrl_c_surfacing_as_a_systemerror_is_an_interrupt(monkeypatch, capsys):
-    from swarm_envs.agents import train
+    from swarm_envs.agents import signals, train
 
     with pytest.raises(SystemError) as caught:
         _ctrl_c_in_compiled_code()
-    assert train.is_interrupt(caught.value) and train.is_interrupt(KeyboardInterrupt())
+    assert signals.is_interrupt(caught.value) and signals.is_interrupt(KeyboardInterrupt())
     for levels in (2, 3, 4):  # as measured: up to four SystemErrors above the KeyboardInterrupt
         with pytest.raises(SystemError) as caught:
             _ctrl_c_in_compiled_code(levels)
-        assert train.is_interrupt(caught.value)
+        assert signals.is_interrupt(caught.value)
     try:  # a SystemError caused by another error is not Ctrl-C
         raise SystemError("a real bug") from ValueError("cause")
     except SystemError as err:
-        assert not train.is_interrupt(err)
-    assert not train.is_interrupt(SystemError("something else")) and not train.is_interrupt(ValueError())
+        assert not signals.is_interrupt(err)
+    assert not signals.is_interrupt(SystemError("something else")) and not signals.is_interrupt(ValueError())
     monkeypatch.setattr(train, "_run", lambda args, state: _ctrl_c_in_compiled_code())
     assert train.main(["--config", str(ROOT / "configs" / "aggregation.yaml")]) == 130
     assert capsys.readouterr().err.startswith("interrupted by Ctrl-C before training started")
@@ -168,7 +168,7 @@ def test_the_first_ctrl_c_stops_training_and_is_never_dropped():
     when it lands in a finalizer, where a KeyboardInterrupt is printed and dropped (pymunk frees its bodies
     in cffi finalizers); a second Ctrl-C raises; afterwards Ctrl-C is ignored until the save is done."""
     pytest.importorskip("stable_baselines3")
-    from swarm_envs.agents.train import _CtrlC
+    from swarm_envs.agents.signals import CtrlC
 
     class SignalInFinalizer:
         def __del__(self) -> None:
@@ -176,7 +176,7 @@ def test_the_first_ctrl_c_stops_training_and_is_never_dropped():
             for _ in range(10_000):  # Python runs the handler between these bytecodes, inside __del__
                 pass
 
-    ctrl_c = _CtrlC()
+    ctrl_c = CtrlC()
     stop = ctrl_c.callback()
     previous = signal.signal(signal.SIGINT, signal.default_int_handler)
     try:
@@ -238,7 +238,7 @@ def test_ctrl_c_at_the_start_of_evaluation_publishes_the_trained_model(tmp_path)
 
 
 def train_results() -> tuple[str, ...]:
-    from swarm_envs.agents.train import RESULT_FILES
+    from swarm_envs.agents.staging import RESULT_FILES
 
     return (*RESULT_FILES, "results.png")
 

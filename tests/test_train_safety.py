@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 
-from swarm_envs.agents import train
+from swarm_envs.agents import staging, train
 
 ROOT = Path(__file__).resolve().parents[1]
 AGG = str(ROOT / "configs" / "aggregation.yaml")
@@ -163,8 +163,8 @@ def test_output_inside_the_evaluated_run_is_refused(tmp_path, capsys):
     assert (out / "model.zip").read_text() == "x"
 
 
-def _staged(out: Path, text: str) -> train.Staging:
-    stage = train.Staging(out)
+def _staged(out: Path, text: str) -> staging.Staging:
+    stage = staging.Staging(out)
     (stage.path / "config.yaml").write_text(text)
     (stage.path / "model.zip").write_text(f"model of {text}")
     return stage
@@ -280,9 +280,9 @@ def _leftover(parent: Path, name: str, age_s: float = 0.0, model: bool = False) 
 def test_staging_directories_carry_their_process_id(tmp_path):
     import re
 
-    stage = train.Staging(tmp_path / "run")
+    stage = staging.Staging(tmp_path / "run")
     assert re.fullmatch(rf"\.run\.{os.getpid()}-[a-z0-9_]{{8}}\.partial", stage.path.name), stage.path.name
-    (found,) = train.staging_dirs(tmp_path / "run")
+    (found,) = staging.staging_dirs(tmp_path / "run")
     assert found.path == stage.path and found.pid == os.getpid() and found.owner_running and not found.has_model
 
 
@@ -300,9 +300,9 @@ def test_a_run_reports_the_staging_directories_left_for_its_output(tmp_path, cap
         live = _leftover(tmp_path, f".run.{sleeper.pid}-abcdefgh.partial")
 
         def stop(self, out):
-            raise train.TrainError("stopped before writing")
+            raise staging.TrainError("stopped before writing")
 
-        monkeypatch.setattr(train.Staging, "__init__", stop)
+        monkeypatch.setattr(staging.Staging, "__init__", stop)
         assert train.main(["--config", AGG, "--output", str(tmp_path / "run")] + _sets()) == 2
     finally:
         sleeper.kill()
@@ -327,7 +327,7 @@ def test_list_and_clean_partial(tmp_path, capsys):
     dead = _leftover(runs, f".a.{_dead_pid()}-abcdefgh.partial", age_s=600, model=True)
     old = _leftover(runs, ".b.zyxwvuts.partial", age_s=7200)
     recent = _leftover(runs, ".b.qwertyui.partial", age_s=300)  # no process id, written 5 min ago: may be in use
-    mine = train.Staging(runs / "c").path  # this process's
+    mine = staging.Staging(runs / "c").path  # this process's
     beside = _leftover(tmp_path, f".runs.{_dead_pid()}-abcdefgh.partial")  # of the output "runs" itself
     other = _leftover(runs, "not-staging.partial")
 

@@ -52,7 +52,9 @@ def load_run(run_dir: str | Path, fixed: str | None = None) -> LoadedRun:
     from swarm_envs.agents.config import DEFAULTS, ConfigError, merge_settings, validate
     from swarm_envs.agents.policies import PolicySpec
     from swarm_envs.agents.tasks import env_id, import_modules
-    from swarm_envs.agents.train import TrainError, env_kwargs_of, load_checkpoint
+    from swarm_envs.agents.config import env_kwargs_of
+    from swarm_envs.agents.checkpoints import load_checkpoint
+    from swarm_envs.agents.staging import TrainError
 
     try:
         raw = yaml.safe_load(config.read_text(encoding="utf-8"))
