@@ -7,7 +7,8 @@ from swarm_envs.comm.channel import ADCModel, adc_model_for, detector_response
 from swarm_envs.comm.network import Network
 from swarm_envs.sim.copies import CopyRandom
 from swarm_envs.ir.layer import compute_links
-from swarm_envs.validate.swarmcom import SEP, comm_range_cm, reliable_range_cm, run_pairs
+from swarm_envs.validate.swarmcom_pairs import comm_range_cm, reliable_range_cm, run_pairs
+from swarm_envs.validate.swarmcom_setup import SEP
 
 RATES = (310, 650, 1160, 1800)
 

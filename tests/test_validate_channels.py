@@ -4,7 +4,9 @@ import numpy as np
 import pytest
 
 from swarm_envs.ir.layer import compute_links
-from swarm_envs.validate.swarmcom import M_MAX, M_MIN, centre_amplitude, channels_of_centre, detector_channels, disc_configuration
+from swarm_envs.comm.channel import M_MAX, M_MIN
+from swarm_envs.validate.swarmcom_channels import centre_amplitude, channels_of_centre, detector_channels
+from swarm_envs.validate.swarmcom_setup import disc_configuration
 
 
 @pytest.mark.parametrize("occlusion", ["ray", "centre"])

@@ -42,7 +42,7 @@ platforms' receivers sample instantly: ``response_c = 0``).
 
 Fit (docs/design.md#swarmcom-messaging: the response is fitted to the published ranges). ``b`` and ``c`` are not both identifiable from the
 two published numbers. For each b, ``c`` is fitted to **14 cm at 1800 bps** [T20 Sec. 7] with
-``python -m swarm_envs.validate swarmcom --fit-response`` (:func:`swarm_envs.validate.swarmcom.fit_response_c`:
+``python -m swarm_envs.validate swarmcom --fit-response`` (:func:`swarm_envs.validate.swarmcom_pairs.fit_response_c`:
 bisection in log c on a static facing pair, 7..30 cm in 1 cm steps, 300 control steps per distance,
 seed 11; for b = 0.01 the 14 cm plateau is c in [1.28e-5, 1.37e-5] s, fit c = 1.32e-5 s = RESPONSE_C,
 i.e. tau = 1.3 ms for a dark detector, 0.27 ms at 14 cm, 13 us at saturation). **61 cm at 310 bps**
