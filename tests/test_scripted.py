@@ -10,7 +10,8 @@ import swarm_envs
 
 from swarm_envs.agents.base import RandomPolicy
 from swarm_envs.agents.evaluation import confidence_interval, evaluate, make_env, random_factory, run_episode
-from swarm_envs.agents.scripted import SCRIPTED, bump_direction, circular_mean, make_scripted, scripted_class
+from swarm_envs.agents.scripted import SCRIPTED, make_scripted, scripted_class
+from swarm_envs.agents.scripted_base import bump_direction, circular_mean
 from swarm_envs.agents.tasks import SHORT_NAMES, headline, scripted_policy
 from swarm_envs.adapters.env import DT
 
