@@ -10,7 +10,7 @@ from swarm_envs.ir import layer
 from swarm_envs.ir.hardware import Hardware, draw_hardware
 from swarm_envs.ir.models import DropletLowPowerIR
 from swarm_envs.sim.platforms import get_platform
-from swarm_envs.sensing.range_bearing import read
+from swarm_envs.sensing.range_bearing_model import read
 from swarm_envs.validate.envs import scene_core
 
 

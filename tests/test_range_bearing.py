@@ -6,13 +6,8 @@ import pytest
 from swarm_envs.ir.layer import compute_links
 from swarm_envs.ir.links import IRLinks
 from swarm_envs.sim.geometry import wrap_angle
-from swarm_envs.sensing.range_bearing import (
-    POWER_LADDER,
-    RangeBearingSensor,
-    brightness,
-    estimate,
-    measure,
-)
+from swarm_envs.sensing.range_bearing import RangeBearingSensor
+from swarm_envs.sensing.range_bearing_model import POWER_LADDER, brightness, estimate, measure
 
 
 def _polar(R, b):
@@ -240,7 +235,7 @@ def test_sensor_deterministic_and_uses_only_gains():
 # --- power control, vectorisation and the Droplet low-power near model ---
 
 from swarm_envs.sim.platforms import get_platform  # noqa: E402
-from swarm_envs.sensing.range_bearing import read  # noqa: E402
+from swarm_envs.sensing.range_bearing_model import read  # noqa: E402
 
 DROPLET = get_platform("droplet")
 

@@ -10,15 +10,11 @@ from swarm_envs.sim.copies import CopyRandom
 from swarm_envs.ir.layer import compute_links, pair_gains
 from swarm_envs.ir.links import IRLinks
 from swarm_envs.sim.geometry import wrap_angle
-from swarm_envs.sensing import range_bearing as rbmod
-from swarm_envs.sensing.range_bearing import (
-    CONFLICT,
-    NOT_HEARD,
-    RangeBearingSensor,
-    decode_ids,
-    id_frames,
-    read,
-)
+from swarm_envs.sensing import range_bearing as rbmod, range_bearing_frames as rb_frames
+from swarm_envs.sensing.range_bearing import RangeBearingSensor
+from swarm_envs.sensing.range_bearing_frames import CONFLICT, NOT_HEARD
+from swarm_envs.sensing.range_bearing_model import read
+from swarm_envs.sensing.range_bearing_frames import decode_ids, id_frames
 
 
 def _polar(r, b):
@@ -326,7 +322,7 @@ def test_compiled_frame_words_equal_the_numpy_reference(platform):
         heard = rng.random((sizes.size, n_d)) < 0.6
         noise = rng.normal(0, 2.0, (int(heard.sum()), frames.shape[1] - 1))
         got = frame_words(light, frames, starts, heard, noise, scale, top, floor, 16)
-        ref = rbmod.frame_words_numpy(light, frames, starts, heard, noise, scale, top, floor, 16)
+        ref = rb_frames.frame_words_numpy(light, frames, starts, heard, noise, scale, top, floor, 16)
         np.testing.assert_array_equal(got[0], ref[0])
         np.testing.assert_array_equal(got[1], ref[1])
         assert 0 < np.mean(ref[0] > 0) and np.any(ref[0] != ref[0][0])  # words vary: not all zero

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from swarm_envs._compile import reference
-from swarm_envs.sensing import range_bearing as rbmod
+from swarm_envs.sensing import range_bearing as rbmod, range_bearing_frames as rb_frames
 from swarm_envs.sensing.exchange import BearingExchange
 
 
@@ -68,8 +68,8 @@ def test_pick_ids_equals_the_numpy_decode_rule(id_check):
         heard = rng.random((G, n_d)) < 0.4
         H = int(heard.sum())
         ident = rng.integers(0, 4, H)  # few ids: agreeing and conflicting channels
-        crc = np.where(rng.random(H) < 0.7, rbmod.CRC16[ident], rng.integers(0, 2**16, H))
-        got = pick_ids(heard, ident, crc, rbmod.CRC16, id_check, rbmod.NOT_HEARD, rbmod.CONFLICT)
+        crc = np.where(rng.random(H) < 0.7, rb_frames.CRC16[ident], rng.integers(0, 2**16, H))
+        got = pick_ids(heard, ident, crc, rb_frames.CRC16, id_check, rb_frames.NOT_HEARD, rb_frames.CONFLICT)
         ref = reference.pick_ids(heard, ident, crc, id_check)
         np.testing.assert_array_equal(got, ref)
         outcomes.update(np.sign(ref).tolist())

@@ -394,11 +394,12 @@ def group_argmax(values: np.ndarray, starts: np.ndarray, labels: np.ndarray) -> 
 
 def pick_ids(heard: np.ndarray, ident_h: np.ndarray, crc_h: np.ndarray, id_check: bool = True) -> np.ndarray:
     """Reference of :func:`swarm_envs.sensing.range_bearing_kernels.pick_ids`, the decode rule of
-    :func:`swarm_envs.sensing.range_bearing.decode_ids`: ``heard`` (G, n_d) bool, ``ident_h``/``crc_h`` (H,)
+    :func:`swarm_envs.sensing.range_bearing_frames.decode_ids`: ``heard`` (G, n_d) bool, ``ident_h``/``crc_h`` (H,)
     the id and CRC words of the heard channels in ``np.nonzero(heard)`` order. Returns (G,) the id all
-    checking channels name, :data:`~swarm_envs.sensing.range_bearing.NOT_HEARD` or
-    :data:`~swarm_envs.sensing.range_bearing.CONFLICT`."""
-    from swarm_envs.sensing.range_bearing import CRC16, CONFLICT, ID_BITS, NOT_HEARD
+    checking channels name, :data:`~swarm_envs.sensing.range_bearing_frames.NOT_HEARD` or
+    :data:`~swarm_envs.sensing.range_bearing_frames.CONFLICT`."""
+    from swarm_envs.sensing.range_bearing_frames import CRC16, CONFLICT, NOT_HEARD
+    from swarm_envs.sensing.range_bearing_frames import ID_BITS
 
     G, n_d = heard.shape
     hg, hi = np.nonzero(heard)

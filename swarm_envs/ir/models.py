@@ -35,7 +35,7 @@ class DropletIR:
     ``gain = S(detector_angle) * E(emitter_angle) * A(r)`` [F14 Eq. (4)], r = emitter-sensor distance
     in cm (the reading of [F14 Eqs. (15),(16)] in docs/design.md#range-and-bearing). The gain is *not* clipped to the 8-bit range:
     saturation, rounding and noise belong to the measurement
-    (:func:`swarm_envs.sensing.range_bearing.measure`).
+    (:func:`swarm_envs.sensing.range_bearing_model.measure`).
 
     Near-range extension (ours): the fit ``A(r) = 14000/(r-3)^2 - 1`` has a pole at r = 3 cm and is only
     valid for roughly r >= 4 cm [F14 Eq. (21)], yet two Droplets at one radius of gap (centre distance

@@ -2,13 +2,13 @@
 
 Pipeline for one (receiver RX, transmitter TX) pair:
 
-1. :func:`brightness` -- noiseless full-power brightness matrix Lambda (n_d x n_e; rows = RX sensors i,
+1. :func:`swarm_envs.sensing.range_bearing_model.brightness` -- noiseless full-power brightness matrix Lambda (n_d x n_e; rows = RX sensors i,
    cols = TX emitters j), ``lambda_ij = S(alpha_ij) E(beta_ij) A(r_ij)`` [F14 Eq. (4)], from the shared
    IR layer (:func:`swarm_envs.ir.layer.pair_gains`).
-2. :func:`measure` -- what the RX's ADC reads: ``clip(round(p lambda + n), 0, adc_max)``, n ~ N(0, sigma^2)
+2. :func:`swarm_envs.sensing.range_bearing_model.measure` -- what the RX's ADC reads: ``clip(round(p lambda + n), 0, adc_max)``, n ~ N(0, sigma^2)
    i.i.d. per entry, with power selection (docs/design.md#range-and-bearing): if the full-power reading saturates, the TX fires
-   again at the largest power factor p of :data:`POWER_LADDER` whose reading does not saturate.
-3. :func:`estimate` -- range R, bearing theta and heading phi from Lambda / p [F14 Sec. II, Eqs. (5)-(18)],
+   again at the largest power factor p of :data:`swarm_envs.sensing.range_bearing_model.POWER_LADDER` whose reading does not saturate.
+3. :func:`swarm_envs.sensing.range_bearing_model.estimate` -- range R, bearing theta and heading phi from Lambda / p [F14 Sec. II, Eqs. (5)-(18)],
    generic over the number and layout of channels (Droplet 6x6, e-puck 8x8).
 
 :class:`RangeBearingSensor` runs this each 0.1 s control step for all pairs of an
@@ -28,7 +28,7 @@ asymmetry of the real sensors (Fig. 4a) that its model does not include, and its
 notes that sensors and emitters differ from robot to robot; neither gives a magnitude. In the env each
 robot's emitter powers, detector gains and axis angles are drawn at reset with assumed spreads
 (:mod:`swarm_envs.ir.hardware`, docs/design.md#hardware-variation) and enter the links' gains, so the
-matrices measured here are those of the robots' own channels while :func:`estimate` keeps the nominal
+matrices measured here are those of the robots' own channels while :func:`swarm_envs.sensing.range_bearing_model.estimate` keeps the nominal
 calibration; the brightness noise above comes on top.
 
 Collisions and the decoded transmitter (docs/design.md#range-and-bearing). A measurement starts with a message: [F14 Sec. II]
@@ -41,7 +41,7 @@ in that step, docs/design.md#range-and-bearing) are modelled with *aligned slots
 commands start at its beginning, so bit k of both frames coincide and emitter j of both lands in column j
 of the receiver's matrix. Light adds. So, at a receiver u:
 
-- **id message** (:func:`decode_ids`): each firing TX w sends ``frame(w)`` = a start bit (1), its 16 id
+- **id message** (:func:`swarm_envs.sensing.range_bearing_frames.decode_ids`): each firing TX w sends ``frame(w)`` = a start bit (1), its 16 id
   bits (LSB first; a copy's own robot number) and the 16 bits of ``CRC-16(id)`` (avr-libc
   ``_crc16_update``, polynomial 0xA001, over the two id bytes; the init 0xFFFF is our choice: firmware
   versions differ on whether the header CRC covers the sender id), on-off keyed with all its
@@ -61,7 +61,7 @@ of the receiver's matrix. Light adds. So, at a receiver u:
   TXs that both reach a channel are rejected; a TX too weak to corrupt any channel's frame still adds
   its light to the matrix (a *corrupted* reading attributed to the stronger one).
 - **matrix**: the receiver's matrix is the sum of all firing TXs' noiseless brightness matrices it
-  sees, then power selection, ADC noise and clipping (:func:`measure`) and :func:`estimate`. With one
+  sees, then power selection, ADC noise and clipping (:func:`swarm_envs.sensing.range_bearing_model.measure`) and :func:`swarm_envs.sensing.range_bearing_model.estimate`. With one
   firing TX in view this is exactly the single-pair reading (bit for bit: the id noise comes from its
   own child stream).
 
@@ -78,37 +78,16 @@ import numpy as np
 
 from swarm_envs.sim.copies import CopyRandom, CopyStream
 from swarm_envs.ir.hardware import Hardware
-from swarm_envs.sim.geometry import wrap_angle
 from swarm_envs.ir.layer import pair_gains
 from swarm_envs.ir.links import IRLinks
 from swarm_envs.sim.platforms import Platform, get_platform
-from swarm_envs.sensing.range_bearing_kernels import FRAME_WORDS_MAX_GROUP, adc_bits, adc_pass, firing_sums, frame_words, group_brightest, merge_readings, pick_ids, priority_independent_set, priority_independent_set_sorted
+from swarm_envs.sensing.range_bearing_kernels import FRAME_WORDS_MAX_GROUP, firing_sums, group_brightest, merge_readings, priority_independent_set, priority_independent_set_sorted
 from swarm_envs.sensing.numpy_sums import PAIRWISE_INIT, segment_sum, sum_last
+from swarm_envs.sensing.range_bearing_frames import ID_BITS, decode_ids, id_frames
+from swarm_envs.sensing.range_bearing_model import POWER_LADDER, amplitude_model, read
 
-__all__ = [
-    "POWER_LADDER",
-    "CRC16",
-    "brightness",
-    "measure",
-    "estimate",
-    "read",
-    "ID_BITS",
-    "id_frames",
-    "decode_ids",
-    "NOT_HEARD",
-    "CONFLICT",
-    "SCHEDULES",
-    "TIMER_PERIOD",
-    "TIMER_JITTER",
-    "RangeBearingReadings",
-    "RangeBearingSensor",
-]
+__all__ = ["SCHEDULES", "TIMER_PERIOD", "TIMER_JITTER", "RangeBearingReadings", "RangeBearingSensor"]
 
-#: Emitter power factors tried in order when the full-power reading saturates (docs/design.md#range-and-bearing). Halving steps
-#: down to 1/256: two Droplets one radius apart (R = 6.6 cm) give up to ~31000 model counts at full
-#: power, so 1/256 is needed to stay below 255 (the Droplet sets LED current with a 7-bit digital
-#: potentiometer [F14 Sec. III], so a ~1/100 dynamic range is plausible).
-POWER_LADDER: tuple[float, ...] = tuple(2.0**-k for k in range(9))
 
 #: Firing schedules of :class:`RangeBearingSensor` (docs/design.md#range-and-bearing).
 SCHEDULES = ("timer", "contention", "every_step")
@@ -120,385 +99,6 @@ TIMER_PERIOD = 1.0
 #: 30 ms after the command, 2 ms to set the powers, 6 x (16 + 10) ms of emitter slots). An assumption.
 TIMER_JITTER = 0.2
 _N_CHILDREN = 5  # child streams per copy: priorities, matrix noise, id noise, timer phases, late starts
-
-#: Bits of a robot id in the ``rnb_r`` command header (the Droplet firmware's ``uint16_t`` sender id).
-ID_BITS = 16
-_CRC_BITS = 16
-#: Decode outcomes of :func:`decode_ids` (besides a decoded id >= 0).
-NOT_HEARD, CONFLICT = -1, -2
-
-
-def _crc16_table() -> np.ndarray:
-    """CRC-16 of every 16-bit id: avr-libc ``_crc16_update`` (poly 0xA001) over the low then high byte,
-    init 0xFFFF (the Droplet firmware's header check)."""
-    ids = np.arange(2**ID_BITS, dtype=np.uint32)
-    crc = np.full(ids.size, 0xFFFF, dtype=np.uint32)
-    for byte in (ids & 0xFF, ids >> 8):
-        crc ^= byte
-        for _ in range(8):
-            crc = np.where(crc & 1, (crc >> 1) ^ 0xA001, crc >> 1)
-    return crc.astype(np.int64)
-
-
-#: the CRC-16 of every ``ID_BITS``-bit robot id (indexed by id), the check an id frame carries
-CRC16 = _crc16_table()
-_WEIGHTS = 1 << np.arange(ID_BITS, dtype=np.int64)
-
-
-def id_frames(ids: np.ndarray) -> np.ndarray:
-    """(K, 1 + 16 + 16) bool on-off-keyed frames of robot ids: start bit, id bits (LSB first), CRC-16 bits.
-
-    Args:
-        ids: (K,) ints in [0, 2**16) (a copy's own robot numbers).
-    """
-    ids = np.asarray(ids, dtype=np.int64).reshape(-1)
-    if ids.size and (ids.min() < 0 or ids.max() >= 2**ID_BITS):
-        raise ValueError(f"robot ids must be in [0, {2**ID_BITS}) to fit the {ID_BITS}-bit id field")
-    bits = np.arange(ID_BITS)
-    return np.concatenate(
-        [np.ones((ids.size, 1), bool), (ids[:, None] >> bits) & 1 == 1, (CRC16[ids][:, None] >> bits) & 1 == 1], axis=1
-    )
-
-
-def decode_ids(
-    light: np.ndarray,
-    frames: np.ndarray,
-    starts: np.ndarray,
-    rng: np.random.Generator | CopyRandom | CopyStream,
-    sigma: float,
-    platform: Platform | str = "droplet",
-    id_check: bool = True,
-    row_copy: np.ndarray | None = None,
-    group_light: np.ndarray | None = None,
-) -> np.ndarray:
-    """Ids that receivers decode from the (possibly colliding) ``rnb_r`` frames of the TXs they see.
-
-    Links are grouped by receiving event: group g is links ``starts[g]:starts[g+1]`` (one link = no
-    collision). Per group, detector i's level in bit slot k is ``sum_links frames[l, k] * light[l, i]``
-    (light adds, so colliding bits OR), read as ``clip(round(level * s + n), 0, adc_max)`` counts with
-    n ~ N(0, sigma^2) and taken as a 1 at or above ``no_reading_floor`` (module docstring). Each detector is
-    a channel: it hears a frame when its start bit reads 1; the frame checks when its CRC bits equal the
-    CRC-16 of its id bits (always, with ``id_check=False``).
-
-    Args:
-        light: (L, n_d) light of each link on each RX detector with all TX emitters on (model units).
-        frames: (L, n_bits) bool frame of each link's TX (:func:`id_frames`).
-        starts: (G,) sorted first link of each group (``starts[0] = 0``).
-        rng, row_copy: noise stream(s); ``row_copy`` (G,) the env copy of each group, as in :func:`measure`.
-        sigma: ADC noise (counts).
-        platform: platform of the robots (ADC constants and floor).
-        id_check: apply the CRC check.
-        group_light: optional (G, n_d) ``light`` summed per group as here (``segment_sum(light, starts)``),
-            if the caller has it already.
-
-    Returns:
-        (G,) decoded id (a copy's own robot number), or :data:`NOT_HEARD` (-1: no channel's frame checks)
-        or :data:`CONFLICT` (-2: checking channels name different ids).
-    """
-    model = get_platform(platform).ir_model
-    light = np.asarray(light, dtype=float)
-    L, n_d = light.shape
-    G = int(len(starts))
-    if G == 0:
-        return np.zeros(0, dtype=np.int64)
-
-    # start bit (1 in every frame): which channels hear a frame at all
-    if group_light is not None:
-        start = np.asarray(group_light, dtype=float)
-    else:
-        start = segment_sum(light, starts) if G < L else light
-    # ADC + floor, as the matrix, in one pass (kernels.adc_bits)
-    noise0 = _noise(rng, sigma, (G, n_d), row_copy) if sigma > 0 else np.zeros((0, n_d))
-    heard = adc_bits(np.ascontiguousarray(start), noise0, float(model.adc_scale), float(model.adc_max), float(model.no_reading_floor))
-    # the rest of the frame, only on channels that heard a start bit (draws: per copy, after the start bits)
-    hg, hi = np.nonzero(heard)
-    H = hg.size
-    n_bits = frames.shape[1] - 1
-    if sigma > 0:
-        noise = _noise(rng, sigma, (H, n_bits), None if row_copy is None else row_copy[hg])
-    else:
-        noise = np.zeros((H, n_bits))
-    compiled = int(np.diff(np.r_[starts, L]).max()) <= FRAME_WORDS_MAX_GROUP  # larger groups: numpy's recursive sums
-    words = frame_words if compiled else frame_words_numpy
-    ident_h, crc_h = words(
-        light, np.asarray(frames, dtype=bool), np.asarray(starts, dtype=np.int64), heard, noise,
-        float(model.adc_scale), float(model.adc_max), float(model.no_reading_floor), ID_BITS,
-    )
-    # the decode rule (numpy reference: swarm_envs._compile.reference.pick_ids)
-    return pick_ids(heard, ident_h, crc_h, CRC16, bool(id_check), NOT_HEARD, CONFLICT)
-
-
-def frame_words_numpy(
-    light: np.ndarray, frames: np.ndarray, starts: np.ndarray, heard: np.ndarray, noise: np.ndarray,
-    scale: float, top: float, floor: float, id_bits: int = ID_BITS,
-) -> tuple[np.ndarray, np.ndarray]:
-    """Id and CRC words read on the heard channels (reference of the compiled
-    :func:`swarm_envs.sensing.range_bearing_kernels.frame_words`, and the path of groups larger than it takes).
-
-    Channel h (``np.nonzero(heard)`` order: group g, detector i) reads bit k of the frame at level
-    ``sum_links frames[l, 1 + k] * light[l, i]`` over its group's links (summed as ``np.add.reduceat``),
-    ``clip(round(level * scale + noise[h, k]), 0, top) / scale >= floor``; bits 0..id_bits-1 are the id
-    word, the rest the CRC word (LSB first). Returns ((H,), (H,)) int64.
-    """
-    G, n_d = heard.shape
-    L = light.shape[0]
-    group = np.repeat(np.arange(G), np.diff(np.r_[starts, L]))
-    hg, hi = np.nonzero(heard)
-    H = hg.size
-    row_of = np.full((G, n_d), -1, dtype=np.int64)
-    row_of[hg, hi] = np.arange(H)
-    ll, li = np.nonzero(heard[group])  # (link, detector) pairs that feed a heard channel
-    rows = row_of[group[ll], li]
-    order = np.argsort(rows, kind="stable")  # every heard channel gets >= 1 link of its group
-    level = light[ll, li, None] * frames[ll, 1:]
-    if ll.size > H:  # light adds: colliding bits OR
-        level = segment_sum(level[order], np.flatnonzero(np.r_[True, np.diff(rows[order]) != 0]))
-    else:
-        level = level[order]
-    counts = np.clip(np.round(level * scale + noise), 0.0, top)
-    bits = (counts / scale >= floor).astype(np.int64)
-    weights = 1 << np.arange(max(id_bits, bits.shape[1] - id_bits), dtype=np.int64)
-    return bits[:, :id_bits] @ weights[:id_bits], bits[:, id_bits:] @ weights[: bits.shape[1] - id_bits]
-
-
-def _model(platform: Platform):
-    model = platform.ir_model
-    if not hasattr(model, "amplitude_inverse"):
-        raise ValueError(
-            f"platform {platform.name!r} has a binary IR model without an amplitude model: no range & "
-            "bearing estimation (use the bearing-only sensor)"
-        )
-    return model
-
-
-def brightness(rel_position: np.ndarray, rel_heading: np.ndarray, platform: Platform | str = "droplet") -> np.ndarray:
-    """Noiseless full-power model brightness matrices (P, n, n) [F14 Eq. (4)].
-
-    Args:
-        rel_position: (P, 2) TX centre in the RX body frame (m).
-        rel_heading: (P,) TX heading in the RX frame (rad).
-        platform: platform of both robots.
-
-    Returns:
-        (P, n_detectors, n_emitters): rows = RX sensors i, cols = TX emitters j, channel k at the
-        platform's k-th angle; in the platform model's units (ADC counts for the Droplet), before power
-        selection, noise and clipping. Line of sight is assumed.
-    """
-    return pair_gains(rel_position, rel_heading, platform)
-
-
-def measure(
-    brightness: np.ndarray,
-    rng: np.random.Generator | CopyRandom | CopyStream,
-    sigma: float | None = None,
-    platform: Platform | str = "droplet",
-    ladder: tuple[float, ...] = POWER_LADDER,
-    row_copy: np.ndarray | None = None,
-) -> tuple[np.ndarray, np.ndarray]:
-    """Simulated ADC reading of brightness matrices with power selection (docs/design.md#range-and-bearing).
-
-    ``measured = clip(round(p * lambda * s + n), 0, adc_max) / s`` with n ~ N(0, sigma^2) counts i.i.d. per
-    entry and s = ``model.adc_scale`` counts per gain unit (1 for the Droplet). A matrix *saturates* when
-    any measured entry reaches ``adc_max`` (255 for the Droplet's 8-bit ADC); then the TX fires again
-    (fresh noise) at the next power factor of ``ladder``, and the first non-saturated reading is kept (the
-    last one if all saturate). The power is chosen per RX-TX pair, as in [F14]'s pairwise request.
-
-    Args:
-        brightness: (P, n_d, n_e) noiseless full-power brightness (model units).
-        rng: random generator for the noise, or per-copy streams (:class:`swarm_envs.sim.copies.CopyRandom`, or a
-            normal :class:`swarm_envs.sim.copies.CopyStream`)
-            with ``row_copy`` (P,) the env copy of each matrix (sorted): each copy's noise then comes from its
-            own stream, as in a single env.
-        sigma: noise standard deviation in ADC counts; default the model's ``default_noise_sigma``.
-        platform: platform (selects the ADC constants).
-        ladder: decreasing power factors, starting with 1.
-        row_copy: see ``rng``.
-
-    Returns:
-        measured (P, n_d, n_e) in model units *at the chosen power* (divide by p for the estimate, or pass
-        ``power=p`` to :func:`estimate`), and p (P,).
-    """
-    platform = get_platform(platform)
-    model = platform.ir_model
-    sigma = float(model.default_noise_sigma if sigma is None else sigma)
-    lam = np.asarray(brightness, dtype=float)
-    scale, top = float(model.adc_scale), float(model.adc_max)
-    P = lam.shape[0]
-    out = np.empty_like(lam)
-    power = np.full(P, float(ladder[-1]))
-    todo = np.arange(P)
-    flat = np.ascontiguousarray(lam).reshape(P, -1)
-    for k, p in enumerate(ladder):
-        if todo.size == 0:
-            break
-        shape = (todo.size, *lam.shape[1:])
-        noise = _noise(rng, sigma, shape, None if row_copy is None else row_copy[todo]) if sigma > 0 else None
-        # clip(round(p * lam * scale + noise), 0, top) and the saturation flags in one pass (kernels.adc_pass)
-        empty = np.zeros((0, flat.shape[1]))
-        counts, sat = adc_pass(flat, todo, empty if noise is None else noise.reshape(todo.size, -1), float(p), scale, top)
-        counts = counts.reshape(shape)
-        done = ~sat if k < len(ladder) - 1 else np.ones(todo.size, dtype=bool)
-        out[todo[done]] = counts[done] / scale
-        power[todo[done]] = p
-        todo = todo[~done]
-    return out, power
-
-
-def _noise(
-    rng: np.random.Generator | CopyRandom | CopyStream, sigma: float, shape: tuple[int, ...], row_copy: np.ndarray | None
-) -> np.ndarray:
-    """N(0, sigma^2) noise of ``shape``; rows from each copy's stream when ``rng`` is a CopyRandom or a
-    normal :class:`~swarm_envs.sim.copies.CopyStream`."""
-    rows = np.zeros(shape[0], dtype=np.int64) if row_copy is None else row_copy
-    if isinstance(rng, CopyStream):
-        if rng.kind != "normal":
-            raise ValueError("noise needs a 'normal' CopyStream")
-        return rng.draw(rows, shape[1:], scale=sigma)
-    if isinstance(rng, CopyRandom):
-        return rng.normal(sigma, rows, shape[1:])
-    return rng.normal(0.0, sigma, shape)
-
-
-def estimate(
-    brightness: np.ndarray,
-    platform: Platform | str = "droplet",
-    power: np.ndarray | None = None,
-    refine: int = 1,
-    model: object | None = None,
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Range, bearing and heading from brightness matrices [F14 Sec. II], vectorised over P pairs.
-
-    Steps ([F14 Sec. II]; docs/design.md#range-and-bearing), with b_i / b_j the unit axis vectors of RX sensor i and TX emitter j, d_i / e_j
-    their positions in their own body frames (d_i = rho b_i on the Droplet):
-
-    1. ``S_i = sum_j lambda_ij``, ``T_j = sum_i lambda_ij`` [Eqs. (5),(6)].
-    2. bearing ``theta = angle(sum_i S_i b_i)`` [Eqs. (7),(8)].
-    3. heading ``phi = theta + pi - angle(sum_j T_j b_j)`` [Eqs. (9),(10)]: ``tau`` points from TX to RX
-       in TX's frame, i.e. along theta + pi in RX's frame (the PDF lost the minus sign).
-    4. (i*, j*) = argmax lambda; with R -> infinity ``alpha = theta - angle(b_i*)``,
-       ``beta = theta + pi - (phi + angle(b_j*))`` [Eqs. (13),(14)];
-       ``r0 = A^-1(lambda / (S(alpha) E(beta)))``, ``R0 = r0 + |d_i*| + |e_j*|`` (= r0 + 2 rho)
-       [Eqs. (15),(16)].
-    5. ``refine`` times (paper: once): ``r_vec = R0 b(theta) + Rot(phi) e_j* - d_i*`` [Eq. (1)], its
-       alpha, beta [Eqs. (11),(12)], ``r = A^-1(lambda / (S E))`` [Eq. (17)],
-       ``R = || r unit(r_vec) + d_i* - Rot(phi) e_j* ||`` [Eq. (18)], R from the maximal pair.
-    6. No reading (NaN) when the largest *raw* entry (lambda * power) is below the model's
-       ``no_reading_floor`` (Droplet firmware: 7 counts).
-
-    ``S(alpha) E(beta)`` is floored at 1e-3 so a badly estimated angle (e.g. beyond the e-puck's 90-degree
-    cut-off) cannot divide by zero.
-
-    Args:
-        brightness: (P, n_d, n_e) measured (or noiseless) brightness in model units.
-        platform: platform of both robots (geometry, sensor/emitter/amplitude models).
-        power: optional (P,) power factors of the readings; brightness is divided by it.
-        refine: number of refinement passes of step 5 (0 returns R0).
-        model: IR model whose S, E, A^-1 invert the matrix (default the platform's; the Droplet's
-            low-power near model is :class:`swarm_envs.ir.models.DropletLowPowerIR`).
-
-    Returns:
-        ranges (m), bearings (rad), headings (rad), each (P,), NaN where there is no reading.
-    """
-    platform = get_platform(platform)
-    model = _model(platform) if model is None else model
-    lam = np.asarray(brightness, dtype=float)
-    if lam.ndim == 2:
-        lam = lam[None]
-    P = lam.shape[0]
-    raw_max = lam.reshape(P, -1).max(axis=1) if P else np.zeros(0)
-    if power is not None:
-        power = np.broadcast_to(np.asarray(power, dtype=float), (P,))
-        lam = lam / power[:, None, None]
-    dd = platform.detector_directions
-    ed = platform.emitter_directions
-    dpos = platform.detector_positions
-    epos = platform.emitter_positions
-
-    S = sum_last(lam)  # (P, n_d) [Eq. (5)]
-    T = sum_last(lam.transpose(0, 2, 1))  # (P, n_e) [Eq. (6)]
-    theta = np.arctan2(S @ np.sin(dd), S @ np.cos(dd))  # [Eqs. (7),(8)]
-    phi = wrap_angle(theta + np.pi - np.arctan2(T @ np.sin(ed), T @ np.cos(ed)))  # [Eqs. (9),(10)]
-
-    flat = lam.reshape(P, -1).argmax(axis=1)
-    i_star, j_star = np.divmod(flat, lam.shape[2])
-    lam_max = lam.reshape(P, -1)[np.arange(P), flat]
-
-    def ainv_m(alpha: np.ndarray, beta: np.ndarray) -> np.ndarray:
-        se = np.maximum(model.sensor(alpha) * model.emitter(beta), 1e-3)
-        return model.amplitude_inverse(lam_max / se) / 100.0  # model inverse is in cm
-
-    # step 4: R -> infinity
-    alpha = wrap_angle(theta - dd[i_star])  # [Eq. (13)]
-    beta = wrap_angle(theta + np.pi - (phi + ed[j_star]))  # [Eq. (14)]
-    r0 = ainv_m(alpha, beta)  # [Eq. (15)]
-    R = r0 + np.hypot(*dpos[i_star].T) + np.hypot(*epos[j_star].T)  # [Eq. (16)]
-
-    # step 5: refine with the current R [Eqs. (11),(12),(17),(18)]
-    c, s = np.cos(phi), np.sin(phi)
-    d_i = dpos[i_star]
-    e_j = np.stack([c * epos[j_star, 0] - s * epos[j_star, 1], s * epos[j_star, 0] + c * epos[j_star, 1]], -1)
-    u = np.stack([np.cos(theta), np.sin(theta)], -1)
-    for _ in range(int(refine)):  # an infinite r (light below a fit's floor) gives NaN: no reading
-        rvec = R[:, None] * u + e_j - d_i
-        ang = np.arctan2(rvec[:, 1], rvec[:, 0])
-        alpha = wrap_angle(ang - dd[i_star])
-        beta = wrap_angle(ang + np.pi - (phi + ed[j_star]))
-        r = ainv_m(alpha, beta)
-        norm = np.maximum(np.hypot(rvec[:, 0], rvec[:, 1]), 1e-12)
-        with np.errstate(invalid="ignore"):
-            Rvec = r[:, None] * rvec / norm[:, None] + d_i - e_j
-        R = np.hypot(Rvec[:, 0], Rvec[:, 1])
-
-    none = ~(raw_max >= model.no_reading_floor)
-    R = np.where(none, np.nan, R)
-    theta = np.where(none, np.nan, theta)
-    phi = np.where(none, np.nan, phi)
-    return R, theta, phi
-
-
-def read(
-    brightness: np.ndarray,
-    rel_position: np.ndarray,
-    rel_heading: np.ndarray,
-    rng: np.random.Generator | CopyRandom | CopyStream,
-    sigma: float | None = None,
-    platform: Platform | str = "droplet",
-    ladder: tuple[float, ...] = POWER_LADDER,
-    near_model: bool = False,
-    row_copy: np.ndarray | None = None,
-    low_brightness: np.ndarray | None = None,
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Measure and estimate P matrices with power control: (range m, bearing rad, heading rad, power).
-
-    Default: :func:`measure` on the power ladder, then :func:`estimate` divided by the chosen power.
-    ``near_model=True`` (Droplet firmware style): one full-power reading; a saturated one is measured
-    again with the emitters at the firmware's low power (brightness from the pair geometry with
-    :class:`swarm_envs.ir.models.DropletLowPowerIR`) and inverted with that low-power amplitude fit;
-    its power is reported as NaN (a different fit, not a factor). ``rng``/``row_copy`` as in :func:`measure`.
-    ``low_brightness`` (P, n, n): the low-power matrices to use instead (e.g. summed over colliding TXs);
-    ``rel_position``/``rel_heading`` are then unused.
-    """
-    platform = get_platform(platform)
-    if not near_model:
-        meas, p = measure(brightness, rng, sigma, platform, ladder, row_copy)
-        return (*estimate(meas, platform, power=p), p)
-    from swarm_envs.ir.models import DropletLowPowerIR
-
-    meas, p = measure(brightness, rng, sigma, platform, (1.0,), row_copy)
-    R, th, ph = estimate(meas, platform)
-    sat = np.flatnonzero(meas.reshape(len(meas), -1).max(axis=1) >= float(platform.ir_model.adc_max))
-    if sat.size:
-        low = DropletLowPowerIR(platform)
-        if low_brightness is not None:
-            lam = np.asarray(low_brightness)[sat]
-        else:
-            lam = pair_gains(np.asarray(rel_position)[sat], np.asarray(rel_heading)[sat], platform, model=low)
-            lam = lam * (np.asarray(brightness)[sat] > 0)  # rays occluded at full power stay dark (the Droplet lights every clear ray)
-        meas_low, _ = measure(lam, rng, sigma, platform, (1.0,), None if row_copy is None else row_copy[sat])
-        R[sat], th[sat], ph[sat] = estimate(meas_low, platform, model=low)
-        p = p.copy()
-        p[sat] = np.nan
-    return R, th, ph, p
 
 
 @dataclass
@@ -555,10 +155,10 @@ class RangeBearingSensor:
       which no robot knows. Only robots hidden from each other by a third may fire together.
       ``schedule="every_step"``: every robot fires every step, measured one at a time as on the paper's
       gantry (idealised: no superposition).
-    - every robot with a link to a firing TX decodes the request id (:func:`decode_ids`) and, when that
+    - every robot with a link to a firing TX decodes the request id (:func:`swarm_envs.sensing.range_bearing_frames.decode_ids`) and, when that
       names a robot of its own copy other than itself, gets a fresh reading attributed to that id (age 0):
-      the summed noiseless gains of the firing TXs it sees -> :func:`measure` (noise, power selection,
-      clipping) -> :func:`estimate`. Matrices below the no-reading floor give nothing.
+      the summed noiseless gains of the firing TXs it sees -> :func:`swarm_envs.sensing.range_bearing_model.measure` (noise, power selection,
+      clipping) -> :func:`swarm_envs.sensing.range_bearing_model.estimate`. Matrices below the no-reading floor give nothing.
     - earlier readings persist with ``age + 1`` until refreshed, and are dropped once older than
       ``max_age`` steps.
 
@@ -590,7 +190,7 @@ class RangeBearingSensor:
         hardware: Hardware | None = None,
     ) -> None:
         self.platform = get_platform(platform)
-        _model(self.platform)
+        amplitude_model(self.platform)
         if near_model and self.platform.name != "droplet":
             raise ValueError(f"near_model=True is the Droplet firmware's low-power fit; platform {self.platform.name!r} has none")
         self.near_model = bool(near_model)

@@ -1,7 +1,7 @@
 """Compiled kernels of the range & bearing sensor [F14]: the contention schedule
 (:func:`priority_independent_set`, :func:`priority_independent_set_sorted`; reference: the Luby rounds of
 :func:`swarm_envs._compile.reference.independent_set`), the id and CRC words read from colliding request frames
-(:func:`frame_words`; reference :func:`swarm_envs.sensing.range_bearing.frame_words_numpy`), the per-step
+(:func:`frame_words`; reference :func:`swarm_envs.sensing.range_bearing_frames.frame_words_numpy`), the per-step
 brightness sums and ADC reads (:func:`firing_sums`, :func:`adc_bits`, :func:`adc_pass`, :func:`group_brightest`),
 the decode rule (:func:`pick_ids`) and the reading table (:func:`merge_readings`). Each is compared bit for bit
 with its numpy reference in ``tests/test_sensing_glue_kernels.py`` (or the files named)."""
@@ -62,7 +62,7 @@ FRAME_WORDS_MAX_GROUP = 129
 
 
 def frame_words(light, frames, starts, heard, noise, scale, top, floor, id_bits):
-    """Compiled :func:`swarm_envs.sensing.range_bearing.frame_words_numpy` (same arguments, same bits:
+    """Compiled :func:`swarm_envs.sensing.range_bearing_frames.frame_words_numpy` (same arguments, same bits:
     the level of a bit slot is summed over the group's links in numpy's reduceat order) for groups of at
     most :data:`FRAME_WORDS_MAX_GROUP` links."""
     return _frame_words(
@@ -130,7 +130,7 @@ def _frame_words(light, frames, starts, heard, noise, scale, top, floor, id_bits
 
 @njit(cache=True, nogil=True)
 def adc_pass(lam, rows, noise, p, scale, top):  # pragma: no cover - compiled
-    """One power-ladder pass of :func:`swarm_envs.sensing.range_bearing.measure` on matrices ``lam[rows]``
+    """One power-ladder pass of :func:`swarm_envs.sensing.range_bearing_model.measure` on matrices ``lam[rows]``
     (flattened to (P, m)): ``clip(round(p * lam * scale + noise), 0, top)`` with numpy's operation order
     and its clip (a rounded -0.0 stays -0.0). ``noise`` (R, m), or (0, m) for
     none. Returns counts (R, m) and saturated (R,) (max count >= top)."""
@@ -187,7 +187,7 @@ def group_brightest(gains, starts, labels):  # pragma: no cover - compiled
 
 @njit(cache=True, nogil=True)
 def pick_ids(heard, ident_h, crc_h, crc16, id_check, not_heard, conflict):  # pragma: no cover - compiled
-    """Decode rule of :func:`swarm_envs.sensing.range_bearing.decode_ids` (reference
+    """Decode rule of :func:`swarm_envs.sensing.range_bearing_frames.decode_ids` (reference
     :func:`swarm_envs._compile.reference.pick_ids`): per group, the id every checking channel
     names, ``not_heard`` if none checks, ``conflict`` if they disagree. ``ident_h``/``crc_h`` are the words
     of the heard channels in ``np.nonzero(heard)`` order."""
@@ -343,7 +343,7 @@ def firing_sums(gains, starts, n_d, init):  # pragma: no cover - compiled
 @njit(cache=True, nogil=True)
 def adc_bits(level, noise, scale, top, floor):  # pragma: no cover - compiled
     """(R, m) bool ``clip(round(level * scale + noise), 0, top) / scale >= floor`` (the ADC and the
-    no-reading floor of :func:`swarm_envs.sensing.range_bearing.decode_ids`' start bits); ``noise``
+    no-reading floor of :func:`swarm_envs.sensing.range_bearing_frames.decode_ids`' start bits); ``noise``
     (R, m), or (0, m) for none."""
     R, m = level.shape
     out = np.empty((R, m), np.bool_)

@@ -14,7 +14,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-__all__ = ["CopyRandom", "CopyStream", "copy_counts"]
+__all__ = ["CopyRandom", "CopyStream", "copy_counts", "normal_noise"]
 
 
 def copy_counts(row_copy: np.ndarray, n_copies: int) -> np.ndarray:
@@ -155,3 +155,18 @@ class CopyStream:
             out *= mul
         self._pos += need
         return out.reshape(R, *tail)
+
+
+def normal_noise(
+    rng: np.random.Generator | CopyRandom | CopyStream, sigma: float, shape: tuple[int, ...], row_copy: np.ndarray | None
+) -> np.ndarray:
+    """N(0, sigma^2) noise of ``shape``; rows from each copy's stream when ``rng`` is a CopyRandom or a
+    normal :class:`CopyStream`."""
+    rows = np.zeros(shape[0], dtype=np.int64) if row_copy is None else row_copy
+    if isinstance(rng, CopyStream):
+        if rng.kind != "normal":
+            raise ValueError("noise needs a 'normal' CopyStream")
+        return rng.draw(rows, shape[1:], scale=sigma)
+    if isinstance(rng, CopyRandom):
+        return rng.normal(sigma, rows, shape[1:])
+    return rng.normal(0.0, sigma, shape)

@@ -5,7 +5,7 @@
 Two robots (RX at the origin facing +x, TX at centre distance R, bearing b, relative heading h):
 R from one radius of gap (6.6 cm) to 4.5 diameters (~20 cm) on the Droplet (scaled by the diameter on
 other platforms), every bearing and heading on a grid, noisy measurement with power selection
-(:func:`swarm_envs.sensing.range_bearing.measure`) then the [F14] estimator. Errors are estimate - truth
+(:func:`swarm_envs.sensing.range_bearing_model.measure`) then the [F14] estimator. Errors are estimate - truth
 (range in cm, angles wrapped, in degrees). The paper gives its results as plots; the claims compared
 are those of its text:
 
@@ -45,7 +45,8 @@ from swarm_envs.sim.geometry import wrap_angle
 from swarm_envs.ir.layer import compute_links, pair_gains
 from swarm_envs.ir.links import IRLinks
 from swarm_envs.sim.platforms import get_platform
-from swarm_envs.sensing.range_bearing import RangeBearingSensor, brightness, read
+from swarm_envs.sensing.range_bearing import RangeBearingSensor
+from swarm_envs.sensing.range_bearing_model import brightness, read
 from swarm_envs.validate.report import Row, print_rows, rows_json
 from swarm_envs.tasks.settings import Int, OneLineArgumentParser, Real, cli_type
 
