@@ -2,7 +2,7 @@
 
 Every per-step array covers all ``B x n_world`` robots (robot ``b * n_world + i`` is robot ``i`` of copy
 ``b``). Data flows one way each control step (``DT`` = 0.1 s): the commands through the platform's motion error
-(:func:`swarm_envs.sim.motion.motion_error`, ``motion_noise``) -> physics (one pymunk ``Space`` per copy,
+(:class:`swarm_envs.sim.motion.MotionError`, ``motion_noise``) -> physics (one pymunk ``Space`` per copy,
 :func:`swarm_envs.sim.world.step_worlds`) -> sensing stack over all robots at once (IR links, range & bearing, SwarmCom,
 bearing exchange, scale-free coordinates; no link, message or random draw crosses copies) -> observation
 arrays -> rewards (the task, on ``(B, ...)`` views).
@@ -27,13 +27,12 @@ import numpy as np
 
 from swarm_envs.tasks._task_checks import RewardsCheck, checked_mask, checked_spawn
 from swarm_envs._compile._worker import worker
-from swarm_envs.sim.copies import CopyStream
 from swarm_envs.sensing.observation import ObservationLayout, assemble_observation
 from swarm_envs.sensing.base import SensorFrame
 from swarm_envs.sensing.stacks import build_stack
 from swarm_envs.tasks.task import BatchState, Task
 from swarm_envs.sim.world import N_BUMP_SECTORS, World, step_worlds
-from swarm_envs.sim.motion import motion_error, wheel_gains
+from swarm_envs.sim.motion import MotionError
 from swarm_envs.sim.control import DT
 
 __all__ = ["SwarmCore", "DT"]
@@ -78,11 +77,11 @@ class SwarmCore:
         prepare(type(task).__name__, self.platform.name, cfg["sensing"])  # a cold numba cache: the notice, a second core
         self.sensing = build_stack(cfg["sensing"], self.platform, self.n_world, cfg, self.B, obstacles)
         self.generators = [np.random.default_rng() for _ in range(self.B)]
-        #: the motion error (``motion_noise``): each copy's stream of standard normal draws (its robots' wheel
-        #: gains at the episode start, then two draws per robot every step it moves) and the gains (n_total, 2)
+        #: the motion error (``motion_noise``): each copy's stream of standard normal draws and the wheel gains
         self.motion_noise = bool(cfg["motion_noise"])
-        self._motion = CopyStream([np.random.default_rng() for _ in range(self.B)], "normal", chunk=max(2048, 64 * self.n_world)) if self.motion_noise else None
-        self.wheel_gains = np.ones((self.n_total, 2))
+        self._motion = MotionError(self.platform, self.B, self.n_world) if self.motion_noise else None
+        #: (n_total, 2) every robot's per-wheel gains of its episode (ones without motion error)
+        self.wheel_gains = self._motion.gains if self._motion is not None else np.ones((self.n_total, 2))
         self.static = (np.arange(self.n_total) % self.n_world) < task.n_static
         self.last_actions = np.zeros((self.n_total, layout.action_size))
         self.num_cycles = np.zeros(self.B, dtype=np.int64)
@@ -125,9 +124,7 @@ class SwarmCore:
             streams = np.random.SeedSequence(int(self.generators[b].integers(2**63))).spawn(3)
             spawn_rng, sensing_rng, motion_rng = (np.random.default_rng(s) for s in streams)
             if self._motion is not None:
-                self._motion.set_generator(int(b), motion_rng)
-                own = slice(int(b) * self.n_world, (int(b) + 1) * self.n_world)
-                self.wheel_gains[own] = wheel_gains(self.platform, self._motion.draw(np.full(self.n_world, b), (2,)))
+                self._motion.start(b, motion_rng)
             if given_positions is None:
                 positions, headings = checked_spawn(self.task, self.task.spawn(spawn_rng))
             else:
@@ -191,8 +188,7 @@ class SwarmCore:
         sending = row_moving & ~off & ~emit_off if payloads is not None else None
         linear, angular = act[row_moving, 0] * p.max_speed, act[row_moving, 1] * p.max_angular_speed
         if self._motion is not None and moving.any():  # two draws per robot of every moving copy, whatever its command
-            draws = self._motion.draw(self.copy_of_robot[row_moving], (2,))
-            linear, angular = motion_error(p, linear, angular, self.wheel_gains[row_moving], draws)
+            linear, angular = self._motion.apply(row_moving, self.copy_of_robot[row_moving], linear, angular)
         return _Command(act, moving, row_moving, linear, angular, payloads, sending, off, emit_off, detect_off)
 
     def _physics(self, command: _Command, overlap: bool) -> Future | None:

@@ -170,16 +170,16 @@ def test_the_droplet_magnitude_is_of_the_order_of_the_measured_square_walks():
 def test_the_draws_do_not_depend_on_the_actions(platform, monkeypatch):
     """Two draws per robot and step whatever the robots do: after different actions the streams are in
     the same place, so the next step's draws are equal."""
-    import swarm_envs.core as core
+    import swarm_envs.sim.motion as motion
 
     seen: list[np.ndarray] = []
-    original = core.motion_error
+    original = motion.motion_error
 
     def recording(p, linear, angular, gains, draws):
         seen.append(draws.copy())
         return original(p, linear, angular, gains, draws)
 
-    monkeypatch.setattr(core, "motion_error", recording)
+    monkeypatch.setattr(motion, "motion_error", recording)
     runs = []
     for actions in (np.zeros((6, 2)), np.random.default_rng(0).uniform(-1, 1, (6, 2))):
         seen.clear()

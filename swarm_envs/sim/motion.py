@@ -1,13 +1,17 @@
 """The motion model: the velocities a platform's wheels deliver for commanded ones (per-wheel gains drawn per
-robot, per-step noise, a dead zone, wheel speed limits; docs/design.md#motion-error), in m/s and rad/s."""
+robot, per-step noise, a dead zone, wheel speed limits; docs/design.md#motion-error), in m/s and rad/s, and its
+random side for the copies of the batched core (:class:`MotionError`: each copy's own stream of draws and its
+robots' wheel gains). The core applies the error before :func:`swarm_envs.sim.world.step_worlds`, so a world
+steps, and logs for its exact copies, the delivered velocities; a world stepped directly moves as commanded."""
 
 from __future__ import annotations
 
 import numpy as np
 
+from swarm_envs.sim.copies import CopyStream
 from swarm_envs.sim.platforms import Platform
 
-__all__ = ["wheel_gains", "motion_error", "wheel_limited"]
+__all__ = ["wheel_gains", "motion_error", "wheel_limited", "MotionError"]
 
 
 def wheel_gains(platform: Platform, draws: np.ndarray) -> np.ndarray:
@@ -44,3 +48,34 @@ def wheel_limited(platform: Platform, linear: np.ndarray, angular: np.ndarray) -
     left = np.clip(linear - angular * half_base, -vmax, vmax)
     right = np.clip(linear + angular * half_base, -vmax, vmax)
     return 0.5 * (left + right), (right - left) / (2 * half_base)
+
+
+class MotionError:
+    """The motion error of ``n_copies`` copies of ``n_world`` robots of ``platform`` (copy ``b``'s robots are
+    rows ``b * n_world`` to ``(b + 1) * n_world - 1``).
+
+    Each copy draws from its own stream of standard normal numbers (:class:`swarm_envs.sim.copies.CopyStream`):
+    its robots' wheel gains at the episode start (:meth:`start`), then two draws per robot every step the
+    copy moves (:meth:`apply`), whatever the commands, so a copy's draws never depend on another copy's.
+    """
+
+    def __init__(self, platform: Platform, n_copies: int, n_world: int) -> None:
+        self.platform = platform
+        self.n_world = int(n_world)
+        self.stream = CopyStream([np.random.default_rng() for _ in range(n_copies)], "normal", chunk=max(2048, 64 * self.n_world))
+        #: (n_copies * n_world, 2) every robot's per-wheel gains (left, right) of its episode
+        self.gains = np.ones((n_copies * self.n_world, 2))
+
+    def start(self, copy: int, generator: np.random.Generator) -> None:
+        """Begin copy ``copy``'s episode: its stream draws from ``generator`` from now on, and its robots'
+        wheel gains are drawn from it."""
+        self.stream.set_generator(int(copy), generator)
+        own = slice(int(copy) * self.n_world, (int(copy) + 1) * self.n_world)
+        self.gains[own] = wheel_gains(self.platform, self.stream.draw(np.full(self.n_world, copy), (2,)))
+
+    def apply(self, rows: np.ndarray, row_copy: np.ndarray, linear: np.ndarray, angular: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The velocities (m/s, rad/s) the wheels deliver for the commanded ``linear`` and ``angular`` (k,) of
+        the robots ``rows`` (indices or a boolean mask over all copies' robots; their copies ``row_copy`` (k,),
+        ascending), with two draws per robot from its copy's stream (:func:`motion_error`)."""
+        draws = self.stream.draw(row_copy, (2,))
+        return motion_error(self.platform, linear, angular, self.gains[rows], draws)
