@@ -39,7 +39,7 @@ __all__ = [
 ]
 
 RESULT_COLUMNS = ("policy", "metric", "mean", "ci_low", "ci_high", "n")
-#: below this many seeds the tables warn that bootstrap intervals under-cover (tests/test_confidence_intervals.py)
+#: below this many seeds the tables warn that bootstrap intervals under-cover (tests/agents/test_confidence_intervals.py)
 FEW_SEEDS = 10
 
 
@@ -107,7 +107,7 @@ def evaluate(
     The seeds run side by side as copies of one batched core (:func:`swarm_envs.make_vec`), at most
     ``max_copies`` at a time, each copy with its own policy instance; copy b seeded with ``s`` equals a single
     env reset with ``s`` bit for bit, so the numbers are exactly those of :func:`run_episode` per seed
-    (``tests/test_scripted.py::test_batched_evaluation_equals_sequential``). ``max_copies=1`` runs one
+    (``tests/agents/test_scripted.py::test_batched_evaluation_equals_sequential``). ``max_copies=1`` runs one
     seed at a time.
     """
     if max_copies < 1:

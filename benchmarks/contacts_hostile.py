@@ -4,7 +4,7 @@ Part 1 (``worst``): for each platform at its default sub-steps and default squar
 robot-robot overlap and the deepest reach past a wall (% of the diameter, ground-truth positions) over
 600 control steps of every robot at full speed towards the centre, towards one corner, towards its
 nearest wall, and of head-on pairs pushing against each other, with 10, 30 and 100 robots and several
-seeds (the scenes of ``tests/test_contacts_hostile.py``, which asserts the documented bound on them).
+seeds (the scenes of ``tests/sim/test_contacts_hostile.py``, which asserts the documented bound on them).
 
 Part 2 (``cost``): median wall-clock and process CPU ms per vector step of ``make_vec`` (Aggregation,
 e-puck, 10 robots x 256 copies, random actions, sensing ``full`` and ``ideal``). With ``--against DIR``
@@ -34,7 +34,7 @@ ROOT = Path(__file__).resolve().parents[1]
 
 
 def _hostile_module() -> ModuleType:
-    """``tests/test_contacts_hostile.py`` (the scenes and the measurement), loaded from its path."""
+    """``tests/sim/test_contacts_hostile.py`` (the scenes and the measurement), loaded from its path."""
     spec = importlib.util.spec_from_file_location("contacts_hostile_scenes", ROOT / "tests" / "test_contacts_hostile.py")
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)

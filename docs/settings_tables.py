@@ -3,7 +3,7 @@
 The tables sit between ``<!-- generated: NAME -->`` and ``<!-- end generated -->`` markers: ``common`` (every
 env's settings, :func:`swarm_envs.tasks.settings.settings_table`), one per suite task with settings of its own
 (its env id), and ``train`` (:func:`swarm_envs.agents.config.bounds_table`). Text outside the markers is
-kept. ``tests/test_reliability_docs.py`` checks that the page holds what this script writes.
+kept. ``tests/integration/test_reliability_docs.py`` checks that the page holds what this script writes.
 """
 
 from __future__ import annotations

@@ -12,7 +12,7 @@ import pytest
 os.environ.setdefault("SDL_VIDEODRIVER", "dummy")
 os.environ.setdefault("PYGAME_HIDE_SUPPORT_PROMPT", "1")
 # no background compile processes from the suite's subprocesses on fresh numba caches (they would race with
-# tests that corrupt or time a cache); tests/test_first_run.py turns it on where it tests it
+# tests that corrupt or time a cache); tests/compile/test_first_run.py turns it on where it tests it
 os.environ.setdefault("SWARM_ENVS_BACKGROUND_COMPILE", "0")
 
 

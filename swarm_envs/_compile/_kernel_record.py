@@ -4,7 +4,7 @@ Every scenario of :data:`RECORD_SCENARIOS` runs one episode in a fresh process w
 and the kernels it compiles from Python, with their argument types (:func:`swarm_envs._compile._first_run.encode_type`)
 and the process time each compile took, are written in order of first use to
 ``swarm_envs/_compile/_kernel_manifest.py``, which :mod:`swarm_envs._compile._first_run` reads. Run it after changing which
-kernels the sensing stack calls or their argument types (``tests/test_first_run.py`` checks that every
+kernels the sensing stack calls or their argument types (``tests/compile/test_first_run.py`` checks that every
 recorded kernel still exists).
 """
 

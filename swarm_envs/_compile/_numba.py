@@ -18,7 +18,7 @@ another with constant arguments compiles once, not once per constant value.
 Kernels allocate with ``np.empty(shape, dtype)``, the dtype given and positional, and fill the array in
 place (``x[:] = 0``) instead of calling ``np.zeros``, ``np.ones`` or ``np.full``: numba compiles each of
 those library functions once per shape and dtype and process, about 30 ms each on the first run, and
-``np.zeros`` compiles ``np.empty`` and a fill function besides (``tests/test_first_run.py`` checks the form).
+``np.zeros`` compiles ``np.empty`` and a fill function besides (``tests/compile/test_first_run.py`` checks the form).
 
 numba is a required dependency: the kernels are the simulator's only implementation of their steps (their
 plain numpy references, for the tests, are in :mod:`swarm_envs._compile.reference`).

@@ -4,7 +4,7 @@ numba implements ``np.argsort(a)`` (``kind="quicksort"``) with seven generic hel
 (``numba/misc/quicksort.py``), which take about 1.5 s to compile in every cold cache. :func:`argsort_quick`
 is the same algorithm step for step (median-of-three partition, insertion sort below 15 elements, an
 explicit stack that holds the larger part; NaN sorts last), in one function: the same permutation for
-every input, ties and NaNs included (``tests/test_first_run.py`` compares it with ``np.argsort`` compiled
+every input, ties and NaNs included (``tests/compile/test_first_run.py`` compares it with ``np.argsort`` compiled
 by numba). Algorithm from numba (BSD-2-Clause, Copyright (c) 2012, Anaconda, Inc.).
 """
 

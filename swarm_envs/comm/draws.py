@@ -155,7 +155,7 @@ if _FAST_NORMAL:
     def _normal_f(bg, ki, wi, fi, zr, zir):
         """One float32 standard normal: NumPy's ``random_standard_normal_f`` (ziggurat, 256 layers) step for
         step, drawing the same 32-bit words from the same bit generator, so the stream is NumPy's
-        ``Generator.standard_normal(dtype=float32)`` bit for bit (``tests/test_network_kernel.py``); inlined
+        ``Generator.standard_normal(dtype=float32)`` bit for bit (``tests/comm/test_network_kernel.py``); inlined
         here it costs less than the library call per sample."""
         while True:
             r = next_uint32(bg)

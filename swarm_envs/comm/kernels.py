@@ -21,7 +21,7 @@
 
 Every random number the step needs is an input (:class:`swarm_envs.comm.draws.StepDraws`, drawn for all
 env copies in one compiled call, each copy from its own generator): the kernel and the numpy reference
-consume the same arrays and must give the same deliveries and counters (``tests/test_network_kernel.py``).
+consume the same arrays and must give the same deliveries and counters (``tests/comm/test_network_kernel.py``).
 
 The flooding dedupe and relaying run once per step in numpy (``Network._finish_step``), not per slot.
 """

@@ -1,18 +1,16 @@
 """The numpy reference of SwarmCom's slot loop (``Network(backend="numpy")``): the vectorised loop over the bit
-slots of a step that the compiled :func:`swarm_envs.comm.kernels.slot_loop` must equal (tests/test_network_kernel.py).
-It reads and updates a :class:`swarm_envs.comm.network.Network`'s state exactly as the kernel does."""
+slots of a step that the compiled :func:`swarm_envs.comm.kernels.slot_loop` must equal (tests/comm/test_network_kernel.py).
+Each function takes the :class:`swarm_envs.comm.network.Network` (``net``) whose state it reads and updates
+exactly as the kernel does."""
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from typing import Any
 
 import numpy as np
 
 from swarm_envs.comm.channel import detector_response
 from swarm_envs.comm.protocol import RECV, bits_to_uint, concat_padded
-
-if TYPE_CHECKING:
-    from swarm_envs.comm.network import Network
 
 __all__ = ["link_tables_numpy", "slots_numpy"]
 
@@ -26,7 +24,7 @@ def _ranges(start: np.ndarray, stop: np.ndarray) -> np.ndarray:
     return offs + np.arange(total)
 
 
-def link_tables_numpy(net: Network, rx: np.ndarray, tx: np.ndarray, gains: np.ndarray) -> tuple:
+def link_tables_numpy(net: Any, rx: np.ndarray, tx: np.ndarray, gains: np.ndarray) -> tuple:
     """The step's link tables as the kernel's :func:`swarm_envs.comm.kernels.link_tables` builds them:
     (tx_ptr, rx, tx, G, flat, sig_ptr, sig_rx); all emitters on, summed from 0.0 in emitter order, links
     grouped by transmitter."""
@@ -46,7 +44,7 @@ def link_tables_numpy(net: Network, rx: np.ndarray, tx: np.ndarray, gains: np.nd
     return tx_ptr, rx, tx, G, flat, sig_ptr, sig_rx
 
 
-def slots_numpy(net: Network, S, draws, tx_ptr, rx, tx, G, flat, sig_ptr, sig_rx) -> list[dict[str, np.ndarray]]:
+def slots_numpy(net: Any, S, draws, tx_ptr, rx, tx, G, flat, sig_ptr, sig_rx) -> list[dict[str, np.ndarray]]:
     """The vectorised numpy slot loop (the reference of the compiled kernel)."""
     n, nd = net.n, net.n_det
     a = net.adc_model

@@ -6,7 +6,7 @@ only do through many (P, n_d, n_e) temporaries (memory-bound). These kernels do 
 pair by pair, skipping dark emitter-detector combinations early, and test each lit ray against the pair's
 candidate occluders (per-ray line of sight, docs/design.md#infrared-physical-layer). They implement exactly the models of
 :mod:`swarm_envs.ir.models` (the numpy methods there stay the reference, and the layer's path for a model
-without a kernel; ``tests/test_ir_kernels.py`` checks the two agree to 1e-12). The pair and occluder kernels
+without a kernel; ``tests/ir/test_ir_kernels.py`` checks the two agree to 1e-12). The pair and occluder kernels
 are in :mod:`swarm_envs.ir.pair_kernels` and :mod:`swarm_envs.ir.occluder_kernels`; their plain numpy references
 in :mod:`swarm_envs._compile.reference`.
 """

@@ -1,6 +1,6 @@
 """Compiled kernels of the bearing exchange [L Sec. 5]: each robot's table of the bearings it measured, rolled
 and encoded into its messages, and the tables decoded from the messages it received (references in
-:mod:`swarm_envs._compile.reference`, compared bit for bit in ``tests/test_sensing_glue_kernels.py``)."""
+:mod:`swarm_envs._compile.reference`, compared bit for bit in ``tests/sensing/test_sensing_glue_kernels.py``)."""
 
 from __future__ import annotations
 import numpy as np

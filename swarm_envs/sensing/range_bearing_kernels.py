@@ -4,7 +4,7 @@
 (:func:`frame_words`; reference :func:`swarm_envs.sensing.range_bearing_frames.frame_words_numpy`), the per-step
 brightness sums and ADC reads (:func:`firing_sums`, :func:`adc_bits`, :func:`adc_pass`, :func:`group_brightest`),
 the decode rule (:func:`pick_ids`) and the reading table (:func:`merge_readings`). Each is compared bit for bit
-with its numpy reference in ``tests/test_sensing_glue_kernels.py`` (or the files named)."""
+with its numpy reference in ``tests/sensing/test_sensing_glue_kernels.py`` (or the files named)."""
 
 from __future__ import annotations
 

@@ -5,7 +5,7 @@
 robots, built from many (N, K, K) temporaries. These kernels do the integer and graph work robot by robot with
 K-sized local arrays; the transcendental and rounded formulas are computed by numpy in
 :func:`swarm_envs.sensing.scale_free.coordinates_all`; the kernels only do correctly rounded IEEE operations in
-numpy's order, so the compiled path gives the reference's results bit for bit (``tests/test_scale_free_kernels.py``)."""
+numpy's order, so the compiled path gives the reference's results bit for bit (``tests/sensing/test_scale_free_kernels.py``)."""
 
 from __future__ import annotations
 import numpy as np

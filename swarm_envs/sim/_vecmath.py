@@ -8,7 +8,7 @@ plain arithmetic: the algorithms and coefficients of FreeBSD's msun ``e_log.c`` 
 Microsystems, 1993, as in musl), with the exponent and mantissa taken from the IEEE bits. Each is within
 1 ulp of the exact value; ``power_into`` computes ``exp(y * log(x))`` as the library path does, so it
 agrees with ``math.exp(y * math.log(x))`` to a few 1e-14 relative for the arguments it is used with (the
-rounding of ``y * log(x)`` dominates both; ``tests/test_vecmath.py``).
+rounding of ``y * log(x)`` dominates both; ``tests/sim/test_vecmath.py``).
 
 :func:`exp_array` is the same ``exp`` in numpy operations: the same IEEE operations in the same order, so
 it equals :func:`exp_moderate` / :func:`exp_into` bit for bit; numpy code that must give a kernel's bits

@@ -77,7 +77,7 @@ class CopyStream:
     only this stream: numpy's ``standard_normal`` (ziggurat) and ``random`` keep no state between calls,
     so ``g.standard_normal(a)`` then ``g.standard_normal(b)`` equals ``g.standard_normal(a + b)`` and the
     values copy ``b`` receives are the first ones of its own generator's stream, whatever the chunking
-    or the other copies' demand: copy ``b`` of a batch equals a single env (``tests/test_copies.py``).
+    or the other copies' demand: copy ``b`` of a batch equals a single env (``tests/sim/test_copies.py``).
 
     Args:
         generators: one generator per copy (used for this stream only).

@@ -4,7 +4,7 @@
 
 Each case (env id x sensing x platform) resets with seed 0 and steps ``STEPS`` times with actions drawn from
 ``numpy.random.default_rng(1)``; the observations, rewards, terminations, truncations and infos of every
-step are rounded to ``DECIMALS`` decimals and hashed (SHA-256). ``tests/test_golden.py`` recomputes them.
+step are rounded to ``DECIMALS`` decimals and hashed (SHA-256). ``tests/integration/test_golden.py`` recomputes them.
 """
 
 from __future__ import annotations
