@@ -159,40 +159,13 @@ def gains_kernel(
     pair p's detectors and emitters are those robots' (offset) axes and ray (i, j) is multiplied by
     ``detector gain[rx[p], i] * emitter gain[tx[p], j]``. None: the nominal axes, no multiplier.
     """
-    return _gains_serial(
-        rel_position, rel_cos_sin, det_pos, det_dir, em_pos, em_dir, kind, params, ir_range, occ_offsets, occ_xy,
-        occ_radius, compact, *_hardware_args(hardware, det_pos.shape[0], em_pos.shape[0]),
-    )
-
-
-@njit(cache=True, error_model="numpy", nogil=True)
-def _gains_serial(
-    rel_position: np.ndarray,
-    rel_cos_sin: np.ndarray,
-    det_pos: np.ndarray,
-    det_dir: np.ndarray,
-    em_pos: np.ndarray,
-    em_dir: np.ndarray,
-    kind: int,
-    params: np.ndarray,
-    ir_range: float,
-    occ_offsets: np.ndarray,
-    occ_xy: np.ndarray,
-    occ_radius: float,
-    compact: bool,
-    hw_rx: np.ndarray,
-    hw_tx: np.ndarray,
-    hw_det: np.ndarray,
-    hw_em: np.ndarray,
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """:func:`gains_kernel` with its channel tables (:func:`_hardware_args`), compiled."""
     P, nd, ne = rel_position.shape[0], det_pos.shape[0], em_pos.shape[0]
     out = np.empty((P, nd, ne), np.float64)  # each row is zeroed just before it is filled (one pass over memory)
     sums = np.empty((P, nd), np.float64)
     lit = np.empty(P, np.int64)
     n_lit = _gains_chunk(
         0, P, out, sums, lit, rel_position, rel_cos_sin, det_pos, det_dir, em_pos, em_dir, kind, params,
-        ir_range, occ_offsets, occ_xy, occ_radius, compact, hw_rx, hw_tx, hw_det, hw_em,
+        ir_range, occ_offsets, occ_xy, occ_radius, bool(compact), *_hardware_args(hardware, nd, ne),
     )
     if compact:
         return out[:n_lit], lit[:n_lit].copy(), sums[:n_lit]
