@@ -27,7 +27,8 @@ from swarm_envs.agents.scripted import make_scripted, scripted_class
 from swarm_envs.agents.tasks import SHORT_NAMES, env_id, headline, import_modules, metric_reductions, scripted_policy
 from swarm_envs._text import shown
 from swarm_envs.registry import list_envs
-from swarm_envs.tasks.settings import COMMON_SETTINGS, Int, OneLineArgumentParser, cli_type
+from swarm_envs.tasks.settings import COMMON_SETTINGS, Int
+from swarm_envs.tasks.settings_cli import OneLineArgumentParser, cli_type
 
 __all__ = ["run_benchmark", "main"]
 

@@ -190,7 +190,7 @@ def _command() -> str:
 
 
 def _parser() -> argparse.ArgumentParser:
-    from swarm_envs.tasks.settings import OneLineArgumentParser
+    from swarm_envs.tasks.settings_cli import OneLineArgumentParser
 
     parser = OneLineArgumentParser(prog=_command().removeprefix("python "), description=__doc__.split("\n\n")[0])
     what = parser.add_mutually_exclusive_group(required=True)

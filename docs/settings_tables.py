@@ -1,7 +1,7 @@
 """Write the generated tables of docs/settings.md from the settings rules: ``python docs/settings_tables.py``.
 
 The tables sit between ``<!-- generated: NAME -->`` and ``<!-- end generated -->`` markers: ``common`` (every
-env's settings, :func:`swarm_envs.tasks.settings.settings_table`), one per suite task with settings of its own
+env's settings, :func:`swarm_envs.tasks.settings_tables.settings_table`), one per suite task with settings of its own
 (its env id), and ``train`` (:func:`swarm_envs.agents.config.bounds_table`). Text outside the markers is
 kept. ``tests/integration/test_reliability_docs.py`` checks that the page holds what this script writes.
 """
@@ -19,7 +19,7 @@ def tables() -> dict[str, str]:
     """Marker name -> the table it holds."""
     from swarm_envs.agents.config import bounds_table
     from swarm_envs.registry import list_envs, task_class
-    from swarm_envs.tasks.settings import settings_table
+    from swarm_envs.tasks.settings_tables import settings_table
 
     out = {"common": settings_table()}
     for env_id in list_envs():

@@ -37,7 +37,8 @@ from swarm_envs.adapters.env import DT
 from swarm_envs.sim.platforms import PLATFORMS
 from swarm_envs.registry import list_envs, task_class
 from swarm_envs.adapters.render import VIEWS
-from swarm_envs.tasks.settings import Int, cli_type
+from swarm_envs.tasks.settings import Int
+from swarm_envs.tasks.settings_cli import cli_type
 
 #: short task name -> registered env id
 TASKS = dict(SHORT_NAMES)

@@ -21,7 +21,8 @@ from pettingzoo import AECEnv
 from pettingzoo.utils.conversions import parallel_to_aec
 
 from swarm_envs.adapters.env import SwarmEnv
-from swarm_envs.tasks.settings import arguments_table, ordered_settings
+from swarm_envs.tasks.settings import ordered_settings
+from swarm_envs.tasks.settings_tables import arguments_table
 from swarm_envs.tasks.task import DT, Task
 
 __all__ = ["task_module", "env_class", "parallel_env_doc", "spaces_doc", "SECTIONS"]
@@ -149,7 +150,7 @@ def task_module(
             ``## Description``, ``## Rewards``, ``## Starting State``, ``## Episode End`` and ``## Version
             History``. The generated sections go in between: ``## Action Space`` and ``## Observation Space``
             (:func:`spaces_doc`) before ``## Rewards``, ``## Arguments`` (from the task's settings,
-            :func:`swarm_envs.tasks.settings.arguments_table`) before ``## Version History``.
+            :func:`swarm_envs.tasks.settings_tables.arguments_table`) before ``## Version History``.
         members: extra members of the env class (:func:`env_class`).
         payload: what the payload bits of a ``messages`` row carry (:func:`spaces_doc`).
 

@@ -22,8 +22,7 @@ from __future__ import annotations
 
 import math
 import numbers
-from collections.abc import Callable, Mapping
-import argparse
+from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
 from typing import Any, Literal
 
@@ -36,25 +35,7 @@ from swarm_envs.sensing.stacks import SENSING_STACKS
 from swarm_envs.sim.platforms import PLATFORMS, Platform, get_platform
 from swarm_envs.sim.control import MAX_CLOSING, MAX_SUBSTEPS, default_substeps, min_substeps
 
-__all__ = [
-    "Setting",
-    "Int",
-    "Real",
-    "Choice",
-    "Flag",
-    "Default",
-    "COMMON_SETTINGS",
-    "COMMON_DEFAULTS",
-    "MAX_ROBOTS",
-    "SettingsError",
-    "validate_settings",
-    "task_settings",
-    "settings_table",
-    "ordered_settings",
-    "arguments_table",
-    "cli_type",
-    "OneLineArgumentParser",
-]
+__all__ = ["Setting", "Int", "Real", "Choice", "Flag", "Default", "COMMON_SETTINGS", "COMMON_DEFAULTS", "MAX_ROBOTS", "SettingsError", "validate_settings", "task_settings", "ordered_settings"]
 
 #: Robots (agents and static robots) of one env copy at most: the IR layer's work and memory grow with
 #: robots x neighbours, and 10,000 robots already take minutes per episode.
@@ -465,16 +446,6 @@ def validate_settings(task: Any, settings: Mapping[str, Any]) -> dict[str, Any]:
     return cfg
 
 
-def settings_table(settings: Mapping[str, Setting] | None = None) -> str:
-    """A Markdown table of ``settings`` (default: :data:`COMMON_SETTINGS`): name, default, rule and the reason
-    for its bounds."""
-    rows = ["| setting | default | rule | why these bounds |", "|---|---|---|---|"]
-    for key, setting in (COMMON_SETTINGS if settings is None else settings).items():
-        rule = setting.rule().replace("|", "\\|")
-        rows.append(f"| `{key}` | `{setting.default!r}` | {rule} | {setting.why or '-'} |")
-    return "\n".join(rows) + "\n"
-
-
 def ordered_settings(settings: Mapping[str, Setting]) -> dict[str, Setting]:
     """A task's keyword arguments in the order its factory takes them: ``n_robots``, the task's own
     settings (declaration order), then the other common settings. ``settings`` are the task's own
@@ -485,54 +456,3 @@ def ordered_settings(settings: Mapping[str, Setting]) -> dict[str, Setting]:
     return {key: rules[key] for key in order}
 
 
-def _shown_default(value: Any) -> str:
-    if isinstance(value, (int, float)) and not isinstance(value, bool):
-        return repr(value)
-    return "``" + repr(value).replace("'", '"') + "``"
-
-
-def arguments_table(settings: Mapping[str, Setting]) -> str:
-    """The ``## Arguments`` section of an env factory's docstring: a Markdown table of ``settings`` (in
-    order), with each argument's default and meaning (its ``help``; else its ``doc``, else its rule)."""
-    rows = [
-        "## Arguments",
-        "",
-        "Keyword-only, SI units. Unknown names raise ``TypeError``; bad values raise ``ValueError``.",
-        "",
-        "| argument | default | meaning |",
-        "|---|---|---|",
-    ]
-    for key, setting in settings.items():
-        meaning = (setting.help or setting.doc or setting.rule()).replace("|", "\\|")
-        rows.append(f"| ``{key}`` | {_shown_default(setting.default)} | {meaning} |")
-    return "\n".join(rows) + "\n"
-
-
-def cli_type(setting: Setting, what: str = "value") -> Callable[[str], Any]:
-    """An argparse ``type`` that applies ``setting``'s rule to a command-line string: a bad value (``--trials
-    0``, ``--noise nan``) is argparse's usage error naming the option, exit code 2, like a bad env setting."""
-    def parse(text: str) -> Any:
-        value: Any = text
-        if isinstance(setting, (Int, Real)):
-            if getattr(setting, "allow_none", False) and text.strip().lower() == "none":
-                value = None
-            else:
-                try:
-                    value = int(text) if isinstance(setting, Int) else float(text)
-                except ValueError:
-                    raise argparse.ArgumentTypeError(f"{what} must be {setting.rule()}, got {shown(text)}") from None
-        try:
-            return setting.check(what, value)
-        except SettingsError as err:
-            raise argparse.ArgumentTypeError(str(err)) from None
-
-    parse.__name__ = setting.rule()
-    return parse
-
-
-class OneLineArgumentParser(argparse.ArgumentParser):
-    """argparse whose usage errors are one line, ``prog: error: message (see --help)``, exit code 2 (the
-    command-line tools' errors, like train.py's)."""
-
-    def error(self, message: str) -> None:  # type: ignore[override]
-        self.exit(2, f"{self.prog}: error: {' '.join(message.split())} (see --help)\n")

@@ -2,7 +2,7 @@
 
 Usage: ``python -m swarm_envs.validate {range-bearing,swarmcom,scale-free,centroid,behaviours} [--json] [options]``.
 Each experiment lives in its own module with a ``main(argv) -> int`` function. Options are checked by the
-same rules as the env settings (:func:`swarm_envs.tasks.settings.cli_type`): a bad value is a one-line usage error
+same rules as the env settings (:func:`swarm_envs.tasks.settings_cli.cli_type`): a bad value is a one-line usage error
 naming the option (:class:`swarm_envs.tasks.settings.OneLineArgumentParser`), exit code 2; a plot directory
 that cannot be written is one ``error:`` line, exit code 2.
 """

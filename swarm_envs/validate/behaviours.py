@@ -35,7 +35,8 @@ import swarm_envs
 from swarm_envs.agents.evaluation import confidence_interval, evaluate
 from swarm_envs.agents.scripted import make_scripted
 from swarm_envs.agents.tasks import headline, metric_reductions, scripted_policy
-from swarm_envs.tasks.settings import COMMON_SETTINGS, Int, OneLineArgumentParser, cli_type
+from swarm_envs.tasks.settings import COMMON_SETTINGS, Int
+from swarm_envs.tasks.settings_cli import OneLineArgumentParser, cli_type
 
 __all__ = ["BEHAVIOURS", "run_episode_trajectory", "message_ranges", "main"]
 

@@ -56,7 +56,8 @@ from swarm_envs.sensing.bearing_sensor import BearingReadings, draw_half_arcs, p
 from swarm_envs.sensing.exchange import BearingExchange
 from swarm_envs.sensing.scale_free import coordinates_all
 from swarm_envs.validate.report import Row, print_rows, rows_json
-from swarm_envs.tasks.settings import Int, OneLineArgumentParser, Real, cli_type
+from swarm_envs.tasks.settings import Int, Real
+from swarm_envs.tasks.settings_cli import OneLineArgumentParser, cli_type
 
 PAPER_MEAN_CM = 14.03
 D_STEP = 0.11  # m [L Sec. 6.2.2]

@@ -48,7 +48,8 @@ from swarm_envs.sim.platforms import get_platform
 from swarm_envs.sensing.range_bearing import RangeBearingSensor
 from swarm_envs.sensing.range_bearing_model import brightness, read
 from swarm_envs.validate.report import Row, print_rows, rows_json
-from swarm_envs.tasks.settings import Int, OneLineArgumentParser, Real, cli_type
+from swarm_envs.tasks.settings import Int, Real
+from swarm_envs.tasks.settings_cli import OneLineArgumentParser, cli_type
 
 DROPLET_DIAMETER_CM = 4.4
 

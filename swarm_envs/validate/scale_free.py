@@ -56,7 +56,8 @@ import numpy as np
 
 from swarm_envs.sensing.scale_free import coordinates_all, knowledge_from_matrix, null_space_lengths
 from swarm_envs.validate.report import Row, print_rows, rows_json
-from swarm_envs.tasks.settings import Int, OneLineArgumentParser, Real, cli_type
+from swarm_envs.tasks.settings import Int, Real
+from swarm_envs.tasks.settings_cli import OneLineArgumentParser, cli_type
 
 PAPER = {
     "rigid_k1_deg4_min": 50.0,

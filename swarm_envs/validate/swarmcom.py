@@ -52,7 +52,8 @@ from typing import Any
 import numpy as np
 
 from swarm_envs.comm.channel import M_MAX, M_MIN
-from swarm_envs.tasks.settings import Int, OneLineArgumentParser, cli_type
+from swarm_envs.tasks.settings import Int
+from swarm_envs.tasks.settings_cli import OneLineArgumentParser, cli_type
 from swarm_envs.validate.report import print_rows, rows_json
 from swarm_envs.validate.swarmcom_channels import experiment_b
 from swarm_envs.validate.swarmcom_flooding import experiment_c

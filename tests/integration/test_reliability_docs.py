@@ -11,7 +11,8 @@ import pytest
 
 from swarm_envs.agents.config import BOUNDS, bounds_table
 from swarm_envs.registry import list_envs, task_class
-from swarm_envs.tasks.settings import COMMON_SETTINGS, Choice, Flag, Int, Real, settings_table
+from swarm_envs.tasks.settings import COMMON_SETTINGS, Choice, Flag, Int, Real
+from swarm_envs.tasks.settings_tables import settings_table
 
 PAGE = Path(__file__).resolve().parents[2] / "docs" / "settings.md"
 
