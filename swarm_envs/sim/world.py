@@ -2,9 +2,9 @@
 
 One :class:`pymunk.Space` per world, robots as dynamic circles, arena walls as static segments.
 Each control step (``dt`` = 0.1 s) is split into physics sub-steps. Every robot is dragged by a
-kinematic *control body* (pymunk's top-down "tank" pattern): a pivot joint and a gear joint with zero
-bias and bounded force make the body's velocity track the control body's as motors would, while
-contacts, which have unbounded force, win over the motors: robots push each other and walls hold; bump
+kinematic *control body* (pymunk's top-down "tank" pattern): a pivot joint with zero bias and bounded
+force makes the body's velocity track the control body's as motors would, while contacts, which have
+unbounded force, win over the motors: robots push each other and walls hold; bump
 sensing reads the contacts pymunk's solver processed in each sub-step (the contacts its post-solve
 collision callbacks would report, see :func:`_substeps`).
 
@@ -40,8 +40,11 @@ The control bodies are set once per control step (no Python work per sub-step be
 bound, set before the first sub-step and after it): translation along the chord of the differential-drive
 arc, ``D = v dt sinc(w dt / 2)`` towards ``heading + w dt / 2``, and rotation at ``w``. pymunk moves a
 body with its previous velocity during the first sub-step (the joints act from the second on), so the
-control velocities are set to ``(D - h u) / (dt - h)`` and ``(w dt - h omega) / (dt - h)`` (h the
-sub-step, u / omega the body's velocity at the step start): a free robot then ends every control step
+control velocity is set to ``(D - h u) / (dt - h)`` (h the sub-step, u the body's velocity at the step
+start), and the body's angular velocity to ``w``: contacts between frictionless discs act through the
+discs' centres and exert no torque, nor does the pivot joint anchored at the centre, so nothing but the
+motors turns a robot, and the torque of :func:`swarm_envs.sim.control.motor_limits` would make that change
+within the first sub-step (no joint is needed to hold it). A free robot then ends every control step
 exactly on its differential-drive arc.
 
 Motion error: :func:`swarm_envs.sim.motion.motion_error` turns commanded velocities into the ones a platform's wheels deliver
@@ -52,11 +55,14 @@ world stepped directly moves exactly as commanded.
 :func:`step_worlds` steps several worlds (e.g. the copies of the batched core) at once: the control
 arithmetic runs as one numpy program over all their robots, and each space is written and read with one
 ``pymunk.batch`` call (no Python loop over bodies), and its contacts are read with one C call per sub-step
-(no Python work per contact); :meth:`World.step` is the same function for one world.
+(no Python work per contact); the spaces are stepped on threads (chipmunk releases the GIL), each a
+contiguous share of the worlds, with the same result bit for bit; :meth:`World.step` is the same
+function for one world.
 """
 
 from __future__ import annotations
 
+import threading
 import warnings
 from collections.abc import Sequence
 
@@ -65,6 +71,7 @@ import pymunk
 import pymunk.batch
 from scipy.spatial import cKDTree
 
+from swarm_envs._compile._worker import run_chunks
 from swarm_envs.sim.arena import (
     Arena,
     as_real_array,
@@ -81,7 +88,7 @@ from swarm_envs.sim.geometry import wrap_angle
 from swarm_envs.sim.motion import wheel_limited
 from swarm_envs.sim.platforms import Platform
 
-__all__ = ["World", "step_worlds", "N_BUMP_SECTORS"]
+__all__ = ["World", "step_worlds", "physics_threads", "N_BUMP_SECTORS"]
 
 #: bytes of commands a world keeps per episode for exact copies (16 per robot and step; 64 MB = 400,000
 #: steps of 10 robots); a longer episode's copy falls back to pymunk's copy of the space
@@ -100,6 +107,8 @@ PLACEMENT_OVERLAP = 0.5
 PLACEMENT_WALL_DEPTH = 0.25
 #: pymunk solver iterations per sub-step (contacts and motor joints)
 SOLVER_ITERATIONS = 10
+#: worlds per physics thread at least (:func:`physics_threads`): fewer do not repay a thread hand-off
+THREADED_MIN_WORLDS = 16
 #: fraction of an overlap left after one second of contact correction: 30 % of it is removed every 1/60 s
 #: (pymunk's default removes 10 %), which keeps chains of robots pushed together within :data:`MAX_OVERLAP`
 COLLISION_BIAS = (1.0 - 0.3) ** 60
@@ -170,7 +179,7 @@ class World:
         self.bodies: list[pymunk.Body] = []
         self.controls: list[pymunk.Body] = []
         moment = pymunk.moment_for_circle(platform.mass, 0.0, platform.radius)
-        max_force, max_torque = motor_limits(platform, self.substeps)
+        max_force = motor_limits(platform, self.substeps)[0]
         for p, h in zip(positions.tolist(), headings.tolist()):
             body = pymunk.Body(platform.mass, moment)
             body.position, body.angle = p, h
@@ -183,10 +192,7 @@ class World:
             pivot = pymunk.PivotJoint(control, body, (0, 0), (0, 0))
             pivot.max_bias = 0.0  # correct velocity only, never position
             pivot.max_force = max_force
-            gear = pymunk.GearJoint(control, body, 0.0, 1.0)
-            gear.max_bias = 0.0
-            gear.max_force = max_torque
-            self.space.add(body, shape, control, pivot, gear)
+            self.space.add(body, shape, control, pivot)
             self.bodies.append(body)
             self.controls.append(control)
         for a, b in np.concatenate([arena.wall_segments(), self.obstacles]):
@@ -357,7 +363,8 @@ class World:
         the read buffer, valid until the next step)."""
         self._contacts.clear()
         rows = self._write_rows
-        rows[:, 0] = self._body_motion  # robot bodies: written back unchanged
+        rows[:, 0, :2] = self._body_motion[:, :2]  # robot bodies: velocity written back unchanged,
+        rows[:, 0, 2] = control[:, 2]  # angular velocity set to the command (no torque acts on a disc)
         rows[:, 1] = control
         space, batched = self.space, self._batched
         if batched is None:  # another pymunk layout: the public API
@@ -389,13 +396,28 @@ class World:
         step_worlds([self], linear, angular, dt)
 
 
-def step_worlds(worlds: Sequence[World], linear: np.ndarray, angular: np.ndarray, dt: float) -> None:
+def physics_threads(n_worlds: int) -> int:
+    """Threads :func:`step_worlds` steps ``n_worlds`` spaces on: numba's thread count (the process's thread
+    setting, ``NUMBA_NUM_THREADS``), at most one per :data:`THREADED_MIN_WORLDS` worlds, and 1 off the main
+    Python thread (envs stepped from other threads stay on their thread)."""
+    if n_worlds < 2 * THREADED_MIN_WORLDS or threading.current_thread() is not threading.main_thread():
+        return 1
+    import numba
+
+    return max(1, min(int(numba.get_num_threads()), n_worlds // THREADED_MIN_WORLDS))
+
+
+def step_worlds(worlds: Sequence[World], linear: np.ndarray, angular: np.ndarray, dt: float, threads: int | None = None) -> None:
     """Advance every world of ``worlds`` (one platform and sub-step count) by ``dt`` seconds.
 
     ``linear`` (m/s) and ``angular`` (rad/s) are the commanded velocities of all their robots, world after
     world (sum of ``n``,). The control arithmetic is one numpy program over all robots (element-wise, so
     each world's numbers are those it would get alone); each space then takes one ``pymunk.batch`` write,
     its sub-steps, and one read. Updates each world's state arrays and bump flags.
+
+    The spaces are stepped on ``threads`` threads (default :func:`physics_threads`), each a contiguous share
+    of the worlds (chipmunk releases the GIL; a space is touched by one thread only): the result is the same
+    bit for bit for any thread count.
     """
     if not worlds:
         return
@@ -425,15 +447,20 @@ def step_worlds(worlds: Sequence[World], linear: np.ndarray, angular: np.ndarray
             [
                 (chord * np.cos(mid) - h * body[:, 0]) / (dt - h),
                 (chord * np.sin(mid) - h * body[:, 1]) / (dt - h),
-                (angular * dt - h * body[:, 2]) / (dt - h),
+                angular,
             ],
             axis=1,
         )
     else:  # one sub-step: the joints act only from the next step on
         control = np.stack([chord * np.cos(mid) / dt, chord * np.sin(mid) / dt, angular], axis=1)
     read = np.empty((bounds[-1], 6))
-    for w, a, b in zip(worlds, bounds[:-1], bounds[1:]):
-        read[a:b] = w._advance(control[a:b], h)
+
+    def advance(k: int) -> None:  # the k-th contiguous share of the worlds
+        for i in range(len(worlds) * k // chunks, len(worlds) * (k + 1) // chunks):
+            read[bounds[i] : bounds[i + 1]] = worlds[i]._advance(control[bounds[i] : bounds[i + 1]], h)
+
+    chunks = physics_threads(len(worlds)) if threads is None else max(1, min(int(threads), len(worlds)))
+    run_chunks(advance, chunks)
     positions = read[:, 0:2].copy()
     new_headings = wrap_angle(read[:, 2])
     # velocity = motion actually achieved over the control step (pushes and walls included)
