@@ -32,6 +32,7 @@ def resolve_checkpoint(path: str) -> Path:
         raise TrainError(f"checkpoint '{path}' cannot be read: {err.strerror or err}") from None
     return p
 
+
 def load_checkpoint(path: Path, cfg: dict[str, Any], env_kwargs: dict[str, Any]):
     """Load a PPO ``.zip`` and check it fits the config's env; :class:`TrainError` with one line otherwise."""
     from swarm_envs.agents.policies import PolicySpec, algorithm_class
@@ -58,6 +59,7 @@ def load_checkpoint(path: Path, cfg: dict[str, Any], env_kwargs: dict[str, Any])
         raise TrainError(f"checkpoint '{path}' gives actions of size {_size(model.action_space.shape)} but the "
                          f"config's {cfg['task']} env expects {_size(act_shape)}")
     return model
+
 
 def check_run_config(checkpoint: Path, cfg: dict[str, Any], env_kwargs: dict[str, Any], config: str) -> None:
     """:class:`TrainError` (one line naming both) if the run that saved ``checkpoint`` (its ``config.yaml``:
@@ -111,14 +113,17 @@ def check_run_config(checkpoint: Path, cfg: dict[str, Any], env_kwargs: dict[str
         raise TrainError(f"{trained} as the policy variant {run_spec.name}, {_fields(run_spec, differ)} (its run config "
                          f"{path}) but {config} evaluates {spec.name}, {_fields(spec, differ)}; {hint}")
 
+
 def _spaces_text(observations: Any, actions: Any) -> str:
     """``observations range_bearing 8x7, proprio 10; actions 2`` (each part's shape)."""
     parts = ", ".join(f"{name} {_size(space.shape)}" for name, space in observations.spaces.items())
     return f"observations {parts}; actions {_size(actions.shape)}"
 
+
 def _fields(spec: Any, names: list[str]) -> str:
     """``agent.frame_stack=4, agent.odometry=True``: the named fields of a policy variant."""
     return ", ".join(f"agent.{k}={getattr(spec, k)}" for k in names)
+
 
 def _size(shape: tuple[int, ...] | None) -> str:
     return "x".join(str(s) for s in shape) if shape else "?"

@@ -22,6 +22,7 @@ def _read_progress(path: Path) -> dict[str, np.ndarray]:
     keys = rows[0].keys() if rows else []
     return {k: np.array([float(r[k]) if r.get(k) not in (None, "") else np.nan for r in rows]) for k in keys}
 
+
 def _save_figure(fig: Any, path: Path) -> None:
     """Save a matplotlib figure to ``path`` under a temporary name, renamed when complete."""
     tmp = path.with_name(f".tmp-{os.getpid()}-{path.name}")
@@ -31,6 +32,19 @@ def _save_figure(fig: Any, path: Path) -> None:
     finally:
         with contextlib.suppress(OSError):
             tmp.unlink()
+
+
+def _finish_figure(fig: Any, title: str, path: Path) -> None:
+    """Title, layout, save (under a temporary name, :func:`_save_figure`) and close a figure."""
+    import matplotlib.pyplot as plt
+
+    fig.suptitle(title, fontsize=10)
+    fig.tight_layout()
+    try:
+        _save_figure(fig, path)
+    finally:
+        plt.close(fig)
+
 
 def plot_learning_curve(csv_path: str | Path, png_path: str | Path, title: str) -> bool:
     """Plot ``progress.csv`` (mean episode return, episode length, losses vs robot-steps); False if no data.
@@ -58,13 +72,9 @@ def plot_learning_curve(csv_path: str | Path, png_path: str | Path, title: str) 
         ax.set_xlabel("robot-steps", fontsize=8)
         ax.set_title(label, fontsize=9)
         ax.tick_params(labelsize=7)
-    fig.suptitle(title, fontsize=10)
-    fig.tight_layout()
-    try:
-        _save_figure(fig, Path(png_path))
-    finally:
-        plt.close(fig)
+    _finish_figure(fig, title, Path(png_path))
     return True
+
 
 def plot_results(rows: list[dict[str, Any]], path: Path, title: str) -> None:
     """One bar panel per metric (policies side by side) with bootstrap 95 % CI error bars (none for n=1)."""
@@ -83,12 +93,8 @@ def plot_results(rows: list[dict[str, Any]], path: Path, title: str) -> None:
         ax.bar(policies, means, yerr=np.nan_to_num(err), capsize=4, color=["tab:blue", "tab:green", "tab:gray"][: len(policies)])
         ax.set_title(m, fontsize=9)
         ax.tick_params(labelsize=8)
-    fig.suptitle(title, fontsize=10)
-    fig.tight_layout()
-    try:
-        _save_figure(fig, Path(path))
-    finally:
-        plt.close(fig)
+    _finish_figure(fig, title, Path(path))
+
 
 def write_gif(cfg: dict[str, Any], policy_factory, path: Path, seed: int) -> None:
     """One evaluation episode of ``policy_factory`` rendered to a GIF."""

@@ -334,6 +334,7 @@ SCRIPTED: dict[str, type[Policy]] = {
     for cls in (RandomWalk, OrientationFlocking, ReynoldsFlocking, BearingAggregation, CentroidSeeker, SortedFollowing, ParityClustering, MidAngleNavigation)
 }
 
+
 def scripted_class(name: str) -> type[Policy]:
     """The controller class of ``name``: a name of :data:`SCRIPTED` or ``"module:Class"`` of any
     :class:`~swarm_envs.agents.base.Policy` subclass (e.g. a task's ``SCRIPTED_POLICY``)."""

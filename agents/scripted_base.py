@@ -16,6 +16,7 @@ __all__ = ["circular_mean", "wrap_below_pi", "bump_direction", "ScriptedPolicy",
 
 _SECTOR_ANGLES = np.arange(N_BUMP_SECTORS) * (2 * np.pi / N_BUMP_SECTORS)  # sector i centred at 45 i deg (body frame)
 
+
 def circular_mean(cos: np.ndarray, sin: np.ndarray, valid: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Angle (rad) of the mean of the valid unit vectors per row ``(N, K) -> (N,)``, and a has-any mask.
 
@@ -26,16 +27,19 @@ def circular_mean(cos: np.ndarray, sin: np.ndarray, valid: np.ndarray) -> tuple[
     has = (w.sum(axis=1) > 0) & (np.hypot(c, s) > 1e-9)
     return np.where(has, np.arctan2(s, c), 0.0), has
 
+
 def wrap_below_pi(angle: np.ndarray) -> np.ndarray:
     """Angles (rad) wrapped to [-pi, pi), the mirror of :func:`swarm_envs.sim.geometry.wrap_angle`'s (-pi, pi],
     bit for bit ``mod(angle + pi, 2 pi) - pi``: the baselines turn clockwise (by -pi) away from a bump dead
     ahead and read a bearing of exactly pi as -pi, as their recorded results do."""
     return -wrap_angle(-np.asarray(angle, dtype=float)) + 0.0  # + 0.0: a zero comes out as +0.0
 
+
 def bump_direction(proprio: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Body-frame direction (rad) of the bumped sectors per robot, and whether any sector is bumped."""
     bumps = proprio[:, :N_BUMP_SECTORS] > 0.5
     return circular_mean(np.cos(_SECTOR_ANGLES)[None], np.sin(_SECTOR_ANGLES)[None], bumps)
+
 
 class ScriptedPolicy(Policy):
     """Shared machinery: a bump escape manoeuvre and a random-walk fallback, both with per-row state."""
@@ -126,10 +130,12 @@ class ScriptedPolicy(Policy):
         self._escape[escaping] -= delta[escaping]
         return escaping, np.zeros(n), ang
 
+
 def decoded_ids(id_rows: np.ndarray, n_world: int) -> np.ndarray:
     """Integer ids (N, R) of id-part rows (N, R, 4) (``range_bearing_ids``, ``message_ids``, ...), -1 where a
     row has none; ``n_world`` robots per env copy (``ObservationLayout.n_world``)."""
     return np.where(id_rows[..., 0] > 0.5, np.rint(id_rows[..., 1] * max(n_world - 1, 1)).astype(np.int64), -1)
+
 
 def require_ids(obs: dict[str, np.ndarray], name: str) -> None:
     if "own_id" not in obs:

@@ -17,6 +17,7 @@ EXIT_INTERRUPTED = 130
 #: exit code of bad input (config, output directory, checkpoint)
 EXIT_BAD_INPUT = 2
 
+
 @contextlib.contextmanager
 def sigint_ignored() -> Iterator[None]:
     """Ignore Ctrl-C inside the block (main thread only), so a file move is never cut short."""
@@ -28,6 +29,7 @@ def sigint_ignored() -> Iterator[None]:
         yield
     finally:
         signal.signal(signal.SIGINT, previous)
+
 
 class CtrlC:
     """Ctrl-C during training and evaluation. The first one asks the work to stop at the next env step (a
@@ -75,9 +77,11 @@ class CtrlC:
 
         return StopOnCtrlC()
 
+
 def one_line(message: object) -> str:
     """``message`` on one line (newlines and runs of spaces collapsed)."""
     return " ".join(str(message).split())
+
 
 def is_interrupt(err: BaseException) -> bool:
     """Whether ``err`` is Ctrl-C: a ``KeyboardInterrupt``, or the ``SystemError`` CPython raises in its place

@@ -26,9 +26,11 @@ RESULT_FILES = ("results.csv", "results.md", "per_seed.json")
 RUN_ENTRIES = ("config.yaml", "model.zip", "progress.csv", "learning_curve.png", "results.csv", "results.md",
                "results.png", "per_seed.json", "timing.json", "episode.gif", "checkpoints", "tensorboard")
 
+
 class TrainError(Exception):
     """Bad input or a failed write found by train.py (output directory, checkpoint, disk); reported as one
     line, exit code 2."""
+
 
 def run_entries(directory: Path) -> list[str]:
     """The names in ``directory`` that belong to a run (:data:`RUN_ENTRIES` and ``eval-*`` directories)."""
@@ -37,6 +39,7 @@ def run_entries(directory: Path) -> list[str]:
     except OSError:  # missing, or not a directory
         return []
     return [n for n in names if n in RUN_ENTRIES or (n.startswith("eval-") and (directory / n).is_dir())]
+
 
 class Staging:
     """A hidden directory beside ``out`` that a command writes its files into; :meth:`publish` moves them
@@ -153,6 +156,7 @@ _STAGING_TAIL = re.compile(r"(?:(?P<pid>[0-9]+)-)?[a-z0-9_]{8}")
 #: a staging directory whose name carries no process id counts as in use until this long after its last write
 UNKNOWN_OWNER_S = 3600.0
 
+
 @dataclass(frozen=True)
 class StagingDir:
     """A staging directory found on disk (:func:`staging_dirs`): its ``path``, the output it belongs to, the
@@ -188,6 +192,7 @@ class StagingDir:
             notes.append(f"in use by process {self.pid}" if self.pid is not None else "written less than an hour ago: may be in use")
         return f"{self.path} ({', '.join(notes)})"
 
+
 def _age(seconds: float) -> str:
     if seconds < 90:
         return f"{max(seconds, 0):.0f} s"
@@ -196,6 +201,7 @@ def _age(seconds: float) -> str:
     if seconds < 48 * 3600:
         return f"{seconds / 3600:.1f} h"
     return f"{seconds / 86400:.1f} days"
+
 
 def _last_write(path: Path) -> float:
     """The newest modification time of ``path`` and the entries in it (and in its ``checkpoints/``)."""
@@ -206,6 +212,7 @@ def _last_write(path: Path) -> float:
                 with contextlib.suppress(OSError):
                     times.append(entry.stat(follow_symlinks=False).st_mtime)
     return max(times)
+
 
 def staging_dirs(folder: str | Path) -> list[StagingDir]:
     """The staging directories (``.NAME.<pid>-<random>.partial``) of the output ``folder`` (beside it) and of
@@ -241,6 +248,7 @@ def staging_dirs(folder: str | Path) -> list[StagingDir]:
             found.append(StagingDir(path, parent / out_name, pid, age, (path / "model.zip").is_file()))
     return sorted(found, key=lambda d: -d.age_s)
 
+
 def report_staging_dirs(out: Path, command: str) -> list[StagingDir]:
     """Print one line (stderr) per staging directory of ``out`` that another process left or is writing;
     returns them."""
@@ -252,6 +260,7 @@ def report_staging_dirs(out: Path, command: str) -> list[StagingDir]:
             print(one_line(f"note: staging directory left by an earlier run of {out}: {d.describe()}; list or remove "
                             f"such directories with: {command} --list-partial / --clean-partial {out}"), file=sys.stderr)
     return found
+
 
 def clean_staging_dirs(folder: str | Path, remove: bool, command: str) -> int:
     """``--list-partial`` / ``--clean-partial FOLDER``: list the staging directories of the output ``folder``
@@ -283,6 +292,7 @@ def clean_staging_dirs(folder: str | Path, remove: bool, command: str) -> int:
         print(f"{len(found)} staging directories, {free} not in use; remove those with: {command} --clean-partial {folder}")
     return code
 
+
 @contextlib.contextmanager
 def errors_naming(path: Path) -> Iterator[None]:
     """Turn an ``OSError`` inside the block (a full disk) into a :class:`TrainError` naming ``path``."""
@@ -290,6 +300,7 @@ def errors_naming(path: Path) -> Iterator[None]:
         yield
     except OSError as err:
         raise TrainError(f"could not write '{path}': {err.strerror or err}") from None
+
 
 def check_output(out: Path, force: bool, eval_only: bool = False) -> None:
     """:class:`TrainError` if ``out`` is a file, or holds a run (:func:`run_entries`) and ``force`` is not
@@ -307,6 +318,7 @@ def check_output(out: Path, force: bool, eval_only: bool = False) -> None:
         hint = "omit it (a new eval-<timestamp> directory)" if eval_only else "use another --output"
         raise TrainError(f"output directory '{out}' already holds {kind} ({', '.join(shown[:6])}); {hint}, "
                          "or add --force to replace it")
+
 
 def eval_output_dir(checkpoint: Path, output: str | None, force: bool) -> Path:
     """Where ``--eval-only`` writes: ``output`` (refused if it holds a run, unless ``force``, and if it holds

@@ -68,6 +68,7 @@ class SortedFollowing(ScriptedPolicy):
         lin, ang = np.where(escaping, e_lin, lin), np.where(escaping, e_ang, ang)
         return self.compose(lin, ang)
 
+
 class ParityClustering(ScriptedPolicy):
     """[L] Alg. 7 clustering by id parity on the decoded ids (``observe_ids=True``).
 
@@ -100,6 +101,7 @@ class ParityClustering(ScriptedPolicy):
         lin, ang = np.where(escaping, e_lin, lin), np.where(escaping, e_ang, ang)
         rw_lin, rw_ang = self._random_walk(~follow)
         return self.compose(np.where(follow, lin, rw_lin), np.where(follow, ang, rw_ang))
+
 
 class MidAngleNavigation(ScriptedPolicy):
     """[L] Alg. 8 mid-angle navigation of a seeker on decoded ids and hop counts (``observe_ids=True``).

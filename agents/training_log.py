@@ -20,6 +20,7 @@ def say(line: str) -> None:
 
     tqdm.write(line, file=sys.stdout)
 
+
 def _progress_writer(total: int, repeat: int = 1):
     """An SB3 logger output that prints one short line per ~10 % of ``total`` PPO timesteps (and the last),
     counted in robot-steps (``repeat`` per timestep)."""
@@ -51,6 +52,7 @@ def _progress_writer(total: int, repeat: int = 1):
 #: the progress.csv column of the training rate (robot-steps/s) from the end of the first env step on
 RATE_KEY = "time/robot_steps_per_s"
 
+
 def rate_callback(repeat: int = 1):
     """An SB3 callback that logs :data:`RATE_KEY` at the end of every rollout: robot-steps (PPO timesteps x
     ``repeat``) per second of wall time since the end of the first env step, PPO updates included. The start
@@ -79,6 +81,7 @@ def rate_callback(repeat: int = 1):
 
     return RateCallback()
 
+
 def make_logger(out: Path, total: int, progress_lines: bool, repeat: int = 1):
     """SB3 logger: ``progress.csv`` always, TensorBoard if installed, short progress lines if asked (``total``
     PPO timesteps, each ``repeat`` robot-steps)."""
@@ -90,6 +93,7 @@ def make_logger(out: Path, total: int, progress_lines: bool, repeat: int = 1):
     if progress_lines:
         formats.append(_progress_writer(total, repeat))
     return Logger(folder=str(out), output_formats=formats)
+
 
 def make_callbacks(cfg: dict[str, Any], out: Path, num_envs: int, total: int):
     """Checkpoints every ``train.checkpoint_freq`` robot-steps and a tqdm bar over the real ``total``

@@ -12,6 +12,7 @@ from swarm_envs.comm.draws import StepDraws
 
 __all__ = ["Deliveries", "PreparedStep"]
 
+
 @dataclass
 class Deliveries:
     """Frames delivered to the application during one step (D rows).
@@ -71,6 +72,7 @@ class Deliveries:
             interference=None if self.interference is None else self.interference[m],
             stats=self.stats,
         )
+
 
 @dataclass(frozen=True)
 class PreparedStep:

@@ -14,6 +14,7 @@ from swarm_envs.comm.protocol import RECV, bits_to_uint, concat_padded
 
 __all__ = ["link_tables_numpy", "slots_numpy"]
 
+
 def _ranges(start: np.ndarray, stop: np.ndarray) -> np.ndarray:
     """Concatenate ``arange(start[i], stop[i])`` for all i (vectorised)."""
     counts = stop - start
@@ -132,6 +133,7 @@ def slots_numpy(net: Any, S, draws, tx_ptr, rx, tx, G, flat, sig_ptr, sig_rx) ->
         net.slot += 1
     return deliveries
 
+
 def _start_tx(net, go: np.ndarray) -> None:
     h = net.q_head[go]
     F = net.q_bits.shape[2]
@@ -149,6 +151,7 @@ def _start_tx(net, go: np.ndarray) -> None:
         net.det.finish(recv)
     net._count("tx_started", go)
 
+
 def _foreign_light(net, on: np.ndarray, tx_ptr, rx, tx, lit_bits) -> np.ndarray:
     """(N,) per robot receiving a frame: bitmask of its detectors lit in this slot by robots ``on``
     (emitting) other than the frame's transmitter (``gt_tx``)."""
@@ -160,6 +163,7 @@ def _foreign_light(net, on: np.ndarray, tx_ptr, rx, tx, lit_bits) -> np.ndarray:
         np.bitwise_or.at(out, r[f], lit_bits[li[f]])
     return out
 
+
 def _interference(net, got: np.ndarray, foreign: np.ndarray) -> None:
     """Deliveries.interference: foreign light of this slot counts at robots ``got`` (that stored a bit)
     whose frame's transmitter is dark in this slot."""
@@ -168,6 +172,7 @@ def _interference(net, got: np.ndarray, foreign: np.ndarray) -> None:
     on = (t >= 0) & net.sending[ts] & net.cur_bits[ts, np.minimum(net.cur_pos[ts], net.cur_bits.shape[1] - 1)]
     dark = got[~on]
     net.rx_foreign[dark] |= foreign[dark]
+
 
 def _truth_on_start(net, started, on, tx_ptr, tx, rx, G) -> None:
     """Ground truth: the strongest transmitter emitting s1 at each robot that just detected a start."""
@@ -198,6 +203,7 @@ def _truth_on_start(net, started, on, tx_ptr, tx, rx, G) -> None:
     nfalse = int((net.gt_tx[started] < 0).sum())
     if nfalse:
         net._count("rx_false_starts", values=nfalse)
+
 
 def _truth_bits(net, got: np.ndarray) -> None:
     k = net.det.nbits[got] - 1
@@ -259,6 +265,7 @@ def _check_points(net, robots: np.ndarray) -> dict[str, np.ndarray] | None:
         todo = np.concatenate(nxt) if nxt else np.zeros(0, dtype=np.int64)
     return out
 
+
 def _score_bits(net, robots: np.ndarray) -> None:
     """Ground-truth scoring of aligned frames at their end (delivered or aborted): raw bit errors over
     the bits received, and errors of every complete 15-bit block after BCH decoding."""
@@ -285,6 +292,7 @@ def _score_bits(net, robots: np.ndarray) -> None:
         net._count("blocks_checked", al, nblk)
         net._count("block_errors", al, bad.sum(axis=1))
 
+
 def _abort(net, robots: np.ndarray) -> None:
     if not robots.size:
         return
@@ -294,6 +302,7 @@ def _abort(net, robots: np.ndarray) -> None:
         net._count("rx_lost", lost)
     net._count("rx_aborted", values=robots.size)
     net.det.finish(robots)
+
 
 def _complete(net, robots: np.ndarray) -> dict[str, np.ndarray] | None:
     det, fmt, c = net.det, net.fmt, net.code

@@ -13,8 +13,10 @@ def no_obstacles() -> np.ndarray:
     """An empty (0, 2, 2) array of obstacle segments."""
     return np.zeros((0, 2, 2))
 
+
 def _cross(ax: np.ndarray, ay: np.ndarray, bx: np.ndarray, by: np.ndarray) -> np.ndarray:
     return ax * by - ay * bx
+
 
 def rays_blocked(starts: np.ndarray, ends: np.ndarray, segments: np.ndarray) -> np.ndarray:
     """(...,) bool: the ray from ``starts`` (..., 2) to ``ends`` (..., 2) (m) crosses or touches one of
@@ -22,6 +24,7 @@ def rays_blocked(starts: np.ndarray, ends: np.ndarray, segments: np.ndarray) -> 
     vectorised over rays and segments."""
     p, q = np.asarray(starts, float)[..., None, :], np.asarray(ends, float)[..., None, :]
     return _crosses(p, q, segments[:, 0], segments[:, 1]).any(axis=-1)
+
 
 def _crosses(p: np.ndarray, q: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Elementwise (broadcast) whether segment p-q crosses or touches segment a-b (points (..., 2));
@@ -32,6 +35,7 @@ def _crosses(p: np.ndarray, q: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.n
     d3 = _cross(pq[..., 0], pq[..., 1], a[..., 0] - p[..., 0], a[..., 1] - p[..., 1])
     d4 = _cross(pq[..., 0], pq[..., 1], b[..., 0] - p[..., 0], b[..., 1] - p[..., 1])
     return (d1 * d2 <= 0) & (d3 * d4 <= 0) & ~((d1 == 0) & (d2 == 0))
+
 
 def block_links(
     links: IRLinks,
@@ -113,6 +117,7 @@ def block_links(
         links.n_robots, occluders, None if sums is None else sums[keep], None if obstacle_clear is None else obstacle_clear[keep],
     )
 
+
 def _segment_distance(p: np.ndarray, q: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """(K,) distance (m) between segments p-q and a-b, each (K, 2): 0 where they cross, else the smallest
     of the four end-point-to-segment distances."""
@@ -128,6 +133,7 @@ def _segment_distance(p: np.ndarray, q: np.ndarray, a: np.ndarray, b: np.ndarray
     d3 = _cross(*(q - p).T, *(a - p).T)
     d4 = _cross(*(q - p).T, *(b - p).T)
     return np.where((d1 * d2 <= 0) & (d3 * d4 <= 0), 0.0, ends)
+
 
 def _world_points(centres: np.ndarray, headings: np.ndarray, body_points: np.ndarray) -> np.ndarray:
     """(R, K, 2) world positions (m) of body-frame points ``body_points`` (K, 2) of R robots."""

@@ -14,6 +14,7 @@ in :mod:`swarm_envs._compile.reference`.
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 
@@ -22,7 +23,7 @@ from swarm_envs.sim._vecmath import power_into
 from swarm_envs._compile._worker import run_chunks
 from swarm_envs.ir.ray_kernels import DISC_TOL, hits_disc
 
-__all__ = ["MODEL_IDS", "model_params", "gains_kernel", "gains_kernel_threaded", "ChunkRows"]
+__all__ = ["MODEL_IDS", "model_params", "GainInputs", "gains_kernel", "gains_kernel_threaded", "ChunkRows"]
 
 #: model class name -> kernel model id
 MODEL_IDS = {"DropletIR": 0, "EpuckIR": 1, "RoneIR": 2, "DropletLowPowerIR": 3}
@@ -113,19 +114,27 @@ def _hardware_args(hardware: tuple | None, nd: int, ne: int) -> tuple[np.ndarray
             np.ascontiguousarray(det, dtype=np.float64), np.ascontiguousarray(em, dtype=np.float64))
 
 
+class GainInputs(NamedTuple):
+    """What the gain kernels read for P candidate pairs (the arguments of :func:`_gains_chunk` after its
+    output buffers, in order): the transmitters in the receivers' frames, the platform's detectors and
+    emitters, its IR model and the pairs' candidate occluders."""
+
+    rel_position: np.ndarray  #: (P, 2) transmitter centre in the receiver's frame (m)
+    rel_cos_sin: np.ndarray  #: (P, 2) cos and sin of the transmitter's heading in the receiver's frame
+    det_pos: np.ndarray  #: (n_d, 2) detector positions in the body frame (m)
+    det_dir: np.ndarray  #: (n_d, 2) detector axes (unit vectors)
+    em_pos: np.ndarray  #: (n_e, 2) emitter positions (m)
+    em_dir: np.ndarray  #: (n_e, 2) emitter axes
+    kind: int  #: the IR model's id (:data:`MODEL_IDS`)
+    params: np.ndarray  #: the model's parameters (:func:`model_params`)
+    ir_range: float  #: largest distance with light (m)
+    occ_offsets: np.ndarray  #: (P + 1,) CSR offsets of each pair's candidate occluders
+    occ_xy: np.ndarray  #: (K, 2) occluder centres in the receiver's frame (m)
+    occ_radius: float  #: occluding disc radius (m)
+
+
 def gains_kernel(
-    rel_position: np.ndarray,
-    rel_cos_sin: np.ndarray,
-    det_pos: np.ndarray,
-    det_dir: np.ndarray,
-    em_pos: np.ndarray,
-    em_dir: np.ndarray,
-    kind: int,
-    params: np.ndarray,
-    ir_range: float,
-    occ_offsets: np.ndarray,
-    occ_xy: np.ndarray,
-    occ_radius: float,
+    inputs: GainInputs,
     compact: bool = False,
     hardware: tuple | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -159,13 +168,13 @@ def gains_kernel(
     pair p's detectors and emitters are those robots' (offset) axes and ray (i, j) is multiplied by
     ``detector gain[rx[p], i] * emitter gain[tx[p], j]``. None: the nominal axes, no multiplier.
     """
+    rel_position, det_pos, em_pos = inputs.rel_position, inputs.det_pos, inputs.em_pos
     P, nd, ne = rel_position.shape[0], det_pos.shape[0], em_pos.shape[0]
     out = np.empty((P, nd, ne), np.float64)  # each row is zeroed just before it is filled (one pass over memory)
     sums = np.empty((P, nd), np.float64)
     lit = np.empty(P, np.int64)
     n_lit = _gains_chunk(
-        0, P, out, sums, lit, rel_position, rel_cos_sin, det_pos, det_dir, em_pos, em_dir, kind, params,
-        ir_range, occ_offsets, occ_xy, occ_radius, bool(compact), *_hardware_args(hardware, nd, ne),
+        0, P, out, sums, lit, *inputs, bool(compact), *_hardware_args(hardware, nd, ne),
     )
     if compact:
         return out[:n_lit], lit[:n_lit].copy(), sums[:n_lit]
@@ -173,18 +182,7 @@ def gains_kernel(
 
 
 def gains_kernel_threaded(
-    rel_position: np.ndarray,
-    rel_cos_sin: np.ndarray,
-    det_pos: np.ndarray,
-    det_dir: np.ndarray,
-    em_pos: np.ndarray,
-    em_dir: np.ndarray,
-    kind: int,
-    params: np.ndarray,
-    ir_range: float,
-    occ_offsets: np.ndarray,
-    occ_xy: np.ndarray,
-    occ_radius: float,
+    inputs: GainInputs,
     n_chunks: int,
     deferred: bool = False,
     hardware: tuple | None = None,
@@ -199,7 +197,7 @@ def gains_kernel_threaded(
     ``(gains, lit, sums, rows)`` with ``rows`` a :class:`ChunkRows`, and ``gains`` holds its values once
     ``rows.gather()`` has run (for a caller whose work reads only ``lit``, ``sums`` and some rows).
     ``hardware``: as in :func:`gains_kernel`."""
-    P, nd, ne = rel_position.shape[0], det_pos.shape[0], em_pos.shape[0]
+    P, nd, ne = inputs.rel_position.shape[0], inputs.det_pos.shape[0], inputs.em_pos.shape[0]
     hw = _hardware_args(hardware, nd, ne)
     out = np.empty((P, nd, ne))
     sums = np.empty((P, nd))
@@ -209,8 +207,7 @@ def gains_kernel_threaded(
 
     def chunk(k: int) -> int:
         return _gains_chunk(
-            bounds[k], bounds[k + 1], out, sums, lit, rel_position, rel_cos_sin, det_pos, det_dir, em_pos,
-            em_dir, kind, params, ir_range, occ_offsets, occ_xy, occ_radius, True, *hw,
+            bounds[k], bounds[k + 1], out, sums, lit, *inputs, True, *hw,
         )
 
     counts = np.asarray(run_chunks(chunk, n_chunks), dtype=np.int64)

@@ -194,16 +194,16 @@ def _gains(
         kind, params = gain_kernels.model_params(model)
         if cos_sin is None:
             cos_sin = np.stack([np.cos(psi), np.sin(psi)], axis=-1)
-        args = (
+        args = gain_kernels.GainInputs(
             R, cos_sin, platform.detector_positions, platform.detector_directions,
             platform.emitter_positions, platform.emitter_directions, kind, params, float(platform.ir_range),
             offsets, xy, float(platform.radius),
         )
         if compact and threads > 1:
             if deferred:
-                return gain_kernels.gains_kernel_threaded(*args, int(threads), True, hw)
-            return (*gain_kernels.gains_kernel_threaded(*args, int(threads), False, hw), None)
-        return (*gain_kernels.gains_kernel(*args, compact, hw), None)
+                return gain_kernels.gains_kernel_threaded(args, int(threads), True, hw)
+            return (*gain_kernels.gains_kernel_threaded(args, int(threads), False, hw), None)
+        return (*gain_kernels.gains_kernel(args, compact, hw), None)
     g = _pair_gains_numpy(R, psi, platform, model, None if hardware is None else hardware[2].pairs(hardware[0], hardware[1]))
     if xy.shape[0]:
         g = g * clear_rays_numpy(R, psi, platform, offsets, xy)

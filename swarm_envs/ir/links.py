@@ -75,6 +75,7 @@ class IRLinks:
         """(P,) true bearing (rad) of tx in rx's frame (ground truth, for validation / ideal sensing)."""
         return np.arctan2(self.rel_position[:, 1], self.rel_position[:, 0])
 
+
 def emitter_sums(gains: np.ndarray) -> np.ndarray:
     """(P, n_d) sums of ``gains`` (P, n_d, n_e) over emitters, sequentially in emitter order from 0.0
     (:class:`IRLinks` ``emitter_sums`` of a model without a kernel; the kernel sums in the same order)."""

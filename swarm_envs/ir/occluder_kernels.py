@@ -40,6 +40,7 @@ def occluders_kernel(
     _occluders_chunk(0, rx.shape[0], base[0], positions, width, rx, tx, starts, counts, near, dist2, cnt, idx)
     return _occluders_gather(base, cnt, idx, 1)
 
+
 def occluders_kernel_threaded(
     positions: np.ndarray,
     width: float,
@@ -72,9 +73,11 @@ def occluders_kernel_threaded(
 def _sort_neighbours_kernel(r0: int, r1: int, positions: np.ndarray, starts: np.ndarray, counts: np.ndarray, near: np.ndarray, dist2: np.ndarray) -> None:
     _sort_neighbours(r0, r1, positions, starts, counts, near, dist2)
 
+
 @njit(cache=True, error_model="numpy", nogil=True)
 def _occluder_buffers_kernel(rx: np.ndarray, tx: np.ndarray, counts: np.ndarray, n_chunks: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return _occluder_buffers(rx, tx, counts, n_chunks)
+
 
 @njit(cache=True, error_model="numpy", nogil=True)
 def _occluders_chunk_kernel(
@@ -83,9 +86,11 @@ def _occluders_chunk_kernel(
 ) -> None:
     _occluders_chunk(p0, p1, K, positions, width, rx, tx, starts, counts, near, dist2, cnt, idx)
 
+
 @njit(cache=True, error_model="numpy", nogil=True)
 def _occluders_gather_kernel(base: np.ndarray, cnt: np.ndarray, idx: np.ndarray, n_chunks: int) -> tuple[np.ndarray, np.ndarray]:
     return _occluders_gather(base, cnt, idx, n_chunks)
+
 
 @njit(cache=True, inline="always", error_model="numpy", nogil=True)
 def _sort_neighbours(r0: int, r1: int, positions: np.ndarray, starts: np.ndarray, counts: np.ndarray, near: np.ndarray, dist2: np.ndarray) -> None:
@@ -104,6 +109,7 @@ def _sort_neighbours(r0: int, r1: int, positions: np.ndarray, starts: np.ndarray
             dist2[q2] = d2
             near[q2] = k
 
+
 @njit(cache=True, inline="always", error_model="numpy", nogil=True)
 def _occluder_buffers(rx: np.ndarray, tx: np.ndarray, counts: np.ndarray, n_chunks: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Buffers of an occluder search in ``n_chunks`` chunks of pairs: the start of each chunk's part of
@@ -120,6 +126,7 @@ def _occluder_buffers(rx: np.ndarray, tx: np.ndarray, counts: np.ndarray, n_chun
     cnt = np.empty(P, np.int64)
     cnt[:] = 0
     return base, cnt, np.empty(max(1, base[n_chunks]), np.int64)
+
 
 @njit(cache=True, inline="always", error_model="numpy", nogil=True)
 def _occluders_chunk(
@@ -181,6 +188,7 @@ def _occluders_chunk(
                 q2 -= 1
         cnt[p] = K - K0
 
+
 @njit(cache=True, inline="always", error_model="numpy", nogil=True)
 def _occluders_gather(base: np.ndarray, cnt: np.ndarray, idx: np.ndarray, n_chunks: int) -> tuple[np.ndarray, np.ndarray]:
     """CSR (offsets (P + 1,), robots (K,)) from the chunks' parts of ``idx`` (:func:`_occluder_buffers`)."""
@@ -196,6 +204,7 @@ def _occluders_gather(base: np.ndarray, cnt: np.ndarray, idx: np.ndarray, n_chun
         for q in range(n):  # element copy (a slice assignment from an array compiles numba's shape-error text)
             out[offsets[first] + q] = idx[base[k] + q]
     return offsets, out
+
 
 @njit(cache=True, error_model="numpy", nogil=True)
 def occluder_frames_kernel(

@@ -18,6 +18,7 @@ def occluder_width(platform: Platform | str) -> float:
     rho = max(np.hypot(*platform.emitter_positions.T).max(), np.hypot(*platform.detector_positions.T).max())
     return float(platform.radius + rho)
 
+
 def neighbour_csr(positions: np.ndarray, reach: float, tree: cKDTree) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Neighbour lists within ``reach`` (m) of every robot from one KD-tree ``query_pairs``, as CSR
     (starts, counts, neighbours)."""
@@ -29,6 +30,7 @@ def neighbour_csr(positions: np.ndarray, reach: float, tree: cKDTree) -> tuple[n
     counts = np.bincount(src, minlength=N)
     starts = np.cumsum(counts) - counts
     return starts.astype(np.int64), counts.astype(np.int64), dst[order].astype(np.int64)
+
 
 def pair_occluders(
     positions: np.ndarray,
@@ -57,6 +59,7 @@ def pair_occluders(
     offsets, idx = occluder_lists(positions, rx, tx, width, tree)
     _, xy = occluder_frames(positions, headings, rx, np.arange(rx.shape[0]), offsets, idx)
     return offsets, idx, xy
+
 
 def occluder_lists(
     positions: np.ndarray,
@@ -95,6 +98,7 @@ def occluder_lists(
         return occluder_kernels.occluders_kernel_threaded(positions, float(width), a, b, starts, counts, nbrs, int(threads))
     return occluder_kernels.occluders_kernel(positions, float(width), a, b, starts, counts, nbrs)
 
+
 def occluder_frames(
     positions: np.ndarray, headings: np.ndarray, rx: np.ndarray, pair_of: np.ndarray, offsets: np.ndarray, idx: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
@@ -102,6 +106,7 @@ def occluder_frames(
     rx = np.ascontiguousarray(rx, dtype=np.int64)
     pair_of = np.ascontiguousarray(pair_of, dtype=np.int64)
     return occluder_kernels.occluder_frames_kernel(positions, np.cos(headings), np.sin(headings), rx, pair_of, offsets, idx)
+
 
 def line_of_sight(
     positions: np.ndarray,

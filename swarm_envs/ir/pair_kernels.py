@@ -44,6 +44,7 @@ def neighbour_csr_kernel(positions: np.ndarray, pairs: np.ndarray, reach2: float
         fill[b] += 1
     return starts, counts, nbrs
 
+
 @njit(cache=True, error_model="numpy", nogil=True)
 def select_links_kernel(
     lit: np.ndarray, rx: np.ndarray, tx: np.ndarray, rel: np.ndarray, rel_heading: np.ndarray, distance: np.ndarray
@@ -59,6 +60,7 @@ def select_links_kernel(
         rel_[k, 0], rel_[k, 1] = rel[p, 0], rel[p, 1]
         rh_[k], d_[k] = rel_heading[p], distance[p]
     return rx_, tx_, rel_, rh_, d_
+
 
 @njit(cache=True, error_model="numpy", nogil=True)
 def directed_pairs_kernel(

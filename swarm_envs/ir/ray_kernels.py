@@ -21,6 +21,7 @@ def segment_hits_disc(x0: float, y0: float, x1: float, y1: float, cx: float, cy:
 
 DISC_TOL = 1e-6  # relative: a ray's line this far outside / inside the disc radius gets the reference's verdict
 
+
 @njit(cache=True, inline="always", error_model="numpy")
 def hits_disc(
     x0: float, y0: float, x1: float, y1: float, dx: float, dy: float, L2: float, cx: float, cy: float, r2: float, r2_hi: float, r2_lo: float

@@ -33,6 +33,7 @@ def roll_tables(robots, tab_ids, tab_bear, tab_time, row_ids, row_bear, row_time
             tab_time[u, s] = never
             row_time[u, s] = never
 
+
 @njit(cache=True, nogil=True)
 def encode_tables(tab_ids, tab_bear, tab_time, robots, offset, max_entries, id_bits, count_bits, bearing_bits):  # pragma: no cover - compiled
     """Bit rows of the bearing-exchange messages of ``robots`` (:meth:`swarm_envs.sensing.exchange.BearingExchange.encode`;
@@ -84,6 +85,7 @@ def encode_tables(tab_ids, tab_bear, tab_time, robots, offset, max_entries, id_b
         lens[r] = count_bits + c * e
     return bits, lens
 
+
 @njit(cache=True, nogil=True)
 def decode_bits(bits, id_bits, count_bits, max_entries, bearing_bits):  # pragma: no cover - compiled
     """Integer part of :func:`swarm_envs.sensing.exchange.decode_rows`: count (capped at ``max_entries``),
@@ -112,6 +114,7 @@ def decode_bits(bits, id_bits, count_bits, max_entries, bearing_bits):  # pragma
             ids[r, m] = v
             qs[r, m] = q
     return ids, qs
+
 
 @njit(cache=True, nogil=True)
 def store_deliveries(r, o, own_b, hit, ids, th, now, tab_ids, tab_bear, tab_time, row_ids, row_bear, row_time):  # pragma: no cover - compiled

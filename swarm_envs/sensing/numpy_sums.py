@@ -29,6 +29,7 @@ def segment_sum(a: np.ndarray, starts: np.ndarray) -> np.ndarray:
 #: as an argument, not a global (numba's cache would freeze it).
 PAIRWISE_INIT = -0.0 if np.signbit(np.add.reduceat(np.full((3, 1), -0.0), [0], axis=0)[0, 0]) else 0.0
 
+
 @njit(cache=True, nogil=True)
 def _pairwise_sum(a, lo, n, c, init):  # pragma: no cover - compiled
     """numpy's ``DOUBLE_pairwise_sum`` of ``a[lo:lo+n, c]`` (numpy/_core/src/umath/loops_utils.h.src)."""
@@ -61,6 +62,7 @@ def _pairwise_sum(a, lo, n, c, init):  # pragma: no cover - compiled
     n2 -= n2 % 8
     return _pairwise_sum(a, lo, n2, c, init) + _pairwise_sum(a, lo + n2, n - n2, c, init)
 
+
 @njit(cache=True, nogil=True)
 def _segment_sum(a, starts, init):  # pragma: no cover - compiled
     G = starts.size
@@ -83,6 +85,7 @@ def _segment_sum(a, starts, init):  # pragma: no cover - compiled
                 out[g, c] = a[s, c] + _pairwise_sum(a, s + 1, e - s - 1, c, init)
     return out
 
+
 def sum_last(a: np.ndarray) -> np.ndarray:
     """Sum over the last axis, added left to right (``((a0 + a1) + a2) + ...``), compiled (reference:
     :func:`swarm_envs._compile.reference.sum_last`, numpy column additions in the same order, the same bits).
@@ -92,6 +95,7 @@ def sum_last(a: np.ndarray) -> np.ndarray:
         return np.zeros(a.shape[:-1])
     flat = np.ascontiguousarray(a.reshape(-1, a.shape[-1]))  # one compiled layout (a single row can come as a column view)
     return _sum_last(flat).reshape(a.shape[:-1])
+
 
 @njit(cache=True, nogil=True)
 def _sum_last(a):  # pragma: no cover - compiled
@@ -103,6 +107,7 @@ def _sum_last(a):  # pragma: no cover - compiled
             r += a[i, j]
         out[i] = r
     return out
+
 
 @njit(cache=True, nogil=True)
 def pairwise_block(a, n):  # pragma: no cover - compiled

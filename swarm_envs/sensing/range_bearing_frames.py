@@ -16,6 +16,7 @@ ID_BITS = 16
 
 _CRC_BITS = 16
 
+
 def _crc16_table() -> np.ndarray:
     """CRC-16 of every 16-bit id: avr-libc ``_crc16_update`` (poly 0xA001) over the low then high byte,
     init 0xFFFF (the Droplet firmware's header check)."""
@@ -49,6 +50,7 @@ def id_frames(ids: np.ndarray) -> np.ndarray:
     return np.concatenate(
         [np.ones((ids.size, 1), bool), (ids[:, None] >> bits) & 1 == 1, (CRC16[ids][:, None] >> bits) & 1 == 1], axis=1
     )
+
 
 def decode_ids(
     light: np.ndarray,
@@ -116,6 +118,7 @@ def decode_ids(
     )
     # the decode rule (numpy reference: swarm_envs._compile.reference.pick_ids)
     return pick_ids(heard, ident_h, crc_h, CRC16, bool(id_check), NOT_HEARD, CONFLICT)
+
 
 def frame_words_numpy(
     light: np.ndarray, frames: np.ndarray, starts: np.ndarray, heard: np.ndarray, noise: np.ndarray,

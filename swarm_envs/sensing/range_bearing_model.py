@@ -20,6 +20,7 @@ __all__ = ["POWER_LADDER", "amplitude_model", "brightness", "measure", "estimate
 #: potentiometer [F14 Sec. III], so a ~1/100 dynamic range is plausible).
 POWER_LADDER: tuple[float, ...] = tuple(2.0**-k for k in range(9))
 
+
 def amplitude_model(platform: Platform):
     """The platform's IR model with an amplitude model (the Droplet's), or ValueError for a binary one."""
     model = platform.ir_model
@@ -29,6 +30,7 @@ def amplitude_model(platform: Platform):
             "bearing estimation (use the bearing-only sensor)"
         )
     return model
+
 
 def brightness(rel_position: np.ndarray, rel_heading: np.ndarray, platform: Platform | str = "droplet") -> np.ndarray:
     """Noiseless full-power model brightness matrices (P, n, n) [F14 Eq. (4)].
@@ -44,6 +46,7 @@ def brightness(rel_position: np.ndarray, rel_heading: np.ndarray, platform: Plat
         selection, noise and clipping. Line of sight is assumed.
     """
     return pair_gains(rel_position, rel_heading, platform)
+
 
 def measure(
     brightness: np.ndarray,
@@ -100,6 +103,7 @@ def measure(
         power[todo[done]] = p
         todo = todo[~done]
     return out, power
+
 
 def estimate(
     brightness: np.ndarray,
@@ -196,6 +200,7 @@ def estimate(
     theta = np.where(none, np.nan, theta)
     phi = np.where(none, np.nan, phi)
     return R, theta, phi
+
 
 def read(
     brightness: np.ndarray,

@@ -17,6 +17,7 @@ __all__ = ["two_hop_triangles", "two_hop_propagate", "unit_mean_positions", "slo
 
 _INT64_MAX = int(np.iinfo(np.int64).max)  # a constant in the kernels (np.iinfo compiles its own helpers)
 
+
 @njit(cache=True, nogil=True)
 def two_hop_triangles(key_b, key_id, ids_in, th_in, ok_in, rid_in, rth_in, self_ids, cap):  # pragma: no cover - compiled
     """Slot order and usable triangles of every robot (the reference's first half).
@@ -115,6 +116,7 @@ def two_hop_triangles(key_b, key_id, ids_in, th_in, ok_in, rid_in, rth_in, self_
                     t += 1
         starts[u + 1] = t
     return order, inv, ok, th, starts, tu[:t], ti[:t], tj[:t], vals[:t]
+
 
 @njit(cache=True, nogil=True)
 def two_hop_propagate(ok, starts, ti, tj, logratio, weight, noise_sensitivity):  # pragma: no cover - compiled
@@ -266,6 +268,7 @@ def two_hop_propagate(ok, starts, ti, tj, logratio, weight, noise_sensitivity): 
                 cnt += nnew
     return logf, known, rigid
 
+
 @njit(cache=True, nogil=True)
 def unit_mean_positions(e, valid, inv, cos_t, sin_t, init):  # pragma: no cover - compiled
     """End of :func:`swarm_envs.sensing.scale_free.coordinates_all` after the (numpy) ``exp``: lengths
@@ -304,6 +307,7 @@ def unit_mean_positions(e, valid, inv, cos_t, sin_t, init):  # pragma: no cover 
             xy[u, s, 0] = fs[src] * cos_t[u, s]
             xy[u, s, 1] = fs[src] * sin_t[u, s]
     return f, vout, xy
+
 
 @njit(cache=True, nogil=True)
 def slot_keys(ids, th, two_pi, id_max):  # pragma: no cover - compiled

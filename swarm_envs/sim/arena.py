@@ -12,6 +12,7 @@ __all__ = ["WALL_SEGMENTS", "Arena", "check_obstacles", "distance_to_segments", 
 #: straight walls of a circular arena (a regular polygon around the circle)
 WALL_SEGMENTS = 64
 
+
 @dataclass(frozen=True)
 class Arena:
     """A walled arena centred on the origin.
@@ -82,6 +83,7 @@ class Arena:
         a = rng.uniform(-np.pi, np.pi, n)
         return np.stack([r * np.cos(a), r * np.sin(a)], -1)
 
+
 def check_obstacles(segments: object, arena: Arena, name: str = "obstacles") -> np.ndarray:
     """``segments`` as a float (S, 2, 2) array of obstacle segments (m) whose end points lie inside
     ``arena``; ``ValueError`` naming ``name`` otherwise."""
@@ -95,6 +97,7 @@ def check_obstacles(segments: object, arena: Arena, name: str = "obstacles") -> 
     if not np.all(arena.contains(arr.reshape(-1, 2))):
         raise ValueError(f"{name}: every end point must lie inside the {arena.shape} arena of size {arena.size} m")
     return arr
+
 
 def distance_to_segments(points: np.ndarray, segments: np.ndarray) -> np.ndarray:
     """(...,) distance (m) from each of ``points`` (..., 2) to the nearest of ``segments`` (S, 2, 2) (inf
@@ -110,6 +113,7 @@ def distance_to_segments(points: np.ndarray, segments: np.ndarray) -> np.ndarray
     gap = rel - t[..., None] * ab
     return np.sqrt((gap * gap).sum(-1)).min(axis=-1)
 
+
 def obstacle_points(segments: np.ndarray, radius: float) -> tuple[np.ndarray, float]:
     """Points along ``segments`` (S, 2, 2) m every radius / 2, and the distance (m) a robot centre of
     ``radius`` keeps from all of them to stay clear of the segments with a tenth of a radius to spare:
@@ -123,6 +127,7 @@ def obstacle_points(segments: np.ndarray, radius: float) -> tuple[np.ndarray, fl
         points.append(a + np.linspace(0.0, 1.0, n + 1)[:, None] * (b - a))
     # a centre farther than r' from every point of a segment sampled every s is >= sqrt(r'^2 - s^2/4) from it
     return np.concatenate(points), float(np.hypot(1.1 * radius, 0.5 * spacing))
+
 
 def as_real_array(values: object, name: str) -> np.ndarray:
     """``values`` as a float array; raises ``ValueError`` for non-real (string, complex, object) input."""

@@ -32,9 +32,11 @@ MAX_SUBSTEPS = 1000
 #: motor force over the largest velocity change of one sub-step (:func:`motor_limits`)
 MOTOR_MARGIN = 1.25
 
+
 def closing_per_substep(platform: Platform, substeps: int) -> float:
     """Distance (m) two robots driving head-on at full speed close within one sub-step of the control step."""
     return 2.0 * platform.max_speed * DT / substeps
+
 
 def default_substeps(platform: Platform) -> int:
     """The platform's default sub-steps per control step: the fewest (at least :data:`MIN_DEFAULT_SUBSTEPS`)
@@ -42,12 +44,14 @@ def default_substeps(platform: Platform) -> int:
     need = 2.0 * platform.max_speed * DT / (DEFAULT_CLOSING * platform.diameter)
     return max(MIN_DEFAULT_SUBSTEPS, math.ceil(need - 1e-9))
 
+
 def min_substeps(platform: Platform) -> int:
     """The fewest sub-steps per control step the platform may use: two robots close at most
     :data:`MAX_CLOSING` of a diameter per sub-step, and at least 3 (the motors then keep every robot on its
     exact arc, :func:`motor_limits`)."""
     need = 2.0 * platform.max_speed * DT / (MAX_CLOSING * platform.diameter)
     return max(3, math.ceil(need - 1e-9))
+
 
 def motor_limits(platform: Platform, substeps: int) -> tuple[float, float]:
     """The motors' largest force (N) and torque (N m) in the first sub-step of a control step, where the
@@ -65,6 +69,7 @@ def motor_limits(platform: Platform, substeps: int) -> tuple[float, float]:
     force = MOTOR_MARGIN * platform.mass * reach * platform.max_speed / h
     torque = MOTOR_MARGIN * moment * reach * platform.max_angular_speed / h
     return force, torque
+
 
 def push_force(platform: Platform, substeps: int) -> float:
     """The motors' largest force (N) after the first sub-step of a control step (module docstring): the

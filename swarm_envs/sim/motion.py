@@ -20,6 +20,7 @@ def wheel_gains(platform: Platform, draws: np.ndarray) -> np.ndarray:
     (:func:`motion_error`)."""
     return np.maximum(1.0 + platform.wheel_gain_std * np.asarray(draws, dtype=float), 0.0)
 
+
 def motion_error(platform: Platform, linear: np.ndarray, angular: np.ndarray, gains: np.ndarray, draws: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The linear (m/s) and angular (rad/s) velocities (n,) the wheels deliver for the commanded ``linear``
     and ``angular`` (n,) under the platform's motion error (``docs/design.md#motion-error``).
@@ -40,6 +41,7 @@ def motion_error(platform: Platform, linear: np.ndarray, angular: np.ndarray, ga
     np.clip(wheels, -vmax, vmax, out=wheels)
     left, right = wheels[:, 0], wheels[:, 1]
     return 0.5 * (left + right), (right - left) / (2 * half)
+
 
 def wheel_limited(platform: Platform, linear: np.ndarray, angular: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Commanded (v m/s, w rad/s) clipped so neither wheel of ``platform`` exceeds its max speed."""

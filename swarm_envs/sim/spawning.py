@@ -22,6 +22,7 @@ LATTICES = ("hex", "hex_rotated", "square")
 #: shifts per axis of a lattice cell tried by :func:`_best_lattice` (besides the wall-aligned and centred ones)
 LATTICE_SHIFTS = 8
 
+
 def _lattice(kind: str, pitch: float, extent: float, shift: tuple[float, float]) -> np.ndarray:
     """Points (k, 2) of a lattice of ``kind`` (:data:`LATTICES`) with nearest-neighbour distance ``pitch``
     (m), shifted by ``shift`` (m), covering the square [-extent, extent]^2."""
@@ -32,6 +33,7 @@ def _lattice(kind: str, pitch: float, extent: float, shift: tuple[float, float])
     pts = np.stack([(i + offset) * pitch + shift[0], j * row + shift[1]], -1).reshape(-1, 2)
     return pts[:, ::-1].copy() if kind == "hex_rotated" else pts
 
+
 def _shifts(kind: str, pitch: float, inner: float) -> list[tuple[float, float]]:
     """Shifts of a lattice to try: centred, aligned with the walls (a point on the lowest row and column a
     centre may take, ``-inner``, for either row parity) and a grid over the lattice cell."""
@@ -41,6 +43,7 @@ def _shifts(kind: str, pitch: float, inner: float) -> list[tuple[float, float]]:
     aligned = [(-inner + a, -inner + b) for a in (0.0, 0.5 * pitch) for b in (0.0, row if kind != "square" else 0.0)]
     grid = [(a, b) for a in np.linspace(0, period[0], LATTICE_SHIFTS, endpoint=False) for b in np.linspace(0, period[1], LATTICE_SHIFTS, endpoint=False)]
     return [(0.0, 0.0), (0.5 * pitch, 0.0), (0.0, 0.5 * pitch)] + aligned + grid
+
 
 def _best_lattice(region: Arena, radius: float, gap: float, avoid: np.ndarray | None = None, avoid_distance: float = 0.0) -> np.ndarray:
     """The lattice placement of discs of ``radius`` (m) with ``gap`` (m) between neighbours that fits the
@@ -72,6 +75,7 @@ def _best_lattice(region: Arena, radius: float, gap: float, avoid: np.ndarray | 
 #: the best lattice of recent (shape, size, radius, gap): a crowded scene spawns from it at every reset
 _LATTICE_CACHE: dict[tuple, np.ndarray] = {}
 
+
 def lattice_lower_bound(region: Arena, radius: float, gap: float) -> int:
     """A lower bound on how many discs any shifted hexagonal lattice (pitch 2 radius + gap) fits in
     ``region``, in O(1): rows x points per row inside the largest inscribed square."""
@@ -83,6 +87,7 @@ def lattice_lower_bound(region: Arena, radius: float, gap: float) -> int:
         return 0
     # an arithmetic progression with step s has at least floor(L / s) points in any interval of length L
     return int(np.floor(2 * inner / (pitch * np.sqrt(3) / 2))) * int(np.floor(2 * inner / pitch))
+
 
 def _lattice_block(region: Arena, radius: float, gap: float, n: int) -> np.ndarray:
     """At least ``n`` <= :func:`lattice_lower_bound` lattice points (hexagonal, pitch 2 radius + gap) in the
@@ -101,6 +106,7 @@ def _lattice_block(region: Arena, radius: float, gap: float, n: int) -> np.ndarr
     pts = _lattice("hex", pitch, half, (0.0, 0.0))
     return pts[np.all(np.abs(pts) <= half, axis=1)]
 
+
 def lattice_positions(
     region: Arena, radius: float, gap: float = 0.0, n: int | None = None, avoid: np.ndarray | None = None, avoid_distance: float = 0.0
 ) -> np.ndarray:
@@ -116,6 +122,7 @@ def lattice_positions(
         return pts if avoid is None else pts[_far_from(pts, avoid, avoid_distance)]
     return _best_lattice(region, radius, gap, avoid, avoid_distance)
 
+
 def fit_count(n: int, radius: float, region: Arena, gap: float = 0.0) -> int:
     """How many discs of ``radius`` (m) with ``gap`` (m) between neighbours the spawner can place in
     ``region`` for sure, up to ``n`` (a lattice placement, :func:`_best_lattice`). O(1) when the region is
@@ -124,6 +131,7 @@ def fit_count(n: int, radius: float, region: Arena, gap: float = 0.0) -> int:
     if n <= lattice_lower_bound(region, radius, gap):
         return n
     return min(n, len(_best_lattice(region, radius, gap)))
+
 
 def check_capacity(n: int, radius: float, region: Arena, gap: float = 0.0) -> None:
     """Raise ``ValueError`` saying how many fit when :func:`spawn_positions` cannot place ``n`` discs of
@@ -136,6 +144,7 @@ def check_capacity(n: int, radius: float, region: Arena, gap: float = 0.0) -> No
             f"{region.size:.4g} m: at most {fit} fit (the densest lattice placement, robots "
             + (f"{gap * 1e3:.1f} mm apart" if gap else "touching") + "); use fewer robots or a larger arena_size"
         )
+
 
 def spawn_positions(
     rng: np.random.Generator,
@@ -216,6 +225,7 @@ def spawn_positions(
             f"{len(lattice)} fit; use a larger arena_size"
         )
     return lattice[np.sort(rng.choice(len(lattice), n, replace=False))]
+
 
 def _far_from(points: np.ndarray, others: np.ndarray, distance: float) -> np.ndarray:
     """(len(points),) bool: the point is at least ``distance`` from every one of ``others``."""

@@ -368,6 +368,7 @@ COMMON_SETTINGS: dict[str, Setting] = {
     ),
 }
 
+
 @dataclass(frozen=True)
 class Default:
     """A task's default for a common setting (``Task.SETTINGS = {"n_robots": Default(5, help=...)}``), with

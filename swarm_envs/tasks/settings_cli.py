@@ -33,6 +33,7 @@ def cli_type(setting: Setting, what: str = "value") -> Callable[[str], Any]:
     parse.__name__ = setting.rule()
     return parse
 
+
 class OneLineArgumentParser(argparse.ArgumentParser):
     """argparse whose usage errors are one line, ``prog: error: message (see --help)``, exit code 2 (the
     command-line tools' errors, like train.py's)."""

@@ -19,10 +19,12 @@ def settings_table(settings: Mapping[str, Setting] | None = None) -> str:
         rows.append(f"| `{key}` | `{setting.default!r}` | {rule} | {setting.why or '-'} |")
     return "\n".join(rows) + "\n"
 
+
 def _shown_default(value: Any) -> str:
     if isinstance(value, (int, float)) and not isinstance(value, bool):
         return repr(value)
     return "``" + repr(value).replace("'", '"') + "``"
+
 
 def arguments_table(settings: Mapping[str, Setting]) -> str:
     """The ``## Arguments`` section of an env factory's docstring: a Markdown table of ``settings`` (in

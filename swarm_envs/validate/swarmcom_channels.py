@@ -161,6 +161,7 @@ def detector_channels(
     n_c = np.array([(c[1:] >= min_share * sent[b]).sum() for b, c in enumerate(per_scene)])
     return {"n_c": n_c, "sent": sent, "intact": per_scene}
 
+
 def _spread(nc: np.ndarray, paper: float | None = None) -> dict[str, float]:
     """Mean, max, min, std and the 10/25/50/75/90 % points of a sample of channel counts."""
     q = np.percentile(nc, [10, 25, 50, 75, 90])

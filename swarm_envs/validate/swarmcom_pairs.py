@@ -124,6 +124,7 @@ def experiment_a(rng: np.random.Generator, quick: bool) -> dict[str, Any]:
     out["paper_reliable_cm"] = PAPER_RELIABLE_CM
     return out
 
+
 def message_error_probability(p_e: np.ndarray, n: int, t: int) -> np.ndarray:
     """1 - P_f of [T20 Eq. (34)], summed as ``sum_{i>t} C(n,i) p^i (1-p)^(n-i)`` (no cancellation);
     equals ``1 - error_free_probability(p_e, n, t)``."""

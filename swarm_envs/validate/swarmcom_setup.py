@@ -28,6 +28,7 @@ PAPER_FIG20A = {"bound": 15, "densest": 6}  # [T20 Sec. 6.2.6]
 PAPER_BITRATE_RELIABLE = {310: 61.0, 1800: 14.0}  # cm, P_e < 0.01, m_tr = 5 [T20 Sec. 7]
 BITRATE_SWEEP = (310, 650, 1080, 1160, 1670, 1800)  # the e-puck's rates [T20 Sec. 5]; Fig. 10: 310, 650, 1160
 
+
 def _rsa(n: int, rng: np.random.Generator, inside, sample, min_dist: float, fixed: np.ndarray, max_tries: int = 20000) -> np.ndarray:
     """Random sequential addition of n discs (centres at least min_dist apart) after the ``fixed`` ones."""
     pts = [p for p in fixed]
@@ -93,12 +94,14 @@ def disc_configuration(n_others: int, rng: np.random.Generator, radius: float = 
         return _rsa(n_others, rng, lambda c: np.ones(len(c), bool), sample, dmin, np.zeros((1, 2)))
     return _hex_disc(n_others, rng, radius, dmin, sweeps=60)
 
+
 def arena_configuration(n: int, rng: np.random.Generator, side: float = ARENA) -> np.ndarray:
     """Robot 0 static at the arena centre, n-1 others uniform non-overlapping inside the walls."""
     p = get_platform(PLATFORM)
     r = p.radius
     c = np.array([[side / 2, side / 2]])
     return _rsa(n - 1, rng, lambda q: np.ones(len(q), bool), lambda m: rng.uniform(r, side - r, (m, 2)), 2 * r, c)
+
 
 class RandomWalk:
     """[T20 Alg. 1] for many robots, kinematic: rotate by a random angle in (-pi, pi] at the maximum
@@ -139,6 +142,7 @@ class RandomWalk:
         for col in (0, 1):  # a proposed position touching any other robot (old or new place) is refused
             ok[pairs[pairs[:, col] >= n, col] - n] = False
         pos[ok] = prop[ok]
+
 
 def arena_walk_snapshots(n: int, rng: np.random.Generator, replicas: int, snapshots: int, period_s: float = 30.0) -> list[tuple[np.ndarray, np.ndarray]]:
     """Snapshots like [T20 Fig. 21]: robot 0 static at the centre of the 72 x 72 cm arena, the others doing

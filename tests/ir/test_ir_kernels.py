@@ -44,7 +44,7 @@ def _occluded_pairs(platform, rng, P, dark=None):
     pair = np.repeat(np.arange(P), counts)
     xy = R[pair] * rng.uniform(0.2, 0.8, (len(pair), 1)) + rng.normal(0, platform.radius, (len(pair), 2))
     kind, params = gain_kernels.model_params(platform.ir_model)
-    args = (
+    args = gain_kernels.GainInputs(
         R, np.stack([np.cos(psi), np.sin(psi)], axis=-1), platform.detector_positions, platform.detector_directions, platform.emitter_positions,
         platform.emitter_directions, kind, params, float(platform.ir_range), offsets, xy, float(platform.radius),
     )
@@ -57,8 +57,8 @@ def test_gains_kernel_compact_rows_are_the_lit_pairs(name):
     platform = get_platform(name)
     P = 3000
     R, psi, offsets, xy, args = _occluded_pairs(platform, np.random.default_rng(21), P)
-    full, lit_full, sums_full = gain_kernels.gains_kernel(*args, False)
-    compact, lit, sums = gain_kernels.gains_kernel(*args, True)
+    full, lit_full, sums_full = gain_kernels.gains_kernel(args, False)
+    compact, lit, sums = gain_kernels.gains_kernel(args, True)
     expected = np.flatnonzero(full.reshape(P, -1).max(axis=1) > 0)
     assert 0 < len(expected) < P
     np.testing.assert_array_equal(lit, expected)
@@ -79,16 +79,16 @@ def test_threaded_gain_kernel_equals_the_serial_kernel_bit_for_bit(name):
     P = 2500
     # a run of out-of-range pairs: a whole chunk can be dark
     *_, args = _occluded_pairs(platform, np.random.default_rng(31), P, dark=slice(1000, 1400))
-    serial, lit, sums = gain_kernels.gains_kernel(*args, True)
+    serial, lit, sums = gain_kernels.gains_kernel(args, True)
     assert 0 < len(lit) < P
     for chunks in (1, 2, 3, 7, 40, P + 5):
-        threaded, lit_t, sums_t = gain_kernels.gains_kernel_threaded(*args, chunks)
+        threaded, lit_t, sums_t = gain_kernels.gains_kernel_threaded(args, chunks)
         np.testing.assert_array_equal(lit_t, lit)
         np.testing.assert_array_equal(threaded, serial)
         np.testing.assert_array_equal(sums_t, sums)
         # the gain rows left where the chunks put them: lit and sums final on return, any rows readable by
         # lit index before the gather (in any order, repeated, none), all of them after it
-        later, lit_b, sums_b, rows = gain_kernels.gains_kernel_threaded(*args, chunks, True)
+        later, lit_b, sums_b, rows = gain_kernels.gains_kernel_threaded(args, chunks, True)
         np.testing.assert_array_equal(lit_b, lit)
         np.testing.assert_array_equal(sums_b, sums)
         assert rows.n_rows == len(lit)
