@@ -47,6 +47,14 @@ def _own_group_default_sigint() -> None:
     signal.signal(signal.SIGINT, signal.SIG_DFL)
 
 
+def _interrupt_lines(proc: subprocess.Popen, stdout: str, stderr: str) -> list[str]:
+    """The interrupted command's stderr lines, after checking it exited with 130 and said one line."""
+    assert proc.returncode == 130, (stdout, stderr)
+    lines = stderr.strip().splitlines()
+    assert len(lines) == 1 and "Traceback" not in stderr, stderr
+    return lines
+
+
 def _old_run(out: Path) -> dict[str, bytes]:
     """A fake earlier run in ``out`` (with a user's file beside it); returns its files' bytes."""
     out.mkdir(parents=True)
@@ -86,9 +94,7 @@ def test_ctrl_c_saves_model_and_config(tmp_path, n_workers, over_old_run):
         if proc.poll() is None:
             proc.kill()
             proc.communicate()
-    assert proc.returncode == 130, (stdout, stderr)
-    lines = stderr.strip().splitlines()
-    assert len(lines) == 1 and "Traceback" not in stderr, stderr
+    lines = _interrupt_lines(proc, stdout, stderr)
     assert lines[0].startswith("interrupted by Ctrl-C after ")
     if over_old_run:  # the finished run is kept as it was; the partial one waits in its staging directory
         assert {name: (out / name).read_bytes() for name in old} == old
@@ -223,9 +229,7 @@ def test_ctrl_c_at_the_start_of_evaluation_publishes_the_trained_model(tmp_path)
         if proc.poll() is None:
             proc.kill()
             proc.communicate()
-    assert proc.returncode == 130, (stdout, stderr)
-    lines = stderr.strip().splitlines()
-    assert len(lines) == 1 and "Traceback" not in stderr, stderr
+    lines = _interrupt_lines(proc, stdout, stderr)
     assert lines[0].startswith(f"interrupted by Ctrl-C during evaluation: saved the trained model to {out / 'model.zip'} "
                                f"and the config to {out / 'config.yaml'}; no results"), lines[0]
     assert f"--eval-only {out / 'model.zip'}" in lines[0]

@@ -57,16 +57,21 @@ def make_run(out: Path, config: str, overrides: list[str]) -> Path:
     return out
 
 
-@pytest.fixture(scope="module", params=sorted(RUNS))
-def exported(request, tmp_path_factory):
-    """(platform, loaded run, float export folder) per platform."""
+def export_case(name: str, run: tuple, tmp_path_factory) -> tuple:
+    """(name, loaded run, float export folder) of a quick run made from ``run`` = (config, overrides)."""
     from swarm_envs.export import export_run
     from swarm_envs.export.run import load_run
 
-    base = tmp_path_factory.mktemp(request.param)
-    run_dir = make_run(base / "run", *RUNS[request.param])
+    base = tmp_path_factory.mktemp(name)
+    run_dir = make_run(base / "run", *run)
     export_run(run_dir, base / "c", onnx=False)
-    return request.param, load_run(run_dir), base / "c"
+    return name, load_run(run_dir), base / "c"
+
+
+@pytest.fixture(scope="module", params=sorted(RUNS))
+def exported(request, tmp_path_factory):
+    """(platform, loaded run, float export folder) per platform."""
+    return export_case(request.param, RUNS[request.param], tmp_path_factory)
 
 
 @needs_cc

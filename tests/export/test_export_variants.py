@@ -18,7 +18,7 @@ pytest.importorskip("stable_baselines3")
 pytest.importorskip("sb3_contrib")
 
 from swarm_envs.export.host import compiler  # noqa: E402
-from tests.export.test_export import TOLERANCE, make_run  # noqa: E402
+from tests.export.test_export import TOLERANCE, export_case  # noqa: E402
 
 needs_cc = pytest.mark.skipif(compiler() is None, reason="no C compiler (cc, gcc or clang) on this machine to build the exported C")
 
@@ -37,13 +37,7 @@ VARIANTS = {
 @pytest.fixture(scope="module", params=sorted(VARIANTS))
 def exported(request, tmp_path_factory):
     """(variant, loaded run, float export folder)."""
-    from swarm_envs.export import export_run
-    from swarm_envs.export.run import load_run
-
-    base = tmp_path_factory.mktemp(request.param)
-    run_dir = make_run(base / "run", *VARIANTS[request.param])
-    export_run(run_dir, base / "c", onnx=False)
-    return request.param, load_run(run_dir), base / "c"
+    return export_case(request.param, VARIANTS[request.param], tmp_path_factory)
 
 
 def _episodes(run, policies, seeds, steps, reset=None):
