@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 
 from swarm_envs.tasks.factories import task_module
-from swarm_envs.tasks.task import BatchState, Real, Task, bump_any, message_range, neighbourhood_sums, pairs_within
+from swarm_envs.tasks.task import BatchState, Task, bump_any, message_range, neighbourhood_sums, pairs_within, reward_weight
 
 __all__ = ["FlockingTask", "FlockingEnv", "raw_env", "parallel_env", "env"]
 
@@ -25,8 +25,7 @@ class FlockingTask(Task):
     """Flocking rewards and metrics over all env copies; extra kwarg ``collision_penalty`` (default 0.1)."""
 
     SETTINGS = {
-        "collision_penalty": Real(0.1, "weight of the fraction of robots bumping", low=0.0, high=1000.0, why="a reward weight; rewards stay within +-1000 per step",
-                                  help="weight of the fraction of robots bumping, subtracted from the reward"),
+        "collision_penalty": reward_weight(0.1, "weight of the fraction of robots bumping", help="weight of the fraction of robots bumping, subtracted from the reward"),
     }
     METRICS = {"polarisation": "mean", "cohesion": "mean", "collision_fraction": "mean"}
     HEADLINE = ("polarisation", +1)

@@ -36,6 +36,7 @@ from scipy.spatial import cKDTree
 
 from swarm_envs.tasks.factories import task_module
 from swarm_envs.tasks.task import (
+    reward_weight,
     DT,
     Default,
     Platform,
@@ -268,10 +269,8 @@ class MidAngleNavigationTask(Task):
         "lanes": Int(1, "corridor lanes (1: a straight corridor)", low=1, high=12,
                      why="each lane is 6 robot diameters wide and the default arena grows with the lanes; 12 lanes already make a 7.9 m r-one arena",
                      help="corridor lanes: 1 a straight corridor, more a winding one (each lane turns into the next behind a wall)"),
-        "arrival_bonus": Real(1.0, "reward of a seeker's arrival at the goal", low=0.0, high=1000.0, why="a reward weight; rewards stay within +-1000 per step",
-                              help="reward of a seeker's arrival"),
-        "collision_penalty": Real(0.01, "weight of a seeker's contact per step", low=0.0, high=1000.0, why="a reward weight; rewards stay within +-1000 per step",
-                                  help="reward subtracted per step a seeker is in contact"),
+        "arrival_bonus": reward_weight(1.0, "reward of a seeker's arrival at the goal", help="reward of a seeker's arrival"),
+        "collision_penalty": reward_weight(0.01, "weight of a seeker's contact per step", help="reward subtracted per step a seeker is in contact"),
     }
     METRICS = {"success_rate": "final", "time_to_goal": "final", "path_ratio": "final", "collision_fraction": "mean"}
     HEADLINE = ("success_rate", +1)

@@ -21,7 +21,7 @@ from typing import Any
 import numpy as np
 
 from swarm_envs.tasks.factories import task_module
-from swarm_envs.tasks.task import DT, BatchState, Choice, Default, Platform, Real, Task, bump_any, largest_component_fraction, pairs_within
+from swarm_envs.tasks.task import DT, BatchState, Choice, Default, Platform, Real, Task, bump_any, largest_component_fraction, pairs_within, reward_weight
 
 __all__ = ["ParityClusteringTask", "ParityClusteringEnv", "raw_env", "parallel_env", "env"]
 
@@ -43,9 +43,8 @@ class ParityClusteringTask(Task):
                                high=100.0, allow_none=True, unit="m",
                                why="at most 100 m: a distance beyond every arena the defaults build; larger values only count more pairs",
                                help="pair distance (m) the segregation index counts; ``None``: 1.5 robot diameters (robots in contact within a cluster)"),
-        "collision_penalty": Real(0.0, "weight of the fraction of robots bumping (Alg. 7 clusters by bumping)", low=0.0, high=1000.0,
-                                  why="a reward weight; rewards stay within +-1000 per step",
-                                  help="weight of the fraction of robots bumping, subtracted from the reward"),
+        "collision_penalty": reward_weight(0.0, "weight of the fraction of robots bumping (Alg. 7 clusters by bumping)",
+                                           help="weight of the fraction of robots bumping, subtracted from the reward"),
         "reward_term": Choice("separation", "what a robot is rewarded for: 'separation' (mean distance to the other parity - "
                               "to its own, over the arena size) or 'segregation' (its own share of same-parity neighbours "
                               "within cluster_radius, the per-robot term of the headline metric, plus the step's gain in "

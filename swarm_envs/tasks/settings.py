@@ -35,7 +35,7 @@ from swarm_envs.sensing.stacks import SENSING_STACKS
 from swarm_envs.sim.platforms import PLATFORMS, Platform, get_platform
 from swarm_envs.sim.control import MAX_CLOSING, MAX_SUBSTEPS, default_substeps, min_substeps
 
-__all__ = ["Setting", "Int", "Real", "Choice", "Flag", "Default", "COMMON_SETTINGS", "COMMON_DEFAULTS", "MAX_ROBOTS", "SettingsError", "validate_settings", "task_settings", "ordered_settings"]
+__all__ = ["Setting", "Int", "Real", "reward_weight", "Choice", "Flag", "Default", "COMMON_SETTINGS", "COMMON_DEFAULTS", "MAX_ROBOTS", "SettingsError", "validate_settings", "task_settings", "ordered_settings"]
 
 #: Robots (agents and static robots) of one env copy at most: the IR layer's work and memory grow with
 #: robots x neighbours, and 10,000 robots already take minutes per episode.
@@ -148,6 +148,11 @@ class Real(Setting):
         if not ok:
             raise SettingsError(key, f"{key} must be {self.rule()}{self.doc and ' (' + self.doc + ')'}, got {shown(value)}")
         return number
+
+
+def reward_weight(default: float, doc: str, help: str = "") -> Real:
+    """A reward weight setting of a task: a finite number in [0, 1000], so rewards stay within +-1000 per step."""
+    return Real(default, doc, low=0.0, high=1000.0, why="a reward weight; rewards stay within +-1000 per step", help=help)
 
 
 @dataclass(frozen=True)

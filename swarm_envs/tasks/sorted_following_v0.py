@@ -21,7 +21,7 @@ from typing import Any
 import numpy as np
 
 from swarm_envs.tasks.factories import task_module
-from swarm_envs.tasks.task import Arena, BatchState, Default, Int, Platform, Real, Task, bump_any, message_range, spawn_positions
+from swarm_envs.tasks.task import Arena, BatchState, Default, Int, Platform, Real, Task, bump_any, message_range, spawn_positions, reward_weight
 
 __all__ = ["SortedFollowingTask", "SortedFollowingEnv", "raw_env", "parallel_env", "env"]
 
@@ -45,10 +45,8 @@ class SortedFollowingTask(Task):
         "remove_leader_at": Int(0, "control step at which the leader (id 0) is switched off; 0: never", low=0, high=10**9,
                                 why="a control step, bounded like max_cycles",
                                 help="control step at which the leader (id 0) is switched off; 0: never"),
-        "speed_weight": Real(0.5, "weight of the mean speed fraction in the reward", low=0.0, high=1000.0, why="a reward weight; rewards stay within +-1000 per step",
-                             help="weight of the mean speed fraction in the reward"),
-        "collision_penalty": Real(0.1, "weight of the fraction of robots bumping", low=0.0, high=1000.0, why="a reward weight; rewards stay within +-1000 per step",
-                                  help="weight of the fraction of robots bumping, subtracted from the reward"),
+        "speed_weight": reward_weight(0.5, "weight of the mean speed fraction in the reward", help="weight of the mean speed fraction in the reward"),
+        "collision_penalty": reward_weight(0.1, "weight of the fraction of robots bumping", help="weight of the fraction of robots bumping, subtracted from the reward"),
     }
     METRICS = {"following_fraction": "mean", "line_order": "mean", "collision_fraction": "mean", "mean_speed": "mean"}
     HEADLINE = ("following_fraction", +1)

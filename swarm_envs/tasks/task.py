@@ -46,7 +46,7 @@ from scipy.spatial import cKDTree
 from swarm_envs.tasks._task_checks import REDUCTIONS, check_declarations, checked_count, checked_length
 from swarm_envs.tasks.metrics import largest_component_fraction, neighbourhood_sums
 from swarm_envs.sim.platforms import Platform, get_platform
-from swarm_envs.tasks.settings import MAX_ROBOTS, Choice, Default, Flag, Int, Real, Setting, SettingsError, task_settings
+from swarm_envs.tasks.settings import MAX_ROBOTS, Choice, Default, Flag, Int, Real, Setting, SettingsError, reward_weight, task_settings
 from swarm_envs.sim.world import N_BUMP_SECTORS
 from swarm_envs.sim.control import DT
 from swarm_envs.sim.spawning import check_capacity, lattice_positions, spawn_positions
@@ -61,6 +61,7 @@ __all__ = [
     "Setting",
     "Int",
     "Real",
+    "reward_weight",
     "Choice",
     "Flag",
     "Default",
