@@ -56,9 +56,8 @@ def min_substeps(platform: Platform) -> int:
 def motor_limits(platform: Platform, substeps: int) -> tuple[float, float]:
     """The motors' largest force (N) and torque (N m) in the first sub-step of a control step, where the
     commanded velocity change is made (:func:`push_force` bounds the force after it): :data:`MOTOR_MARGIN`
-    times the largest velocity change the control velocities of the world's docstring ask for within one
-    sub-step, linear and angular. The world applies the force with its pivot joints; the angular change needs
-    no joint (no torque opposes it) and is set directly, within the torque's reach.
+    times the largest velocity change the control velocities of :mod:`swarm_envs.sim.world`'s docstring ask
+    for within one sub-step, linear and angular.
 
     A control velocity is ``c = (D - h u) / (dt - h)`` with ``|D| <= v dt`` and ``u`` the previous one, so
     ``|c| <= v dt / (dt - 2 h)`` however the commands alternate, and a change ``c - u`` is at most twice

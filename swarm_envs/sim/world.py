@@ -2,9 +2,9 @@
 
 One :class:`pymunk.Space` per world, robots as dynamic circles, arena walls as static segments.
 Each control step (``dt`` = 0.1 s) is split into physics sub-steps. Every robot is dragged by a
-kinematic *control body* (pymunk's top-down "tank" pattern): a pivot joint with zero bias and bounded
-force makes the body's velocity track the control body's as motors would, while contacts, which have
-unbounded force, win over the motors: robots push each other and walls hold; bump
+kinematic *control body* (pymunk's top-down "tank" pattern): a pivot joint and a gear joint with zero
+bias and bounded force make the body's velocity track the control body's as motors would, while
+contacts, which have unbounded force, win over the motors: robots push each other and walls hold; bump
 sensing reads the contacts pymunk's solver processed in each sub-step (the contacts its post-solve
 collision callbacks would report, see :func:`_substeps`).
 
@@ -40,11 +40,8 @@ The control bodies are set once per control step (no Python work per sub-step be
 bound, set before the first sub-step and after it): translation along the chord of the differential-drive
 arc, ``D = v dt sinc(w dt / 2)`` towards ``heading + w dt / 2``, and rotation at ``w``. pymunk moves a
 body with its previous velocity during the first sub-step (the joints act from the second on), so the
-control velocity is set to ``(D - h u) / (dt - h)`` (h the sub-step, u the body's velocity at the step
-start), and the body's angular velocity to ``w``: contacts between frictionless discs act through the
-discs' centres and exert no torque, nor does the pivot joint anchored at the centre, so nothing but the
-motors turns a robot, and the torque of :func:`swarm_envs.sim.control.motor_limits` would make that change
-within the first sub-step (no joint is needed to hold it). A free robot then ends every control step
+control velocities are set to ``(D - h u) / (dt - h)`` and ``(w dt - h omega) / (dt - h)`` (h the
+sub-step, u / omega the body's velocity at the step start): a free robot then ends every control step
 exactly on its differential-drive arc.
 
 Motion error: :func:`swarm_envs.sim.motion.motion_error` turns commanded velocities into the ones a platform's wheels deliver
@@ -179,7 +176,7 @@ class World:
         self.bodies: list[pymunk.Body] = []
         self.controls: list[pymunk.Body] = []
         moment = pymunk.moment_for_circle(platform.mass, 0.0, platform.radius)
-        max_force = motor_limits(platform, self.substeps)[0]
+        max_force, max_torque = motor_limits(platform, self.substeps)
         for p, h in zip(positions.tolist(), headings.tolist()):
             body = pymunk.Body(platform.mass, moment)
             body.position, body.angle = p, h
@@ -192,7 +189,10 @@ class World:
             pivot = pymunk.PivotJoint(control, body, (0, 0), (0, 0))
             pivot.max_bias = 0.0  # correct velocity only, never position
             pivot.max_force = max_force
-            self.space.add(body, shape, control, pivot)
+            gear = pymunk.GearJoint(control, body, 0.0, 1.0)
+            gear.max_bias = 0.0
+            gear.max_force = max_torque
+            self.space.add(body, shape, control, pivot, gear)
             self.bodies.append(body)
             self.controls.append(control)
         for a, b in np.concatenate([arena.wall_segments(), self.obstacles]):
@@ -363,8 +363,7 @@ class World:
         the read buffer, valid until the next step)."""
         self._contacts.clear()
         rows = self._write_rows
-        rows[:, 0, :2] = self._body_motion[:, :2]  # robot bodies: velocity written back unchanged,
-        rows[:, 0, 2] = control[:, 2]  # angular velocity set to the command (no torque acts on a disc)
+        rows[:, 0] = self._body_motion  # robot bodies: written back unchanged
         rows[:, 1] = control
         space, batched = self.space, self._batched
         if batched is None:  # another pymunk layout: the public API
@@ -447,7 +446,7 @@ def step_worlds(worlds: Sequence[World], linear: np.ndarray, angular: np.ndarray
             [
                 (chord * np.cos(mid) - h * body[:, 0]) / (dt - h),
                 (chord * np.sin(mid) - h * body[:, 1]) / (dt - h),
-                angular,
+                (angular * dt - h * body[:, 2]) / (dt - h),
             ],
             axis=1,
         )
