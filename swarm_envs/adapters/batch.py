@@ -41,7 +41,7 @@ class CoreBatch:
         task_cls = getattr(task, "TASK", task)  # an env class's task
         if not (isinstance(task_cls, type) and issubclass(task_cls, Task)) or task_cls is Task:
             raise TypeError(
-                f"SwarmVectorEnv needs a subclass of swarm_envs.Task that implements the hooks (at least rewards), got {task!r:.80}"
+                f"a batched env needs a subclass of swarm_envs.Task that implements the hooks (at least rewards), got {task!r:.80}"
             )
         cfg = resolve_config(task_cls, kwargs)
         self.config = cfg
