@@ -16,8 +16,10 @@ copies here).
   :attr:`SwarmVecEnv.last_infos` rather than in per-row dicts;
 - seeding: :meth:`seed` (SB3) gives each row a seed; copy ``c`` resets with the seed of its first row;
 - ``n_workers > 1`` splits the copies over that many worker processes (SB3 ``SubprocVecEnv``-style, one
-  batched core each, contiguous blocks of copies), for machines with several cores. Each copy keeps its own
-  streams, so the rows are the same as with one process.
+  batched core each, contiguous blocks of copies), for machines with several cores; the workers share the
+  trainer's numba threads (``NUMBA_NUM_THREADS``), each ``threads // n_workers`` (at least 1). Each copy
+  keeps its own streams, so the rows are the same as with one process. One process already uses every
+  core for a large batch (``docs/design.md``, Threads).
 
 Also :class:`SB3Policy`, which wraps a trained SB3 model as an :class:`agents.base.Policy`.
 """
@@ -173,12 +175,15 @@ def _merge(parts: list[Any]) -> Any:
     return np.concatenate(parts, axis=0)
 
 
-def _worker(conn, env_cls: type, n_copies: int, kwargs: dict[str, Any]) -> None:  # pragma: no cover - runs in a child
+def _worker(conn, env_cls: type, n_copies: int, kwargs: dict[str, Any], threads: int = 1) -> None:  # pragma: no cover - runs in a child
     import signal
+
+    import numba
 
     from swarm_envs.adapters.batch import CoreBatch
 
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the trainer's to handle; it closes the workers
+    numba.set_num_threads(threads)  # the worker's share of the trainer's threads
 
     vec = CoreBatch(env_cls, n_copies, **kwargs)
     while True:
@@ -204,12 +209,15 @@ class _WorkerVec:
 
         from swarm_envs.adapters.batch import CoreBatch
 
+        import numba
+
         ctx = mp.get_context("forkserver" if "forkserver" in mp.get_all_start_methods() else "spawn")
         self.blocks = np.array_split(np.arange(n_copies), n_workers)
+        threads = max(1, numba.get_num_threads() // n_workers)  # the workers share this process's threads
         self.conns, self.procs = [], []
         for block in self.blocks:
             parent, child = ctx.Pipe()
-            proc = ctx.Process(target=_worker, args=(child, env_cls, len(block), kwargs), daemon=True)
+            proc = ctx.Process(target=_worker, args=(child, env_cls, len(block), kwargs, threads), daemon=True)
             proc.start()
             child.close()
             self.conns.append(parent)

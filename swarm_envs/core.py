@@ -156,10 +156,13 @@ class SwarmCore:
         observation). The others apply ``actions`` (n_total, action_size), already checked and clipped to
         [-1, 1] (rows of static robots are ignored), through the platform's motion error (``motion_noise``).
 
-        Thread plan: in a large single scene (the sensing's last step said so), the part of the sensing step
-        that reads nothing the physics changes (queueing messages, drawing the channel's random numbers) runs
-        on the worker thread during the physics, and the task's rewards (ground truth only) during the
-        sensing. Chipmunk and the kernels release the GIL; the results are the same as in sequence.
+        Thread plan (numba's thread count, ``NUMBA_NUM_THREADS``, default all cores): the copies' spaces
+        step on threads (:func:`swarm_envs.sim.world.step_worlds`). In a large scene, one env or a batch
+        (the sensing's last step said so), the part of the sensing step that reads nothing the physics
+        changes (queueing messages, drawing the channel's random numbers) runs on the worker thread during
+        the physics, the task's rewards (ground truth only) during the sensing, and inside the sensing the
+        gain kernel in chunks and range & bearing beside SwarmCom. The compiled sub-steps and kernels release
+        the GIL; the results are the same as in sequence, for any thread count.
         """
         starting = self._starting.copy()
         command = self._act(actions, starting)

@@ -110,6 +110,42 @@ def test_the_thread_plan_does_not_change_results(env_id, monkeypatch):
     assert_tree_equal(runs[0], runs[1])
 
 
+@pytest.mark.parametrize("platform", ["epuck", "rone"])
+def test_one_and_two_threads_give_the_same_steps(platform, monkeypatch):
+    """A batch that uses every threaded part (physics spaces on threads, the gain kernel's and the occluder
+    search's chunks, range & bearing beside SwarmCom, the rewards beside the sensing; the pair threshold
+    lowered so that a small batch qualifies) steps to the same observations, rewards and states on 1 and
+    on 2 numba threads."""
+    numba = pytest.importorskip("numba")
+    if numba.config.NUMBA_NUM_THREADS < 2:
+        pytest.skip("needs NUMBA_NUM_THREADS >= 2")
+    import swarm_envs
+    from swarm_envs.ir import layer
+    from swarm_envs.sim.world import THREADED_MIN_WORLDS, physics_threads
+
+    monkeypatch.setattr(layer, "THREADED_MIN_PAIRS", 200)
+    copies = 2 * THREADED_MIN_WORLDS
+    before = numba.get_num_threads()
+    runs = []
+    try:
+        for threads in (1, 2):
+            numba.set_num_threads(threads)
+            assert physics_threads(copies) == threads
+            vec = swarm_envs.make_vec("swarm_envs/Flocking-v0", copies, n_robots=8, platform=platform, sensing="full", message_bits=2)
+            obs, _ = vec.reset(seed=4)
+            rng = np.random.default_rng(0)
+            trace = [obs]
+            for _ in range(6):
+                obs, rew, *_ = vec.step(rng.uniform(-1, 1, vec.action_space.shape).astype(vec.action_space.dtype))
+                trace += [obs, rew, dict(vars(vec.core.state()))]
+                assert vec.core.sensing.large_scene is (threads == 2)
+            runs.append(trace)
+            vec.close()
+    finally:
+        numba.set_num_threads(before)
+    assert_tree_equal(runs[0], runs[1])
+
+
 def test_the_core_builds_its_sensing_stack_from_the_registry():
     from swarm_envs.sensing.stacks import SENSING_STACKS, build_stack
     from swarm_envs.sim.platforms import get_platform

@@ -1,6 +1,7 @@
 """The process's worker thread and helper threads, for work that runs alongside the main thread's step.
 
-A large single scene (one env copy of hundreds of robots, numba on more than one thread) has stages that
+A large scene (one env of hundreds of robots, or a batch of copies with as many IR pairs; numba on more
+than one thread) has stages that
 do not depend on each other: range & bearing and SwarmCom read the same IR links; the task's rewards
 read only the ground truth. :class:`swarm_envs.sensing.full.FullSensing` runs range & bearing here while
 the channel is simulated on the calling thread, and :class:`swarm_envs.core.SwarmCore` the rewards while

@@ -321,7 +321,7 @@ def compute_links_with_rows(
         if dead.any():
             live = ~dead
             rx, tx, pair_of, rel, rel_cs, rel_heading, distance = (v[live] for v in (rx, tx, pair_of, rel, rel_cs, rel_heading, distance))
-    threads = gain_threads(rx.shape[0]) if copy is None else 1
+    threads = gain_threads(rx.shape[0])
     occluders = None
     if occlusion == "ray":
         # occluders once per unordered pair (every candidate pair: a pair's occluders are found among its
@@ -359,11 +359,9 @@ def gain_threads(n_pairs: int) -> int:
     (the library's own, which wait on a lock when idle, so they take no core from the physics or the
     worker thread; numba's own parallel threads spin for milliseconds after each parallel region).
 
-    Only :func:`compute_links` of a single scene (``copy=None``: one env, as a large swarm is stepped)
-    uses threads; a batch of copies stays on one thread (batched training scales with copies and worker
-    processes instead), and only from the main Python thread (one large scene per process uses the
-    helpers; envs stepped from other threads stay on their thread). The result is the same bit for bit
-    either way."""
+    A scene is one env or a batch of copies (their pairs counted together). Threads are used only from the
+    main Python thread (one large scene per process uses the helpers; envs stepped from other threads
+    stay on their thread). The result is the same bit for bit either way."""
     if n_pairs < THREADED_MIN_PAIRS or threading.current_thread() is not threading.main_thread():
         return 1
     import numba

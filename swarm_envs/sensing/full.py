@@ -106,12 +106,12 @@ _STAT_NAMES = ("tx_started", "deferrals", "rx_delivered", "rx_lost", "collisions
 
 def rb_on_worker_thread(n_links: int, n_copies: int) -> bool:
     """Whether range & bearing runs on the worker thread (:mod:`swarm_envs._compile._worker`) while SwarmCom runs on
-    the calling thread: for a single scene (``n_copies == 1``) large enough for the gain kernel's threads
-    (:func:`gain_threads` of its ``n_links`` links: numba on more than one thread, called from the main
-    thread). The two read the same links, draw from their own streams and touch disjoint state, and their
-    compiled kernels release the GIL (``nogil``), so the result is the same bit for bit either way; batches
-    of copies stay on one thread."""
-    return n_copies == 1 and gain_threads(n_links) > 1
+    the calling thread: when the scene (one env or a batch of ``n_copies`` copies) is large enough for the
+    gain kernel's threads (:func:`gain_threads` of its ``n_links`` links: numba on more than one thread,
+    called from the main thread). The two read the same links, draw from their own streams and touch
+    disjoint state, and their compiled kernels release the GIL (``nogil``), so the result is the same bit
+    for bit either way."""
+    return gain_threads(n_links) > 1
 
 
 def _observation_rows(neighbours: NeighbourReadings, n: int, k: int) -> None:
@@ -294,7 +294,7 @@ class FullSensing:
         )
         take = None if gain_rows is None else gain_rows.take
 
-        # range & bearing (large single scenes: on the worker thread, while SwarmCom runs here)
+        # range & bearing (large scenes: on the worker thread, while SwarmCom runs here)
         self.large_scene = rb_on_worker_thread(len(links), self.n_copies)
         rb_future = rb = neighbours = None
         try:

@@ -52,9 +52,9 @@ world stepped directly moves exactly as commanded.
 :func:`step_worlds` steps several worlds (e.g. the copies of the batched core) at once: the control
 arithmetic runs as one numpy program over all their robots, and each space is written and read with one
 ``pymunk.batch`` call (no Python loop over bodies), and its contacts are read with one C call per sub-step
-(no Python work per contact); the spaces are stepped on threads (chipmunk releases the GIL), each a
-contiguous share of the worlds, with the same result bit for bit; :meth:`World.step` is the same
-function for one world.
+(no Python work per contact). The sub-steps themselves (chipmunk's calls) run in compiled code without the
+GIL (:mod:`swarm_envs.sim.substep_kernel`), so the spaces step on threads, each a contiguous share of the
+worlds, with the same result bit for bit; :meth:`World.step` is the same function for one world.
 """
 
 from __future__ import annotations
@@ -84,6 +84,7 @@ from swarm_envs.sim.control import (
 from swarm_envs.sim.geometry import wrap_angle
 from swarm_envs.sim.motion import wheel_limited
 from swarm_envs.sim.platforms import Platform
+from swarm_envs.sim.substep_kernel import CHIPMUNK, address, substep_spaces
 
 __all__ = ["World", "step_worlds", "physics_threads", "N_BUMP_SECTORS"]
 
@@ -231,6 +232,14 @@ class World:
                 _batched_data(buffer, fields) for buffer, fields in ((self._write_buffer, _WRITE), (self._read_buffer, _READ), (self._contacts, _CONTACT_FIELDS))
             )
         self._read_ptr = None  # the read buffer's C array when _read_rows was made
+        # the addresses substep_spaces needs: the space, the contacts' pmBatchedData, the motors' pivot joints
+        self._native = None
+        if CHIPMUNK is not None and self._batched is not None:
+            self._native = (
+                address(self.space._space),
+                address(self._batched[2]),
+                np.array([address(handle) for handle in self._pivot_handles], dtype=np.uintp),
+            )
 
     # -- copies (copy.deepcopy, pickle) ----------------------------------------------------------------
     # pymunk can pickle a space, but a restored space does not step on bit for bit: chipmunk's joint
@@ -239,7 +248,7 @@ class World:
     # sensing and task state are copied as they are), which is exact because the physics is deterministic.
     _NOT_COPIED = ("space", "bodies", "controls", "_robot_ids", "_contacts", "_read_buffer", "_write_values",
                    "_write_rows", "_write_buffer", "_batched", "_read_ptr", "_read_rows", "_pivots", "_pivot_handles",
-                   "_motor_forces")
+                   "_motor_forces", "_native")
 
     def __getstate__(self) -> dict:
         state = {k: v for k, v in self.__dict__.items() if k not in self._NOT_COPIED}
@@ -357,33 +366,59 @@ class World:
             self._set_motor_force(push)
             _substeps(self.space, h, self.substeps - 1, self._contacts, reader)
 
-    def _advance(self, control: np.ndarray, h: float) -> np.ndarray:
-        """Set the control bodies' (vx, vy, omega) rows ``control`` (n, 3), run the sub-steps of ``h``
-        seconds, and return every robot body's (x, y, angle, vx, vy, omega) (n, 6) from pymunk (a view of
-        the read buffer, valid until the next step)."""
+    def _native_ready(self) -> bool:
+        """Whether :func:`swarm_envs.sim.substep_kernel.substep_spaces` can run this world's sub-steps: pymunk's
+        layout is the known one and the space has none of the bookkeeping ``Space.step`` would do
+        (:func:`_substeps`)."""
+        if self._native is None or self._batched is None:
+            return False
+        space = self.space
+        try:
+            return not (space._bodies_to_check or space._add_later or space._remove_later or space._post_step_callbacks or space.threaded)
+        except AttributeError:  # pragma: no cover - pymunk internals changed
+            return False
+
+    def _write_control(self, control: np.ndarray) -> None:
+        """Empty the contacts and set the control bodies' (vx, vy, omega) rows ``control`` (n, 3) with one
+        C call (the known pymunk layout)."""
         self._contacts.clear()
         rows = self._write_rows
         rows[:, 0] = self._body_motion  # robot bodies: written back unchanged
         rows[:, 1] = control
-        space, batched = self.space, self._batched
-        if batched is None:  # another pymunk layout: the public API
-            pymunk.batch.set_space_bodies(space, _WRITE, self._write_buffer)
-            self._run_substeps(h, None)
-            self._read_buffer.clear()
-            pymunk.batch.get_space_bodies(space, _READ, self._read_buffer)
-            return np.frombuffer(self._read_buffer.float_buf(), dtype=np.float64)[: 12 * self.n].reshape(self.n, 2, 6)[:, 0]
-        write, read, contacts = batched
+        write = self._batched[0]
         # as pymunk.batch.set_space_bodies: the setter pops values from the start of the array
         write.floatArray.num = 0
-        _chipmunk.cpSpaceEachBody(space._space, _SET_BODY, write)
+        _chipmunk.cpSpaceEachBody(self.space._space, _SET_BODY, write)
         write.floatArray.num = len(self._write_values)
-        self._run_substeps(h, contacts)
+
+    def _read_motion(self) -> np.ndarray:
+        """Every robot body's (x, y, angle, vx, vy, omega) (n, 6) with one C call (the known pymunk layout; a
+        view of the read buffer, valid until the next step)."""
+        read = self._batched[1]
         read.floatArray.num = 0  # as Buffer.clear
-        _chipmunk.cpSpaceEachBody(space._space, _GET_BODY, read)
+        _chipmunk.cpSpaceEachBody(self.space._space, _GET_BODY, read)
         if read.floatArray.arr != self._read_ptr:  # the first read, or the C array moved: a new view
             self._read_ptr = read.floatArray.arr
             self._read_rows = np.frombuffer(self._read_buffer.float_buf(), dtype=np.float64)[: 12 * self.n].reshape(self.n, 2, 6)[:, 0]
         return self._read_rows
+
+    def _advance(self, control: np.ndarray, h: float) -> np.ndarray:
+        """Set the control bodies' (vx, vy, omega) rows ``control`` (n, 3), run the sub-steps of ``h``
+        seconds from Python, and return every robot body's (x, y, angle, vx, vy, omega) (n, 6) from pymunk
+        (a view of the read buffer, valid until the next step)."""
+        if self._batched is None:  # another pymunk layout: the public API
+            self._contacts.clear()
+            rows = self._write_rows
+            rows[:, 0] = self._body_motion
+            rows[:, 1] = control
+            pymunk.batch.set_space_bodies(self.space, _WRITE, self._write_buffer)
+            self._run_substeps(h, None)
+            self._read_buffer.clear()
+            pymunk.batch.get_space_bodies(self.space, _READ, self._read_buffer)
+            return np.frombuffer(self._read_buffer.float_buf(), dtype=np.float64)[: 12 * self.n].reshape(self.n, 2, 6)[:, 0]
+        self._write_control(control)
+        self._run_substeps(h, self._batched[2])
+        return self._read_motion()
 
     # -- dynamics --------------------------------------------------------------------------------
     def wheel_limited(self, linear: np.ndarray, angular: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -415,8 +450,8 @@ def step_worlds(worlds: Sequence[World], linear: np.ndarray, angular: np.ndarray
     its sub-steps, and one read. Updates each world's state arrays and bump flags.
 
     The spaces are stepped on ``threads`` threads (default :func:`physics_threads`), each a contiguous share
-    of the worlds (chipmunk releases the GIL; a space is touched by one thread only): the result is the same
-    bit for bit for any thread count.
+    of the worlds, their sub-steps by :func:`swarm_envs.sim.substep_kernel.substep_spaces` (compiled, without
+    the GIL; a space is touched by one thread only): the result is the same bit for bit for any thread count.
     """
     if not worlds:
         return
@@ -454,12 +489,20 @@ def step_worlds(worlds: Sequence[World], linear: np.ndarray, angular: np.ndarray
         control = np.stack([chord * np.cos(mid) / dt, chord * np.sin(mid) / dt, angular], axis=1)
     read = np.empty((bounds[-1], 6))
 
-    def advance(k: int) -> None:  # the k-th contiguous share of the worlds
-        for i in range(len(worlds) * k // chunks, len(worlds) * (k + 1) // chunks):
+    chunks = physics_threads(len(worlds)) if threads is None else max(1, min(int(threads), len(worlds)))
+    # the sub-steps compiled, without the GIL (substep_kernel), for every world that allows it (not the first
+    # step of a space, whose new bodies pymunk's Space.step checks first); the Python calls for the others
+    ready = [i for i, w in enumerate(worlds) if w._native_ready()]
+    rest = [i for i, w in enumerate(worlds) if not w._native_ready()] if len(ready) < len(worlds) else []
+    if ready:
+        _substep_native([worlds[i] for i in ready], [(bounds[i], bounds[i + 1]) for i in ready], control, read, h, substeps, chunks)
+
+    def advance(k: int) -> None:  # the k-th contiguous share of the other worlds
+        for i in rest[len(rest) * k // chunks : len(rest) * (k + 1) // chunks]:
             read[bounds[i] : bounds[i + 1]] = worlds[i]._advance(control[bounds[i] : bounds[i + 1]], h)
 
-    chunks = physics_threads(len(worlds)) if threads is None else max(1, min(int(threads), len(worlds)))
-    run_chunks(advance, chunks)
+    if rest:
+        run_chunks(advance, min(chunks, len(rest)))
     positions = read[:, 0:2].copy()
     new_headings = wrap_angle(read[:, 2])
     # velocity = motion actually achieved over the control step (pushes and walls included)
@@ -471,6 +514,37 @@ def step_worlds(worlds: Sequence[World], linear: np.ndarray, angular: np.ndarray
         w.positions, w.headings = positions[a:b], new_headings[a:b]
         w.velocities, w.angular_velocities = velocities[a:b], angular_velocities[a:b]
         w.bumps, w._body_motion = bumps[a:b], motion[a:b]
+
+
+def _substep_native(worlds: Sequence[World], rows: Sequence[tuple[int, int]], control: np.ndarray, read: np.ndarray, h: float, substeps: int, chunks: int) -> None:
+    """:func:`step_worlds`'s write, sub-steps and read of ``worlds`` (every one :meth:`World._native_ready`;
+    world ``k``'s robots are ``rows[k]`` = (start, stop) of ``control`` and ``read``): the control bodies
+    written and the bodies read back from Python (one C call each per space), the sub-steps of ``h`` s by
+    :func:`swarm_envs.sim.substep_kernel.substep_spaces` (no GIL), ``chunks`` contiguous shares of the worlds
+    on threads."""
+    for w, (a, b) in zip(worlds, rows):
+        w._write_control(control[a:b])
+    spaces = np.array([w._native[0] for w in worlds], dtype=np.uintp)
+    readers = np.array([w._native[1] for w in worlds], dtype=np.uintp)
+    joints = np.concatenate([w._native[2] for w in worlds])
+    joint_start = np.concatenate([[0], np.cumsum([len(w._native[2]) for w in worlds])]).astype(np.int64)
+    first_force = np.array([w._motor_forces[0] for w in worlds], dtype=float)
+    push = np.array([w._motor_forces[1] for w in worlds], dtype=float)
+    n = len(worlds)
+    chunks = max(1, min(chunks, n))
+
+    def share(k: int) -> None:
+        substep_spaces(*CHIPMUNK, spaces, readers, joint_start, joints, first_force, push, h, substeps, n * k // chunks, n * (k + 1) // chunks)
+
+    for w in worlds:  # as Space.step: no pymunk call may change a space while it steps
+        w.space._locked = True
+    try:
+        run_chunks(share, chunks)
+    finally:
+        for w in worlds:
+            w.space._locked = False
+    for w, (a, b) in zip(worlds, rows):
+        read[a:b] = w._read_motion()
 
 
 def _batched_data(buffer: pymunk.batch.Buffer, fields: pymunk.batch.BodyFields | pymunk.batch.ArbiterFields) -> object:
