@@ -60,9 +60,11 @@ def main() -> None:
         vec.step(rng.uniform(-1, 1, shape))
     wall.clear()
     cpu.clear()
+    links = 0
     w, c = time.perf_counter(), time.process_time()
     for _ in range(args.steps):
         vec.step(rng.uniform(-1, 1, shape))
+        links += int(vec.core.frame.stats["ir_links"].sum()) if "ir_links" in vec.core.frame.stats else 0
     total_wall, total_cpu = (time.perf_counter() - w) / args.steps, (time.process_time() - c) / args.steps
     per = {k: (wall[k] / args.steps, cpu[k] / args.steps) for k in wall}
     per["rest (actions, gather, outputs)"] = (total_wall - sum(x for x, _ in per.values()), total_cpu - sum(y for _, y in per.values()))
@@ -73,6 +75,9 @@ def main() -> None:
     for name, (x, y) in sorted(per.items(), key=lambda kv: -kv[1][0]):
         print(f"  {name:34s} {x * 1e3:8.2f} {y * 1e3:8.2f}")
     print(f"  {'non-physics':34s} {(total_wall - per['physics'][0]) * 1e3:8.2f} {(total_cpu - per['physics'][1]) * 1e3:8.2f}")
+    if links:  # the sensing's work grows with the IR links (pairs in range with light), not with the robots
+        per_step = links / args.steps
+        print(f"  IR links: {per_step / agents:.1f} per robot; sensing {per['sensing'][1] / per_step * 1e6:.2f} CPU us per link")
 
 
 if __name__ == "__main__":

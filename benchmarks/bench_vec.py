@@ -4,13 +4,14 @@ Prints agent-steps/s (robots x env copies x steps per second) with random action
 default density, for N in {10, 100} x B in {1, 16, 64, 256} and N = 1000 x B = 1, sensing full and ideal;
 each figure is the median over timed steps after warm-up (the machine is shared: medians, and same-run
 ratios; the process CPU time per step is printed too, as it depends less on other load). When ``vmas`` is importable, VMAS's flocking scenario with N = 10 and 1024 envs on the CPU
-(torch with 1 thread) is timed in the same run and printed beside, as a ratio.
+(torch with 1 thread, or ``--threads``) is timed in the same run and printed beside, as a ratio.
 
     python benchmarks/bench_vec.py                     # the full table (several minutes)
     python benchmarks/bench_vec.py --quick             # N = 10 only
     python benchmarks/bench_vec.py --n 10 --copies 64 --sensing full
     python benchmarks/bench_vec.py --interleave 5        # VMAS vs N = 10 ideal, alternated, 5 rounds
     python benchmarks/bench_vec.py --n 1000 --json     # one JSON object instead of the table (run_all.py --markdown)
+    python benchmarks/bench_vec.py --threads 2         # swarm_envs on 2 numba threads, VMAS on 2 torch threads
 
 On a shared machine the load drifts between the VMAS row and ours; ``--interleave R`` alternates the two
 measurements (VMAS, then N = 10 ideal flocking at B = 64 and 256) R times and prints each round's ratio
@@ -58,14 +59,14 @@ def time_swarm(n: int, copies: int, sensing: str, min_steps: int, min_seconds: f
     return statistics.median(times), statistics.median(cpu)
 
 
-def make_vmas(n: int, num_envs: int):
-    """VMAS flocking (num_envs envs of n agents, CPU, 1 torch thread), reset and warmed up, or None."""
+def make_vmas(n: int, num_envs: int, threads: int = 1):
+    """VMAS flocking (num_envs envs of n agents, CPU, ``threads`` torch threads), reset and warmed up, or None."""
     try:
         import torch
         import vmas
     except ImportError:
         return None
-    torch.set_num_threads(1)
+    torch.set_num_threads(threads)
     env = vmas.make_env(scenario="flocking", num_envs=num_envs, device="cpu", continuous_actions=True, n_agents=n, seed=0)
     env.reset()
     for _ in range(3):
@@ -73,9 +74,9 @@ def make_vmas(n: int, num_envs: int):
     return env
 
 
-def time_vmas(n: int, num_envs: int, steps: int, env=None) -> float | None:
-    """Median seconds per VMAS flocking step (num_envs envs of n agents, CPU, 1 torch thread), or None."""
-    env = env if env is not None else make_vmas(n, num_envs)
+def time_vmas(n: int, num_envs: int, steps: int, env=None, threads: int = 1) -> float | None:
+    """Median seconds per VMAS flocking step (num_envs envs of n agents, CPU, ``threads`` torch threads), or None."""
+    env = env if env is not None else make_vmas(n, num_envs, threads)
     if env is None:
         return None
     times = []
@@ -130,7 +131,15 @@ def main() -> None:
     parser.add_argument("--import", dest="imports", action="append", default=[], metavar="MODULE",
                         help="module or .py file that registers --env (repeatable), e.g. examples/custom_task.py")
     parser.add_argument("--json", action="store_true", help="print one JSON object (rows, VMAS, load, threads) instead of the table")
+    parser.add_argument("--threads", type=int, help="numba threads for swarm_envs and torch threads for VMAS (default: numba's count, "
+                        "NUMBA_NUM_THREADS, all cores unless set; VMAS 1)")
     args = parser.parse_args()
+    if args.threads is not None:
+        import numba
+
+        if not 1 <= args.threads <= numba.config.NUMBA_NUM_THREADS:
+            parser.error(f"--threads must be in [1, {numba.config.NUMBA_NUM_THREADS}] (NUMBA_NUM_THREADS), got {args.threads}")
+        numba.set_num_threads(args.threads)
     from swarm_envs.agents.tasks import import_modules
 
     try:
@@ -151,17 +160,18 @@ def main() -> None:
         print(json.dumps(_measure_json(grid, modes, args)))
         return
     print(f"{args.env}; load average at start: {os.getloadavg()[0]:.2f} on {os.cpu_count()} cores")
-    print(f"threads: {_numba_threads()} (numba's thread count; a single copy with >= 16384 candidate IR pairs, i.e. the N = 1000 full row, "
-          "runs its occluder search and gain kernel in that many chunks on helper threads, and SwarmCom's draws, the rewards and "
-          "range & bearing on a worker thread; everything else on one thread; NUMBA_NUM_THREADS=1 for one core)")
+    print(f"threads: {_numba_threads()} (numba's thread count: batches of >= 32 copies step their physics on that many threads, and a "
+          "scene with >= 16384 candidate IR pairs runs its occluder search and gain kernel in that many chunks, and SwarmCom's draws, "
+          "the rewards and range & bearing on a worker thread; NUMBA_NUM_THREADS=1 or --threads 1 for one core)")
     vmas_rate = None
+    vmas_threads = args.threads or 1
     if not args.no_vmas:
-        t = time_vmas(10, 1024, args.vmas_steps)
+        t = time_vmas(10, 1024, args.vmas_steps, threads=vmas_threads)
         if t is None:
             print("VMAS: not installed (pip install vmas) - no VMAS column")
         else:
             vmas_rate = 10 * 1024 / t
-            print(f"VMAS 1024 envs x 10 agents flocking (cpu, 1 torch thread): {t * 1e3:.1f} ms/step, {vmas_rate:,.0f} agent-steps/s")
+            print(f"VMAS 1024 envs x 10 agents flocking (cpu, {vmas_threads} torch threads): {t * 1e3:.1f} ms/step, {vmas_rate:,.0f} agent-steps/s")
     print()
     print("| N | B | sensing | ms / vector step | CPU ms / step | agent-steps/s | env steps/s (per copy) | vs VMAS N=10 x 1024 |")
     print("|---|---|---|---|---|---|---|---|")
@@ -178,12 +188,13 @@ def _measure_json(grid: list[tuple[int, int]], modes: list[str], args: argparse.
     """The table's measurements as one JSON-serialisable dict (times in seconds per vector step)."""
     result: dict = {"load_start": os.getloadavg()[0], "numba_threads": _numba_threads(), "vmas": None, "rows": []}
     if not args.no_vmas:
-        t = time_vmas(10, 1024, args.vmas_steps)
+        threads = args.threads or 1
+        t = time_vmas(10, 1024, args.vmas_steps, threads=threads)
         if t is not None:
             import vmas
 
             result["vmas"] = {"version": vmas.__version__, "n_agents": 10, "num_envs": 1024, "s_per_step": t,
-                              "agent_steps_per_s": 10 * 1024 / t}
+                              "agent_steps_per_s": 10 * 1024 / t, "torch_threads": threads}
     for sensing in modes:
         for n, b in grid:
             t, cpu = time_swarm(n, b, sensing, args.min_steps, args.min_seconds, args.env)

@@ -47,10 +47,13 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--no-first-run", action="store_true", help="with --markdown: skip the first-run (cold numba cache) runs")
     parser.add_argument("--no-vmas", action="store_true", help="with --markdown: do not time VMAS even if installed")
     parser.add_argument("--no-adapters", action="store_true", help="with --markdown: skip the ParallelEnv and TorchRL ratios")
+    parser.add_argument("--threads", type=int, nargs="+", default=None,
+                        help="with --markdown: thread counts of the throughput table (default 1 and 2, at most the cores)")
     args = parser.parse_args(argv)
     if args.markdown:
+        threads = args.threads or sorted({1, min(2, os.cpu_count() or 1)})
         return write_page(Path(args.markdown), args.sizes, training=not args.no_training, vmas=not args.no_vmas,
-                          first_run=not args.no_first_run, adapters=not args.no_adapters)
+                          first_run=not args.no_first_run, adapters=not args.no_adapters, threads=threads)
     status = 0
     for script in sorted(HERE.glob("bench_*.py")):
         name = script.stem.removeprefix("bench_")
@@ -66,9 +69,10 @@ def _env() -> dict[str, str]:
     return {**os.environ, "PYTHONPATH": os.pathsep.join(filter(None, [str(ROOT), os.environ.get("PYTHONPATH")]))}
 
 
-def measure_vec(n: int, with_vmas: bool) -> dict:
-    """bench_vec.py's rows for swarm size ``n`` (full and ideal sensing), in a fresh process."""
-    cmd = [sys.executable, str(HERE / "bench_vec.py"), "--n", str(n), "--json"] + ([] if with_vmas else ["--no-vmas"])
+def measure_vec(n: int, with_vmas: bool, threads: int = 1) -> dict:
+    """bench_vec.py's rows for swarm size ``n`` (full and ideal sensing) on ``threads`` threads (numba; torch
+    for VMAS), in a fresh process."""
+    cmd = [sys.executable, str(HERE / "bench_vec.py"), "--n", str(n), "--json", "--threads", str(threads)] + ([] if with_vmas else ["--no-vmas"])
     print("running:", " ".join(cmd[1:]), flush=True)
     out = subprocess.run(cmd, capture_output=True, text=True, env=_env(), cwd=ROOT, check=True).stdout
     return json.loads(out.strip().splitlines()[-1])
@@ -141,12 +145,14 @@ def machine() -> dict[str, str]:
 
 
 # --------------------------------------------------------------------------------------------- writing
-def write_page(path: Path, sizes: list[int], training: bool, vmas: bool, first_run: bool = True, adapters: bool = True) -> int:
-    """Measure and write the performance page to ``path``."""
+def write_page(path: Path, sizes: list[int], training: bool, vmas: bool, first_run: bool = True, adapters: bool = True,
+               threads: list[int] = (1,)) -> int:
+    """Measure and write the performance page to ``path``: the throughput table at each count of ``threads``
+    (VMAS on as many torch threads, measured in the first size's process)."""
     started = datetime.datetime.now(datetime.timezone.utc)
     load_before = os.getloadavg()
     info = machine()
-    runs = [measure_vec(n, with_vmas=vmas and i == 0) for i, n in enumerate(sorted(sizes))]
+    runs = [measure_vec(n, with_vmas=vmas and i == 0, threads=t) for t in threads for i, n in enumerate(sorted(sizes))]
     first = measure_first_run() if first_run else None
     views = measure_views() if adapters else None
     torchrl = measure_torchrl() if adapters else None
@@ -168,8 +174,10 @@ def render(info: dict[str, str], runs: list[dict], train: dict | str, sizes: lis
            started: datetime.datetime, minutes: float, load_before: tuple, load_after: tuple,
            first_run: dict | None = None, views: dict | None = None, torchrl: dict | str | None = None) -> str:
     """The performance page as markdown."""
-    vmas = next((r["vmas"] for r in runs if r.get("vmas")), None)
-    rows = [row for r in runs for row in r["rows"]]
+    vmas_of = {r["numba_threads"]: r["vmas"] for r in runs if r.get("vmas")}  # VMAS per thread count
+    vmas = vmas_of.get(1) or next(iter(vmas_of.values()), None)
+    rows = [{**row, "threads": r["numba_threads"]} for r in runs for row in r["rows"]]
+    thread_counts = sorted({r["numba_threads"] for r in runs})
     lines = [
         "# Performance",
         "",
@@ -189,13 +197,13 @@ def render(info: dict[str, str], runs: list[dict], train: dict | str, sizes: lis
         f"| CPU | {info['cpu']}, {info['cores']} cores |",
         f"| OS | {info['os']} |",
         f"| load average (1 / 5 / 15 min) | {_load(load_before)} before, {_load(load_after)} after |",
-        f"| numba threads | {runs[0]['numba_threads']} |",
+        f"| threads (numba; torch for VMAS) | {', '.join(map(str, thread_counts))} |",
         "| versions | " + ", ".join(f"{k} {v}" for k, v in info.items() if k not in ("cpu", "cores", "os")) + " |",
         "",
         "Timings on a shared machine drift with the other load; the load averages above say how busy it was.",
         "Every figure is a median over timed steps after warm-up, and the VMAS ratio compares figures from",
-        "the same run. Where the wall-clock time per step is well above the process's CPU time, the process",
-        "waited for a core that other work held (on one thread; the N = 1000 full row uses two).",
+        "the same run at the same thread count. On one thread, a wall-clock time per step well above the",
+        "process's CPU time means the process waited for a core that other work held.",
         "",
         "## Rollout throughput of the batched core",
         "",
@@ -203,17 +211,21 @@ def render(info: dict[str, str], runs: list[dict], train: dict | str, sizes: lis
         "actions: e-puck robots at the default density, B copies of N robots each, one batched core. An",
         "*env step* advances every copy by one control step (0.1 s of simulated time); *agent-steps/s* =",
         "N x B x env steps/s. Each swarm size runs in its own process (`python benchmarks/bench_vec.py",
-        "--n N`). A single scene with at least 16,384 candidate IR pairs (the N = 1000 full-sensing row) uses",
-        "the second core (`NUMBA_NUM_THREADS`); everything else runs on one thread.",
+        "--n N --threads T`) with T numba threads (`NUMBA_NUM_THREADS`): batches of at least 32 copies step",
+        "their physics on T threads, and a scene with at least 16,384 candidate IR pairs (256 copies of 10,",
+        "or N = 1000) runs its gain kernel in T chunks and range & bearing beside SwarmCom (docs/design.md,",
+        "Threads); results are the same for any T.",
         "",
     ]
     if vmas:
+        peers = "; ".join(f"{v['agent_steps_per_s']:,.0f} agent-steps/s ({v['s_per_step'] * 1e3:.1f} ms per step) on {t} torch "
+                          f"thread{'s' if t > 1 else ''}" for t, v in sorted(vmas_of.items()))
         lines += [
             f"Peer: [VMAS](https://github.com/proroklab/VectorizedMultiAgentSimulator) {vmas['version']}, its",
-            f"`flocking` scenario with {vmas['n_agents']} agents in {vmas['num_envs']} vectorised envs on the CPU",
-            f"(torch on 1 thread), measured in the same run: **{vmas['agent_steps_per_s']:,.0f} agent-steps/s**",
-            f"({vmas['s_per_step'] * 1e3:.1f} ms per step). VMAS simulates point-mass dynamics with exact",
-            "observations; the ideal-sensing rows are the closer comparison.",
+            f"`flocking` scenario with {vmas['n_agents']} agents in {vmas['num_envs']} vectorised envs on the CPU,",
+            f"measured in the same run: **{peers}**. VMAS simulates point-mass dynamics with exact",
+            "observations; the ideal-sensing rows are the closer comparison. Each row's ratio is to VMAS on as",
+            "many threads.",
             "",
         ]
     else:
@@ -222,12 +234,13 @@ def render(info: dict[str, str], runs: list[dict], train: dict | str, sizes: lis
             "x 1024 envs on the CPU, as a column measured in the same run).",
             "",
         ]
-    lines += ["| N | B | sensing | ms / env step | CPU ms / env step | env steps/s (per copy) | agent-steps/s | vs VMAS |",
-              "|---|---|---|---|---|---|---|---|"]
+    lines += ["| N | B | sensing | threads | ms / env step | CPU ms / env step | env steps/s (per copy) | agent-steps/s | vs VMAS |",
+              "|---|---|---|---|---|---|---|---|---|"]
     for sensing in ("full", "ideal"):
-        for row in (r for r in rows if r["sensing"] == sensing):
-            ratio = f"{row['agent_steps_per_s'] / vmas['agent_steps_per_s']:.2f}x" if vmas else "-"
-            lines.append(f"| {row['n']} | {row['copies']} | {sensing} | {row['s_per_step'] * 1e3:.1f} | "
+        for row in sorted((r for r in rows if r["sensing"] == sensing), key=lambda r: (r["n"], r["copies"], r["threads"])):
+            peer = vmas_of.get(row["threads"])
+            ratio = f"{row['agent_steps_per_s'] / peer['agent_steps_per_s']:.2f}x" if peer else "-"
+            lines.append(f"| {row['n']} | {row['copies']} | {sensing} | {row['threads']} | {row['s_per_step'] * 1e3:.1f} | "
                          f"{row['cpu_s_per_step'] * 1e3:.1f} | {row['env_steps_per_s']:,.1f} | "
                          f"{row['agent_steps_per_s']:,.0f} | {ratio} |")
     if sizes != list(SIZES):
@@ -295,6 +308,7 @@ def render(info: dict[str, str], runs: list[dict], train: dict | str, sizes: lis
         "```bash",
         "python benchmarks/bench_vec.py                        # the throughput table in one process, VMAS column if installed",
         "python benchmarks/bench_vec.py --n 1000 --copies 1 --sensing full --no-vmas   # one row",
+        "python benchmarks/bench_vec.py --threads 2            # the table on 2 threads (VMAS on 2 torch threads)",
         "python benchmarks/bench_vec.py --interleave 5         # VMAS and N = 10 ideal alternated: ratios under the same load",
         "python benchmarks/bench_stages.py                     # one vector step split into physics, sensing, observations, rewards",
         "python benchmarks/bench_first_run.py                  # the README snippet on an empty numba cache, 3 runs, and warm",

@@ -196,8 +196,11 @@ def test_performance_page_is_rendered_from_the_measurements():
     run_all = _run_all()
     rows = [{"n": 10, "copies": 256, "sensing": s, "s_per_step": t, "cpu_s_per_step": t, "agent_steps_per_s": 2560 / t,
              "env_steps_per_s": 1 / t} for s, t in (("full", 0.08), ("ideal", 0.04))]
-    runs = [{"numba_threads": 2, "vmas": {"version": "1.5.2", "n_agents": 10, "num_envs": 1024, "s_per_step": 0.2,
-                                          "agent_steps_per_s": 51200.0}, "rows": rows}]
+    rows2 = [dict(row, s_per_step=0.05, cpu_s_per_step=0.09, agent_steps_per_s=51200.0, env_steps_per_s=20.0) for row in rows[:1]]
+    runs = [{"numba_threads": 1, "vmas": {"version": "1.5.2", "n_agents": 10, "num_envs": 1024, "s_per_step": 0.2,
+                                          "agent_steps_per_s": 51200.0}, "rows": rows},
+            {"numba_threads": 2, "vmas": {"version": "1.5.2", "n_agents": 10, "num_envs": 1024, "s_per_step": 0.1,
+                                          "agent_steps_per_s": 102400.0}, "rows": rows2}]
     info = {"cpu": "Test CPU", "cores": "2", "os": "Linux", "Python": "3.11", "numpy": "2"}
     train = {"robot_steps": 202240, "train_s": 30.0, "total_s": 40.0, "robot_steps_per_s": 6741.3}
     when = datetime.datetime(2030, 1, 2, 3, 4, tzinfo=datetime.timezone.utc)
@@ -213,11 +216,12 @@ def test_performance_page_is_rendered_from_the_measurements():
     assert "20,711 against 25,686 agent-steps/s, **ratio 0.78**" in page and "(ratio 0.028)" in page
     assert "**11.9 s** (median of 3 runs: 11.2, 12.4, 11.9 s)" in page and "filled cache: 2.1 s" in page
     assert "it ran in\n2 of these 3 runs" in page
-    assert "| 10 | 256 | full | 80.0 | 80.0 | 12.5 | 32,000 | 0.62x |" in page
-    assert "| 10 | 256 | ideal | 40.0 | 40.0 | 25.0 | 64,000 | 1.25x |" in page
-    assert "51,200 agent-steps/s" in page and "6,741 robot-steps/s" in page and "Test CPU, 2 cores" in page
+    assert "| 10 | 256 | full | 1 | 80.0 | 80.0 | 12.5 | 32,000 | 0.62x |" in page
+    assert "| 10 | 256 | full | 2 | 50.0 | 90.0 | 20.0 | 51,200 | 0.50x |" in page  # to VMAS on 2 threads
+    assert "| 10 | 256 | ideal | 1 | 40.0 | 40.0 | 25.0 | 64,000 | 1.25x |" in page
+    assert "51,200 agent-steps/s (200.0 ms per step) on 1 torch thread; 102,400" in page and "6,741 robot-steps/s" in page and "Test CPU, 2 cores" in page
     assert "Reduced run: only N = 10" in page
-    without = run_all.render(info, [dict(runs[0], vmas=None)], "not measured (`--no-training`)", list(run_all.SIZES),
+    without = run_all.render(info, [dict(runs[0], vmas=None), dict(runs[1], vmas=None)], "not measured (`--no-training`)", list(run_all.SIZES),
                              when, 5.0, (0.5, 0.4, 0.3), (0.6, 0.5, 0.4))
     assert "VMAS was not installed" in without and "| - |" in without and "Reduced run" not in without
     assert "was not measured (`--no-first-run`)" in without and "Not measured (`--no-adapters`)" in without
