@@ -160,7 +160,7 @@ def main() -> None:
         print(json.dumps(_measure_json(grid, modes, args)))
         return
     print(f"{args.env}; load average at start: {os.getloadavg()[0]:.2f} on {os.cpu_count()} cores")
-    print(f"threads: {_numba_threads()} (numba's thread count: batches of >= 32 copies step their physics on that many threads, and a "
+    print(f"threads: {_numba_threads()} (numba's thread count: batches of >= 16 copies step their physics on that many threads, and a "
           "scene with >= 16384 candidate IR pairs runs its occluder search and gain kernel in that many chunks, and SwarmCom's draws, "
           "the rewards and range & bearing on a worker thread; NUMBA_NUM_THREADS=1 or --threads 1 for one core)")
     vmas_rate = None

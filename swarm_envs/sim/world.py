@@ -106,7 +106,7 @@ PLACEMENT_WALL_DEPTH = 0.25
 #: pymunk solver iterations per sub-step (contacts and motor joints)
 SOLVER_ITERATIONS = 10
 #: worlds per physics thread at least (:func:`physics_threads`): fewer do not repay a thread hand-off
-THREADED_MIN_WORLDS = 16
+THREADED_MIN_WORLDS = 8
 #: fraction of an overlap left after one second of contact correction: 30 % of it is removed every 1/60 s
 #: (pymunk's default removes 10 %), which keeps chains of robots pushed together within :data:`MAX_OVERLAP`
 COLLISION_BIAS = (1.0 - 0.3) ** 60
