@@ -6,6 +6,7 @@ from __future__ import annotations
 import numpy as np
 from swarm_envs.sensing.observation import ObservationLayout
 from swarm_envs.sim.platforms import Platform
+from swarm_envs.adapters.env import DT
 from swarm_envs.agents.scripted_base import ScriptedPolicy, circular_mean, decoded_ids, require_ids
 
 __all__ = ["SortedFollowing", "ParityClustering", "MidAngleNavigation"]
@@ -107,8 +108,11 @@ class MidAngleNavigation(ScriptedPolicy):
     """[L] Alg. 8 mid-angle navigation of a seeker on decoded ids and hop counts (``observe_ids=True``).
 
     The static robots broadcast their hop count to the goal in their message bits (LSB first; the goal 0,
-    ``2**b - 1`` unknown). The seeker keeps, per decoded sender id, the hop count two of its frames in a
-    row agreed on (forgotten after ``memory`` steps; frames naming the seeker itself are corrupted ones) and takes each neighbour's bearing from its ``range_bearing`` row
+    ``2**b - 1`` unknown). The seeker keeps, per decoded sender id, the lowest hop count two of its frames
+    in a row agreed on within the last ``memory`` steps (Alg. 8's ``LowestHopsToGoal(id(v))``: a static
+    relay's count rises only while it has lost its own links, and a rise would make the seeker turn back;
+    the sender is forgotten ``memory`` steps after its last agreed frame; frames naming the seeker itself
+    are corrupted ones) and takes each neighbour's bearing from its ``range_bearing`` row
     (the message's coarse bearing when it has none), turned back by the seeker's own rotation since the
     reading was measured (odometry from its last actions: an r-one reading refreshes only when a frame
     arrives, and a stale body-frame bearing is wrong once the robot has turned). Then, as Alg. 8: a neighbour with hop 0 is the goal
@@ -116,7 +120,16 @@ class MidAngleNavigation(ScriptedPolicy):
     the mid-angle (circular mean) of the two of them farthest apart in bearing. Ours, where Alg. 8 says
     nothing: when those two are more than ``passing_angle`` rad apart (2.5, 143 degrees: either side of the
     seeker, which is passing between them) it keeps its heading instead of turning to their mid-angle,
-    which then flips between ahead and behind; with only one such neighbour in sight the seeker steers to it; with no hop count heard it
+    which then flips between ahead and behind; with only one such neighbour in sight the seeker steers to it.
+    Ours too: the seeker goes *through* the gap it steers to. It keeps the direction of its steering target
+    (that pair's mid-angle, or that one neighbour) in its odometry frame (its own rotation summed since the
+    reset); when the direction to the same relays reverses (turns by more than 90 degrees), the seeker has
+    crossed their line (turning on the spot does not move an odometry-frame direction), and from then on
+    it steers directly away from them, on through the gap, until it hears a lower hop count, crosses back
+    (the direction reverses again), or has driven one infrared range (``platform.ir_range`` at its speed)
+    without hearing one. Steering to the mid-angle of relays already passed would take it back through the
+    gap: with relays heard right behind it (the r-one hears a neighbour at contact range), it would cross
+    and re-cross the gap until a lower hop count came in. With no hop count heard it
     random-walks ([T20] Alg. 1); a bump turns it away and it drives straight for ``evade_steps`` before
     steering again; and it does not stop at a bump with the goal ahead (Alg. 8's CheckBumpGoal), since
     without range (the r-one) a bump of a relay in front of the goal looks the same.
@@ -136,11 +149,17 @@ class MidAngleNavigation(ScriptedPolicy):
     def reset(self, n: int, rng: np.random.Generator | None = None) -> None:
         super().reset(n, rng)
         n_world = self.layout.n_world
-        self._hop = np.full((n, n_world), -1, dtype=np.int64)  # hop count two frames in a row agreed on
+        self._hop = np.full((n, n_world), -1, dtype=np.int64)  # lowest hop count two frames in a row agreed on
         self._last_hop = np.full((n, n_world), -1, dtype=np.int64)  # the last one decoded
-        self._heard_at = np.full((n, n_world), -(10**9), dtype=np.int64)
+        self._heard_at = np.full((n, n_world), -(10**9), dtype=np.int64)  # the step a value of that sender was confirmed
+        self._low_at = np.full((n, n_world), -(10**9), dtype=np.int64)  # the step its lowest value was
         self._clock = 0
         self._evade = np.zeros(n, dtype=np.int64)  # steps left of driving straight after an escape turn
+        self._odometry = np.zeros(n)  # own rotation (rad) since the reset, from the last actions
+        self._target = np.zeros(n)  # odometry-frame direction (rad) of the last relays steered to ...
+        self._target_ids = np.full((n, 2), -1, dtype=np.int64)  # ... and their ids (a pair, or one twice; -1: none yet)
+        self._passed_hop = np.full(n, -1, dtype=np.int64)  # the hop count whose robots' line the seeker crossed ...
+        self._passed_at = np.full(n, -(10**9), dtype=np.int64)  # ... and the step it did
 
     def act_batch(self, obs: dict[str, np.ndarray]) -> np.ndarray:
         require_ids(obs, "MidAngleNavigation")
@@ -150,7 +169,8 @@ class MidAngleNavigation(ScriptedPolicy):
         self._clock += 1
         unknown = 2**b - 1
         # hop counts from this step's messages, by decoded sender id (the robot's own id is a corrupted header);
-        # a value counts once two frames of that sender in a row carried it (one corrupted frame changes nothing)
+        # a value counts once two frames of that sender in a row carried it (one corrupted frame changes nothing),
+        # and the lowest one counted in the last `memory` steps is the sender's (Alg. 8's LowestHopsToGoal)
         own = np.rint(obs["own_id"][:, 0] * max(n_world - 1, 1)).astype(np.int64)
         senders = decoded_ids(obs["message_ids"], n_world)
         heard = (msg[..., 0] > 0.5) & (senders >= 0) & (senders != own[:, None])
@@ -159,12 +179,15 @@ class MidAngleNavigation(ScriptedPolicy):
         for row, slot in zip(rows, slots):  # in row order: the frames of one step one after the other
             who, value = senders[row, slot], values[row, slot]
             if self._last_hop[row, who] == value:
-                self._hop[row, who] = value
+                hop = self._hop[row, who]
+                if hop < 0 or value <= hop or self._clock - self._low_at[row, who] > self.memory:  # its lowest
+                    self._hop[row, who], self._low_at[row, who] = value, self._clock
                 self._heard_at[row, who] = self._clock
             self._last_hop[row, who] = value
         # a bearing per id: range & bearing rows (turned back by the own rotation since), else this step's
         # message bearing
         current = self._current_bearings(rb, self._rotation_since(obs))
+        self._odometry += self._turned[:, 0]  # this step's own rotation (_rotation_since)
         bearing = np.full((n, n_world), np.nan)
         bearing[rows, senders[rows, slots]] = msg[rows, slots, 1] * np.pi
         ids = decoded_ids(obs["range_bearing_ids"], n_world)
@@ -178,10 +201,13 @@ class MidAngleNavigation(ScriptedPolicy):
         goal_in_sight = known.any(axis=1) & (lowest == 0)
         candidates = known & (hop == lowest[:, None])
         theta = np.zeros(n)
+        target = np.full((n, 2), -1, dtype=np.int64)  # ids of the relays steered to (a pair, or one twice); -1: none
         for r in np.flatnonzero(known.any(axis=1)):
-            angles = bearing[r, candidates[r]]
+            who = np.flatnonzero(candidates[r])
+            angles = bearing[r, who]
             if goal_in_sight[r] or len(angles) == 1:
                 theta[r] = angles[0]
+                target[r] = -1 if goal_in_sight[r] else who[0]
                 continue
             gaps = np.abs(np.angle(np.exp(1j * (angles[:, None] - angles[None, :]))))  # pairwise separation
             i, j = np.unravel_index(np.argmax(gaps), gaps.shape)
@@ -189,6 +215,8 @@ class MidAngleNavigation(ScriptedPolicy):
                 theta[r] = 0.0  # them, so it keeps going rather than turning to their (ill-defined) mid-angle
             else:
                 theta[r] = np.angle(np.exp(1j * angles[i]) + np.exp(1j * angles[j]))  # the mid-angle
+                target[r] = sorted((who[i], who[j]))
+        self._through_the_gap(theta, target, lowest)
         steering = known.any(axis=1)
         lin = np.where(steering, self.speed, 0.0)
         ang = np.where(steering, self.turn_towards(theta, self.gain), 0.0)
@@ -203,3 +231,19 @@ class MidAngleNavigation(ScriptedPolicy):
         lin = np.where(escaping, e_lin, np.where(evading, self.speed, lin))
         ang = np.where(escaping, e_ang, np.where(evading, 0.0, ang))
         return self.compose(lin, ang)
+
+    def _through_the_gap(self, theta: np.ndarray, target: np.ndarray, lowest: np.ndarray) -> None:
+        """Turn ``theta`` (N,) (rad, body frame, the Alg. 8 steering target) around, in place, while the seeker
+        is past the relays of hop count ``lowest`` (N,): it crossed their line when the odometry-frame
+        direction of the same target relays ``target`` (N, 2) ids (-1: none, e.g. the goal) reversed
+        (class docstring)."""
+        limit = self.platform.ir_range / max(self.speed * self.platform.max_speed * DT, 1e-9)  # steps to drive one IR range
+        for r in np.flatnonzero(target[:, 0] >= 0):
+            direction = self._odometry[r] + theta[r]
+            past = self._passed_hop[r] == lowest[r] and self._clock - self._passed_at[r] <= limit
+            if np.array_equal(self._target_ids[r], target[r]) and np.cos(direction - self._target[r]) < 0:
+                past = not past  # the direction to the same relays reversed: the seeker crossed their line (or back)
+                self._passed_hop[r], self._passed_at[r] = (lowest[r], self._clock) if past else (-1, -(10**9))
+            self._target[r], self._target_ids[r] = direction, target[r]
+            if past:
+                theta[r] = np.angle(-np.exp(1j * theta[r]))  # directly away from them: on through the gap
