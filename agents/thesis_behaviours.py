@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 from swarm_envs.sensing.observation import ObservationLayout
 from swarm_envs.sim.platforms import Platform
-from swarm_envs.adapters.env import DT
+from swarm_envs.sim.control import DT
 from swarm_envs.agents.scripted_base import ScriptedPolicy, circular_mean, decoded_ids, require_ids
 
 __all__ = ["SortedFollowing", "ParityClustering", "MidAngleNavigation"]
