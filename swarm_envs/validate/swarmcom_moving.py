@@ -1,6 +1,8 @@
 """Channel count of [T20 Fig. 21] with moving robots, run in the env: the centre robot static at the centre of
-the 72 x 72 cm arena sends, the others drive the random walk of [T20 Alg. 1], and every 30 s of simulated
-time the robots that currently detect the centre are counted [T20 Sec. 6.2.6].
+the 72 x 72 cm arena sends, the others start at random places and drive the random walk of [T20 Alg. 1], and
+after 30 s of simulated time the robots that currently detect the centre are counted [T20 Sec. 6.2.6: "Every
+30 s, the number of illuminated robots, n_C, is determined ... The process is repeated 30 times per
+experiment. In other words, in total 90 experimental trials were conducted": one count per trial].
 
 Everything goes through the simulator's public API: the set-up is a task (:class:`CentreBroadcast`) made with
 :func:`swarm_envs.make_vec`, one env copy per seed; the listeners are driven by the scripted
@@ -9,14 +11,14 @@ walls, motion error on); the receiver is the ``sensing="full"`` stack (IR links 
 per-robot hardware variation, ADC noise, detector response, start detection and the dynamic threshold of
 [T20 Eq. (36)], the bit-level SwarmCom network at 310 bps).
 
-Detection rule (the paper's robots light their LEDs "whenever they receive the signal" [T20 Fig. 21]): a
-listener is lit at a count instant t when its own observation held a decoded SwarmCom frame whose header
-names the centre (the ``message_ids`` row's decoded id 0, as the receiver decoded it) in at least one control
-step of the window (t - ``window_s``, t]. A frame lasts 0.15 s (46 bit slots at 310 bps with an 8-bit
-payload) and a listener parked next to the centre decodes one every 0.2 s (every other 0.1 s step), so the
-1 s window spans about 5 frames: a robot that stays in range stays lit, one that left range more than 1 s
-ago is not. The counts for 0.3 s (the shortest window that always holds a frame's end) and 5 s windows are
-measured beside it.
+Detection rule (the paper's robots light their LEDs "whenever they receive the signal" [T20 Fig. 21]; how
+long an LED stays lit is not stated): a listener is lit at a count instant t when its own observation held a
+decoded SwarmCom frame whose header names the centre (the ``message_ids`` row's decoded id 0, as the receiver
+decoded it) in at least one control step of the window (t - ``window_s``, t]. A frame lasts 0.15 s (46 bit
+slots at 310 bps with an 8-bit payload) and a listener parked next to the centre decodes one every 1-3
+control steps (0.2 s on average), so the 0.3 s window of the rule is the shortest that always holds a frame's
+end for a robot that keeps receiving: it is lit while it currently detects the centre, and not 0.3 s after
+it stopped. The counts for 1 s and 5 s windows (an LED held lit that long) are measured beside it.
 """
 
 from __future__ import annotations
@@ -34,8 +36,8 @@ from swarm_envs.validate.swarmcom_setup import ARENA, PLATFORM
 __all__ = ["CentreBroadcast", "centre_heard", "count_lit", "moving_channels", "COUNT_PERIOD_S", "LIT_WINDOW_S", "WINDOWS_S"]
 
 COUNT_PERIOD_S = 30.0  # s between two counts of lit robots [T20 Sec. 6.2.6]
-LIT_WINDOW_S = 1.0  # s, a robot is lit when it decoded a centre frame this recently (module docstring)
-WINDOWS_S = (0.3, LIT_WINDOW_S, 5.0)  # windows measured (s): two frames' spacing plus a step, the rule's 1 s, 5 s
+LIT_WINDOW_S = 0.3  # s, a robot is lit when it decoded a centre frame this recently (module docstring)
+WINDOWS_S = (LIT_WINDOW_S, 1.0, 5.0)  # windows measured (s): the rule's, and an LED held lit 1 s or 5 s
 PAYLOAD_BITS = 8  # the centre's payload: all ones, a series of s_1 as far as a frame allows
 
 
@@ -99,7 +101,7 @@ def count_lit(
     n_world = env.task.n_world
     period = int(round(period_s / DT))
     window_steps = {w: max(1, int(round(w / DT))) for w in windows_s}
-    obs = observations if observations is not None else env.observations()
+    obs = observations if observations is not None else env.batch.observations()
     last = np.full((B, N), -(10**9), dtype=np.int64)  # step of the last frame from the centre
     out = {w: np.zeros((B, n_counts), dtype=np.int64) for w in windows_s}
     zeros = np.zeros((B, N, env.layout.action_size), dtype=np.float32)
@@ -125,15 +127,17 @@ def moving_channels(
     n_robots: int,
     relative_threshold: float,
     seeds: list[int],
-    n_counts: int,
+    n_counts: int = 1,
     period_s: float = COUNT_PERIOD_S,
     windows_s: tuple[float, ...] = WINDOWS_S,
-) -> dict[float, np.ndarray]:
+) -> dict[str, Any]:
     """[T20 Fig. 21] with moving robots: ``n_robots`` e-pucks (the centre among them) in the 72 x 72 cm arena,
-    one env copy per seed of ``seeds``, m_tr = ``relative_threshold`` (ADC counts), 310 bps; the agents
-    drive the random walk [T20 Alg. 1, t_m = 2 s, v in [-128, 128] mm/s, no obstacle avoidance]; lit
-    agents counted at t = ``period_s``, 2 ``period_s``, ... (``n_counts`` counts per copy; the first after
-    one period of walking from the spawn). Returns {window (s): (len(seeds), n_counts) lit agents}."""
+    one env copy (trial) per seed of ``seeds``, m_tr = ``relative_threshold`` (ADC counts), 310 bps; the agents
+    start at random places and headings and drive the random walk [T20 Alg. 1, t_m = 2 s, v in
+    [-128, 128] mm/s, no obstacle avoidance]; lit agents counted at t = ``period_s``, 2 ``period_s``, ...
+    (``n_counts`` counts per trial). Returns ``lit`` {window (s): (len(seeds), n_counts) lit agents} and
+    ``centre_drift_m`` (len(seeds),): how far (m, ground truth) the walkers pushed the static centre robot
+    off the arena centre by the last count (its motors hold it with the physics' bounded motor force)."""
     steps = int(round(n_counts * period_s / DT))
     env = swarm_envs.make_vec(
         CentreBroadcast, len(seeds), platform=PLATFORM, n_robots=n_robots - 1, arena_size=ARENA, sensing="full",
@@ -143,6 +147,8 @@ def moving_channels(
     try:
         obs, _ = env.reset(seed=[int(s) for s in seeds])
         walk = RandomWalk(env.platform, env.layout, np.random.default_rng(np.random.SeedSequence([int(s) for s in seeds])))
-        return count_lit(env, walk, n_counts, period_s, windows_s, observations=obs)
+        lit = count_lit(env, walk, n_counts, period_s, windows_s, observations=obs)
+        centre = env.core.positions.reshape(len(seeds), env.task.n_world, 2)[:, 0]
+        return {"lit": lit, "centre_drift_m": np.linalg.norm(centre, axis=1)}
     finally:
         env.close()

@@ -52,7 +52,9 @@ def test_centre_heard_reads_the_decoded_sender_id():
 
 
 def test_moving_count_is_bounded():
-    lit = moving_channels(6, 10, [0, 1], n_counts=2, period_s=3.0, windows_s=(1.0,))[1.0]
+    res = moving_channels(6, 10, [0, 1], n_counts=2, period_s=3.0, windows_s=(1.0,))
+    lit = res["lit"][1.0]
+    assert res["centre_drift_m"].shape == (2,) and (res["centre_drift_m"] < 0.36).all()
     assert lit.shape == (2, 2)
     assert (lit >= 0).all() and (lit <= 5).all() and lit.sum() > 0
 
