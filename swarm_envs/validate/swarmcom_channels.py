@@ -17,6 +17,12 @@ from swarm_envs.ir.occlusion import line_of_sight, occluder_width, pair_occluder
 from swarm_envs.sim.copies import CopyRandom
 from swarm_envs.sim.geometry import wrap_angle
 from swarm_envs.sim.platforms import get_platform
+from swarm_envs.validate.swarmcom_moving import (
+    COUNT_PERIOD_S,
+    LIT_WINDOW_S,
+    WINDOWS_S,
+    moving_channels,
+)
 from swarm_envs.validate.swarmcom_setup import (
     ARENA,
     DISC_R,
@@ -30,7 +36,6 @@ from swarm_envs.validate.swarmcom_setup import (
     arena_walk_snapshots,
     disc_configuration,
 )
-from swarm_envs.validate.swarmcom_moving import COUNT_PERIOD_S, LIT_WINDOW_S, WINDOWS_S, moving_channels
 
 
 def centre_links(pos: np.ndarray, head: np.ndarray, max_range: float = DISC_R, occlusion: str = "ray") -> tuple[np.ndarray, np.ndarray]:

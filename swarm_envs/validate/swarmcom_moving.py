@@ -33,7 +33,7 @@ from swarm_envs.agents.scripted import RandomWalk
 from swarm_envs.tasks.task import DT, BatchState, Task, spawn_positions
 from swarm_envs.validate.swarmcom_setup import ARENA, PLATFORM
 
-__all__ = ["CentreBroadcast", "centre_heard", "count_lit", "moving_channels", "COUNT_PERIOD_S", "LIT_WINDOW_S", "WINDOWS_S"]
+__all__ = ["COUNT_PERIOD_S", "LIT_WINDOW_S", "WINDOWS_S", "CentreBroadcast", "centre_heard", "count_lit", "moving_channels"]
 
 COUNT_PERIOD_S = 30.0  # s between two counts of lit robots [T20 Sec. 6.2.6]
 LIT_WINDOW_S = 0.3  # s, a robot is lit when it decoded a centre frame this recently (module docstring)
@@ -99,8 +99,8 @@ def count_lit(
     Returns {window: (B, n_counts) int}: lit agents per copy and count."""
     B, N = env.num_envs, env.n_agents
     n_world = env.task.n_world
-    period = int(round(period_s / DT))
-    window_steps = {w: max(1, int(round(w / DT))) for w in windows_s}
+    period = round(period_s / DT)
+    window_steps = {w: max(1, round(w / DT)) for w in windows_s}
     obs = observations if observations is not None else env.batch.observations()
     last = np.full((B, N), -(10**9), dtype=np.int64)  # step of the last frame from the centre
     out = {w: np.zeros((B, n_counts), dtype=np.int64) for w in windows_s}
@@ -138,7 +138,7 @@ def moving_channels(
     (``n_counts`` counts per trial). Returns ``lit`` {window (s): (len(seeds), n_counts) lit agents} and
     ``centre_drift_m`` (len(seeds),): how far (m, ground truth) the walkers pushed the static centre robot
     off the arena centre by the last count (its motors hold it with the physics' bounded motor force)."""
-    steps = int(round(n_counts * period_s / DT))
+    steps = round(n_counts * period_s / DT)
     env = swarm_envs.make_vec(
         CentreBroadcast, len(seeds), platform=PLATFORM, n_robots=n_robots - 1, arena_size=ARENA, sensing="full",
         message_bits=PAYLOAD_BITS, observe_ids=True, relative_threshold=relative_threshold, bitrate=310,

@@ -6,7 +6,12 @@ import pytest
 
 import swarm_envs
 from swarm_envs.agents.scripted import RandomWalk
-from swarm_envs.validate.swarmcom_moving import CentreBroadcast, centre_heard, count_lit, moving_channels
+from swarm_envs.validate.swarmcom_moving import (
+    CentreBroadcast,
+    centre_heard,
+    count_lit,
+    moving_channels,
+)
 
 
 class _ThirdDeaf(CentreBroadcast):
