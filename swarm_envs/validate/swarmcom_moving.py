@@ -9,7 +9,9 @@ Everything goes through the simulator's public API: the set-up is a task (:class
 :class:`swarm_envs.agents.scripted.RandomWalk` on their observations (physics with collisions and the arena
 walls, motion error on); the receiver is the ``sensing="full"`` stack (IR links with per-ray occlusion and
 per-robot hardware variation, ADC noise, detector response, start detection and the dynamic threshold of
-[T20 Eq. (36)], the bit-level SwarmCom network at 310 bps).
+[T20 Eq. (36)], the bit-level SwarmCom network at 310 bps). The bearing exchange is ``exchange="ideal"``: over
+the network it would put the centre's bearing lists on the air between its frames, and the paper's centre
+sends only its signal.
 
 Detection rule (the paper's robots light their LEDs "whenever they receive the signal" [T20 Fig. 21]; how
 long an LED stays lit is not stated): a listener is lit at a count instant t when its own observation held a
