@@ -17,6 +17,10 @@
     frames intact) and, as a second row, as a noiseless amplitude above m_tr
     (:func:`swarm_envs.validate.swarmcom_channels.centre_amplitude`) for per-ray line of sight (as
     simulated) and for a centre-line rule, with m_tr swept over the paper's 61/45/33/21 cm settings;
+    and Fig. 21 as the paper ran it, with the robots moving in the env
+    (:func:`swarm_envs.validate.swarmcom_moving.moving_channels`: the random walk through physics and the
+    full sensing stack, 100 trials per size, each counted once after 30 s; a robot is lit when it decoded a
+    frame from the centre in the last 0.3 s, counts for 1 s and 5 s beside it);
 (c) local broadcast vs flooding: 2..7 robots doing the random walk of [T20 Alg. 1] (t_m = 2 s) in the
     72 x 72 cm arena, 310 bps, m_tr = 10; message loss P_l (a message is lost for a robot that has not
     received it 2 s after it was queued) [T20 Sec. 6.2.2, Fig. 16b]; flooding is run with the network's
@@ -37,8 +41,8 @@ simulated side by side in one network, 3 m apart (beyond the 1 m IR range), so t
 Run times are printed at the end of each run.
 
 This module is the command line; the experiments live in :mod:`swarm_envs.validate.swarmcom_pairs` (a, d, e),
-:mod:`swarm_envs.validate.swarmcom_channels` (b) and :mod:`swarm_envs.validate.swarmcom_flooding` (c), their
-shared set-ups and the paper's figures in :mod:`swarm_envs.validate.swarmcom_setup`, and the tables, rows and
+:mod:`swarm_envs.validate.swarmcom_channels` and :mod:`swarm_envs.validate.swarmcom_moving` (b) and
+:mod:`swarm_envs.validate.swarmcom_flooding` (c), their shared set-ups and the paper's figures in :mod:`swarm_envs.validate.swarmcom_setup`, and the tables, rows and
 plots in :mod:`swarm_envs.validate.swarmcom_report`.
 """
 

@@ -1,7 +1,8 @@
 """Channel count of the SwarmCom validation [T20 Sec. 6.2.6, Figs. 20a, 21]: how many robots can tell a
 centre robot's s_0 from s_1, as a noiseless received amplitude above m_tr (per-ray or centre-line occlusion)
 and through the simulated receiver (:func:`detector_channels`), over random placements in the 61 cm disc
-and random-walk snapshots in the 72 x 72 cm arena (experiment b)."""
+and random-walk snapshots in the 72 x 72 cm arena, and with the robots moving in the env
+(:func:`swarm_envs.validate.swarmcom_moving.moving_channels`) (experiment b)."""
 
 from __future__ import annotations
 
@@ -16,6 +17,12 @@ from swarm_envs.ir.occlusion import line_of_sight, occluder_width, pair_occluder
 from swarm_envs.sim.copies import CopyRandom
 from swarm_envs.sim.geometry import wrap_angle
 from swarm_envs.sim.platforms import get_platform
+from swarm_envs.validate.swarmcom_moving import (
+    COUNT_PERIOD_S,
+    LIT_WINDOW_S,
+    WINDOWS_S,
+    moving_channels,
+)
 from swarm_envs.validate.swarmcom_setup import (
     ARENA,
     DISC_R,
@@ -187,16 +194,21 @@ def experiment_b(rng: np.random.Generator, quick: bool, fig21_mtrs: tuple[float,
     """Channels per robot [T20 Sec. 6.2.6, Figs. 20a, 21]: the noiseless amplitude count for both occlusion
     rules and every m_tr of ``M_TR_SWEEP``, and the detector count (:func:`detector_channels`, per-ray
     occlusion) at each figure's m_tr (Fig. 20a: ``PAPER_MTR``; Fig. 21: ``fig21_mtrs``, default ``FIG21_MTR`` and
-    ``PAPER_MTR``)."""
+    ``PAPER_MTR``), and the moving count in the env at each of ``fig21_mtrs``
+    (:func:`swarm_envs.validate.swarmcom_moving.moving_channels`: ``moving_trials`` trials, each an env copy
+    started at random and counted once after 30 s of walking, as the paper's 30 trials per size)."""
     det_rng = rng.spawn(1)[0]  # the detector's draws: the scenes are the same with or without them
+    moving_rng = rng.spawn(1)[0]  # the moving count's env seeds: the other draws are the same with or without it
     if quick:
         counts = [1, 5, 10, 20, 40, 80, 120, 160, 200, 240, 272]
         trials = 20
         arena_trials, replicas, snapshots = 100, 25, 4
+        moving_trials = 4
     else:
         counts = [1, 2, 5, 10, 15, 20, 30, 40, 50, 60, 70, 80, 90, 100, 110, 120, 140, 160, 180, 200, 220, 240, 255, 265, 272]
         trials = 300
         arena_trials, replicas, snapshots = 1000, 100, 10
+        moving_trials = 100
     area = np.pi * DISC_R**2
     curve = []
     for n in counts:
@@ -237,6 +249,14 @@ def experiment_b(rng: np.random.Generator, quick: bool, fig21_mtrs: tuple[float,
             det = _detector_counts(scenes["walk"], m_tr, det_rng, kmax)
             arena[n][f"walk_detector_mtr{m_tr}"] = _spread(det["n_c"].astype(float), PAPER_ARENA_NC[n])
             arena[n][f"walk_detector_any_mtr{m_tr}"] = _spread(det["n_c_any"].astype(float), PAPER_ARENA_NC[n])
+    env_seeds = [int(s) for s in moving_rng.integers(0, 2**31, moving_trials)]
+    for n in (10, 20, 30):
+        for m_tr in fig21_mtrs:
+            mv = moving_channels(n, m_tr, env_seeds)
+            for window, lit in mv["lit"].items():
+                key = f"moving_mtr{m_tr}" if window == LIT_WINDOW_S else f"moving_mtr{m_tr}_window{window:g}s"
+                arena[n][key] = _spread(lit.ravel().astype(float), PAPER_ARENA_NC[n])
+            arena[n][f"moving_centre_drift_cm_mtr{m_tr}"] = _spread(100.0 * mv["centre_drift_m"])
     key = f"ray_mtr{PAPER_MTR}"
     dkey = f"detector_mtr{PAPER_MTR}"
     return {
@@ -244,6 +264,7 @@ def experiment_b(rng: np.random.Generator, quick: bool, fig21_mtrs: tuple[float,
         "trials_per_density": trials,
         "arena": arena,
         "arena_snapshots": {"uniform": arena_trials, "walk": replicas * snapshots},
+        "moving": {"trials": moving_trials, "seeds": env_seeds, "count_at_s": COUNT_PERIOD_S, "window_s": LIT_WINDOW_S, "windows_s": list(WINDOWS_S)},
         "rules": list(OCC_RULES),
         "m_tr_sweep": list(M_TR_SWEEP),
         "fig21_m_tr": list(fig21_mtrs),

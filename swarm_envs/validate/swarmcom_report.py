@@ -160,6 +160,17 @@ def print_results(results: dict[str, Any]) -> None:
         for n, r in b["arena"].items():
             cells = [f"{r[key]['median']:4.0f} [{r[key]['p10']:.0f}, {r[key]['p90']:.0f}] ({r[key]['mean']:.1f})" for _, key in cols]
             print(f"  {n:>6} | {r['paper']:>5} | " + " | ".join(f"{c:>25}" for c in cells))
+        if "moving" in b:
+            mv = b["moving"]
+            print(f"  moving robots in the env [Alg. 1 random walk, full sensing]: {mv['trials']} trials, each counted once after {mv['count_at_s']:g} s;"
+                  " lit = decoded a centre frame within the window: median [10%, 90%] (mean); the static centre pushed off the centre by (cm)")
+            mcols = [(f"moving m_tr={m:g}, {w:g} s", f"moving_mtr{m}" if w == mv["window_s"] else f"moving_mtr{m}_window{w:g}s")
+                     for m in b["fig21_m_tr"] for w in mv["windows_s"]]
+            print(f"  {'robots':>6} | {'paper':>5} | " + " | ".join(f"{name:>25}" for name, _ in mcols) + " | centre pushed by, median [max]")
+            for n, r in b["arena"].items():
+                cells = [f"{r[key]['median']:4.0f} [{r[key]['p10']:.0f}, {r[key]['p90']:.0f}] ({r[key]['mean']:.1f})" for _, key in mcols]
+                drift = r[f"moving_centre_drift_cm_mtr{b['fig21_m_tr'][0]}"]
+                print(f"  {n:>6} | {r['paper']:>5} | " + " | ".join(f"{c:>25}" for c in cells) + f" | {drift['median']:.1f} [{drift['max']:.1f}]")
         print("  noiseless threshold sweep, walk snapshots, per ray: median [10%, 90%] (mean) by m_tr (paper ranges 61/45/33/21 cm)")
         for n, r in b["arena"].items():
             print(f"  {n:>6} | {r['paper']:>5} | " + " | ".join(
@@ -249,6 +260,15 @@ def rows(results: dict[str, Any]) -> list[Row]:
                     continue  # the noiseless sweep covers M_TR_SWEEP only
                 cells = " / ".join(f"{arena[n][key]['median']:.0f} [{arena[n][key]['p10']:.0f}, {arena[n][key]['p90']:.0f}]" for n in ns)
                 out.append(Row("[T20 Fig. 21]", f"n_C with 10 / 20 / 30 robots, m_tr = {m} ({label})", cells,
+                               " / ".join(str(arena[n]["paper"]) for n in ns), fig21, how))
+        if "moving" in b:
+            mv = b["moving"]
+            how = (f"median [10 %, 90 %] of {mv['trials']} trials, each an env copy started at random and counted once after {mv['count_at_s']:g} s of the random walk "
+                   f"(physics, full sensing); lit: decoded a frame from the centre in the last {mv['window_s']:g} s")
+            for m in b["fig21_m_tr"]:
+                key = f"moving_mtr{m}"
+                cells = " / ".join(f"{arena[n][key]['median']:.0f} [{arena[n][key]['p10']:.0f}, {arena[n][key]['p90']:.0f}]" for n in ns)
+                out.append(Row("[T20 Fig. 21]", f"n_C with 10 / 20 / 30 robots, m_tr = {m} (moving, env)", cells,
                                " / ".join(str(arena[n]["paper"]) for n in ns), fig21, how))
     if "c" in results:
         c = results["c"]

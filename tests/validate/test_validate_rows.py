@@ -57,6 +57,9 @@ def test_swarmcom_channels_quick_detector_below_noiseless(capsys):
     for n, arena in b["arena"].items():
         assert arena["walk_detector_mtr5"]["mean"] <= arena["walk_ray_mtr5"]["mean"]
     assert any(r["figure"] == "[T20 Fig. 21]" and "detector" in r["quantity"] for r in rows)
+    assert any(r["figure"] == "[T20 Fig. 21]" and "moving" in r["quantity"] for r in rows)
+    for n, arena in b["arena"].items():  # lit listeners, robots moving: at most the n - 1 listeners
+        assert 0 <= arena["moving_mtr10"]["min"] <= arena["moving_mtr10"]["max"] <= int(n) - 1
 
 
 @pytest.mark.slow
