@@ -24,11 +24,29 @@ import argparse
 import json
 import os
 import statistics
+import sys
 import time
 
 import numpy as np
 
 os.environ.setdefault("OMP_NUM_THREADS", "1")
+
+
+def _threads_argument(argv: list[str]) -> int | None:
+    """The value of ``--threads`` in ``argv`` (None when absent or not an integer; argparse reports it)."""
+    for i, arg in enumerate(argv):
+        value = arg.split("=", 1)[1] if arg.startswith("--threads=") else (argv[i + 1] if arg == "--threads" and i + 1 < len(argv) else None)
+        if value is not None:
+            try:
+                return int(value)
+            except ValueError:
+                return None
+    return None
+
+
+# numba's thread pool is sized when numba starts: --threads T asks for T whatever NUMBA_NUM_THREADS says
+if (_T := _threads_argument(sys.argv[1:])) is not None and _T >= 1:
+    os.environ["NUMBA_NUM_THREADS"] = str(_T)
 
 import swarm_envs  # noqa: E402
 
@@ -131,14 +149,14 @@ def main() -> None:
     parser.add_argument("--import", dest="imports", action="append", default=[], metavar="MODULE",
                         help="module or .py file that registers --env (repeatable), e.g. examples/custom_task.py")
     parser.add_argument("--json", action="store_true", help="print one JSON object (rows, VMAS, load, threads) instead of the table")
-    parser.add_argument("--threads", type=int, help="numba threads for swarm_envs and torch threads for VMAS (default: numba's count, "
-                        "NUMBA_NUM_THREADS, all cores unless set; VMAS 1)")
+    parser.add_argument("--threads", type=int, help="numba threads for swarm_envs (overrides NUMBA_NUM_THREADS) and torch threads "
+                        "for VMAS (default: numba's count, NUMBA_NUM_THREADS, all cores unless set; VMAS 1)")
     args = parser.parse_args()
     if args.threads is not None:
         import numba
 
-        if not 1 <= args.threads <= numba.config.NUMBA_NUM_THREADS:
-            parser.error(f"--threads must be in [1, {numba.config.NUMBA_NUM_THREADS}] (NUMBA_NUM_THREADS), got {args.threads}")
+        if args.threads < 1:
+            parser.error(f"--threads must be at least 1, got {args.threads}")
         numba.set_num_threads(args.threads)
     from swarm_envs.agents.tasks import import_modules
 
