@@ -492,8 +492,9 @@ def step_worlds(worlds: Sequence[World], linear: np.ndarray, angular: np.ndarray
     chunks = physics_threads(len(worlds)) if threads is None else max(1, min(int(threads), len(worlds)))
     # the sub-steps compiled, without the GIL (substep_kernel), for every world that allows it (not the first
     # step of a space, whose new bodies pymunk's Space.step checks first); the Python calls for the others
-    ready = [i for i, w in enumerate(worlds) if w._native_ready()]
-    rest = [i for i, w in enumerate(worlds) if not w._native_ready()] if len(ready) < len(worlds) else []
+    native = [w._native_ready() for w in worlds]
+    ready = [i for i, ok in enumerate(native) if ok]
+    rest = [i for i, ok in enumerate(native) if not ok]
     if ready:
         _substep_native([worlds[i] for i in ready], [(bounds[i], bounds[i + 1]) for i in ready], control, read, h, substeps, chunks)
 
