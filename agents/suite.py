@@ -106,14 +106,23 @@ def plan(suite: dict[str, Any], out: Path, tasks: list[str] | None = None, seeds
     return runs
 
 
-def _run(run: dict[str, Any], log: Path) -> tuple[str, int, float]:
+def job_environment(jobs: int) -> dict[str, str]:
+    """The environment of each ``train.py`` run when ``jobs`` run at once: the cores are shared out, so each
+    run gets ``cores // jobs`` numba threads (at least 1) unless ``NUMBA_NUM_THREADS`` is set already.
+    Results do not depend on the thread count; oversubscribed cores only slow every run down."""
+    env = {**os.environ, "PYTHONUNBUFFERED": "1"}
+    env.setdefault("NUMBA_NUM_THREADS", str(max(1, (os.cpu_count() or 1) // max(1, jobs))))
+    return env
+
+
+def _run(run: dict[str, Any], log: Path, env: dict[str, str]) -> tuple[str, int, float]:
     """Run one ``train.py`` command into its directory (its output appended to ``log``)."""
     argv = [*TRAIN, *run["argv"], "--output", str(run["dir"]), "--set", "train.progress_bar=false"]
     t0 = time.perf_counter()
     with open(log, "a") as fh:
         fh.write(f"\n$ {' '.join(argv)}\n")
         fh.flush()
-        code = subprocess.call(argv, stdout=fh, stderr=subprocess.STDOUT, env={**os.environ, "PYTHONUNBUFFERED": "1"})
+        code = subprocess.call(argv, stdout=fh, stderr=subprocess.STDOUT, env=env)
     return str(run["dir"]), code, time.perf_counter() - t0
 
 
@@ -126,15 +135,16 @@ def execute(runs: list[dict[str, Any]], out: Path, jobs: int = 1) -> list[tuple[
     todo = [r for r in runs if not (Path(r["dir"]) / "results.csv").is_file()]
     pending = {str(r["dir"]) for r in todo}
     done: list[tuple[str, int, float]] = []
+    env = job_environment(jobs)
     with concurrent.futures.ThreadPoolExecutor(max_workers=max(1, jobs)) as pool:
         running: dict[concurrent.futures.Future, dict[str, Any]] = {}
         while todo or running:
             ready = [r for r in todo if str(r.get("after")) not in pending]
             for run in ready[: max(1, jobs) - len(running)]:
                 todo.remove(run)
-                running[pool.submit(_run, run, log)] = run
+                running[pool.submit(_run, run, log, env)] = run
             if not running:  # what is left waits for runs that were not planned (or failed): run it anyway
-                running[pool.submit(_run, todo[0], log)] = todo.pop(0)
+                running[pool.submit(_run, todo[0], log, env)] = todo.pop(0)
             finished, _ = concurrent.futures.wait(running, return_when=concurrent.futures.FIRST_COMPLETED)
             for future in finished:
                 run = running.pop(future)
@@ -236,7 +246,7 @@ def report(suite: dict[str, Any], out: Path, tasks: list[str] | None = None) -> 
             for dirs in (ideal_dirs, full_eval, full_dirs):
                 mean, lo, hi, n, _ = _rl_cell(dirs, metric)
                 cells.append(_fmt(mean, lo, hi, n) if n else "not run")
-            cost_lines.append(f"| {task} ({metric}) | {cost} | " + " | ".join(cells) + " |")
+            cost_lines.append(f"| {task} ({metric}{'' if sign > 0 else ', lower is better'}) | {cost} | " + " | ".join(cells) + " |")
         _plot_curves(curves, out / f"curves_{task}.png", f"{task}: mean episode return per robot (mean, min-max over training seeds)")
     note = ("\n\nRL rows: mean over training seeds of each seed's mean over the evaluation seeds, with a 95 % Student-t "
             "interval over the training seeds (n = training seeds). Baselines: bootstrap 95 % interval over the "

@@ -127,3 +127,13 @@ def test_suite_end_to_end_resumes_and_reports(tmp_path, capsys):
 def test_unknown_task_is_one_line(tmp_path, capsys):
     assert suite_mod.main(["--suite", str(_suite_file(tmp_path)), "--tasks", "herding", "--output", str(tmp_path / "o")]) == 2
     assert "unknown task(s) ['herding']" in capsys.readouterr().err
+
+
+def test_concurrent_runs_share_the_cores(monkeypatch):
+    monkeypatch.delenv("NUMBA_NUM_THREADS", raising=False)
+    monkeypatch.setattr(suite_mod.os, "cpu_count", lambda: 4)
+    assert suite_mod.job_environment(2)["NUMBA_NUM_THREADS"] == "2"
+    assert suite_mod.job_environment(8)["NUMBA_NUM_THREADS"] == "1"
+    assert suite_mod.job_environment(1)["NUMBA_NUM_THREADS"] == "4"
+    monkeypatch.setenv("NUMBA_NUM_THREADS", "3")
+    assert suite_mod.job_environment(2)["NUMBA_NUM_THREADS"] == "3"
