@@ -39,7 +39,7 @@ def test_readme_benchmark_table_quotes_results_csv():
     rows = [line for line in _table_lines(ROOT / "README.md") if re.match(r"\| `\w+_long`", line)]
     tasks = {task for task, _ in results}
     assert {re.match(r"\| `(\w+)_long`", row).group(1) for row in rows} == tasks, "README lacks a suite task"
-    columns = ["rl:mlp", "rl:odometry", "scripted", "random"]
+    columns = ["rl:mlp", "rl:odometry", "rl:deepsets", "scripted", "random"]
     for row in rows:
         task = re.match(r"\| `(\w+)_long`", row).group(1)
         cells = [cell.strip() for cell in row.strip("|").split("|")][2:]
