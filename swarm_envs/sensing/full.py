@@ -104,9 +104,9 @@ BEACON_KIND = "bearing_beacon"  # SwarmCom system kind of the header-only beacon
 _STAT_NAMES = ("tx_started", "deferrals", "rx_delivered", "rx_lost", "collisions", "bits_checked", "bit_errors")
 
 
-def rb_on_worker_thread(n_links: int, n_copies: int) -> bool:
+def rb_on_worker_thread(n_links: int) -> bool:
     """Whether range & bearing runs on the worker thread (:mod:`swarm_envs._compile._worker`) while SwarmCom runs on
-    the calling thread: when the scene (one env or a batch of ``n_copies`` copies) is large enough for the
+    the calling thread: when the scene (one env or a batch of copies) is large enough for the
     gain kernel's threads (:func:`gain_threads` of its ``n_links`` links: numba on more than one thread,
     called from the main thread). The two read the same links, draw from their own streams and touch
     disjoint state, and their compiled kernels release the GIL (``nogil``), so the result is the same bit
@@ -295,7 +295,7 @@ class FullSensing:
         take = None if gain_rows is None else gain_rows.take
 
         # range & bearing (large scenes: on the worker thread, while SwarmCom runs here)
-        self.large_scene = rb_on_worker_thread(len(links), self.n_copies)
+        self.large_scene = rb_on_worker_thread(len(links))
         rb_future = rb = neighbours = None
         try:
             if self.has_range:

@@ -370,21 +370,20 @@ class World:
         """Whether :func:`swarm_envs.sim.substep_kernel.substep_spaces` can run this world's sub-steps: pymunk's
         layout is the known one and the space has none of the bookkeeping ``Space.step`` would do
         (:func:`_substeps`)."""
-        if self._native is None or self._batched is None:
-            return False
-        space = self.space
-        try:
-            return not (space._bodies_to_check or space._add_later or space._remove_later or space._post_step_callbacks or space.threaded)
-        except AttributeError:  # pragma: no cover - pymunk internals changed
-            return False
+        return self._native is not None and self._batched is not None and _plain_space(self.space)
+
+    def _fill_write_rows(self, control: np.ndarray) -> None:
+        """Empty the contacts and fill the write buffer: the robot bodies' velocities unchanged, the control
+        bodies' (vx, vy, omega) rows ``control`` (n, 3)."""
+        self._contacts.clear()
+        rows = self._write_rows
+        rows[:, 0] = self._body_motion
+        rows[:, 1] = control
 
     def _write_control(self, control: np.ndarray) -> None:
         """Empty the contacts and set the control bodies' (vx, vy, omega) rows ``control`` (n, 3) with one
         C call (the known pymunk layout)."""
-        self._contacts.clear()
-        rows = self._write_rows
-        rows[:, 0] = self._body_motion  # robot bodies: written back unchanged
-        rows[:, 1] = control
+        self._fill_write_rows(control)
         write = self._batched[0]
         # as pymunk.batch.set_space_bodies: the setter pops values from the start of the array
         write.floatArray.num = 0
@@ -407,10 +406,7 @@ class World:
         seconds from Python, and return every robot body's (x, y, angle, vx, vy, omega) (n, 6) from pymunk
         (a view of the read buffer, valid until the next step)."""
         if self._batched is None:  # another pymunk layout: the public API
-            self._contacts.clear()
-            rows = self._write_rows
-            rows[:, 0] = self._body_motion
-            rows[:, 1] = control
+            self._fill_write_rows(control)
             pymunk.batch.set_space_bodies(self.space, _WRITE, self._write_buffer)
             self._run_substeps(h, None)
             self._read_buffer.clear()
@@ -557,6 +553,16 @@ def _batched_data(buffer: pymunk.batch.Buffer, fields: pymunk.batch.BodyFields |
     return data
 
 
+def _plain_space(space: pymunk.Space) -> bool:
+    """Whether ``space`` has none of the bookkeeping ``Space.step`` wraps around ``cpSpaceStep`` (bodies
+    added or removed from callbacks, post-step callbacks, the threaded solver), so chipmunk's step can be
+    called directly; False with another pymunk layout."""
+    try:
+        return not (space._bodies_to_check or space._add_later or space._remove_later or space._post_step_callbacks or space.threaded)
+    except AttributeError:  # pragma: no cover - pymunk internals changed
+        return False
+
+
 def _substeps(space: pymunk.Space, h: float, count: int, contacts: pymunk.batch.Buffer, reader: object | None) -> None:
     """``count`` pymunk steps of ``h`` seconds; after each, the contacts the step processed are appended to
     ``contacts``: per arbiter the ints (body a id, body b id, contact count) and the floats (normal x, y).
@@ -575,13 +581,7 @@ def _substeps(space: pymunk.Space, h: float, count: int, contacts: pymunk.batch.
     ``reader``, a ``pmBatchedData`` over ``contacts``) are called directly. Otherwise (or with another
     pymunk layout) ``Space.step`` and ``pymunk.batch.get_space_arbiters`` are used: the same chipmunk calls.
     """
-    try:
-        direct = reader is not None and not (
-            space._bodies_to_check or space._add_later or space._remove_later or space._post_step_callbacks or space.threaded
-        )
-    except AttributeError:  # pragma: no cover - pymunk internals changed
-        direct = False
-    if not direct:
+    if reader is None or not _plain_space(space):
         for _ in range(count):
             space.step(h)
             pymunk.batch.get_space_arbiters(space, _CONTACT_FIELDS, contacts)

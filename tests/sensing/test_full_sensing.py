@@ -139,7 +139,7 @@ def test_range_bearing_on_the_worker_thread_gives_the_same_steps(platform, monke
     import swarm_envs.sensing.full as full
 
     def run(on_worker):
-        monkeypatch.setattr(full, "rb_on_worker_thread", lambda n_links, n_copies: on_worker)
+        monkeypatch.setattr(full, "rb_on_worker_thread", lambda n_links: on_worker)
         env = swarm_envs.make("swarm_envs/Aggregation-v0", n_robots=40, sensing="full", platform=platform)
         obs, _ = env.reset(seed=11)
         rng = np.random.default_rng(3)
@@ -169,7 +169,7 @@ def test_gain_rows_left_in_the_chunks_give_the_same_steps(platform, monkeypatch)
 
     def run(threads):
         monkeypatch.setattr(layer, "gain_threads", lambda n_pairs: threads)
-        monkeypatch.setattr(full, "rb_on_worker_thread", lambda n_links, n_copies: threads > 1)
+        monkeypatch.setattr(full, "rb_on_worker_thread", lambda n_links: threads > 1)
         env = swarm_envs.make("swarm_envs/Flocking-v0", n_robots=30, sensing="full", platform=platform)
         obs, _ = env.reset(seed=4)
         rng = np.random.default_rng(6)
@@ -191,7 +191,7 @@ def test_gain_rows_left_in_the_chunks_give_the_same_steps(platform, monkeypatch)
 def test_an_error_on_the_worker_thread_reaches_the_caller(monkeypatch):
     import swarm_envs.sensing.full as full
 
-    monkeypatch.setattr(full, "rb_on_worker_thread", lambda n_links, n_copies: True)
+    monkeypatch.setattr(full, "rb_on_worker_thread", lambda n_links: True)
     env = swarm_envs.make("swarm_envs/Aggregation-v0", n_robots=10, sensing="full", platform="epuck")
     env.reset(seed=0)
 
@@ -208,7 +208,7 @@ def test_an_error_building_the_observation_rows_on_the_worker_reaches_the_caller
     raised by the step (after the step's own work, which it does not mask)."""
     import swarm_envs.sensing.full as full
 
-    monkeypatch.setattr(full, "rb_on_worker_thread", lambda n_links, n_copies: True)
+    monkeypatch.setattr(full, "rb_on_worker_thread", lambda n_links: True)
     env = swarm_envs.make("swarm_envs/Aggregation-v0", n_robots=10, sensing="full", platform="epuck")
     env.reset(seed=0)
 
@@ -223,7 +223,7 @@ def test_an_error_building_the_observation_rows_on_the_worker_reaches_the_caller
 def test_an_error_drawing_ahead_on_the_worker_reaches_the_caller(monkeypatch):
     import swarm_envs.sensing.full as full
 
-    monkeypatch.setattr(full, "rb_on_worker_thread", lambda n_links, n_copies: True)
+    monkeypatch.setattr(full, "rb_on_worker_thread", lambda n_links: True)
     env = swarm_envs.make("swarm_envs/Aggregation-v0", n_robots=10, sensing="full", platform="epuck")
     env.reset(seed=0)
     zeros = {a: np.zeros(env.action_space(a).shape, np.float32) for a in env.agents}
