@@ -1,10 +1,13 @@
 """Physics: disc robots with velocity-controlled differential drive in a walled arena (pymunk).
 
 One :class:`pymunk.Space` per world, robots as dynamic circles, arena walls as static segments.
-Each control step (``dt`` = 0.1 s) is split into physics sub-steps. Every robot is dragged by a
-kinematic *control body* (pymunk's top-down "tank" pattern): a pivot joint and a gear joint with zero
-bias and bounded force make the body's velocity track the control body's as motors would, while
-contacts, which have unbounded force, win over the motors: robots push each other and walls hold; bump
+Each control step (``dt`` = 0.1 s) is split into physics sub-steps. Every robot has a *control velocity*
+(vx, vy, omega) per step, and its motors drive it there with bounded force and torque: before each
+sub-step the robot gets the force and torque that change its velocity towards the control velocity by at
+most force x h / mass (torque x h / moment) within the sub-step (:func:`swarm_envs.sim.substep_kernel.motor_forces`),
+which chipmunk applies in its velocity integration, after moving the bodies and before solving the
+contacts -- where motor joints would act. Contacts, which have unbounded force, win over the motors:
+robots push each other and walls hold; bump
 sensing reads the contacts pymunk's solver processed in each sub-step (the contacts its post-solve
 collision callbacks would report, see :func:`_substeps`).
 
@@ -36,10 +39,9 @@ through the discs' centres and exert no torque, so the motors' torque keeps its 
 A placement (:meth:`World.check_placement`) may overlap as deep as :data:`PLACEMENT_OVERLAP`, far beyond
 what the physics produces, so a state read back from ``infos`` is always accepted by ``reset(options=...)``.
 
-The control bodies are set once per control step (no Python work per sub-step besides the motors' force
-bound, set before the first sub-step and after it): translation along the chord of the differential-drive
+The control velocities are set once per control step: translation along the chord of the differential-drive
 arc, ``D = v dt sinc(w dt / 2)`` towards ``heading + w dt / 2``, and rotation at ``w``. pymunk moves a
-body with its previous velocity during the first sub-step (the joints act from the second on), so the
+body with its previous velocity during the first sub-step (the motors' force acts after that move), so the
 control velocities are set to ``(D - h u) / (dt - h)`` and ``(w dt - h omega) / (dt - h)`` (h the
 sub-step, u / omega the body's velocity at the step start): a free robot then ends every control step
 exactly on its differential-drive arc.
@@ -84,7 +86,7 @@ from swarm_envs.sim.control import (
 from swarm_envs.sim.geometry import wrap_angle
 from swarm_envs.sim.motion import wheel_limited
 from swarm_envs.sim.platforms import Platform
-from swarm_envs.sim.substep_kernel import CHIPMUNK, address, substep_spaces
+from swarm_envs.sim.substep_kernel import CHIPMUNK, address, motor_forces, substep_spaces
 
 __all__ = ["World", "step_worlds", "physics_threads", "N_BUMP_SECTORS"]
 
@@ -103,17 +105,19 @@ MAX_OVERLAP = 0.02
 PLACEMENT_OVERLAP = 0.5
 #: fraction of a diameter a robot of a placement may reach past a wall (its centre stays half a radius inside)
 PLACEMENT_WALL_DEPTH = 0.25
-#: pymunk solver iterations per sub-step (contacts and motor joints)
+#: pymunk solver iterations per sub-step (contacts)
 SOLVER_ITERATIONS = 10
 #: worlds per physics thread at least (:func:`physics_threads`): fewer do not repay a thread hand-off
 THREADED_MIN_WORLDS = 8
 #: fraction of an overlap left after one second of contact correction: 30 % of it is removed every 1/60 s
 #: (pymunk's default removes 10 %), which keeps chains of robots pushed together within :data:`MAX_OVERLAP`
 COLLISION_BIAS = (1.0 - 0.3) ** 60
-# pymunk.batch fields: every body's (x, y, angle, vx, vy, omega) read in one call per space, and the
-# (vx, vy, omega) written in one call; a space's bodies come in insertion order (robot, its control, ...)
+# pymunk.batch fields: every body's (x, y, angle, vx, vy, omega) read in one call per space; before each
+# sub-step the (vx, vy, omega) read and the motors' (fx, fy, torque) written in one call each; a space's
+# bodies come in insertion order (the robots, then the walls' static body)
 _READ = pymunk.batch.BodyFields.POSITION | pymunk.batch.BodyFields.ANGLE | pymunk.batch.BodyFields.VELOCITY | pymunk.batch.BodyFields.ANGULAR_VELOCITY
-_WRITE = pymunk.batch.BodyFields.VELOCITY | pymunk.batch.BodyFields.ANGULAR_VELOCITY
+_MOTION = pymunk.batch.BodyFields.VELOCITY | pymunk.batch.BodyFields.ANGULAR_VELOCITY
+_WRITE = pymunk.batch.BodyFields.FORCE | pymunk.batch.BodyFields.TORQUE
 # contacts: per cached arbiter, the two bodies' ids and its contact count (ints) and normal (floats)
 _CONTACT_FIELDS = (
     pymunk.batch.ArbiterFields.BODY_A_ID
@@ -175,9 +179,7 @@ class World:
         self.space.iterations = SOLVER_ITERATIONS
         self.space.collision_bias = COLLISION_BIAS
         self.bodies: list[pymunk.Body] = []
-        self.controls: list[pymunk.Body] = []
         moment = pymunk.moment_for_circle(platform.mass, 0.0, platform.radius)
-        max_force, max_torque = motor_limits(platform, self.substeps)
         for p, h in zip(positions.tolist(), headings.tolist()):
             body = pymunk.Body(platform.mass, moment)
             body.position, body.angle = p, h
@@ -185,17 +187,8 @@ class World:
             shape.friction = 0.0
             shape.elasticity = 0.0
             shape.collision_type = _ROBOT
-            control = pymunk.Body(body_type=pymunk.Body.KINEMATIC)
-            control.position, control.angle = p, h
-            pivot = pymunk.PivotJoint(control, body, (0, 0), (0, 0))
-            pivot.max_bias = 0.0  # correct velocity only, never position
-            pivot.max_force = max_force
-            gear = pymunk.GearJoint(control, body, 0.0, 1.0)
-            gear.max_bias = 0.0
-            gear.max_force = max_torque
-            self.space.add(body, shape, control, pivot, gear)
+            self.space.add(body, shape)
             self.bodies.append(body)
-            self.controls.append(control)
         for a, b in np.concatenate([arena.wall_segments(), self.obstacles]):
             wall = pymunk.Segment(self.space.static_body, tuple(a), tuple(b), 0.0)
             wall.friction = 0.0
@@ -209,19 +202,21 @@ class World:
         # contacts of the sub-steps of a control step, appended by _substeps (see there)
         self._robot_ids = np.array([body.id for body in self.bodies], dtype=np.uintp)
         self._contacts = pymunk.batch.Buffer()
-        # the motors' linear joints and their force bounds of the first and of the later sub-steps (_advance)
-        self._pivots = [joint for joint in self.space.constraints if isinstance(joint, pymunk.PivotJoint)]
-        self._pivot_handles = [joint._constraint for joint in self._pivots] if _ffi is not None else None
-        self._motor_forces = (motor_limits(self.platform, self.substeps)[0], push_force(self.platform, self.substeps))
-        # batch buffers: reads (robot and control rows interleaved), and the velocities written each step
+        # the motors' force bounds of the first and of the later sub-steps and their torque bound (_run_substeps)
+        force, torque = motor_limits(self.platform, self.substeps)
+        self._motor_forces = (force, push_force(self.platform, self.substeps), torque)
+        self._inertia = (self.platform.mass, pymunk.moment_for_circle(self.platform.mass, 0.0, self.platform.radius))
+        self._control = np.zeros((self.n, 3))  # the control velocities of the current step (step_worlds)
+        # batch buffers: the step's read of every body, and the motors' read and write before each sub-step
         ids = pymunk.batch.Buffer()
         pymunk.batch.get_space_bodies(self.space, pymunk.batch.BodyFields.BODY_ID, ids)
-        order = [body.id for pair in zip(self.bodies, self.controls) for body in pair] + [self.space.static_body.id]
+        order = [body.id for body in self.bodies] + [self.space.static_body.id]
         if np.frombuffer(ids.int_buf(), dtype=np.uintp).tolist() != order:  # pragma: no cover - pymunk changed
             raise RuntimeError("pymunk.batch does not list the bodies in insertion order")
         self._read_buffer = pymunk.batch.Buffer()
-        self._write_values = np.zeros(len(order) * 3)  # the static body (last) keeps its zero velocity
-        self._write_rows = self._write_values[: 6 * self.n].reshape(self.n, 2, 3)  # (robot, control) rows
+        self._motion_buffer = pymunk.batch.Buffer()  # bodies' (vx, vy, omega) rows (C memory, grown once here)
+        pymunk.batch.get_space_bodies(self.space, _MOTION, self._motion_buffer)
+        self._write_values = np.zeros(len(order) * 3)  # motors' (fx, fy, torque) rows; the static body's stay 0
         self._write_buffer = pymunk.batch.Buffer()
         self._write_buffer.set_float_buf(self._write_values)
         # the same C iterators as pymunk.batch's get/set_space_bodies and get_space_arbiters, each with one
@@ -229,26 +224,32 @@ class World:
         self._batched = None
         if _ffi is not None:
             self._batched = tuple(
-                _batched_data(buffer, fields) for buffer, fields in ((self._write_buffer, _WRITE), (self._read_buffer, _READ), (self._contacts, _CONTACT_FIELDS))
+                _batched_data(buffer, fields)
+                for buffer, fields in ((self._write_buffer, _WRITE), (self._read_buffer, _READ), (self._contacts, _CONTACT_FIELDS), (self._motion_buffer, _MOTION))
             )
         self._read_ptr = None  # the read buffer's C array when _read_rows was made
-        # the addresses substep_spaces needs: the space, the contacts' pmBatchedData, the motors' pivot joints
+        # the addresses substep_spaces needs: the space, the contacts' pmBatchedData, and the motors' read and
+        # write (each a pmBatchedData and its pmFloatArray)
         self._native = None
         if CHIPMUNK is not None and self._batched is not None:
             self._native = (
                 address(self.space._space),
                 address(self._batched[2]),
-                np.array([address(handle) for handle in self._pivot_handles], dtype=np.uintp),
+                (
+                    address(self._batched[3]),
+                    address(self._motion_buffer._float_arr),
+                    address(self._batched[0]),
+                    address(self._write_buffer._float_arr),
+                ),
             )
 
     # -- copies (copy.deepcopy, pickle) ----------------------------------------------------------------
-    # pymunk can pickle a space, but a restored space does not step on bit for bit: chipmunk's joint
+    # pymunk can pickle a space, but a restored space does not step on bit for bit: chipmunk's contact
     # impulses and its collision index are not part of pymunk's state. A copy therefore rebuilds the space
     # and replays the episode's physics from its placement with the logged commands (physics only: the
     # sensing and task state are copied as they are), which is exact because the physics is deterministic.
-    _NOT_COPIED = ("space", "bodies", "controls", "_robot_ids", "_contacts", "_read_buffer", "_write_values",
-                   "_write_rows", "_write_buffer", "_batched", "_read_ptr", "_read_rows", "_pivots", "_pivot_handles",
-                   "_motor_forces", "_native")
+    _NOT_COPIED = ("space", "bodies", "_robot_ids", "_contacts", "_read_buffer", "_write_values", "_motion_buffer",
+                   "_write_buffer", "_batched", "_read_ptr", "_read_rows", "_motor_forces", "_inertia", "_control", "_native")
 
     def __getstate__(self) -> dict:
         state = {k: v for k, v in self.__dict__.items() if k not in self._NOT_COPIED}
@@ -259,14 +260,14 @@ class World:
                 RuntimeWarning,
                 stacklevel=2,
             )
-            state["_space_copy"] = (self.space, self.bodies, self.controls)
+            state["_space_copy"] = (self.space, self.bodies)
         return state
 
     def __setstate__(self, state: dict) -> None:
         space_copy = state.pop("_space_copy", None)
         self.__dict__.update(state)
         if space_copy is not None:
-            self.space, self.bodies, self.controls = space_copy
+            self.space, self.bodies = space_copy
             self._make_buffers()
             return
         self._build_space()
@@ -345,26 +346,36 @@ class World:
             return
         self._commands.append((linear.copy(), angular.copy(), dt))
 
-    def _set_motor_force(self, force: float) -> None:
-        """Bound every robot's linear motor joint (its pivot joint) to ``force`` (N); one C call per robot."""
-        if self._pivot_handles is None:  # another pymunk layout: the public API
-            for joint in self._pivots:
-                joint.max_force = force
+    def _apply_motors(self, h: float, force: float) -> None:
+        """Set every robot's motor force and torque for the next sub-step of ``h`` s (:func:`motor_forces`
+        towards its control velocity, the force bounded to ``force`` N): the bodies' velocities read and the
+        forces written with one C call each (the public pymunk.batch API with another pymunk layout)."""
+        mass, moment = self._inertia
+        torque = self._motor_forces[2]
+        if self._batched is None:
+            self._motion_buffer.clear()
+            pymunk.batch.get_space_bodies(self.space, _MOTION, self._motion_buffer)
+            motion = np.frombuffer(self._motion_buffer.float_buf(), dtype=np.float64)
+            motor_forces(self._control, motion, self._write_values, mass, moment, h, force, torque)
+            pymunk.batch.set_space_bodies(self.space, _WRITE, self._write_buffer)
             return
-        set_max_force = _chipmunk.cpConstraintSetMaxForce
-        for handle in self._pivot_handles:
-            set_max_force(handle, force)
+        read, write, handle = self._batched[3], self._batched[0], self.space._space
+        read.floatArray.num = 0  # as Buffer.clear
+        _chipmunk.cpSpaceEachBody(handle, _GET_BODY, read)
+        motion = np.frombuffer(self._motion_buffer.float_buf(), dtype=np.float64)
+        motor_forces(self._control, motion, self._write_values, mass, moment, h, force, torque)
+        write.floatArray.num = 0  # as pymunk.batch.set_space_bodies: the setter pops values from the start
+        _chipmunk.cpSpaceEachBody(handle, _SET_BODY, write)
+        write.floatArray.num = len(self._write_values)
 
     def _run_substeps(self, h: float, reader: object | None) -> None:
-        """The sub-steps of ``h`` seconds: the first with the motors' full force, which makes the commanded
-        velocity change, the others with :func:`push_force`, which bounds how hard a robot pushes (module
-        docstring). A free robot moves the same under both bounds."""
-        full, push = self._motor_forces
-        self._set_motor_force(full)
-        _substeps(self.space, h, 1, self._contacts, reader)
-        if self.substeps > 1:
-            self._set_motor_force(push)
-            _substeps(self.space, h, self.substeps - 1, self._contacts, reader)
+        """The sub-steps of ``h`` seconds, each after :meth:`_apply_motors`: the first with the motors' full
+        force, which makes the commanded velocity change, the others with :func:`push_force`, which bounds
+        how hard a robot pushes (module docstring). A free robot moves the same under both bounds."""
+        full, push, _ = self._motor_forces
+        for k in range(self.substeps):
+            self._apply_motors(h, full if k == 0 else push)
+            _substeps(self.space, h, 1, self._contacts, reader)
 
     def _native_ready(self) -> bool:
         """Whether :func:`swarm_envs.sim.substep_kernel.substep_spaces` can run this world's sub-steps: pymunk's
@@ -372,23 +383,10 @@ class World:
         (:func:`_substeps`)."""
         return self._native is not None and self._batched is not None and _plain_space(self.space)
 
-    def _fill_write_rows(self, control: np.ndarray) -> None:
-        """Empty the contacts and fill the write buffer: the robot bodies' velocities unchanged, the control
-        bodies' (vx, vy, omega) rows ``control`` (n, 3)."""
-        self._contacts.clear()
-        rows = self._write_rows
-        rows[:, 0] = self._body_motion
-        rows[:, 1] = control
-
     def _write_control(self, control: np.ndarray) -> None:
-        """Empty the contacts and set the control bodies' (vx, vy, omega) rows ``control`` (n, 3) with one
-        C call (the known pymunk layout)."""
-        self._fill_write_rows(control)
-        write = self._batched[0]
-        # as pymunk.batch.set_space_bodies: the setter pops values from the start of the array
-        write.floatArray.num = 0
-        _chipmunk.cpSpaceEachBody(self.space._space, _SET_BODY, write)
-        write.floatArray.num = len(self._write_values)
+        """Empty the contacts and keep the control (vx, vy, omega) rows ``control`` (n, 3) for the motors."""
+        self._contacts.clear()
+        self._control[:] = control
 
     def _read_motion(self) -> np.ndarray:
         """Every robot body's (x, y, angle, vx, vy, omega) (n, 6) with one C call (the known pymunk layout; a
@@ -398,20 +396,19 @@ class World:
         _chipmunk.cpSpaceEachBody(self.space._space, _GET_BODY, read)
         if read.floatArray.arr != self._read_ptr:  # the first read, or the C array moved: a new view
             self._read_ptr = read.floatArray.arr
-            self._read_rows = np.frombuffer(self._read_buffer.float_buf(), dtype=np.float64)[: 12 * self.n].reshape(self.n, 2, 6)[:, 0]
+            self._read_rows = np.frombuffer(self._read_buffer.float_buf(), dtype=np.float64)[: 6 * self.n].reshape(self.n, 6)
         return self._read_rows
 
     def _advance(self, control: np.ndarray, h: float) -> np.ndarray:
-        """Set the control bodies' (vx, vy, omega) rows ``control`` (n, 3), run the sub-steps of ``h``
+        """Keep the control (vx, vy, omega) rows ``control`` (n, 3), run the sub-steps of ``h``
         seconds from Python, and return every robot body's (x, y, angle, vx, vy, omega) (n, 6) from pymunk
         (a view of the read buffer, valid until the next step)."""
         if self._batched is None:  # another pymunk layout: the public API
-            self._fill_write_rows(control)
-            pymunk.batch.set_space_bodies(self.space, _WRITE, self._write_buffer)
+            self._write_control(control)
             self._run_substeps(h, None)
             self._read_buffer.clear()
             pymunk.batch.get_space_bodies(self.space, _READ, self._read_buffer)
-            return np.frombuffer(self._read_buffer.float_buf(), dtype=np.float64)[: 12 * self.n].reshape(self.n, 2, 6)[:, 0]
+            return np.frombuffer(self._read_buffer.float_buf(), dtype=np.float64)[: 6 * self.n].reshape(self.n, 6)
         self._write_control(control)
         self._run_substeps(h, self._batched[2])
         return self._read_motion()
@@ -481,7 +478,7 @@ def step_worlds(worlds: Sequence[World], linear: np.ndarray, angular: np.ndarray
             ],
             axis=1,
         )
-    else:  # one sub-step: the joints act only from the next step on
+    else:  # one sub-step: the motors act only from the next step on
         control = np.stack([chord * np.cos(mid) / dt, chord * np.sin(mid) / dt, angular], axis=1)
     read = np.empty((bounds[-1], 6))
 
@@ -515,23 +512,26 @@ def step_worlds(worlds: Sequence[World], linear: np.ndarray, angular: np.ndarray
 
 def _substep_native(worlds: Sequence[World], rows: Sequence[tuple[int, int]], control: np.ndarray, read: np.ndarray, h: float, substeps: int, chunks: int) -> None:
     """:func:`step_worlds`'s write, sub-steps and read of ``worlds`` (every one :meth:`World._native_ready`;
-    world ``k``'s robots are ``rows[k]`` = (start, stop) of ``control`` and ``read``): the control bodies
-    written and the bodies read back from Python (one C call each per space), the sub-steps of ``h`` s by
+    world ``k``'s robots are ``rows[k]`` = (start, stop) of ``control`` and ``read``): the contacts emptied
+    from Python, the bodies read back from Python (one C call per space), the sub-steps of ``h`` s by
     :func:`swarm_envs.sim.substep_kernel.substep_spaces` (no GIL), ``chunks`` contiguous shares of the worlds
     on threads."""
-    for w, (a, b) in zip(worlds, rows):
-        w._write_control(control[a:b])
+    for w in worlds:
+        w._contacts.clear()
     spaces = np.array([w._native[0] for w in worlds], dtype=np.uintp)
     readers = np.array([w._native[1] for w in worlds], dtype=np.uintp)
-    joints = np.concatenate([w._native[2] for w in worlds])
-    joint_start = np.concatenate([[0], np.cumsum([len(w._native[2]) for w in worlds])]).astype(np.int64)
+    motors = np.array([w._native[2] for w in worlds], dtype=np.uintp)
+    row_bounds = np.array(rows, dtype=np.int64).reshape(-1, 2)
     first_force = np.array([w._motor_forces[0] for w in worlds], dtype=float)
     push = np.array([w._motor_forces[1] for w in worlds], dtype=float)
+    torque = np.array([w._motor_forces[2] for w in worlds], dtype=float)
+    mass, moment = worlds[0]._inertia
+    control = np.ascontiguousarray(control)
     n = len(worlds)
     chunks = max(1, min(chunks, n))
 
     def share(k: int) -> None:
-        substep_spaces(*CHIPMUNK, spaces, readers, joint_start, joints, first_force, push, h, substeps, n * k // chunks, n * (k + 1) // chunks)
+        substep_spaces(*CHIPMUNK, spaces, readers, motors, row_bounds, control, first_force, push, torque, mass, moment, h, substeps, n * k // chunks, n * (k + 1) // chunks)
 
     for w in worlds:  # as Space.step: no pymunk call may change a space while it steps
         w.space._locked = True

@@ -295,3 +295,50 @@ def test_step_worlds_threads_bit_identical(platform):
     assert bumped > 0  # the case includes contacts
     for threads in (2, 3, 7):
         np.testing.assert_array_equal(run(threads)[0], sequential)
+
+
+@pytest.mark.parametrize("platform", ["epuck", "rone", "droplet"])
+def test_a_robot_driven_into_a_wall_pushes_with_the_bounded_motor_force(platform):
+    """A robot driven at full speed into a wall for 2 s: in every sub-step after a step's first, the wall's
+    contact impulse is the motors' push force bound (:func:`swarm_envs.sim.control.push_force` x h, the motor
+    saturated and never more), in the first sub-step at most the full motor force x h; the robot stays
+    within :data:`swarm_envs.sim.world.MAX_OVERLAP` of a diameter of the wall."""
+    from swarm_envs.sim.control import motor_limits, push_force
+    from swarm_envs.sim.world import _ROBOT, _WALL, MAX_OVERLAP
+
+    p = PLATFORMS[platform]
+    arena = Arena("square", 20 * p.diameter)
+    world = World(p, 1, arena)
+    world.place(np.array([[arena.half - p.radius - 0.25 * p.diameter, 0.0]]), np.zeros(1))
+    world._native = None  # the Python sub-steps (bit-identical to the compiled ones) run the post-solve callback
+    impulses: list[float] = []
+    world.space.on_collision(_ROBOT, _WALL, post_solve=lambda arbiter, space, data: impulses.append(abs(arbiter.total_impulse.x)))
+    h = 0.1 / world.substeps
+    full, push = motor_limits(p, world.substeps)[0] * h, push_force(p, world.substeps) * h
+    pressed = 0
+    for _ in range(20):
+        impulses.clear()
+        world.step(np.array([p.max_speed]), np.zeros(1), 0.1)
+        assert arena.wall_depth(world.positions, p.radius).max() <= MAX_OVERLAP * p.diameter
+        if len(impulses) == world.substeps:  # in contact throughout the step
+            pressed += 1
+            assert impulses[0] <= full * (1 + 1e-9)
+            np.testing.assert_allclose(impulses[1:], push, rtol=1e-6)
+    assert pressed >= 10, "the robot must be pressed against the wall"
+
+
+def test_the_motor_makes_the_bounded_velocity_change():
+    """:func:`swarm_envs.sim.substep_kernel.motor_forces`: the force that changes a robot's velocity towards its
+    control velocity within one sub-step, clipped in norm to the force bound (linear) and to the torque bound
+    (angular), and zero for a robot at its control velocity."""
+    from swarm_envs.sim.substep_kernel import motor_forces
+
+    mass, moment, h, force, torque = 0.2, 1e-4, 0.01, 1.0, 0.002
+    control = np.array([[0.03, 0.04, 0.5], [1.0, 0.0, -3.0], [0.2, 0.1, 0.0]])
+    motion = np.array([0.0, 0.0, 0.4, 0.0, 0.0, 0.0, 0.2, 0.1, 0.0, 9.0, 9.0, 9.0])  # last row: the static body
+    out = np.full(12, 7.0)
+    motor_forces(control, motion, out, mass, moment, h, force, torque)
+    np.testing.assert_allclose(out[0:3], [0.03 * mass / h, 0.04 * mass / h, 0.1 * moment / h])  # within the bounds
+    np.testing.assert_allclose(out[3:6], [force, 0.0, -torque])  # clipped: |f| = force, |t| = torque
+    np.testing.assert_array_equal(out[6:9], 0.0)  # at its control velocity
+    np.testing.assert_array_equal(out[9:], 7.0)  # the static body's row is not written
