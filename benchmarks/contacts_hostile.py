@@ -35,7 +35,7 @@ ROOT = Path(__file__).resolve().parents[1]
 
 def _hostile_module() -> ModuleType:
     """``tests/sim/test_contacts_hostile.py`` (the scenes and the measurement), loaded from its path."""
-    spec = importlib.util.spec_from_file_location("contacts_hostile_scenes", ROOT / "tests" / "test_contacts_hostile.py")
+    spec = importlib.util.spec_from_file_location("contacts_hostile_scenes", ROOT / "tests" / "sim" / "test_contacts_hostile.py")
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
     return module

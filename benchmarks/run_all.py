@@ -11,7 +11,8 @@ that has just stepped thousands of robots), VMAS's flocking in the same run when
 the first run of the README's first snippet on an empty numba cache (``bench_first_run.py --json``), the
 ParallelEnv and TorchRL views against ``make_vec`` (``bench_views.py --json``, ``bench_torchrl.py --json``),
 and the training rate of the default PPO config (``train.py --config configs/aggregation.yaml``, when
-stable-baselines3 and torch are installed), and writes the page: the machine, the tables and the
+stable-baselines3 and torch are installed) with its split into env steps and PPO's own work
+(``bench_train_stages.py``), and writes the page: the machine, the tables and the
 commands that reproduce them. ``--sizes``, ``--no-first-run`` and ``--no-training`` make a shorter run;
 the page says what was measured.
 """
@@ -125,6 +126,22 @@ def measure_training() -> dict | str:
             "robot_steps_per_s": timing["robot_steps"] / timing["train_s"]}
 
 
+def measure_training_stages() -> list[tuple[str, float, float]] | str:
+    """(stage, seconds, share of ``learn`` in %) of the default PPO config from ``bench_train_stages.py``, or
+    why it was not run."""
+    cmd = [sys.executable, str(HERE / "bench_train_stages.py"), "--config", TRAIN_CONFIG]
+    print("running:", " ".join(cmd[1:]), flush=True)
+    proc = subprocess.run(cmd, capture_output=True, text=True, env=_env(), cwd=ROOT)
+    if proc.returncode != 0:
+        return f"not measured: bench_train_stages.py exited with code {proc.returncode}: {proc.stderr.strip().splitlines()[-1:]}"
+    rows = []
+    for line in proc.stdout.splitlines():
+        cells = [c.strip() for c in line.strip().strip("|").split("|")]
+        if len(cells) == 3 and cells[2].endswith("%"):
+            rows.append((cells[0], float(cells[1]), float(cells[2].rstrip(" %"))))
+    return rows or "not measured: bench_train_stages.py printed no table"
+
+
 def machine() -> dict[str, str]:
     """CPU model, cores and library versions of this machine."""
     cpu = platform.processor() or platform.machine()
@@ -157,6 +174,8 @@ def write_page(path: Path, sizes: list[int], training: bool, vmas: bool, first_r
     views = measure_views() if adapters else None
     torchrl = measure_torchrl() if adapters else None
     train = measure_training() if training else "not measured (`--no-training`)"
+    if isinstance(train, dict):
+        train["stages"] = measure_training_stages()
     load_after = os.getloadavg()
     minutes = (datetime.datetime.now(datetime.timezone.utc) - started).total_seconds() / 60
     page = render(info, runs, train, sorted(sizes), started, minutes, load_before, load_after, first, views, torchrl)
@@ -299,6 +318,20 @@ def render(info: dict[str, str], runs: list[dict], train: dict | str, sizes: lis
             f"robot-steps in {train['train_s']:.1f} s); the whole command, with the evaluation of PPO, the scripted",
             f"baseline and a random policy over 20 seeds, took {train['total_s']:.1f} s.",
         ]
+        stages = train.get("stages")
+        if isinstance(stages, list):
+            lines += [
+                "",
+                "Where the time of `model.learn` goes (`python benchmarks/bench_train_stages.py`, the same config for",
+                "51,200 robot-steps; *env step* is the batched core, *PPO update* stable-baselines3's epochs of",
+                "minibatch gradient steps):",
+                "",
+                "| stage | s | share |",
+                "|---|---|---|",
+                *[f"| {name} | {sec:.2f} | {share:.1f} % |" for name, sec, share in stages],
+            ]
+        elif stages is not None:
+            lines += ["", f"The split of the training time was {stages}."]
     else:
         lines.append(f"The default PPO config's training rate was {train}.")
     lines += [

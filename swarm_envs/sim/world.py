@@ -6,10 +6,9 @@ Each control step (``dt`` = 0.1 s) is split into physics sub-steps. Every robot 
 sub-step the robot gets the force and torque that change its velocity towards the control velocity by at
 most force x h / mass (torque x h / moment) within the sub-step (:func:`swarm_envs.sim.substep_kernel.motor_forces`),
 which chipmunk applies in its velocity integration, after moving the bodies and before solving the
-contacts -- where motor joints would act. Contacts, which have unbounded force, win over the motors:
-robots push each other and walls hold; bump
-sensing reads the contacts pymunk's solver processed in each sub-step (the contacts its post-solve
-collision callbacks would report, see :func:`_substeps`).
+contacts. Contacts, which have unbounded force, win over the motors: robots push each other and walls
+hold; bump sensing reads the contacts pymunk's solver processed in each sub-step (the contacts its
+post-solve collision callbacks would report, see :func:`_substeps`).
 
 Contacts and sub-steps. pymunk finds a contact only once two discs overlap, so two robots driving
 head-on at full speed overlap by up to the distance they close within one sub-step before their contact

@@ -202,7 +202,8 @@ def test_performance_page_is_rendered_from_the_measurements():
             {"numba_threads": 2, "vmas": {"version": "1.5.2", "n_agents": 10, "num_envs": 1024, "s_per_step": 0.1,
                                           "agent_steps_per_s": 102400.0}, "rows": rows2}]
     info = {"cpu": "Test CPU", "cores": "2", "os": "Linux", "Python": "3.11", "numpy": "2"}
-    train = {"robot_steps": 202240, "train_s": 30.0, "total_s": 40.0, "robot_steps_per_s": 6741.3}
+    train = {"robot_steps": 202240, "train_s": 30.0, "total_s": 40.0, "robot_steps_per_s": 6741.3,
+             "stages": [("env step", 2.5, 45.1), ("PPO update", 2.4, 43.2)]}
     when = datetime.datetime(2030, 1, 2, 3, 4, tzinfo=datetime.timezone.utc)
     first = {"runs": 3, "background_started": [True, True, False], "cold_s": [11.2, 12.4, 11.9], "warm_s": [2.0, 2.2, 2.1], "cold_median_s": 11.9,
              "warm_median_s": 2.1, "load_before": [0.5, 0.4, 0.3], "load_after": [0.7, 0.5, 0.4]}
@@ -221,6 +222,10 @@ def test_performance_page_is_rendered_from_the_measurements():
     assert "| 10 | 256 | ideal | 1 | 40.0 | 40.0 | 25.0 | 64,000 | 1.25x |" in page
     assert "51,200 agent-steps/s (200.0 ms per step) on 1 torch thread; 102,400" in page and "6,741 robot-steps/s" in page and "Test CPU, 2 cores" in page
     assert "Reduced run: only N = 10" in page
+    assert "| env step | 2.50 | 45.1 % |\n| PPO update | 2.40 | 43.2 % |" in page
+    failed = run_all.render(info, runs, dict(train, stages="not measured: bench_train_stages.py exited with code 1"), [10], when, 5.0,
+                            (0.5, 0.4, 0.3), (0.6, 0.5, 0.4), first, views, torchrl)
+    assert "The split of the training time was not measured: bench_train_stages.py exited with code 1." in failed
     without = run_all.render(info, [dict(runs[0], vmas=None), dict(runs[1], vmas=None)], "not measured (`--no-training`)", list(run_all.SIZES),
                              when, 5.0, (0.5, 0.4, 0.3), (0.6, 0.5, 0.4))
     assert "VMAS was not installed" in without and "| - |" in without and "Reduced run" not in without
