@@ -68,16 +68,31 @@ def test_validation_page_quotes_the_output_files():
     assert not missing, "\n".join(missing)
 
 
+def headline_numbers(text: str) -> list[float]:
+    """The numbers of a result in order, without its bracketed or parenthesised parts (intervals, counts,
+    conditions) and code spans: ``7 [5, 8] / 10 [7, 13] (env)`` -> [7, 10]."""
+    text = CODE.sub(" ", text)
+    previous = None
+    while previous != text:
+        previous, text = text, re.sub(r"\([^()]*\)|\[[^\[\]]*\]", " ", text)
+    return [float(x.replace(",", "")) for x in NUMBER.findall(text)]
+
+
 def test_every_measured_row_is_quoted_on_the_validation_page():
-    """The leading number of each measured row's result (before any bracket or parenthesis) is on the page."""
-    page: dict[str, set[float]] = {}
+    """Each measured row's result (its numbers outside brackets and parentheses, in order) appears in that
+    order in one "ours" cell of its figure: a changed count in any position of ``7 / 10 / 12`` is caught."""
+    cells: dict[str, list[list[float]]] = {}
     for figure, _quantity, ours, *_ in table_rows(ROOT / "docs" / "validation.md", "## The validation table"):
-        page.setdefault(figure, set()).update(numbers(ours))
+        cells.setdefault(figure, []).append(headline_numbers(ours))
+
+    def quoted(result: list[float], cell: list[float]) -> bool:
+        return any(cell[i : i + len(result)] == result for i in range(len(cell) - len(result) + 1))
+
     unquoted = []
     for name, rows in load_rows().items():
         for r in measured(rows):
-            head = re.split(r"[\[(]", r["ours"])[0]
-            if not numbers(head) <= page.get(r["figure"], set()):
+            result = headline_numbers(r["ours"])
+            if not any(quoted(result, cell) for cell in cells.get(r["figure"], [])):
                 unquoted.append(f"{name}: {r['figure']} {r['quantity']!r} = {r['ours']!r}")
     assert not unquoted, "\n".join(unquoted)
 
