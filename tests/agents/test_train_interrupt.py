@@ -66,7 +66,7 @@ def _old_run(out: Path) -> dict[str, bytes]:
 
 
 @pytest.mark.skipif(sys.platform == "win32", reason="SIGINT to a child process is POSIX")
-@pytest.mark.parametrize("n_workers, over_old_run", [(1, False), (2, True)])
+@pytest.mark.parametrize("n_workers, over_old_run", [(1, False), pytest.param(2, True, marks=pytest.mark.slow)])  # slow: .ci/run's slow step
 def test_ctrl_c_saves_model_and_config(tmp_path, n_workers, over_old_run):
     from stable_baselines3 import PPO
 

@@ -27,6 +27,7 @@ def _episodes(ring_of_robot: np.ndarray, seeds: range):
         yield obs["robot_0"], env
 
 
+@pytest.mark.slow  # 80 episodes (statistical); run by .ci/run's slow step
 def test_row_positions_carry_no_id_information():
     """Shuffling which robot carries which id (same positions) leaves each row slot's bearing statistics
     unchanged within sampling error (observe_ids=False). Ranked by id, slot 0 would always hold the lowest
