@@ -10,11 +10,12 @@ ratios; the process CPU time per step is printed too, as it depends less on othe
     python benchmarks/bench_vec.py --quick             # N = 10 only
     python benchmarks/bench_vec.py --n 10 --copies 64 --sensing full
     python benchmarks/bench_vec.py --interleave 5        # VMAS vs N = 10 ideal, alternated, 5 rounds
+    python benchmarks/bench_vec.py --interleave 5 --sensing full
     python benchmarks/bench_vec.py --n 1000 --json     # one JSON object instead of the table (run_all.py --markdown)
     python benchmarks/bench_vec.py --threads 2         # swarm_envs on 2 numba threads, VMAS on 2 torch threads
 
 On a shared machine the load drifts between the VMAS row and ours; ``--interleave R`` alternates the two
-measurements (VMAS, then N = 10 ideal flocking at B = 64 and 256) R times and prints each round's ratio
+measurements (VMAS, then N = 10 flocking at B = 64 and 256, ideal sensing or --sensing) R times and prints each round's ratio
 and the median ratio, so both sides of every ratio see the same load.
 """
 
@@ -106,26 +107,36 @@ def time_vmas(n: int, num_envs: int, steps: int, env=None, threads: int = 1) -> 
     return statistics.median(times)
 
 
-def interleaved(rounds: int, copies: tuple[int, ...] = (64, 256), vmas_steps: int = 15) -> None:
-    """VMAS (N = 10, 1024 envs) and N = 10 ideal flocking at each of ``copies``, alternated ``rounds`` times."""
-    env = make_vmas(10, 1024)
+def interleaved(rounds: int, copies: tuple[int, ...] = (64, 256), vmas_steps: int = 15, sensing: str = "ideal",
+                env_id: str = "swarm_envs/Flocking-v0", threads: int = 1, quiet: bool = False) -> dict | None:
+    """VMAS (N = 10, 1024 envs, ``threads`` torch threads) and N = 10 of ``env_id`` with ``sensing`` at each of
+    ``copies`` (numba's thread count), alternated ``rounds`` times; prints each round (unless ``quiet``) and
+    returns the ratios (median, min, max per copy count), or None without VMAS."""
+    env = make_vmas(10, 1024, threads)
     if env is None:
         print("VMAS: not installed (pip install vmas) - nothing to interleave")
-        return
-    print(f"{args.env}; load average at start: {os.getloadavg()[0]:.2f} on {os.cpu_count()} cores")
-    print("| round | VMAS agent-steps/s | " + " | ".join(f"B={b} agent-steps/s | ratio" for b in copies) + " |")
-    print("|---|---|" + "---|---|" * len(copies))
+        return None
+    load_start = os.getloadavg()[0]
+    say = (lambda *a, **k: None) if quiet else print
+    say(f"{env_id}, {sensing} sensing, {_numba_threads()} numba / {threads} torch threads; load average at start: {load_start:.2f} on {os.cpu_count()} cores")
+    say("| round | VMAS agent-steps/s | " + " | ".join(f"B={b} agent-steps/s | ratio" for b in copies) + " |")
+    say("|---|---|" + "---|---|" * len(copies))
     ratios: dict[int, list[float]] = {b: [] for b in copies}
+    vmas_rates = []
     for r in range(rounds):
-        vmas_rate = 10 * 1024 / time_vmas(10, 1024, vmas_steps, env)
+        vmas_rate = 10 * 1024 / time_vmas(10, 1024, vmas_steps, env, threads)
+        vmas_rates.append(vmas_rate)
         cells = []
         for b in copies:
-            rate = 10 * b / time_swarm(10, b, "ideal", 5, 2.0)[0]
+            rate = 10 * b / time_swarm(10, b, sensing, 5, 2.0, env_id)[0]
             ratios[b].append(rate / vmas_rate)
             cells.append(f"{rate:,.0f} | {rate / vmas_rate:.2f}x")
-        print(f"| {r + 1} | {vmas_rate:,.0f} | " + " | ".join(cells) + " |", flush=True)
-    print("\nmedian ratio: " + ", ".join(f"B={b} {statistics.median(v):.2f}x (min {min(v):.2f}, max {max(v):.2f})" for b, v in ratios.items()))
-    print(f"load average at end: {os.getloadavg()[0]:.2f}")
+        say(f"| {r + 1} | {vmas_rate:,.0f} | " + " | ".join(cells) + " |", flush=True)
+    say("\nmedian ratio: " + ", ".join(f"B={b} {statistics.median(v):.2f}x (min {min(v):.2f}, max {max(v):.2f})" for b, v in ratios.items()))
+    say(f"load average at end: {os.getloadavg()[0]:.2f}")
+    return {"env": env_id, "sensing": sensing, "numba_threads": _numba_threads(), "torch_threads": threads, "rounds": rounds,
+            "vmas_median_agent_steps_per_s": statistics.median(vmas_rates), "load_start": load_start, "load_end": os.getloadavg()[0],
+            "ratios": {str(b): {"median": statistics.median(v), "min": min(v), "max": max(v)} for b, v in ratios.items()}}
 
 
 def _numba_threads() -> int:
@@ -144,7 +155,7 @@ def main() -> None:
     parser.add_argument("--min-seconds", type=float, default=3.0)
     parser.add_argument("--no-vmas", action="store_true")
     parser.add_argument("--vmas-steps", type=int, default=20, help="timed VMAS steps (median)")
-    parser.add_argument("--interleave", type=int, metavar="R", help="alternate VMAS and N = 10 ideal R times (ratios only)")
+    parser.add_argument("--interleave", type=int, metavar="R", help="alternate VMAS and N = 10 R times (ratios only; ideal sensing unless --sensing)")
     parser.add_argument("--env", default="swarm_envs/Flocking-v0", help="registered env id (default: flocking, as VMAS's scenario)")
     parser.add_argument("--import", dest="imports", action="append", default=[], metavar="MODULE",
                         help="module or .py file that registers --env (repeatable), e.g. examples/custom_task.py")
@@ -166,7 +177,9 @@ def main() -> None:
     except (ImportError, ValueError) as err:
         parser.error(str(err))
     if args.interleave:
-        interleaved(args.interleave)
+        result = interleaved(args.interleave, sensing=args.sensing or "ideal", env_id=args.env, threads=args.threads or 1, quiet=args.json)
+        if args.json:
+            print(json.dumps(result))
         return
     grid = [(n, b) for n, b in GRID if not args.quick or n == 10]
     if args.n:

@@ -7,7 +7,8 @@ Each benchmark is its own script (``bench_*.py``) and can be run alone with its 
 
 ``--markdown`` (default PATH ``docs/performance.md``) measures the batched core's rollout throughput
 (``bench_vec.py --json``, one fresh process per swarm size, so a large scene is not measured in a process
-that has just stepped thousands of robots), VMAS's flocking in the same run when ``vmas`` is installed,
+that has just stepped thousands of robots), VMAS's flocking in the same run when ``vmas`` is installed
+(also alternated with N = 10 at each thread count and sensing, ``bench_vec.py --interleave``),
 the first run of the README's first snippet on an empty numba cache (``bench_first_run.py --json``), the
 ParallelEnv and TorchRL views against ``make_vec`` (``bench_views.py --json``, ``bench_torchrl.py --json``),
 and the training rate of the default PPO config (``train.py --config configs/aggregation.yaml``, when
@@ -74,6 +75,15 @@ def measure_vec(n: int, with_vmas: bool, threads: int = 1) -> dict:
     """bench_vec.py's rows for swarm size ``n`` (full and ideal sensing) on ``threads`` threads (numba; torch
     for VMAS), in a fresh process."""
     cmd = [sys.executable, str(HERE / "bench_vec.py"), "--n", str(n), "--json", "--threads", str(threads)] + ([] if with_vmas else ["--no-vmas"])
+    print("running:", " ".join(cmd[1:]), flush=True)
+    out = subprocess.run(cmd, capture_output=True, text=True, env=_env(), cwd=ROOT, check=True).stdout
+    return json.loads(out.strip().splitlines()[-1])
+
+
+def measure_interleaved(threads: int, sensing: str, rounds: int = 5) -> dict:
+    """bench_vec.py's alternated VMAS / N = 10 ratios (``--interleave``) for ``sensing`` on ``threads`` threads,
+    in a fresh process: both sides of each ratio measured under the same load."""
+    cmd = [sys.executable, str(HERE / "bench_vec.py"), "--interleave", str(rounds), "--sensing", sensing, "--threads", str(threads), "--json"]
     print("running:", " ".join(cmd[1:]), flush=True)
     out = subprocess.run(cmd, capture_output=True, text=True, env=_env(), cwd=ROOT, check=True).stdout
     return json.loads(out.strip().splitlines()[-1])
@@ -170,6 +180,7 @@ def write_page(path: Path, sizes: list[int], training: bool, vmas: bool, first_r
     load_before = os.getloadavg()
     info = machine()
     runs = [measure_vec(n, with_vmas=vmas and i == 0, threads=t) for t in threads for i, n in enumerate(sorted(sizes))]
+    alternated = [measure_interleaved(t, s) for s in ("full", "ideal") for t in threads] if any(r.get("vmas") for r in runs) else None
     first = measure_first_run() if first_run else None
     views = measure_views() if adapters else None
     torchrl = measure_torchrl() if adapters else None
@@ -178,7 +189,7 @@ def write_page(path: Path, sizes: list[int], training: bool, vmas: bool, first_r
         train["stages"] = measure_training_stages()
     load_after = os.getloadavg()
     minutes = (datetime.datetime.now(datetime.timezone.utc) - started).total_seconds() / 60
-    page = render(info, runs, train, sorted(sizes), started, minutes, load_before, load_after, first, views, torchrl)
+    page = render(info, runs, train, sorted(sizes), started, minutes, load_before, load_after, first, views, torchrl, alternated)
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text(page, encoding="utf-8")
     print(f"wrote {path} ({minutes:.1f} min of measurements)")
@@ -191,7 +202,8 @@ def _load(values: tuple[float, float, float]) -> str:
 
 def render(info: dict[str, str], runs: list[dict], train: dict | str, sizes: list[int],
            started: datetime.datetime, minutes: float, load_before: tuple, load_after: tuple,
-           first_run: dict | None = None, views: dict | None = None, torchrl: dict | str | None = None) -> str:
+           first_run: dict | None = None, views: dict | None = None, torchrl: dict | str | None = None,
+           alternated: list[dict] | None = None) -> str:
     """The performance page as markdown."""
     vmas_of = {r["numba_threads"]: r["vmas"] for r in runs if r.get("vmas")}  # VMAS per thread count
     vmas = vmas_of.get(1) or next(iter(vmas_of.values()), None)
@@ -265,6 +277,22 @@ def render(info: dict[str, str], runs: list[dict], train: dict | str, sizes: lis
     if sizes != list(SIZES):
         lines += ["", f"Reduced run: only N = {', '.join(map(str, sizes))} were measured (`--sizes`); the full run "
                   f"adds N = {', '.join(str(n) for n in SIZES if n not in sizes)}."]
+    if alternated:
+        copies = list(alternated[0]["ratios"])
+        lines += [
+            "",
+            "### Ratios under the same load",
+            "",
+            f"VMAS (as above) and N = 10 at B = {' and '.join(copies)} alternated {alternated[0]['rounds']} times in one process per row",
+            "(`python benchmarks/bench_vec.py --interleave 5 --sensing S --threads T`), so that both sides of every",
+            "ratio see the same load; the median ratio over the rounds, in brackets the lowest and the highest:",
+            "",
+            "| sensing | threads | VMAS agent-steps/s (median) | " + " | ".join(f"B = {b} vs VMAS" for b in copies) + " |",
+            "|---|---|---|" + "---|" * len(copies),
+        ]
+        for a in alternated:
+            cells = " | ".join(f"{a['ratios'][b]['median']:.2f}x [{a['ratios'][b]['min']:.2f}, {a['ratios'][b]['max']:.2f}]" for b in copies)
+            lines.append(f"| {a['sensing']} | {a['numba_threads']} | {a['vmas_median_agent_steps_per_s']:,.0f} | {cells} |")
     lines += ["", "## First run", ""]
     if first_run:
         lines += [

@@ -223,6 +223,10 @@ def test_performance_page_is_rendered_from_the_measurements():
     assert "51,200 agent-steps/s (200.0 ms per step) on 1 torch thread; 102,400" in page and "6,741 robot-steps/s" in page and "Test CPU, 2 cores" in page
     assert "Reduced run: only N = 10" in page
     assert "| env step | 2.50 | 45.1 % |\n| PPO update | 2.40 | 43.2 % |" in page
+    alternated = [{"sensing": "full", "numba_threads": 1, "rounds": 5, "vmas_median_agent_steps_per_s": 120000.0,
+                   "ratios": {"64": {"median": 0.43, "min": 0.41, "max": 0.45}, "256": {"median": 0.51, "min": 0.5, "max": 0.54}}}]
+    same_load = run_all.render(info, runs, train, [10], when, 5.0, (0.5, 0.4, 0.3), (0.6, 0.5, 0.4), first, views, torchrl, alternated)
+    assert "| full | 1 | 120,000 | 0.43x [0.41, 0.45] | 0.51x [0.50, 0.54] |" in same_load and "### Ratios under the same load" not in page
     failed = run_all.render(info, runs, dict(train, stages="not measured: bench_train_stages.py exited with code 1"), [10], when, 5.0,
                             (0.5, 0.4, 0.3), (0.6, 0.5, 0.4), first, views, torchrl)
     assert "The split of the training time was not measured: bench_train_stages.py exited with code 1." in failed
