@@ -22,6 +22,7 @@ if TYPE_CHECKING:
     from swarm_envs.sensing.scale_free import ScaleFreeResult
 
 __all__ = [
+    "motor_forces",
     "pack_nearest",
     "directed_links",
     "largest_component_fraction",
@@ -41,6 +42,19 @@ __all__ = [
 
 
 # -- observations (swarm_envs.sensing.observation) -------------------------------------------------------------------
+def motor_forces(control: np.ndarray, motion: np.ndarray, mass: float, moment: float, h: float, force: float, torque: float) -> np.ndarray:
+    """:func:`swarm_envs.sim.substep_kernel.motor_forces`: each robot's (fx, fy, torque) rows (n, 3) that change
+    its velocity ``motion`` (n, 3: vx, vy, omega) towards ``control`` (n, 3) within one sub-step of ``h`` s, the
+    linear change clipped to ``force`` h / ``mass`` in norm and the angular to ``torque`` h / ``moment``."""
+    dv = control[:, :2] - motion[:, :2]
+    cap = force * h / mass
+    norm = np.sqrt((dv * dv).sum(axis=1))
+    dv = np.where((norm > cap)[:, None], dv * (cap / np.maximum(norm, 1e-300))[:, None], dv)
+    cap_w = torque * h / moment
+    dw = np.clip(control[:, 2] - motion[:, 2], -cap_w, cap_w)
+    return np.column_stack([dv * mass / h, dw * moment / h])
+
+
 def pack_nearest(n_rows: int, row: np.ndarray, key: np.ndarray, values: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray]:
     """Reference of :func:`swarm_envs.sensing.observation.pack_nearest` (kernels ``_pack_nearest_kernel`` and
     ``_nearest_slots_kernel`` of :mod:`swarm_envs.sensing.observation`, whose ``order`` is
