@@ -1,4 +1,4 @@
-"""The motors' compiled force kernel against its numpy reference, and the bound it promises."""
+"""The motors' compiled force kernel against its numpy reference (its bounds: tests/sim/test_world.py)."""
 
 import numpy as np
 from hypothesis import given, settings, strategies as st
@@ -30,15 +30,3 @@ def test_kernel_equals_the_numpy_reference_bit_for_bit(seed, n, spread, force, t
     assert np.array_equal(out[: 3 * n].reshape(n, 3), reference.motor_forces(control, motion, mass, moment, h, force, torque))
     assert np.isnan(out[3 * n :]).all()
 
-
-def test_the_velocity_change_is_bounded_by_the_motor_force():
-    """A robot far from its control velocity gets exactly the bound, in the direction of the change; one
-    within reach gets the change itself."""
-    mass, moment, h, force, torque = 0.2, 1e-4, 0.005, 4.0, 0.01
-    control = np.array([[1.0, 0.0, 5.0], [0.05, 0.0, 0.1]])
-    motion = np.zeros((2, 3))
-    out = np.empty(6)
-    motor_forces(control, motion.reshape(-1), out, mass, moment, h, force, torque)
-    rows = out.reshape(2, 3)
-    assert np.allclose(rows[0], [force, 0.0, torque])  # clipped: |F| = force, T = torque
-    assert np.allclose(rows[1], [0.05 * mass / h, 0.0, 0.1 * moment / h])  # reachable: the change within h
