@@ -71,38 +71,37 @@ def _env() -> dict[str, str]:
     return {**os.environ, "PYTHONPATH": os.pathsep.join(filter(None, [str(ROOT), os.environ.get("PYTHONPATH")]))}
 
 
+def _run_json(cmd: list[str]) -> dict:
+    """The JSON object a benchmark script prints last, run as ``cmd`` from the repository root."""
+    print("running:", " ".join(cmd[1:]), flush=True)
+    out = subprocess.run(cmd, capture_output=True, text=True, env=_env(), cwd=ROOT, check=True).stdout
+    return json.loads(out.strip().splitlines()[-1])
+
+
 def measure_vec(n: int, with_vmas: bool, threads: int = 1) -> dict:
     """bench_vec.py's rows for swarm size ``n`` (full and ideal sensing) on ``threads`` threads (numba; torch
     for VMAS), in a fresh process."""
     cmd = [sys.executable, str(HERE / "bench_vec.py"), "--n", str(n), "--json", "--threads", str(threads)] + ([] if with_vmas else ["--no-vmas"])
-    print("running:", " ".join(cmd[1:]), flush=True)
-    out = subprocess.run(cmd, capture_output=True, text=True, env=_env(), cwd=ROOT, check=True).stdout
-    return json.loads(out.strip().splitlines()[-1])
+    return _run_json(cmd)
 
 
 def measure_interleaved(threads: int, sensing: str, rounds: int = 5) -> dict:
     """bench_vec.py's alternated VMAS / N = 10 ratios (``--interleave``) for ``sensing`` on ``threads`` threads,
     in a fresh process: both sides of each ratio measured under the same load."""
     cmd = [sys.executable, str(HERE / "bench_vec.py"), "--interleave", str(rounds), "--sensing", sensing, "--threads", str(threads), "--json"]
-    print("running:", " ".join(cmd[1:]), flush=True)
-    out = subprocess.run(cmd, capture_output=True, text=True, env=_env(), cwd=ROOT, check=True).stdout
-    return json.loads(out.strip().splitlines()[-1])
+    return _run_json(cmd)
 
 
 def measure_first_run(runs: int = 3) -> dict:
     """bench_first_run.py's result: the README snippet on an empty numba cache, ``runs`` times, and warm."""
     cmd = [sys.executable, str(HERE / "bench_first_run.py"), "--runs", str(runs), "--json"]
-    print("running:", " ".join(cmd[1:]), flush=True)
-    out = subprocess.run(cmd, capture_output=True, text=True, env=_env(), cwd=ROOT, check=True).stdout
-    return json.loads(out.strip().splitlines()[-1])
+    return _run_json(cmd)
 
 
 def measure_views() -> dict:
     """bench_views.py's medians: the ParallelEnv against make_vec(..., 1), N = 1000, full sensing."""
     cmd = [sys.executable, str(HERE / "bench_views.py"), "--json"]
-    print("running:", " ".join(cmd[1:]), flush=True)
-    out = subprocess.run(cmd, capture_output=True, text=True, env=_env(), cwd=ROOT, check=True).stdout
-    return json.loads(out.strip().splitlines()[-1])
+    return _run_json(cmd)
 
 
 def measure_torchrl() -> dict | str:
@@ -113,9 +112,7 @@ def measure_torchrl() -> dict | str:
     except ImportError:
         return "not measured: torchrl is not installed (`pip install -e \".[torchrl]\"`)"
     cmd = [sys.executable, str(HERE / "bench_torchrl.py"), "--json"]
-    print("running:", " ".join(cmd[1:]), flush=True)
-    out = subprocess.run(cmd, capture_output=True, text=True, env=_env(), cwd=ROOT, check=True).stdout
-    return json.loads(out.strip().splitlines()[-1])
+    return _run_json(cmd)
 
 
 def measure_training() -> dict | str:
