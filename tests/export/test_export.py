@@ -26,7 +26,7 @@ needs_cc = pytest.mark.skipif(compiler() is None, reason="no C compiler (cc, gcc
 #: platform -> (config, overrides): one task per platform
 RUNS = {
     "epuck": ("configs/aggregation.yaml", []),
-    "rone": ("configs/sorted_following.yaml", []),  # odometry: true
+    "rone": ("configs/sorted_following.yaml", ["agent.encoder=mlp"]),  # the flat MLP with odometry
     "droplet": ("configs/aggregation.yaml", ["env.platform=droplet", "env.message_bits=3", "agent.net_arch=[32, 16]", "agent.activation=relu"]),
 }
 TOLERANCE = 1e-5  # float32 C vs torch, per action component

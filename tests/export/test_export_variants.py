@@ -27,7 +27,7 @@ SMALL = ["agent.net_arch=[16]", "agent.set_embedding=8", "agent.lstm_hidden=8"]
 VARIANTS = {
     "deepsets_stack2": ("configs/aggregation.yaml", [*SMALL, "agent.encoder=deepsets", "agent.frame_stack=2", "agent.activation=relu"]),
     "recurrent": ("configs/aggregation.yaml", [*SMALL, "agent.algorithm=recurrent_ppo"]),
-    "stack3_repeat2_odometry": ("configs/sorted_following.yaml", [*SMALL, "agent.frame_stack=3", "agent.action_repeat=2"]),
+    "stack3_repeat2_odometry": ("configs/sorted_following.yaml", [*SMALL, "agent.encoder=mlp", "agent.frame_stack=3", "agent.action_repeat=2"]),
     "all_droplet": ("configs/aggregation.yaml", [*SMALL, "env.platform=droplet", "env.message_bits=3", "agent.activation=relu",
                                                  "agent.encoder=deepsets", "agent.algorithm=recurrent_ppo", "agent.odometry=true",
                                                  "agent.frame_stack=2", "agent.action_repeat=3"]),
