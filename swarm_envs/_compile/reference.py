@@ -41,7 +41,7 @@ __all__ = [
 ]
 
 
-# -- observations (swarm_envs.sensing.observation) -------------------------------------------------------------------
+# -- physics (swarm_envs.sim.world, kernels in swarm_envs.sim.substep_kernel) ---------------------------------------
 def motor_forces(control: np.ndarray, motion: np.ndarray, mass: float, moment: float, h: float, force: float, torque: float) -> np.ndarray:
     """:func:`swarm_envs.sim.substep_kernel.motor_forces`: each robot's (fx, fy, torque) rows (n, 3) that change
     its velocity ``motion`` (n, 3: vx, vy, omega) towards ``control`` (n, 3) within one sub-step of ``h`` s, the
@@ -55,6 +55,7 @@ def motor_forces(control: np.ndarray, motion: np.ndarray, mass: float, moment: f
     return np.column_stack([dv * mass / h, dw * moment / h])
 
 
+# -- observations (swarm_envs.sensing.observation) -------------------------------------------------------------------
 def pack_nearest(n_rows: int, row: np.ndarray, key: np.ndarray, values: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray]:
     """Reference of :func:`swarm_envs.sensing.observation.pack_nearest` (kernels ``_pack_nearest_kernel`` and
     ``_nearest_slots_kernel`` of :mod:`swarm_envs.sensing.observation`, whose ``order`` is
