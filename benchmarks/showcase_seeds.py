@@ -25,14 +25,7 @@ os.environ.setdefault("OMP_NUM_THREADS", "1")
 import numpy as np  # noqa: E402
 
 from swarm_envs.agents.evaluation import make_env, run_episode  # noqa: E402
-from swarm_envs.demo import DEFAULT_SHOWCASE, SHOWCASE, _headline, demo_tasks, make_policy  # noqa: E402
-
-
-def showcase_settings(task: str) -> tuple[dict[str, Any], str, int]:
-    """(env settings, shown policy, showcase seed) of ``task``'s ``swarm-demo --all`` scene."""
-    preset = {**DEFAULT_SHOWCASE, **SHOWCASE.get(task, {})}
-    env_kwargs = {"platform": preset["platform"], "sensing": "full", "n_robots": preset["n_robots"], "max_cycles": preset["steps"], **preset.get("env", {})}
-    return {k: v for k, v in env_kwargs.items() if v is not None}, preset.get("policy", "scripted"), preset["seed"]
+from swarm_envs.demo import _headline, demo_tasks, make_policy, showcase_settings  # noqa: E402
 
 
 def measure(task: str, seeds: int) -> dict[str, Any]:

@@ -62,6 +62,26 @@ SHOWCASE: dict[str, dict[str, Any]] = {
 #: the settings of a task without a showcase (None: the task's own default)
 DEFAULT_SHOWCASE: dict[str, Any] = {"platform": None, "n_robots": None, "steps": 300, "seed": 0, "overlay": None}
 
+def showcase_settings(
+    task: str, sensing: str = "full", platform: str | None = None, n_robots: int | None = None, steps: int | None = None,
+    env: Any = (),
+) -> tuple[dict[str, Any], str, int]:
+    """(env settings, shown policy, seed) of ``task``'s showcase scene (:data:`SHOWCASE`, else
+    :data:`DEFAULT_SHOWCASE`), with the command line's ``platform``, ``n_robots``, ``steps`` (control steps)
+    and further ``env`` settings (pairs) in place of the preset's where given; settings left None are the
+    task's own defaults and are dropped."""
+    preset = {**DEFAULT_SHOWCASE, **SHOWCASE.get(task, {})}
+    env_kwargs: dict[str, Any] = {
+        "platform": preset["platform"] if platform is None else platform,
+        "sensing": sensing,
+        "n_robots": n_robots or preset["n_robots"],
+        "max_cycles": steps or preset["steps"],
+        **preset.get("env", {}),
+        **dict(env),
+    }
+    return {k: v for k, v in env_kwargs.items() if v is not None}, preset.get("policy", "scripted"), preset["seed"]
+
+
 #: image settings of ``--all`` unless given: small GIFs for the documentation
 DOCS_IMAGE = {"pixels": 320, "frame_skip": 4}
 #: image settings of a single demo unless given
@@ -454,16 +474,8 @@ def main(argv: list[str] | None = None) -> int:
         preset = {**DEFAULT_SHOWCASE, **SHOWCASE.get(task, {})}
         # a showcase may draw fewer frames (a busy scene keeps its GIF small)
         frame_skip = args.frame_skip or (preset.get("frame_skip", image["frame_skip"]) if args.all else image["frame_skip"])
-        seed = preset["seed"] if args.seed is None else args.seed
-        env_kwargs: dict[str, Any] = {
-            "platform": preset["platform"] if args.platform is None else args.platform,
-            "sensing": args.sensing,
-            "n_robots": args.n_robots or preset["n_robots"],
-            "max_cycles": args.steps or preset["steps"],
-            **preset.get("env", {}),
-            **dict(args.env),
-        }
-        env_kwargs = {k: v for k, v in env_kwargs.items() if v is not None}  # None: the task's own default
+        env_kwargs, preset_policy, preset_seed = showcase_settings(task, args.sensing, args.platform, args.n_robots, args.steps, args.env)
+        seed = preset_seed if args.seed is None else args.seed
         overlay = None if args.no_overlay else preset["overlay"] if args.overlay is None else args.overlay
         try:
             probe = make_env(task, **env_kwargs)  # checks every setting before anything runs
@@ -472,7 +484,7 @@ def main(argv: list[str] | None = None) -> int:
         try:
             if overlay is not None and overlay >= probe.n_agents:
                 raise DemoError(f"--overlay {overlay}: this env has agents 0 .. {probe.n_agents - 1}")
-            shown_policy = args.policy or (preset.get("policy", "scripted") if args.all else "scripted")
+            shown_policy = args.policy or (preset_policy if args.all else "scripted")
             policy = make_policy(shown_policy, probe, args.model)
         except DemoError as err:
             parser.error(str(err))
