@@ -30,7 +30,7 @@ from numba.core.extending import intrinsic
 
 from swarm_envs._compile._numba import njit
 
-__all__ = ["ChipmunkCalls", "CHIPMUNK", "FLOAT_ARRAY_DATA", "address", "motor_forces", "substep_spaces"]
+__all__ = ["ChipmunkCalls", "CHIPMUNK", "FLOAT_ARRAY_DATA", "address", "contact_rows", "motor_forces", "substep_spaces"]
 
 
 class ChipmunkCalls(NamedTuple):
@@ -72,9 +72,11 @@ try:
 
     #: chipmunk's functions for :func:`substep_spaces` (None: another pymunk layout)
     CHIPMUNK: ChipmunkCalls | None = _chipmunk_calls()
-    #: byte offset of the data pointer in pymunk.batch's ``pmFloatArray {int num, max; cpFloat *arr;}``
+    #: byte offset of the data pointer in pymunk.batch's ``pmFloatArray {int num, max; cpFloat *arr;}`` (and
+    #: ``pmIntArray``, the same with ``uintptr_t *arr``)
     FLOAT_ARRAY_DATA = int(_ffi.offsetof("pmFloatArray", "arr"))
-    if _ffi.offsetof("pmFloatArray", "num") != 0 or _ffi.sizeof("int") != 4:  # pragma: no cover
+    same_layout = _ffi.offsetof("pmIntArray", "num") == 0 and _ffi.offsetof("pmIntArray", "arr") == FLOAT_ARRAY_DATA
+    if _ffi.offsetof("pmFloatArray", "num") != 0 or _ffi.sizeof("int") != 4 or not same_layout:  # pragma: no cover
         CHIPMUNK = None
 except (ImportError, AttributeError):  # pragma: no cover - another pymunk layout
     CHIPMUNK = None
@@ -104,6 +106,43 @@ def _floats(address: int, size: int) -> np.ndarray:
     """The first ``size`` floats of the pmFloatArray at ``address`` (a view of its C array)."""
     data = carray(_pointer(address + FLOAT_ARRAY_DATA), 1, np.uintp)[0]
     return carray(_pointer(data), size, np.float64)
+
+
+@njit(cache=True)
+def _count(address: int) -> int:
+    """The count of the pmFloatArray or pmIntArray at ``address`` (its first field, an int)."""
+    return carray(_pointer(address), 1, np.int32)[0]
+
+
+@njit(cache=True)
+def _words(address: int, size: int) -> np.ndarray:
+    """The first ``size`` values of the pmIntArray at ``address`` (``uintptr_t``; a view of its C array)."""
+    data = carray(_pointer(address + FLOAT_ARRAY_DATA), 1, np.uintp)[0]
+    return carray(_pointer(data), size, np.uintp)
+
+
+@njit(cache=True)
+def contact_rows(contacts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The contacts the sub-steps of several spaces appended (:func:`swarm_envs.sim.world._substeps`), read from
+    each space's contacts arrays (``contacts[i]``: the ``pmIntArray *`` and ``pmFloatArray *``), space after
+    space: per cached arbiter its ints (body a id, body b id, contact count) (A, 3) and its normal (A, 2),
+    the rows ``np.frombuffer`` of each buffer's ``int_buf()`` and ``float_buf()`` gives, concatenated."""
+    total = 0
+    for i in range(contacts.shape[0]):
+        total += _count(contacts[i, 0]) // 3
+    ints = np.empty((total, 3), np.uintp)
+    normals = np.empty((total, 2), np.float64)
+    row = 0
+    for i in range(contacts.shape[0]):
+        m = _count(contacts[i, 0]) // 3
+        words, floats = _words(contacts[i, 0], 3 * m), _floats(contacts[i, 1], 2 * m)
+        for k in range(m):
+            for c in range(3):
+                ints[row + k, c] = words[3 * k + c]
+            normals[row + k, 0] = floats[2 * k]
+            normals[row + k, 1] = floats[2 * k + 1]
+        row += m
+    return ints, normals
 
 
 @njit(cache=True)
@@ -141,8 +180,11 @@ def substep_spaces(
     spaces: np.ndarray,
     readers: np.ndarray,
     motors: np.ndarray,
+    reads: np.ndarray,
+    contacts: np.ndarray,
     rows: np.ndarray,
     control: np.ndarray,
+    read: np.ndarray,
     first_force: np.ndarray,
     push_force: np.ndarray,
     torque: np.ndarray,
@@ -159,11 +201,17 @@ def substep_spaces(
     towards ``control[rows[i, 0]:rows[i, 1]]`` (bounded to ``first_force[i]`` N in the first sub-step,
     ``push_force[i]`` after, ``torque[i]`` N m) written with the setter (``motors[i, 2:4]``); then one
     ``cpSpaceStep`` and a read of its cached arbiters into ``readers[i]`` (a ``pmBatchedData *``): the calls
-    of :meth:`swarm_envs.sim.world.World._run_substeps`."""
+    of :meth:`swarm_envs.sim.world.World._run_substeps`. Before the sub-steps the contacts' arrays (the
+    ``pmIntArray *`` and ``pmFloatArray *`` ``contacts[i]``) are emptied, as ``Buffer.clear``; after them every
+    body's (x, y, angle, vx, vy, omega) is read with the getter (``reads[i, 0]`` the ``pmBatchedData *``,
+    ``reads[i, 1]`` its ``pmFloatArray *``) and its robots' rows copied into ``read[rows[i, 0]:rows[i, 1]]``
+    (n, 6): the calls of :meth:`swarm_envs.sim.world.World._advance`."""
     for i in range(lo, hi):
         space = spaces[i]
         n = rows[i, 1] - rows[i, 0]
         target = control[rows[i, 0] : rows[i, 1]]
+        _clear(contacts[i, 0])
+        _clear(contacts[i, 1])
         for k in range(substeps):
             _clear(motors[i, 1])
             each_body(space, get_body, motors[i, 0])
@@ -173,3 +221,9 @@ def substep_spaces(
             each_body(space, set_body, motors[i, 2])
             step(space, h)
             each_arbiter(space, read_arbiter, readers[i])
+        _clear(reads[i, 1])
+        each_body(space, get_body, reads[i, 0])
+        bodies = _floats(reads[i, 1], 6 * n)
+        for j in range(n):
+            for c in range(6):
+                read[rows[i, 0] + j, c] = bodies[6 * j + c]

@@ -85,7 +85,7 @@ from swarm_envs.sim.control import (
 from swarm_envs.sim.geometry import wrap_angle
 from swarm_envs.sim.motion import wheel_limited
 from swarm_envs.sim.platforms import Platform
-from swarm_envs.sim.substep_kernel import CHIPMUNK, address, motor_forces, substep_spaces
+from swarm_envs.sim.substep_kernel import CHIPMUNK, address, contact_rows, motor_forces, substep_spaces
 
 __all__ = ["World", "step_worlds", "physics_threads", "N_BUMP_SECTORS"]
 
@@ -227,8 +227,9 @@ class World:
                 for buffer, fields in ((self._write_buffer, _WRITE), (self._read_buffer, _READ), (self._contacts, _CONTACT_FIELDS), (self._motion_buffer, _MOTION))
             )
         self._read_ptr = None  # the read buffer's C array when _read_rows was made
-        # the addresses substep_spaces needs: the space, the contacts' pmBatchedData, and the motors' read and
-        # write (each a pmBatchedData and its pmFloatArray)
+        # the addresses substep_spaces needs: the space, the contacts' pmBatchedData, the motors' read and
+        # write (each a pmBatchedData and its pmFloatArray), the step's read of the bodies (the same), and the
+        # contacts' pmIntArray and pmFloatArray
         self._native = None
         if CHIPMUNK is not None and self._batched is not None:
             self._native = (
@@ -240,6 +241,8 @@ class World:
                     address(self._batched[0]),
                     address(self._write_buffer._float_arr),
                 ),
+                (address(self._batched[1]), address(self._read_buffer._float_arr)),
+                (address(self._contacts._int_arr), address(self._contacts._float_arr)),
             )
 
     # -- copies (copy.deepcopy, pickle) ----------------------------------------------------------------
@@ -454,7 +457,8 @@ def step_worlds(worlds: Sequence[World], linear: np.ndarray, angular: np.ndarray
     linear, angular = np.asarray(linear, float).reshape(-1), np.asarray(angular, float).reshape(-1)
     sizes = [w.n for w in worlds]
     bounds = np.concatenate([[0], np.cumsum(sizes)])
-    for w, a, b in zip(worlds, bounds[:-1], bounds[1:]):
+    spans = list(zip(bounds[:-1].tolist(), bounds[1:].tolist()))  # each world's rows (Python ints: cheaper slicing)
+    for w, (a, b) in zip(worlds, spans):
         w._record(linear[a:b], angular[a:b], dt)
     linear, angular = first.wheel_limited(linear, angular)
     if linear.shape[0] != bounds[-1]:
@@ -484,11 +488,15 @@ def step_worlds(worlds: Sequence[World], linear: np.ndarray, angular: np.ndarray
     chunks = physics_threads(len(worlds)) if threads is None else max(1, min(int(threads), len(worlds)))
     # the sub-steps compiled, without the GIL (substep_kernel), for every world that allows it (not the first
     # step of a space, whose new bodies pymunk's Space.step checks first); the Python calls for the others
-    native = [w._native_ready() for w in worlds]
-    ready = [i for i, ok in enumerate(native) if ok]
-    rest = [i for i, ok in enumerate(native) if not ok]
+    batch = _native_batch(worlds)
+    if batch is None:
+        ready, rest = [], list(range(len(worlds)))
+    else:
+        native = [_plain_space(w.space) for w in worlds]
+        ready = [i for i, ok in enumerate(native) if ok]
+        rest = [i for i, ok in enumerate(native) if not ok]
     if ready:
-        _substep_native([worlds[i] for i in ready], [(bounds[i], bounds[i + 1]) for i in ready], control, read, h, substeps, chunks)
+        _substep_native(worlds, batch, ready, bounds, control, read, h, substeps, chunks)
 
     def advance(k: int) -> None:  # the k-th contiguous share of the other worlds
         for i in rest[len(rest) * k // chunks : len(rest) * (k + 1) // chunks]:
@@ -501,46 +509,85 @@ def step_worlds(worlds: Sequence[World], linear: np.ndarray, angular: np.ndarray
     # velocity = motion actually achieved over the control step (pushes and walls included)
     velocities = (positions - before_pos) / dt
     angular_velocities = wrap_angle(new_headings - headings) / dt
-    bumps = _bump_flags(worlds, bounds, new_headings)
+    bumps = _bump_flags(worlds, bounds, new_headings, batch)
     motion = read[:, 3:6].copy()
-    for w, a, b in zip(worlds, bounds[:-1], bounds[1:]):
+    for w, (a, b) in zip(worlds, spans):
         w.positions, w.headings = positions[a:b], new_headings[a:b]
         w.velocities, w.angular_velocities = velocities[a:b], angular_velocities[a:b]
         w.bumps, w._body_motion = bumps[a:b], motion[a:b]
 
 
-def _substep_native(worlds: Sequence[World], rows: Sequence[tuple[int, int]], control: np.ndarray, read: np.ndarray, h: float, substeps: int, chunks: int) -> None:
-    """:func:`step_worlds`'s write, sub-steps and read of ``worlds`` (every one :meth:`World._native_ready`;
-    world ``k``'s robots are ``rows[k]`` = (start, stop) of ``control`` and ``read``): the contacts emptied
-    from Python, the bodies read back from Python (one C call per space), the sub-steps of ``h`` s by
+class _NativeBatch:
+    """What :func:`substep_spaces` and :func:`contact_rows` read of a list of worlds (the ``_native`` addresses
+    of :meth:`World._make_buffers` as arrays, the motors' bounds) and the worlds' robot body ids sorted with
+    their rows: built once for a list of worlds and kept while every world keeps its space."""
+
+    def __init__(self, worlds: Sequence[World], natives: list[tuple]) -> None:
+        self.natives = natives  # held, so that no other tuple can take their ids (the cache key)
+        self.spaces = np.array([nat[0] for nat in natives], dtype=np.uintp)
+        self.readers = np.array([nat[1] for nat in natives], dtype=np.uintp)
+        self.motors = np.array([nat[2] for nat in natives], dtype=np.uintp).reshape(-1, 4)
+        self.reads = np.array([nat[3] for nat in natives], dtype=np.uintp).reshape(-1, 2)
+        self.contacts = np.array([nat[4] for nat in natives], dtype=np.uintp).reshape(-1, 2)
+        self.first_force = np.array([w._motor_forces[0] for w in worlds], dtype=float)
+        self.push = np.array([w._motor_forces[1] for w in worlds], dtype=float)
+        self.torque = np.array([w._motor_forces[2] for w in worlds], dtype=float)
+        self.inertia = worlds[0]._inertia
+        ids = np.concatenate([w._robot_ids for w in worlds])  # body ids are unique among live bodies
+        order = np.argsort(ids)
+        self.sorted_ids, self.id_rows = ids[order], order  # robot rows of the worlds, world after world
+
+
+_NATIVE_BATCHES: dict[tuple[int, ...], _NativeBatch] = {}
+_NATIVE_BATCHES_KEPT = 8
+
+
+def _native_batch(worlds: Sequence[World]) -> _NativeBatch | None:
+    """The :class:`_NativeBatch` of ``worlds`` (cached by the identity of their ``_native`` tuples, which a
+    world replaces with each new space), or None when a world has no native addresses (another pymunk
+    layout, or pymunk.batch's internals unavailable)."""
+    natives = [w._native if w._batched is not None else None for w in worlds]
+    if any(nat is None for nat in natives):
+        return None
+    key = tuple(map(id, natives))
+    batch = _NATIVE_BATCHES.get(key)
+    if batch is None:
+        if len(_NATIVE_BATCHES) >= _NATIVE_BATCHES_KEPT:
+            _NATIVE_BATCHES.pop(next(iter(_NATIVE_BATCHES)), None)
+        batch = _NATIVE_BATCHES[key] = _NativeBatch(worlds, natives)
+    return batch
+
+
+def _substep_native(worlds: Sequence[World], batch: _NativeBatch, ready: list[int], bounds: np.ndarray, control: np.ndarray, read: np.ndarray,
+                    h: float, substeps: int, chunks: int) -> None:
+    """:func:`step_worlds`'s contacts emptied, sub-steps and read of the worlds ``ready`` of ``worlds`` (each
+    with a space :func:`_plain_space` allows; ``batch`` their :class:`_NativeBatch`; world ``i``'s robots are
+    rows ``bounds[i]:bounds[i + 1]`` of ``control`` and ``read``), by
     :func:`swarm_envs.sim.substep_kernel.substep_spaces` (no GIL), ``chunks`` contiguous shares of the worlds
     on threads."""
-    for w in worlds:
-        w._contacts.clear()
-    spaces = np.array([w._native[0] for w in worlds], dtype=np.uintp)
-    readers = np.array([w._native[1] for w in worlds], dtype=np.uintp)
-    motors = np.array([w._native[2] for w in worlds], dtype=np.uintp)
-    row_bounds = np.array(rows, dtype=np.int64).reshape(-1, 2)
-    first_force = np.array([w._motor_forces[0] for w in worlds], dtype=float)
-    push = np.array([w._motor_forces[1] for w in worlds], dtype=float)
-    torque = np.array([w._motor_forces[2] for w in worlds], dtype=float)
-    mass, moment = worlds[0]._inertia
+    idx = np.asarray(ready, dtype=np.int64)
+    every = idx.shape[0] == len(worlds)
+    pick = (lambda a: a) if every else (lambda a: a[idx])
+    spaces, readers, motors, reads, contacts = (pick(a) for a in (batch.spaces, batch.readers, batch.motors, batch.reads, batch.contacts))
+    first_force, push, torque = pick(batch.first_force), pick(batch.push), pick(batch.torque)
+    row_bounds = np.stack([bounds[:-1], bounds[1:]], axis=1).astype(np.int64)[idx]
+    mass, moment = batch.inertia
     control = np.ascontiguousarray(control)
-    n = len(worlds)
+    n = idx.shape[0]
     chunks = max(1, min(chunks, n))
 
     def share(k: int) -> None:
-        substep_spaces(*CHIPMUNK, spaces, readers, motors, row_bounds, control, first_force, push, torque, mass, moment, h, substeps, n * k // chunks, n * (k + 1) // chunks)
+        substep_spaces(*CHIPMUNK, spaces, readers, motors, reads, contacts, row_bounds, control, read, first_force, push, torque, mass, moment, h,
+                       substeps, n * k // chunks, n * (k + 1) // chunks)
 
-    for w in worlds:  # as Space.step: no pymunk call may change a space while it steps
+    stepping = worlds if every else [worlds[i] for i in ready]
+    for w in stepping:  # as Space.step: no pymunk call may change a space while it steps
         w.space._locked = True
     try:
         run_chunks(share, chunks)
     finally:
-        for w in worlds:
+        for w in stepping:
             w.space._locked = False
-    for w, (a, b) in zip(worlds, rows):
-        read[a:b] = w._read_motion()
 
 
 def _batched_data(buffer: pymunk.batch.Buffer, fields: pymunk.batch.BodyFields | pymunk.batch.ArbiterFields) -> object:
@@ -596,14 +643,21 @@ def _substeps(space: pymunk.Space, h: float, count: int, contacts: pymunk.batch.
         space._locked = False
 
 
-def _bump_flags(worlds: Sequence[World], bounds: np.ndarray, headings: np.ndarray) -> np.ndarray:
+def _bump_flags(worlds: Sequence[World], bounds: np.ndarray, headings: np.ndarray, batch: _NativeBatch | None = None) -> np.ndarray:
     """(sum n, N_BUMP_SECTORS) contact flags of the last control step from the worlds' contacts.
 
     Each contact of a sub-step (an arbiter with a contact count > 0, see :func:`_substeps`) flags, for
     each of its two bodies that is a robot, the sector of the contact normal seen from that robot (the
     normal points from body a to body b) relative to the robot's heading at the end of the step.
+    ``batch``: the worlds' :class:`_NativeBatch`, whose addresses read every world's contacts in one call
+    (:func:`contact_rows`); None: each world's buffers are read from Python.
     """
     bumps = np.zeros((bounds[-1], N_BUMP_SECTORS), dtype=bool)
+    if batch is not None:
+        arbiters, normals = contact_rows(batch.contacts)
+        if arbiters.shape[0] == 0:
+            return bumps
+        return _flag_sectors(bumps, arbiters, normals, batch.sorted_ids, batch.id_rows, headings)
     ints, floats, ids, starts, sizes = [], [], [], [], []
     for w, a in zip(worlds, bounds[:-1]):
         if w._contacts._int_arr.num:  # the world had contacts
@@ -616,13 +670,19 @@ def _bump_flags(worlds: Sequence[World], bounds: np.ndarray, headings: np.ndarra
         return bumps
     arbiters = np.frombuffer(b"".join(ints), dtype=np.uintp).reshape(-1, 3)
     normals = np.frombuffer(b"".join(floats), dtype=np.float64).reshape(-1, 2)
-    touching = arbiters[:, 2] > 0
-    arbiters, normals = arbiters[touching], normals[touching]
-    # body ids (unique among live bodies) -> robot rows; the walls' static body is no robot
+    # body ids (unique among live bodies) -> robot rows
     ids, sizes = np.concatenate(ids), np.array(sizes)
     rows = np.arange(len(ids)) + np.repeat(np.array(starts) - (np.cumsum(sizes) - sizes), sizes)
     order = np.argsort(ids)
-    ids, rows = ids[order], rows[order]
+    return _flag_sectors(bumps, arbiters, normals, ids[order], rows[order], headings)
+
+
+def _flag_sectors(bumps: np.ndarray, arbiters: np.ndarray, normals: np.ndarray, ids: np.ndarray, rows: np.ndarray, headings: np.ndarray) -> np.ndarray:
+    """:func:`_bump_flags` of the arbiters (A, 3) (body a id, body b id, contact count) with their normals
+    (A, 2), set in ``bumps`` (returned): ``ids`` robot body ids sorted, ``rows`` their rows of ``bumps``."""
+    touching = arbiters[:, 2] > 0
+    arbiters, normals = arbiters[touching], normals[touching]
+    # the walls' static body is no robot
     bodies = arbiters[:, :2].ravel()  # a, b, a, b, ...: body a sees the normal, body b its opposite
     pos = np.minimum(np.searchsorted(ids, bodies), len(ids) - 1)
     robot = ids[pos] == bodies
