@@ -266,6 +266,38 @@ def test_compiled_substeps_equal_the_python_calls(platform):
     assert flagged > 20, "the scene must make contacts"
 
 
+def test_contact_rows_read_what_the_buffers_hold():
+    """:func:`swarm_envs.sim.substep_kernel.contact_rows` (the compiled read of every space's contacts) gives
+    the rows of the buffers' own ``int_buf()`` and ``float_buf()``, world after world, and the kernel's
+    read of the bodies gives what pymunk.batch reads."""
+    from swarm_envs.sim.substep_kernel import contact_rows
+    from swarm_envs.sim.world import _native_batch, step_worlds
+
+    p = PLATFORMS["epuck"]
+    rng = np.random.default_rng(5)
+    arena = Arena("square", 6 * p.diameter)
+    worlds = []
+    for _ in range(6):
+        world = World(p, 16, arena)
+        world.place(spawn_positions(rng, 16, p.radius, arena), rng.uniform(-np.pi, np.pi, 16))
+        worlds.append(world)
+    rows_seen = 0
+    for _ in range(6):
+        step_worlds(worlds, np.full(96, p.max_speed), rng.uniform(-1, 1, 96), 0.1)
+        ints, normals = contact_rows(_native_batch(worlds).contacts)
+        expected_ints = np.concatenate([np.frombuffer(w._contacts.int_buf(), dtype=np.uintp) for w in worlds]).reshape(-1, 3)
+        expected_normals = np.concatenate([np.frombuffer(w._contacts.float_buf(), dtype=np.float64) for w in worlds]).reshape(-1, 2)
+        np.testing.assert_array_equal(ints, expected_ints)
+        np.testing.assert_array_equal(normals, expected_normals)
+        rows_seen += len(ints)
+        for w in worlds:
+            read = np.array(w._read_motion())  # pymunk.batch's read of the bodies now
+            np.testing.assert_array_equal(w.positions, read[:, :2])
+            np.testing.assert_array_equal(w.headings, wrap_angle(read[:, 2]))
+            np.testing.assert_array_equal(w._body_motion, read[:, 3:])
+    assert rows_seen > 20, "the scene must make contacts"
+
+
 @pytest.mark.parametrize("platform", ["epuck", "droplet"])
 def test_step_worlds_threads_bit_identical(platform):
     """Stepping the spaces on threads (contiguous shares of the worlds) gives the sequential result bit for
