@@ -66,7 +66,7 @@ from swarm_envs.sensing.base import MessageReadings, NeighbourReadings, ScaleFre
 from swarm_envs.sensing.bearing_sensor import RONE_ARC_MEAN_DEG, RONE_ARC_RANGE_DEG, MessageBearings
 from swarm_envs.sensing.exchange import BearingExchange, thesis_round_time
 from swarm_envs.sensing.range_bearing import RangeBearingSensor
-from swarm_envs.sensing.scale_free import coordinates, coordinates_all
+from swarm_envs.sensing.scale_free import coordinates, coordinates_all, coordinates_all_chunks
 
 __all__ = ["FullSensing", "BEACON_PERIOD", "SECTOR_MAX_AGE", "RB_MAX_AGE", "rb_max_age", "reading_max_age", "rb_on_worker_thread"]
 
@@ -155,6 +155,7 @@ class FullSensing:
         self.copy_of = np.repeat(np.arange(self.n_copies), self.copy_size)
         #: whether the last step's scene was large enough for the worker thread (:func:`rb_on_worker_thread`)
         self.large_scene = False
+        self._scene_threads = 1  # threads of the last step's scene (gain_threads)
         # one stack for all copies; each module keeps one generator per copy (placeholders until reset)
         streams = [CopyRandom([np.random.default_rng(0) for _ in range(self.n_copies)]) for _ in range(5)]
         #: the ties of the observation-row ranking on a platform without range (:func:`ranked_slots`)
@@ -296,6 +297,7 @@ class FullSensing:
 
         # range & bearing (large scenes: on the worker thread, while SwarmCom runs here)
         self.large_scene = rb_on_worker_thread(len(links))
+        self._scene_threads = gain_threads(len(links))
         rb_future = rb = neighbours = None
         try:
             if self.has_range:
@@ -375,8 +377,8 @@ class FullSensing:
         return rb, NeighbourReadings(rb.rx, rb.tx, rb.range, rb.bearing, rb.heading, rb.age.astype(float))
 
     def _scale_free(self, knowledge) -> ScaleFreeReadings:
-        if self.method == "two_hop":
-            result = coordinates_all(knowledge)
+        if self.method == "two_hop":  # a large scene: the robots in chunks on threads (the same result)
+            result = coordinates_all_chunks(knowledge, self._scene_threads) if self.large_scene else coordinates_all(knowledge)
             xy, valid, rigid = result.xy, result.valid, result.rigid
         else:  # null-space k-hop method: one robot at a time (slow; an analysis option, see README)
             xy, valid, rigid = self._null_space(knowledge)

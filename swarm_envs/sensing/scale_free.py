@@ -64,10 +64,11 @@ the valid ``f_w`` equal to 1, NaN for non-neighbours and uncomputable neighbours
 from __future__ import annotations
 
 from collections import deque
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
+from swarm_envs._compile._worker import run_chunks
 from swarm_envs.sensing.exchange import BearingExchange, NeighbourKnowledge
 from swarm_envs.sim.geometry import wrap_angle
 from swarm_envs.sensing.scale_free_kernels import slot_keys, two_hop_propagate, two_hop_triangles, unit_mean_positions
@@ -76,6 +77,7 @@ from swarm_envs.sensing.numpy_sums import PAIRWISE_INIT
 __all__ = [
     "coordinates",
     "coordinates_all",
+    "coordinates_all_chunks",
     "ScaleFreeSensor",
     "NeighbourKnowledge",
     "ScaleFreeResult",
@@ -191,6 +193,32 @@ def coordinates_all(
     f = np.take_along_axis(f, inv, 1)
     xy = np.stack([f * np.cos(th_in), f * np.sin(th_in)], -1)
     return ScaleFreeResult(xy=xy, valid=np.take_along_axis(valid, inv, 1), rigid=rigid, ids=ids_in.copy(), length=f)
+
+
+def coordinates_all_chunks(knowledge: NeighbourKnowledge, n_chunks: int, noise_sensitivity: bool = True, angle_balance: bool = True) -> ScaleFreeResult:
+    """:func:`coordinates_all` with the robots cut into ``n_chunks`` contiguous ranges of rows, each computed by
+    one thread (the calling thread and the helpers of :func:`swarm_envs._compile._worker.run_chunks`): a
+    robot's coordinates depend on its own row of ``knowledge`` only (its slots and the rows its neighbours
+    reported), every formula is element-wise or robot by robot, and the compiled kernels release the GIL,
+    so the result is the same bit for bit for any number of chunks (for a large scene on several cores)."""
+    n = knowledge.ids.shape[0]
+    n_chunks = max(1, min(int(n_chunks), n))
+    if n_chunks == 1:
+        return coordinates_all(knowledge, noise_sensitivity, angle_balance)
+    robot_ids = np.arange(n, dtype=np.int64) if knowledge.robot_ids is None else np.asarray(knowledge.robot_ids, np.int64)
+    bounds = [n * c // n_chunks for c in range(n_chunks + 1)]
+
+    def chunk(c: int) -> ScaleFreeResult:
+        rows = slice(bounds[c], bounds[c + 1])
+        part = replace(
+            knowledge, ids=knowledge.ids[rows], bearings=knowledge.bearings[rows], row_ids=knowledge.row_ids[rows],
+            row_bearings=knowledge.row_bearings[rows], row_age=None if knowledge.row_age is None else knowledge.row_age[rows],
+            robot_ids=robot_ids[rows],
+        )
+        return coordinates_all(part, noise_sensitivity, angle_balance)
+
+    parts = run_chunks(chunk, n_chunks)
+    return ScaleFreeResult(*(np.concatenate([getattr(p, name) for p in parts]) for name in ("xy", "valid", "rigid", "ids", "length")))
 
 
 def knowledge_from_matrix(bearings: np.ndarray, robots: np.ndarray | None = None) -> NeighbourKnowledge:

@@ -10,6 +10,7 @@ from swarm_envs.sensing.scale_free import (
     angle_balance,
     coordinates,
     coordinates_all,
+    coordinates_all_chunks,
     knowledge_from_matrix,
     null_space_lengths,
 )
@@ -200,6 +201,22 @@ def test_batched_matches_single_robot_on_noisy_data():
             np.testing.assert_allclose(got, xy, atol=1e-12, equal_nan=True)
             assert np.all(np.isfinite(res.xy[u][res.valid[u]]))
             assert not np.any(np.isfinite(res.xy[u][~res.valid[u]]))
+
+
+@pytest.mark.parametrize("n_chunks", [2, 3, 7])
+def test_coordinates_in_chunks_on_threads_equal_the_whole_batch(n_chunks):
+    """The robots cut into contiguous chunks, each on a thread (a large scene), give the coordinates of the
+    whole batch bit for bit, on noisy quantised bearings (ties, missing rows, degenerate triangles)."""
+    rng = np.random.default_rng(12)
+    pos, hd, B = random_scene(rng, n=40, side=3.0, r=1.1)
+    Bq = np.where(np.isnan(B), np.nan, np.round(B / np.deg2rad(22.5)) * np.deg2rad(22.5))
+    kn = knowledge_from_matrix(Bq)
+    for ns in (True, False):
+        whole = coordinates_all(kn, noise_sensitivity=ns)
+        assert whole.valid.any() and not whole.valid.all()
+        chunked = coordinates_all_chunks(kn, n_chunks, noise_sensitivity=ns)
+        for name in ("xy", "valid", "rigid", "ids", "length"):
+            np.testing.assert_array_equal(getattr(chunked, name), getattr(whole, name))
 
 
 def test_degenerate_geometry_gives_no_nan_in_valid_outputs():
