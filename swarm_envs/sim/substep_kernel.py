@@ -126,11 +126,12 @@ def contact_rows(contacts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The contacts the sub-steps of several spaces appended (:func:`swarm_envs.sim.world._substeps`), read from
     each space's contacts arrays (``contacts[i]``: the ``pmIntArray *`` and ``pmFloatArray *``), space after
     space: per cached arbiter its ints (body a id, body b id, contact count) (A, 3) and its normal (A, 2),
-    the rows ``np.frombuffer`` of each buffer's ``int_buf()`` and ``float_buf()`` gives, concatenated."""
+    the rows ``np.frombuffer`` of each buffer's ``int_buf()`` and ``float_buf()`` gives, concatenated. The
+    ints are the ``uintptr_t`` words' bits in an int64 array (``.view(np.uintp)`` reads them as they are)."""
     total = 0
     for i in range(contacts.shape[0]):
         total += _count(contacts[i, 0]) // 3
-    ints = np.empty((total, 3), np.uintp)
+    ints = np.empty((total, 3), np.int64)
     normals = np.empty((total, 2), np.float64)
     row = 0
     for i in range(contacts.shape[0]):

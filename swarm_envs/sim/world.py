@@ -657,7 +657,7 @@ def _bump_flags(worlds: Sequence[World], bounds: np.ndarray, headings: np.ndarra
         arbiters, normals = contact_rows(batch.contacts)
         if arbiters.shape[0] == 0:
             return bumps
-        return _flag_sectors(bumps, arbiters, normals, batch.sorted_ids, batch.id_rows, headings)
+        return _flag_sectors(bumps, arbiters.view(np.uintp), normals, batch.sorted_ids, batch.id_rows, headings)
     ints, floats, ids, starts, sizes = [], [], [], [], []
     for w, a in zip(worlds, bounds[:-1]):
         if w._contacts._int_arr.num:  # the world had contacts

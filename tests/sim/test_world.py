@@ -287,7 +287,7 @@ def test_contact_rows_read_what_the_buffers_hold():
         ints, normals = contact_rows(_native_batch(worlds).contacts)
         expected_ints = np.concatenate([np.frombuffer(w._contacts.int_buf(), dtype=np.uintp) for w in worlds]).reshape(-1, 3)
         expected_normals = np.concatenate([np.frombuffer(w._contacts.float_buf(), dtype=np.float64) for w in worlds]).reshape(-1, 2)
-        np.testing.assert_array_equal(ints, expected_ints)
+        np.testing.assert_array_equal(ints.view(np.uintp), expected_ints)
         np.testing.assert_array_equal(normals, expected_normals)
         rows_seen += len(ints)
         for w in worlds:
