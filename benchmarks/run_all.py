@@ -241,8 +241,8 @@ def render(info: dict[str, str], runs: list[dict], train: dict | str, sizes: lis
         "N x B x env steps/s. Each swarm size runs in its own process (`python benchmarks/bench_vec.py",
         "--n N --threads T`) with T numba threads (`NUMBA_NUM_THREADS`): batches of at least 16 copies step",
         "their physics on T threads, and a scene with at least 16,384 candidate IR pairs (256 copies of 10,",
-        "or N = 1000) runs its gain kernel in T chunks and range & bearing beside SwarmCom (docs/design.md,",
-        "Threads); results are the same for any T.",
+        "or N = 1000) runs its gain kernel and its scale-free coordinates in T chunks and range & bearing",
+        "beside SwarmCom (docs/design.md, Threads); results are the same for any T.",
         "",
     ]
     if vmas:
