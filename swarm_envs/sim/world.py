@@ -540,6 +540,7 @@ class _NativeBatch:
 
 _NATIVE_BATCHES: dict[tuple[int, ...], _NativeBatch] = {}
 _NATIVE_BATCHES_KEPT = 8
+_NATIVE_BATCHES_LOCK = threading.Lock()  # envs may step on several threads
 
 
 def _native_batch(worlds: Sequence[World]) -> _NativeBatch | None:
@@ -550,11 +551,12 @@ def _native_batch(worlds: Sequence[World]) -> _NativeBatch | None:
     if any(nat is None for nat in natives):
         return None
     key = tuple(map(id, natives))
-    batch = _NATIVE_BATCHES.get(key)
-    if batch is None:
-        if len(_NATIVE_BATCHES) >= _NATIVE_BATCHES_KEPT:
-            _NATIVE_BATCHES.pop(next(iter(_NATIVE_BATCHES)), None)
-        batch = _NATIVE_BATCHES[key] = _NativeBatch(worlds, natives)
+    with _NATIVE_BATCHES_LOCK:
+        batch = _NATIVE_BATCHES.get(key)
+        if batch is None:
+            if len(_NATIVE_BATCHES) >= _NATIVE_BATCHES_KEPT:  # the oldest goes
+                _NATIVE_BATCHES.pop(next(iter(_NATIVE_BATCHES)))
+            batch = _NATIVE_BATCHES[key] = _NativeBatch(worlds, natives)
     return batch
 
 

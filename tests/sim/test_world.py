@@ -266,6 +266,36 @@ def test_compiled_substeps_equal_the_python_calls(platform):
     assert flagged > 20, "the scene must make contacts"
 
 
+def test_a_world_placed_again_mid_batch_steps_as_with_the_python_calls():
+    """A world of a batch placed again (a new space: new C addresses) while the others keep stepping: the
+    compiled batch picks up its new space (the cached addresses follow it) and moves and flags bit for bit
+    as the same worlds stepped by the Python calls."""
+    from swarm_envs.sim.world import _native_batch, step_worlds
+
+    p = PLATFORMS["epuck"]
+    rng = np.random.default_rng(21)
+    arena = Arena("square", 6 * p.diameter)
+    starts = [(spawn_positions(rng, 12, p.radius, arena), rng.uniform(-np.pi, np.pi, 12)) for _ in range(4)]
+    compiled, python = [World(p, 12, arena) for _ in range(4)], [World(p, 12, arena) for _ in range(4)]
+    for a, b, start in zip(compiled, python, starts):
+        a.place(*start)
+        b.place(*start)
+        b._native = None
+    for step in range(10):
+        if step == 5:
+            again = (spawn_positions(rng, 12, p.radius, arena), rng.uniform(-np.pi, np.pi, 12))
+            before = _native_batch(compiled)
+            compiled[2].place(*again)
+            python[2].place(*again)
+            assert _native_batch(compiled) is not before
+        lin, ang = rng.uniform(0.5, 1, 48) * p.max_speed, rng.uniform(-1, 1, 48) * p.max_angular_speed
+        step_worlds(compiled, lin, ang, 0.1)
+        step_worlds(python, lin, ang, 0.1)
+        for a, b in zip(compiled, python):
+            for name in ("positions", "headings", "velocities", "angular_velocities", "bumps"):
+                np.testing.assert_array_equal(getattr(a, name), getattr(b, name))
+
+
 def test_contact_rows_read_what_the_buffers_hold():
     """:func:`swarm_envs.sim.substep_kernel.contact_rows` (the compiled read of every space's contacts) gives
     the rows of the buffers' own ``int_buf()`` and ``float_buf()``, world after world, and the kernel's
