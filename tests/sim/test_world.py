@@ -10,6 +10,16 @@ from swarm_envs.sim.arena import Arena
 from swarm_envs.sim.geometry import wrap_angle
 
 
+def _placed_worlds(platform, n_worlds: int, n_robots: int, arena, rng) -> list:
+    """``n_worlds`` worlds of ``n_robots`` robots each, placed at random spawn positions and headings."""
+    worlds = []
+    for _ in range(n_worlds):
+        world = World(platform, n_robots, arena)
+        world.place(spawn_positions(rng, n_robots, platform.radius, arena), rng.uniform(-np.pi, np.pi, n_robots))
+        worlds.append(world)
+    return worlds
+
+
 @pytest.mark.parametrize("platform", sorted(PLATFORMS))
 @pytest.mark.parametrize("v_frac,w_frac", [(0.5, 0.3), (0.4, -0.5), (1.0, 0.0), (0.0, 0.8)])
 def test_free_robot_follows_analytic_arc(platform, v_frac, w_frac):
@@ -306,11 +316,7 @@ def test_contact_rows_read_what_the_buffers_hold():
     p = PLATFORMS["epuck"]
     rng = np.random.default_rng(5)
     arena = Arena("square", 6 * p.diameter)
-    worlds = []
-    for _ in range(6):
-        world = World(p, 16, arena)
-        world.place(spawn_positions(rng, 16, p.radius, arena), rng.uniform(-np.pi, np.pi, 16))
-        worlds.append(world)
+    worlds = _placed_worlds(p, 6, 16, arena, rng)
     rows_seen = 0
     for _ in range(6):
         step_worlds(worlds, np.full(96, p.max_speed), rng.uniform(-1, 1, 96), 0.1)
@@ -339,11 +345,7 @@ def test_step_worlds_threads_bit_identical(platform):
 
     def run(threads):
         rng = np.random.default_rng(3)
-        worlds = []
-        for _ in range(40):
-            world = World(p, 12, arena)
-            world.place(spawn_positions(rng, 12, p.radius, arena), rng.uniform(-np.pi, np.pi, 12))
-            worlds.append(world)
+        worlds = _placed_worlds(p, 40, 12, arena, rng)
         bumped = 0
         for _ in range(15):
             v = rng.uniform(-p.max_speed, p.max_speed, 480)
