@@ -62,6 +62,7 @@ SHOWCASE: dict[str, dict[str, Any]] = {
 #: the settings of a task without a showcase (None: the task's own default)
 DEFAULT_SHOWCASE: dict[str, Any] = {"platform": None, "n_robots": None, "steps": 300, "seed": 0, "overlay": None}
 
+
 def showcase_settings(
     task: str, sensing: str = "full", platform: str | None = None, n_robots: int | None = None, steps: int | None = None,
     env: Any = (),

@@ -66,7 +66,7 @@ from swarm_envs.sensing.base import MessageReadings, NeighbourReadings, ScaleFre
 from swarm_envs.sensing.bearing_sensor import RONE_ARC_MEAN_DEG, RONE_ARC_RANGE_DEG, MessageBearings
 from swarm_envs.sensing.exchange import BearingExchange, thesis_round_time
 from swarm_envs.sensing.range_bearing import RangeBearingSensor
-from swarm_envs.sensing.scale_free import coordinates, coordinates_all, coordinates_all_chunks
+from swarm_envs.sensing.scale_free import coordinates, coordinates_all_chunks
 
 __all__ = ["FullSensing", "BEACON_PERIOD", "SECTOR_MAX_AGE", "RB_MAX_AGE", "rb_max_age", "reading_max_age", "rb_on_worker_thread"]
 
@@ -377,8 +377,8 @@ class FullSensing:
         return rb, NeighbourReadings(rb.rx, rb.tx, rb.range, rb.bearing, rb.heading, rb.age.astype(float))
 
     def _scale_free(self, knowledge) -> ScaleFreeReadings:
-        if self.method == "two_hop":  # a large scene: the robots in chunks on threads (the same result)
-            result = coordinates_all_chunks(knowledge, self._scene_threads) if self.large_scene else coordinates_all(knowledge)
+        if self.method == "two_hop":  # in a large scene the robots in chunks on threads (the same result)
+            result = coordinates_all_chunks(knowledge, self._scene_threads)
             xy, valid, rigid = result.xy, result.valid, result.rigid
         else:  # null-space k-hop method: one robot at a time (slow; an analysis option, see README)
             xy, valid, rigid = self._null_space(knowledge)

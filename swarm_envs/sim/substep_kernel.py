@@ -75,8 +75,8 @@ try:
     #: byte offset of the data pointer in pymunk.batch's ``pmFloatArray {int num, max; cpFloat *arr;}`` (and
     #: ``pmIntArray``, the same with ``uintptr_t *arr``)
     FLOAT_ARRAY_DATA = int(_ffi.offsetof("pmFloatArray", "arr"))
-    same_layout = _ffi.offsetof("pmIntArray", "num") == 0 and _ffi.offsetof("pmIntArray", "arr") == FLOAT_ARRAY_DATA
-    if _ffi.offsetof("pmFloatArray", "num") != 0 or _ffi.sizeof("int") != 4 or not same_layout:  # pragma: no cover
+    _same_layout = _ffi.offsetof("pmIntArray", "num") == 0 and _ffi.offsetof("pmIntArray", "arr") == FLOAT_ARRAY_DATA
+    if _ffi.offsetof("pmFloatArray", "num") != 0 or _ffi.sizeof("int") != 4 or not _same_layout:  # pragma: no cover
         CHIPMUNK = None
 except (ImportError, AttributeError):  # pragma: no cover - another pymunk layout
     CHIPMUNK = None

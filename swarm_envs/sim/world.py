@@ -379,12 +379,6 @@ class World:
             self._apply_motors(h, full if k == 0 else push)
             _substeps(self.space, h, 1, self._contacts, reader)
 
-    def _native_ready(self) -> bool:
-        """Whether :func:`swarm_envs.sim.substep_kernel.substep_spaces` can run this world's sub-steps: pymunk's
-        layout is the known one and the space has none of the bookkeeping ``Space.step`` would do
-        (:func:`_substeps`)."""
-        return self._native is not None and self._batched is not None and _plain_space(self.space)
-
     def _write_control(self, control: np.ndarray) -> None:
         """Empty the contacts and keep the control (vx, vy, omega) rows ``control`` (n, 3) for the motors."""
         self._contacts.clear()

@@ -250,7 +250,7 @@ def test_compiled_substeps_equal_the_python_calls(platform):
     """The sub-steps run by the compiled loop (:func:`swarm_envs.sim.substep_kernel.substep_spaces`, chipmunk
     called without the GIL) move and flag bit for bit as the same chipmunk calls made from Python, alone
     and for several worlds on 1 and 2 threads, contacts included."""
-    from swarm_envs.sim.world import step_worlds
+    from swarm_envs.sim.world import _native_batch, _plain_space, step_worlds
 
     p = PLATFORMS[platform]
     rng = np.random.default_rng(8)
@@ -264,7 +264,8 @@ def test_compiled_substeps_equal_the_python_calls(platform):
     flagged = 0
     for step in range(15):
         if step == 1:  # pymunk's first step of a space checks its new bodies; from then on the compiled loop runs
-            assert all(w._native_ready() for w in compiled) and not any(w._native_ready() for w in python)
+            assert _native_batch(compiled) is not None and all(_plain_space(w.space) for w in compiled)
+            assert _native_batch(python) is None
         lin, ang = rng.uniform(-1, 1, 72) * p.max_speed, rng.uniform(-1, 1, 72) * p.max_angular_speed
         step_worlds(compiled[:1], lin[:24], ang[:24], 0.1)
         step_worlds(compiled[1:], lin[24:], ang[24:], 0.1, threads=1 + step % 2)
