@@ -316,15 +316,19 @@ def slot_loop(
     S, slot0, n_det, m_min, m_sup, m_tr, alpha, first_check,
     tx_ptr, lrx, G, sig_ptr, sig_rx, ambient, rx_v, resp_kt, resp_b,
     noise, inoise, pool,
-    q_bits, q_slots, q_head, q_count, cur_bits, cur_slots, cur_pos, cur_id, sending, frame_counter, backoff,
+    q_bits, q_slots, q_head, q_count, cur_bits, cur_slots, cur_pos, cur_id, sending, backoff,
     state, m_max_est, thr, nbits, expect, phase, buf, best_m, best_det, last_s1, start_slot,
     gt_tx, gt_id, gt_buf, collided,
     code_n, code_k, table_msg, table_ok, header_blocks, header_bits, id_bits, with_sender, crc_bits, crc_table, valid_types,
-    n_ids, counts, per_robot, d_int, d_pay, rx_foreign,
+    n_ids, counts, per_robot, d_int, d_pay, rx_foreign, r0, r1, adc_noise,
 ):  # fmt: skip
-    """All S bit slots of one control step for all robots (module docstring). State arrays are updated in
-    place; ``frame_counter`` is a (1,) array. Deliveries are written to ``d_int`` (D, 12) with columns
-    :data:`DELIVERY_FIELDS` and ``d_pay`` (D, >= 255) bool; returns the number written. Header ids are a
+    """All S bit slots of one control step for the robots ``r0:r1`` (module docstring), whole env copies:
+    no link leaves a copy, so the robots of other copies are neither read nor written, and disjoint ranges
+    may run at the same time on threads. State arrays are updated in place; a robot's frames are numbered
+    in ``cur_id`` (one more than its last frame's; the ground truth matches a receiver's frame with its
+    transmitter's by that number). ``counts`` gets the range's counters. Deliveries are written to
+    ``d_int`` (D, 12) with columns :data:`DELIVERY_FIELDS` and ``d_pay`` (D, >= 255) bool, by slot and then
+    by receiver; returns the number written. Header ids are a
     copy's own robot numbers, valid below ``n_ids`` (the robots per env copy). ``rx_foreign`` (N,) int64: per
     receiving robot, the detectors (bit d) that light of a robot other than its frame's transmitter reached
     (``G * (ambient - m_min) > m_tr``) in a slot where that transmitter was dark; reset at a start symbol,
@@ -332,7 +336,11 @@ def slot_loop(
 
     Detector response: with ``resp_kt = slot duration / c > 0`` every detector's level ``rx_v`` (N, n_det)
     follows the light through :func:`swarm_envs.comm.channel.detector_response` (same arithmetic) in every
-    slot, also while its robot sends, and the ADC samples the level; ``resp_kt = 0``: instantaneous."""
+    slot, also while its robot sends, and the ADC samples the level; ``resp_kt = 0``: instantaneous.
+
+    ``adc_noise``: whether ``noise`` holds ADC noise draws; False when it is all zeros (an ADC model without
+    noise), and then an instantaneous detector that no light reached in a slot (no intensity noise) reads
+    the same sample on every detector, computed once."""
     n = sending.shape[0]
     Q = q_bits.shape[1]
     F = cur_bits.shape[1]
@@ -340,9 +348,10 @@ def slot_loop(
     W = buf.shape[1]
     has_inoise = inoise.shape[0] > 0
     filt = resp_kt > 0.0
-    ysum = np.empty((n, n_det), np.float64)
+    ysum = np.empty((n, n_det), np.float64)  # rows r0:r1 used
     ysum[:] = 0.0
-    ysum_flat, level_flat = ysum.reshape(-1), rx_v.reshape(-1)  # (robot, detector) rows, for _respond
+    ysum_flat = ysum.reshape(-1)[r0 * n_det : r1 * n_det]  # the range's (robot, detector) rows, for _respond
+    level_flat = rx_v.reshape(-1)[r0 * n_det : r1 * n_det]
     best_str = np.empty(n, np.float64)
     best_str[:] = -np.inf
     best_tx = np.empty(n, np.int64)
@@ -353,17 +362,19 @@ def slot_loop(
     fmask[:] = 0
     check = np.empty(n, np.bool_)
     check[:] = False
+    lit = np.empty(n, np.bool_)  # this slot's light reached the robot
+    lit[:] = False
+    same_dark_sample = not (filt or has_inoise or adc_noise)  # a dark robot's detectors all read the same
     info = np.empty(W, np.bool_)
     info[:] = False
     tinfo = np.empty(W, np.bool_)
     tinfo[:] = False
     dirty = False
     nd_out = 0
-    fc = frame_counter[0]
     for s in range(S):
         slot = slot0 + s
         # 1. CSMA [Sec. 4.4]
-        for r in range(n):
+        for r in range(r0, r1):
             if q_count[r] > 0 and not sending[r]:
                 if backoff[r] > 0:
                     backoff[r] -= 1
@@ -377,8 +388,7 @@ def slot_loop(
                         cur_bits[r, i] = q_bits[r, h, i]
                     cur_slots[r] = q_slots[r, h]
                     cur_pos[r] = 0
-                    cur_id[r] = fc
-                    fc += 1
+                    cur_id[r] += 1
                     sending[r] = True
                     q_head[r] = (h + 1) % Q
                     q_count[r] -= 1
@@ -389,13 +399,16 @@ def slot_loop(
                     per_robot[_P_TX_STARTED, r] += 1
         # 2./3. emission and superposed intensities [Eqs. (10),(11)]
         if dirty:
-            ysum[:] = 0.0
-            best_str[:] = -np.inf
-            best_tx[:] = -1
-            sigcnt[:] = 0
-            fmask[:] = 0
+            for r in range(r0, r1):
+                for d in range(n_det):
+                    ysum[r, d] = 0.0
+                best_str[r] = -np.inf
+                best_tx[r] = -1
+                sigcnt[r] = 0
+                fmask[r] = 0
+                lit[r] = False
             dirty = False
-        for t in range(n):
+        for t in range(r0, r1):
             if not sending[t]:
                 continue
             dirty = True
@@ -404,6 +417,7 @@ def slot_loop(
             if cur_bits[t, cur_pos[t]]:
                 for li in range(tx_ptr[t], tx_ptr[t + 1]):
                     r = lrx[li]
+                    lit[r] = True
                     st = -np.inf
                     foreign = state[r] == _RECV and gt_tx[r] != t
                     for d in range(n_det):
@@ -418,9 +432,9 @@ def slot_loop(
                         best_tx[r] = t
         # detector response across slots (channel.detector_response), every robot
         if filt:
-            _respond(ysum_flat, inoise[s].reshape(-1) if has_inoise else inoise.reshape(-1), level_flat, resp_b, resp_kt)
+            _respond(ysum_flat, inoise[s].reshape(-1)[r0 * n_det : r1 * n_det] if has_inoise else inoise.reshape(-1), level_flat, resp_b, resp_kt)
         # 4./5. ADC [Eqs. (20)-(22)] and detectors [Sec. 4.2, Eq. (36), Sec. 4.5]
-        for r in range(n):
+        for r in range(r0, r1):
             listen = not sending[r]
             in_frame = state[r] == _RECV
             if not listen:
@@ -433,24 +447,34 @@ def slot_loop(
             mv = np.inf
             md = 0
             msum = 0.0
-            for d in range(n_det):
-                if filt:
-                    y = rx_v[r, d]
-                else:
-                    y = ysum[r, d]
-                    if has_inoise:
-                        y = y + inoise[s, r, d]
-                    if y > 1.0:
-                        y = 1.0
-                m = np.floor(span * (1.0 - y) + m_min + np.float64(noise[s, r, d]))
+            if same_dark_sample and not lit[r]:  # no light, no noise: the else branch's sample (y = 0, n_m = 0), once
+                m = np.floor(span * (1.0 - 0.0) + m_min + np.float64(np.float32(0.0)))
                 if m < 0.0:
                     m = 0.0
                 elif m > m_sup:
                     m = m_sup
-                msum += m
-                if m < mv:
-                    mv = m
-                    md = d
+                mv = m
+                for d in range(n_det):
+                    msum += m
+            else:
+                for d in range(n_det):
+                    if filt:
+                        y = rx_v[r, d]
+                    else:
+                        y = ysum[r, d]
+                        if has_inoise:
+                            y = y + inoise[s, r, d]
+                        if y > 1.0:
+                            y = 1.0
+                    m = np.floor(span * (1.0 - y) + m_min + np.float64(noise[s, r, d]))
+                    if m < 0.0:
+                        m = 0.0
+                    elif m > m_sup:
+                        m = m_sup
+                    msum += m
+                    if m < mv:
+                        mv = m
+                        md = d
             m_t = m_max_est[r] - m_tr
             s1 = mv < (thr[r] if in_frame else m_t)
             last_s1[r] = s1
@@ -499,7 +523,7 @@ def slot_loop(
                 if nbits[r] == expect[r]:
                     check[r] = True
         # advance transmitters
-        for t in range(n):
+        for t in range(r0, r1):
             if sending[t]:
                 cur_pos[t] += 1
                 if cur_pos[t] >= cur_slots[t]:
@@ -508,7 +532,7 @@ def slot_loop(
                     if q_count[t] > 0:
                         backoff[t] = pool[t, s]  # fresh access delay (fairness)
         # 5. frame check points
-        for r in range(n):
+        for r in range(r0, r1):
             if not check[r]:
                 continue
             check[r] = False
@@ -598,5 +622,4 @@ def slot_loop(
                     state[r] = _IDLE
                     nbits[r] = 0
                     break
-    frame_counter[0] = fc
     return nd_out

@@ -55,6 +55,7 @@ from typing import Any
 
 import numpy as np
 
+from swarm_envs._compile._worker import run_chunks
 from swarm_envs.comm.bch import BCHCode, code as bch_code
 from swarm_envs.comm.channel import ADCModel, adc_model_for
 from swarm_envs.comm.deliveries import Deliveries, PreparedStep
@@ -215,7 +216,6 @@ class Network:
         self.cur_pos = np.zeros(n, dtype=np.int64)
         self.cur_id = np.full(n, -1, dtype=np.int64)
         self.sending = np.zeros(n, dtype=bool)
-        self.frame_counter = 0
         self.seq_next = np.zeros(n, dtype=np.int64)
         self.gt_tx = np.full(n, -1, dtype=np.int64)
         self.gt_id = np.full(n, -1, dtype=np.int64)
@@ -406,10 +406,13 @@ class Network:
         S = int(np.floor(total + 1e-9))
         return PreparedStep(S, self.slot, self.carry, total - S, self.draw_step(S))
 
-    def step(self, links: Any, prepared: PreparedStep | None = None) -> Deliveries:
+    def step(self, links: Any, prepared: PreparedStep | None = None, threads: int = 1) -> Deliveries:
         """Simulate one control step of ``bitrate * dt`` bit slots over the given IR links
         (:class:`swarm_envs.ir.links.IRLinks` of the current poses) and return what was delivered.
-        ``prepared``: this step's draws from :meth:`prepare_step` (default: drawn now; same numbers)."""
+        ``prepared``: this step's draws from :meth:`prepare_step` (default: drawn now; same numbers).
+        ``threads``: the compiled slot loop runs the env copies in that many contiguous groups, on this thread
+        and helper threads (:func:`swarm_envs._compile._worker.run_chunks`); the result is the same bit for
+        bit for any number."""
         self._step_stats = self._new_step_stats()
         n, nd = self.n, self.n_det
         a = self.adc_model
@@ -446,7 +449,7 @@ class Network:
         self.carry = prepared.carry_after
         self.csma.draw_requested(draws.access)
         if self.backend == "numba":
-            deliveries = self._slots_kernel(S, draws, tx_ptr, rx, G, sig_ptr, sig_rx)
+            deliveries = self._slots_kernel(S, draws, tx_ptr, rx, G, sig_ptr, sig_rx, threads)
         else:
             from swarm_envs.comm.reference_slots import slots_numpy
 
@@ -473,50 +476,59 @@ class Network:
             return np.array([self.kinds.name(t) for t in types], dtype=object)
         return table[types]
 
-    def _slots_kernel(self, S, draws, tx_ptr, rx, G, sig_ptr, sig_rx) -> list[dict[str, np.ndarray]]:
-        """The compiled slot loop (:func:`swarm_envs.comm.kernels.slot_loop`)."""
+    def _slots_kernel(self, S, draws, tx_ptr, rx, G, sig_ptr, sig_rx, threads: int = 1) -> list[dict[str, np.ndarray]]:
+        """The compiled slot loop (:func:`swarm_envs.comm.kernels.slot_loop`) over ``threads`` contiguous groups
+        of env copies (each with its own counters and delivery records), on threads."""
         a, det, fmt, c = self.adc_model, self.det, self.fmt, self.code
         wmax = int(fmt.n_blocks(MAX_PAYLOAD)) * c.n + 1  # longest frame any header can announce
         det.ensure_capacity(wmax)
         if self.gt_buf.shape[1] < det.buf.shape[1]:
             self.gt_buf = np.concatenate([self.gt_buf, np.zeros((self.n, det.buf.shape[1] - self.gt_buf.shape[1]), bool)], axis=1)
-        dcap = self.n * (1 + S // (fmt.header_blocks * c.n + 1))  # completions per robot and step are bounded
-        d_int = np.zeros((dcap, len(DELIVERY_FIELDS)), dtype=np.int64)
-        d_pay = np.zeros((dcap, MAX_PAYLOAD), dtype=bool)
-        counts = np.zeros(len(COUNTERS), dtype=np.int64)
         per_robot = np.zeros((len(PER_ROBOT), self.n), dtype=np.int64)
-        fc = np.array([self.frame_counter], dtype=np.int64)
         state = det.state.view(np.int8)
-        D = slot_loop(
+        n_groups = max(1, min(int(threads), self.n_copies))
+        edges = [self.copy_size * ((self.n_copies * k) // n_groups) for k in range(n_groups + 1)]  # robot rows
+        counts = np.zeros((n_groups, len(COUNTERS)), dtype=np.int64)
+        records: list[tuple[np.ndarray, np.ndarray]] = []
+        for k in range(n_groups):
+            dcap = (edges[k + 1] - edges[k]) * (1 + S // (fmt.header_blocks * c.n + 1))  # completions per robot and step are bounded
+            records.append((np.zeros((dcap, len(DELIVERY_FIELDS)), dtype=np.int64), np.zeros((dcap, MAX_PAYLOAD), dtype=bool)))
+
+        def group(k: int) -> int:
+            d_int, d_pay = records[k]
+            return slot_loop(
             S, self.slot, self.n_det, float(a.m_min), int(a.m_sup), self.m_tr, det.alpha, fmt.first_check_slots,
             tx_ptr, rx, G, sig_ptr, sig_rx, self.ambient, self.rx_level, self.response_kt, float(a.response_bias),
             draws.noise, draws.intensity_noise, draws.backoff,
             self.q_bits, self.q_slots, self.q_head, self.q_count, self.cur_bits, self.cur_slots, self.cur_pos, self.cur_id,
-            self.sending, fc, self.csma.backoff,
+            self.sending, self.csma.backoff,
             state, det.m_max_est, det.thr, det.nbits, det.expect, det.phase, det.buf, det.best_m, det.best_det,
             det.last_s1, det.start_slot,
             self.gt_tx, self.gt_id, self.gt_buf, self.collided,
             c.n, c.k, c._table_msg, c._table_ok, fmt.header_blocks, fmt.header_bits, fmt.id_bits, fmt.with_sender,
             fmt.crc_bits, self._crc_table(), self.kinds.valid_codes(),
-            self.copy_size, counts, per_robot, d_int, d_pay, self.rx_foreign,
+            self.copy_size, counts[k], per_robot, d_int, d_pay, self.rx_foreign, edges[k], edges[k + 1], a.noise_var > 0,
         )  # fmt: skip
-        self.frame_counter = int(fc[0])
+
+        written = run_chunks(group, n_groups)
         self.slot += S
         for i, name in enumerate(COUNTERS):
-            if counts[i]:
-                self._count(name, values=int(counts[i]))
+            total = int(counts[:, i].sum())
+            if total:
+                self._count(name, values=total)
         for i, name in enumerate(PER_ROBOT):
             self.stats[name + "_per_robot"] += per_robot[i]
             self._step_stats[name + "_per_robot"] += per_robot[i]
-        if D == 0:
-            return []
-        cols = {f: d_int[:D, i] for i, f in enumerate(DELIVERY_FIELDS)}
-        L = cols["length"]
-        Lmax = int(L.max())
-        out = {k: cols[k] for k in ("receiver", "origin", "sender", "seq", "type", "length", "detector", "slot", "done_slot", "transmitter", "interference")}
-        out["corrupt"] = cols["corrupt"].astype(bool)
-        out["payload"] = d_pay[:D, :Lmax].copy()
-        return [out]
+        parts = []
+        for (d_int, d_pay), D in zip(records, written):  # _finish_step puts the groups' records in the canonical order
+            if D == 0:
+                continue
+            cols = {f: d_int[:D, i] for i, f in enumerate(DELIVERY_FIELDS)}
+            out = {k: cols[k] for k in ("receiver", "origin", "sender", "seq", "type", "length", "detector", "slot", "done_slot", "transmitter", "interference")}
+            out["corrupt"] = cols["corrupt"].astype(bool)
+            out["payload"] = d_pay[:D, : int(cols["length"].max())].copy()
+            parts.append(out)
+        return parts
 
     def _finish_step(self, parts: list[dict[str, np.ndarray]]) -> Deliveries:
         if parts:

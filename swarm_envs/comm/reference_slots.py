@@ -140,8 +140,7 @@ def _start_tx(net, go: np.ndarray) -> None:
     net.cur_bits[go, :F] = net.q_bits[go, h, :]
     net.cur_slots[go] = net.q_slots[go, h]
     net.cur_pos[go] = 0
-    net.cur_id[go] = net.frame_counter + np.arange(go.size)
-    net.frame_counter += go.size
+    net.cur_id[go] += 1  # a robot's frames are numbered one after the other (slot_loop)
     net.sending[go] = True
     net.q_head[go] = (h + 1) % net.Q
     net.q_count[go] -= 1

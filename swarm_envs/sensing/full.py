@@ -306,7 +306,7 @@ class FullSensing:
                 else:
                     rb, neighbours = self._range_bearing(links, take)
             # SwarmCom: application payloads and the bearing exchange share the channel (queued by prepare_step)
-            deliveries = self.network.step(links, prepared)
+            deliveries = self.network.step(links, prepared, threads=self._scene_threads)
         finally:  # never leave the worker running on this step's state
             if rb_future is not None:
                 rb_future.exception()  # waits

@@ -184,8 +184,8 @@ def test_a_corrupted_swarmcom_header_shows_the_wrong_sender(monkeypatch, platfor
     sigma = _derangement(n_world)
     record = {"rx": [], "wrong": [], "true": []}
 
-    def corrupting_step(self, links, prepared=None):
-        d = original(self, links, prepared)
+    def corrupting_step(self, links, prepared=None, threads=1):
+        d = original(self, links, prepared, threads)
         base = (d.origin // n_world) * n_world
         wrong = base + sigma[d.origin % n_world]
         app = d.kind == "app"

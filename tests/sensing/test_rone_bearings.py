@@ -280,8 +280,8 @@ def test_env_readings_are_frames_of_the_last_complete_round(exchange):
     seen = []
     step = fs.network.step
 
-    def record(links, prepared=None):
-        d = step(links, prepared)
+    def record(links, prepared=None, threads=1):
+        d = step(links, prepared, threads)
         seen.append(set(zip(d.receiver.tolist(), d.origin.tolist())))
         return d
 
@@ -343,8 +343,8 @@ def test_env_every_frame_colliding_leaves_no_reading():
     pos, hd, _ = triangle()
     step = fs.network.step
 
-    def lose_robot_2(links, prepared=None):  # the channel loses every frame from robot 2 (e.g. all collide)
-        d = step(links, prepared)
+    def lose_robot_2(links, prepared=None, threads=1):  # the channel loses every frame from robot 2 (e.g. all collide)
+        d = step(links, prepared, threads)
         keep = d.transmitter != 2
         for f in ("receiver", "origin", "sender", "seq", "detector", "kind", "length", "payload", "slot", "corrupt", "transmitter"):
             setattr(d, f, getattr(d, f)[keep])
@@ -366,8 +366,8 @@ def test_env_a_list_whose_frame_measured_no_bearing_adds_no_neighbour():
     step = fs.network.step
     hit_all = {"on": False, "lists": 0}
 
-    def corrupt_robot_2(links, prepared=None):
-        d = step(links, prepared)
+    def corrupt_robot_2(links, prepared=None, threads=1):
+        d = step(links, prepared, threads)
         if hit_all["on"]:
             from2 = d.transmitter == 2
             d.interference = np.where(from2, 0xFF, d.interference)
