@@ -20,7 +20,8 @@ class StepDraws(NamedTuple):
     """All random numbers of one control step of S slots for N robots (module docstring).
 
     Attributes:
-        noise: (S, N, n_det) float32, ADC noise n_m of every detector sample (counts).
+        noise: (S, N, n_det) float32, ADC noise n_m of every detector sample (counts), or shape (0, 0, 0)
+            when the ADC has no noise (n_m = 0).
         intensity_noise: (S, N, n_det) float64 intensity noise n_j, or shape (0, 0, 0) when sigma = 0.
         backoff: (N, S) int64 in [0, W): the draw a robot uses if it defers (``1 + draw``) or arms a fresh
             access delay after a frame (``draw``) in slot s (at most one of the two per robot and slot).
@@ -74,14 +75,13 @@ _jit_inline = njit(cache=True, nogil=True, inline="always")
 
 @_jit_inline
 def _draw_buffers(B, n, S, n_det, noise_sigma, intensity_sigma):
-    """The arrays :func:`draw_copies` fills for B copies of n robots: ADC noise (S, B n, n_det) float32 (zeros
-    when ``noise_sigma`` is 0, otherwise left for the draws), intensity noise (S, B n, n_det) or empty,
-    backoff (B n, S) and access (B n,) int64."""
+    """The arrays :func:`draw_copies` fills for B copies of n robots: ADC noise (S, B n, n_det) float32, or
+    empty when ``noise_sigma`` is 0, intensity noise (S, B n, n_det) or empty, backoff (B n, S) and access
+    (B n,) int64."""
     N = B * n
     ni = S if intensity_sigma > 0 else 0
-    noise = np.empty((S, N, n_det), np.float32)
-    if noise_sigma <= 0:
-        noise[:] = 0.0
+    noisy = noise_sigma > 0
+    noise = np.empty((S if noisy else 0, N if noisy else 0, n_det if noisy else 0), np.float32)
     inoise = np.empty((ni, N if ni else 0, n_det if ni else 0), np.float64)
     inoise[:] = 0.0
     return noise, inoise, np.empty((N, S), np.int64), np.empty(N, np.int64)
@@ -242,7 +242,7 @@ def draw_copies(gens: Any, S: int, n: int, n_det: int, noise_sigma: float, inten
 
     Copy b draws from ``gens[b]`` only (a :meth:`GeneratorList.sync` list), in a fixed order with shapes
     fixed by (S, n), independent of the robots' activity: the ADC noise n_m of every detector sample
-    (float32 standard normals times ``noise_sigma``; zeros when 0), the intensity noise n_j (only when
+    (float32 standard normals times ``noise_sigma``; an empty array when 0), the intensity noise n_j (only when
     ``intensity_sigma > 0``), then one ``integers(0, window, n * S + n)`` call whose first ``n * S`` values
     are the CSMA backoff draws (robot-major) and the last ``n`` the access delays. Robot rows of copy b are
     ``b * n .. b * n + n - 1``; so copy b of a batch draws exactly what a single env with ``gens[b]`` draws.

@@ -320,7 +320,7 @@ def slot_loop(
     state, m_max_est, thr, nbits, expect, phase, buf, best_m, best_det, last_s1, start_slot,
     gt_tx, gt_id, gt_buf, collided,
     code_n, code_k, table_msg, table_ok, header_blocks, header_bits, id_bits, with_sender, crc_bits, crc_table, valid_types,
-    n_ids, counts, per_robot, d_int, d_pay, rx_foreign, r0, r1, adc_noise,
+    n_ids, counts, per_robot, d_int, d_pay, rx_foreign, r0, r1,
 ):  # fmt: skip
     """All S bit slots of one control step for the robots ``r0:r1`` (module docstring), whole env copies:
     no link leaves a copy, so the robots of other copies are neither read nor written, and disjoint ranges
@@ -338,9 +338,9 @@ def slot_loop(
     follows the light through :func:`swarm_envs.comm.channel.detector_response` (same arithmetic) in every
     slot, also while its robot sends, and the ADC samples the level; ``resp_kt = 0``: instantaneous.
 
-    ``adc_noise``: whether ``noise`` holds ADC noise draws; False when it is all zeros (an ADC model without
-    noise), and then an instantaneous detector that no light reached in a slot (no intensity noise) reads
-    the same sample on every detector, computed once."""
+    ADC noise ``noise`` (S, N, n_det), empty for an ADC without noise (n_m = 0): then an instantaneous detector
+    bank that no light reached in a slot (no intensity noise) reads the same sample on every detector,
+    computed once."""
     n = sending.shape[0]
     Q = q_bits.shape[1]
     F = cur_bits.shape[1]
@@ -364,7 +364,8 @@ def slot_loop(
     check[:] = False
     lit = np.empty(n, np.bool_)  # this slot's light reached the robot
     lit[:] = False
-    same_dark_sample = not (filt or has_inoise or adc_noise)  # a dark robot's detectors all read the same
+    has_noise = noise.shape[0] > 0
+    same_dark_sample = not (filt or has_inoise or has_noise)  # a dark robot's detectors all read the same
     info = np.empty(W, np.bool_)
     info[:] = False
     tinfo = np.empty(W, np.bool_)
@@ -398,15 +399,13 @@ def slot_loop(
                     counts[_C_TX_STARTED] += 1
                     per_robot[_P_TX_STARTED, r] += 1
         # 2./3. emission and superposed intensities [Eqs. (10),(11)]
-        if dirty:
-            for r in range(r0, r1):
-                for d in range(n_det):
-                    ysum[r, d] = 0.0
-                best_str[r] = -np.inf
-                best_tx[r] = -1
-                sigcnt[r] = 0
-                fmask[r] = 0
-                lit[r] = False
+        if dirty:  # the range's rows of this slot's light (one pass over memory each)
+            ysum[r0:r1] = 0.0
+            best_str[r0:r1] = -np.inf
+            best_tx[r0:r1] = -1
+            sigcnt[r0:r1] = 0
+            fmask[r0:r1] = 0
+            lit[r0:r1] = False
             dirty = False
         for t in range(r0, r1):
             if not sending[t]:
@@ -448,7 +447,7 @@ def slot_loop(
             md = 0
             msum = 0.0
             if same_dark_sample and not lit[r]:  # no light, no noise: the else branch's sample (y = 0, n_m = 0), once
-                m = np.floor(span * (1.0 - 0.0) + m_min + np.float64(np.float32(0.0)))
+                m = np.floor(span * (1.0 - 0.0) + m_min + 0.0)
                 if m < 0.0:
                     m = 0.0
                 elif m > m_sup:
@@ -466,7 +465,8 @@ def slot_loop(
                             y = y + inoise[s, r, d]
                         if y > 1.0:
                             y = 1.0
-                    m = np.floor(span * (1.0 - y) + m_min + np.float64(noise[s, r, d]))
+                    n_m = np.float64(noise[s, r, d]) if has_noise else 0.0
+                    m = np.floor(span * (1.0 - y) + m_min + n_m)
                     if m < 0.0:
                         m = 0.0
                     elif m > m_sup:

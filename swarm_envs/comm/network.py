@@ -507,7 +507,7 @@ class Network:
             self.gt_tx, self.gt_id, self.gt_buf, self.collided,
             c.n, c.k, c._table_msg, c._table_ok, fmt.header_blocks, fmt.header_bits, fmt.id_bits, fmt.with_sender,
             fmt.crc_bits, self._crc_table(), self.kinds.valid_codes(),
-            self.copy_size, counts[k], per_robot, d_int, d_pay, self.rx_foreign, edges[k], edges[k + 1], a.noise_var > 0,
+            self.copy_size, counts[k], per_robot, d_int, d_pay, self.rx_foreign, edges[k], edges[k + 1],
         )  # fmt: skip
 
         written = run_chunks(group, n_groups)

@@ -49,7 +49,7 @@ def slots_numpy(net: Any, S, draws, tx_ptr, rx, tx, G, flat, sig_ptr, sig_rx) ->
     """The vectorised numpy slot loop (the reference of the compiled kernel)."""
     n, nd = net.n, net.n_det
     a = net.adc_model
-    noise = draws.noise
+    noise = draws.noise  # empty: an ADC without noise
     span = (net.ambient - a.m_min)[:, None]
     deliveries: list[dict[str, np.ndarray]] = []
     first_check = net.fmt.first_check_slots
@@ -83,21 +83,21 @@ def slots_numpy(net: Any, S, draws, tx_ptr, rx, tx, G, flat, sig_ptr, sig_rx) ->
             v0 = net.rx_level
             v = detector_response(v0, yt, 1.0 / net.bitrate, a.response_c, a.response_bias)
             net.rx_level = v
-            m = np.floor(span * (1.0 - v) + a.m_min + noise[s])
+            m = np.floor(span * (1.0 - v) + a.m_min + (noise[s] if noise.size else 0.0))
         elif on.size:
             li = _ranges(tx_ptr[on], tx_ptr[on + 1])
             ysum = np.bincount(flat.reshape(-1, nd)[li].ravel(), weights=G[li].ravel(), minlength=n * nd).reshape(n, nd)
             if net.intensity_sigma > 0:
                 ysum = ysum + draws.intensity_noise[s]
             y = np.minimum(ysum, 1.0)
-            m = np.floor(span * (1.0 - y) + a.m_min + noise[s])
+            m = np.floor(span * (1.0 - y) + a.m_min + (noise[s] if noise.size else 0.0))
         else:
             y = None
             if net.intensity_sigma > 0:
                 yy = np.minimum(draws.intensity_noise[s], 1.0)
-                m = np.floor(span * (1.0 - yy) + a.m_min + noise[s])
+                m = np.floor(span * (1.0 - yy) + a.m_min + (noise[s] if noise.size else 0.0))
             else:
-                m = np.floor(span + a.m_min + noise[s])
+                m = np.floor(span + a.m_min + (noise[s] if noise.size else 0.0))
         np.clip(m, 0, a.m_sup, out=m)
         # 4./5. detectors
         listen = ~net.sending

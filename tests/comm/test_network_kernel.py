@@ -171,6 +171,7 @@ def test_draw_step_shapes():
     d = draw_step(np.random.default_rng(0), 31, 7, 8, 1.58, 0.0, 32)
     assert d.noise.shape == (31, 7, 8) and d.noise.dtype == np.float32
     assert d.intensity_noise.size == 0
+    assert draw_step(np.random.default_rng(0), 31, 7, 8, 0.0, 0.0, 32).noise.shape == (0, 0, 0)  # an ADC without noise
     assert d.backoff.shape == (7, 31) and d.backoff.min() >= 0 and d.backoff.max() < 32
     assert d.access.shape == (7,)
 
