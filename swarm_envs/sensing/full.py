@@ -305,8 +305,9 @@ class FullSensing:
                     rb_future = worker().submit(self._range_bearing, links, take)
                 else:
                     rb, neighbours = self._range_bearing(links, take)
-            # SwarmCom: application payloads and the bearing exchange share the channel (queued by prepare_step)
-            deliveries = self.network.step(links, prepared, threads=self._scene_threads)
+            # SwarmCom: application payloads and the bearing exchange share the channel (queued by prepare_step);
+            # its slot loop takes the scene's threads unless range & bearing has one of them (the worker)
+            deliveries = self.network.step(links, prepared, threads=1 if rb_future is not None else self._scene_threads)
         finally:  # never leave the worker running on this step's state
             if rb_future is not None:
                 rb_future.exception()  # waits
