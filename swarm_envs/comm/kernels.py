@@ -328,8 +328,8 @@ def slot_loop(
     in ``cur_id`` (one more than its last frame's; the ground truth matches a receiver's frame with its
     transmitter's by that number). ``counts`` gets the range's counters. Deliveries are written to
     ``d_int`` (D, 12) with columns :data:`DELIVERY_FIELDS` and ``d_pay`` (D, >= 255) bool, by slot and then
-    by receiver; returns the number written. Header ids are a
-    copy's own robot numbers, valid below ``n_ids`` (the robots per env copy). ``rx_foreign`` (N,) int64: per
+    by receiver; returns the number written. Header ids are a copy's own robot numbers, valid below
+    ``n_ids`` (the robots per env copy). ``rx_foreign`` (N,) int64: per
     receiving robot, the detectors (bit d) that light of a robot other than its frame's transmitter reached
     (``G * (ambient - m_min) > m_tr``) in a slot where that transmitter was dark; reset at a start symbol,
     reported as the delivery's ``interference`` column.

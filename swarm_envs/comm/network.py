@@ -497,18 +497,18 @@ class Network:
         def group(k: int) -> int:
             d_int, d_pay = records[k]
             return slot_loop(
-            S, self.slot, self.n_det, float(a.m_min), int(a.m_sup), self.m_tr, det.alpha, fmt.first_check_slots,
-            tx_ptr, rx, G, sig_ptr, sig_rx, self.ambient, self.rx_level, self.response_kt, float(a.response_bias),
-            draws.noise, draws.intensity_noise, draws.backoff,
-            self.q_bits, self.q_slots, self.q_head, self.q_count, self.cur_bits, self.cur_slots, self.cur_pos, self.cur_id,
-            self.sending, self.csma.backoff,
-            state, det.m_max_est, det.thr, det.nbits, det.expect, det.phase, det.buf, det.best_m, det.best_det,
-            det.last_s1, det.start_slot,
-            self.gt_tx, self.gt_id, self.gt_buf, self.collided,
-            c.n, c.k, c._table_msg, c._table_ok, fmt.header_blocks, fmt.header_bits, fmt.id_bits, fmt.with_sender,
-            fmt.crc_bits, self._crc_table(), self.kinds.valid_codes(),
-            self.copy_size, counts[k], per_robot, d_int, d_pay, self.rx_foreign, edges[k], edges[k + 1],
-        )  # fmt: skip
+                S, self.slot, self.n_det, float(a.m_min), int(a.m_sup), self.m_tr, det.alpha, fmt.first_check_slots,
+                tx_ptr, rx, G, sig_ptr, sig_rx, self.ambient, self.rx_level, self.response_kt, float(a.response_bias),
+                draws.noise, draws.intensity_noise, draws.backoff,
+                self.q_bits, self.q_slots, self.q_head, self.q_count, self.cur_bits, self.cur_slots, self.cur_pos, self.cur_id,
+                self.sending, self.csma.backoff,
+                state, det.m_max_est, det.thr, det.nbits, det.expect, det.phase, det.buf, det.best_m, det.best_det,
+                det.last_s1, det.start_slot,
+                self.gt_tx, self.gt_id, self.gt_buf, self.collided,
+                c.n, c.k, c._table_msg, c._table_ok, fmt.header_blocks, fmt.header_bits, fmt.id_bits, fmt.with_sender,
+                fmt.crc_bits, self._crc_table(), self.kinds.valid_codes(),
+                self.copy_size, counts[k], per_robot, d_int, d_pay, self.rx_foreign, edges[k], edges[k + 1],
+            )  # fmt: skip
 
         written = run_chunks(group, n_groups)
         self.slot += S
