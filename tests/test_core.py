@@ -113,17 +113,26 @@ def test_the_thread_plan_does_not_change_results(env_id, monkeypatch):
 @pytest.mark.parametrize("platform", ["epuck", "rone"])
 def test_one_and_two_threads_give_the_same_steps(platform, monkeypatch):
     """A batch that uses every threaded part (physics spaces on threads, the gain kernel's and the occluder
-    search's chunks, range & bearing beside SwarmCom, the rewards beside the sensing; the pair threshold
-    lowered so that a small batch qualifies) steps to the same observations, rewards and states on 1 and
-    on 2 numba threads."""
+    search's chunks, range & bearing beside SwarmCom (e-puck) or SwarmCom's slot loop in two groups of
+    copies (r-one), the rewards beside the sensing; the pair threshold lowered so that a small batch
+    qualifies) steps to the same observations, rewards and states on 1 and on 2 numba threads."""
     numba = pytest.importorskip("numba")
     if numba.config.NUMBA_NUM_THREADS < 2:
         pytest.skip("needs NUMBA_NUM_THREADS >= 2")
     import swarm_envs
+    from swarm_envs.comm.network import Network
     from swarm_envs.ir import layer
     from swarm_envs.sim.world import THREADED_MIN_WORLDS, physics_threads
 
     monkeypatch.setattr(layer, "THREADED_MIN_PAIRS", 200)
+    slot_groups = []
+    network_step = Network.step
+
+    def counted(self, links, prepared=None, threads=1):
+        slot_groups.append(threads)
+        return network_step(self, links, prepared, threads)
+
+    monkeypatch.setattr(Network, "step", counted)
     copies = 2 * THREADED_MIN_WORLDS
     before = numba.get_num_threads()
     runs = []
@@ -144,6 +153,7 @@ def test_one_and_two_threads_give_the_same_steps(platform, monkeypatch):
     finally:
         numba.set_num_threads(before)
     assert_tree_equal(runs[0], runs[1])
+    assert max(slot_groups) == (2 if platform == "rone" else 1)
 
 
 def test_the_core_builds_its_sensing_stack_from_the_registry():
