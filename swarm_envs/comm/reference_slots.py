@@ -56,6 +56,7 @@ def slots_numpy(net: Any, S, draws, tx_ptr, rx, tx, G, flat, sig_ptr, sig_rx) ->
     # per link: the receiver's detectors that its light reaches with at least m_tr counts (bit d = detector d)
     lit_bits = ((G * (net.ambient[rx] - a.m_min)[:, None] > net.m_tr).astype(np.int64) << np.arange(nd, dtype=np.int64)).sum(1) if G.size else np.zeros(0, np.int64)
     for s in range(S):
+        n_m = noise[s] if noise.size else 0.0  # this slot's ADC noise
         # 1. CSMA
         pending = (net.q_count > 0) & ~net.sending
         if pending.any():
@@ -83,21 +84,21 @@ def slots_numpy(net: Any, S, draws, tx_ptr, rx, tx, G, flat, sig_ptr, sig_rx) ->
             v0 = net.rx_level
             v = detector_response(v0, yt, 1.0 / net.bitrate, a.response_c, a.response_bias)
             net.rx_level = v
-            m = np.floor(span * (1.0 - v) + a.m_min + (noise[s] if noise.size else 0.0))
+            m = np.floor(span * (1.0 - v) + a.m_min + n_m)
         elif on.size:
             li = _ranges(tx_ptr[on], tx_ptr[on + 1])
             ysum = np.bincount(flat.reshape(-1, nd)[li].ravel(), weights=G[li].ravel(), minlength=n * nd).reshape(n, nd)
             if net.intensity_sigma > 0:
                 ysum = ysum + draws.intensity_noise[s]
             y = np.minimum(ysum, 1.0)
-            m = np.floor(span * (1.0 - y) + a.m_min + (noise[s] if noise.size else 0.0))
+            m = np.floor(span * (1.0 - y) + a.m_min + n_m)
         else:
             y = None
             if net.intensity_sigma > 0:
                 yy = np.minimum(draws.intensity_noise[s], 1.0)
-                m = np.floor(span * (1.0 - yy) + a.m_min + (noise[s] if noise.size else 0.0))
+                m = np.floor(span * (1.0 - yy) + a.m_min + n_m)
             else:
-                m = np.floor(span + a.m_min + (noise[s] if noise.size else 0.0))
+                m = np.floor(span + a.m_min + n_m)
         np.clip(m, 0, a.m_sup, out=m)
         # 4./5. detectors
         listen = ~net.sending
