@@ -112,10 +112,10 @@ def test_the_thread_plan_does_not_change_results(env_id, monkeypatch):
 
 @pytest.mark.parametrize("platform", ["epuck", "rone"])
 def test_one_and_two_threads_give_the_same_steps(platform, monkeypatch):
-    """A batch that uses every threaded part (physics spaces on threads, the gain kernel's and the occluder
-    search's chunks, range & bearing beside SwarmCom (e-puck) or SwarmCom's slot loop in two groups of
-    copies (r-one), the rewards beside the sensing; the pair threshold lowered so that a small batch
-    qualifies) steps to the same observations, rewards and states on 1 and on 2 numba threads."""
+    """A batch that uses every threaded part (physics spaces in shares taken by threads, the gain kernel's and
+    the occluder search's chunks, range & bearing beside SwarmCom (e-puck) or SwarmCom's slot loop in two
+    groups of copies (r-one), the rewards beside the sensing; the pair threshold lowered so that a small
+    batch qualifies) steps to the same observations, rewards and states on 1 and on 2 numba threads."""
     numba = pytest.importorskip("numba")
     if numba.config.NUMBA_NUM_THREADS < 2:
         pytest.skip("needs NUMBA_NUM_THREADS >= 2")
@@ -133,7 +133,7 @@ def test_one_and_two_threads_give_the_same_steps(platform, monkeypatch):
         return network_step(self, links, prepared, threads)
 
     monkeypatch.setattr(Network, "step", counted)
-    copies = 2 * THREADED_MIN_WORLDS
+    copies = 3 * THREADED_MIN_WORLDS  # three shares of the spaces, taken by two threads
     before = numba.get_num_threads()
     runs = []
     try:

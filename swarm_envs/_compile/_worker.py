@@ -11,13 +11,15 @@ bit for bit either way. One thread, in submission order; it also draws SwarmCom'
 queues the step's messages while the physics runs (:meth:`FullSensing.prepare_step`).
 
 The helper threads (:func:`run_chunks`) are a separate pool for pieces of one compiled computation: the
-chunks of the IR layer's gain kernel and occluder search. Idle threads of both pools wait on a lock, so
-they take no core from the rest.
+chunks of the IR layer's gain kernel and occluder search, the shares of a batch's physics, SwarmCom's
+groups of copies, the scale-free coordinates' ranges of robots. Idle threads of both pools wait on a
+lock, so they take no core from the rest.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
+import itertools
 from concurrent.futures import ThreadPoolExecutor
 from typing import TypeVar
 
@@ -49,20 +51,42 @@ def _helpers(n: int) -> ThreadPoolExecutor:
     return _HELPERS
 
 
-def run_chunks(chunk: Callable[[int], T], n_chunks: int) -> list[T]:
-    """``[chunk(0), ..., chunk(n_chunks - 1)]``, chunk 0 on the calling thread and the others on helper
-    threads (a pool of its own, not the worker, grown to ``n_chunks - 1`` threads on demand): for compiled
-    kernels that release the GIL and write disjoint parts of shared arrays (the IR layer's gain kernel and
-    occluder search on a large scene). The helpers wait on a lock between calls, so an idle helper takes no
-    core from the worker thread or the physics. Waits for every chunk; the first chunk's error (in
-    chunk order) is raised."""
-    if n_chunks <= 1:
-        return [chunk(0)] if n_chunks == 1 else []
-    pool = _helpers(n_chunks - 1)
-    futures = [pool.submit(chunk, k) for k in range(1, n_chunks)]
-    try:
-        first = chunk(0)
-    finally:  # never return while a helper still writes into the caller's arrays
-        for f in futures:
-            f.exception()  # waits
-    return [first, *(f.result() for f in futures)]
+def run_chunks(chunk: Callable[[int], T], n_chunks: int, threads: int | None = None) -> list[T]:
+    """``[chunk(0), ..., chunk(n_chunks - 1)]`` on ``threads`` threads (default one per chunk): the calling
+    thread and helper threads (a pool of its own, not the worker, grown to ``threads - 1`` threads on
+    demand), for compiled kernels that release the GIL and write disjoint parts of shared arrays (the IR
+    layer's gain kernel and occluder search, the physics of env copies, SwarmCom's groups of copies).
+
+    With one thread per chunk, chunk 0 runs on the calling thread. With fewer threads than chunks, each
+    thread takes the next chunk not yet taken when it finishes one, so a thread that shares its core with
+    other work (the worker thread) takes fewer chunks; which thread runs a chunk changes no result.
+
+    The helpers wait on a lock between calls, so an idle helper takes no core from the worker thread or the
+    physics. Waits for every chunk; the first chunk's error (in chunk order) is raised."""
+    threads = n_chunks if threads is None else max(1, min(int(threads), n_chunks))
+    if threads == n_chunks:
+        if n_chunks <= 1:
+            return [chunk(0)] if n_chunks == 1 else []
+        pool = _helpers(n_chunks - 1)
+        futures = [pool.submit(chunk, k) for k in range(1, n_chunks)]
+        try:
+            first = chunk(0)
+        finally:  # never return while a helper still writes into the caller's arrays
+            for f in futures:
+                f.exception()  # waits
+        return [first, *(f.result() for f in futures)]
+    results: list = [None] * n_chunks
+    errors: dict[int, BaseException] = {}
+    taken = itertools.count()  # next() of a count is atomic under the GIL: each chunk is taken once
+
+    def take_chunks(_: int) -> None:
+        while (k := next(taken)) < n_chunks:
+            try:
+                results[k] = chunk(k)
+            except BaseException as error:  # kept: raised in chunk order once every chunk has run
+                errors[k] = error
+
+    run_chunks(take_chunks, threads)
+    if errors:
+        raise errors[min(errors)]
+    return results

@@ -54,8 +54,8 @@ world stepped directly moves exactly as commanded.
 arithmetic runs as one numpy program over all their robots, and each space is written and read with one
 ``pymunk.batch`` call (no Python loop over bodies), and its contacts are read with one C call per sub-step
 (no Python work per contact). The sub-steps themselves (chipmunk's calls) run in compiled code without the
-GIL (:mod:`swarm_envs.sim.substep_kernel`), so the spaces step on threads, each a contiguous share of the
-worlds, with the same result bit for bit; :meth:`World.step` is the same function for one world.
+GIL (:mod:`swarm_envs.sim.substep_kernel`), so the spaces step on threads, in contiguous shares of the
+worlds that each thread takes as it frees up, with the same result bit for bit; :meth:`World.step` is the same function for one world.
 """
 
 from __future__ import annotations
@@ -108,6 +108,9 @@ PLACEMENT_WALL_DEPTH = 0.25
 SOLVER_ITERATIONS = 10
 #: worlds per physics thread at least (:func:`physics_threads`): fewer do not repay a thread hand-off
 THREADED_MIN_WORLDS = 8
+#: shares of the worlds per physics thread (:func:`step_worlds`): a thread that finishes its share takes the
+#: next one, so the threads stay busy when one of them shares its core with the worker thread
+SHARES_PER_THREAD = 4
 #: fraction of an overlap left after one second of contact correction: 30 % of it is removed every 1/60 s
 #: (pymunk's default removes 10 %), which keeps chains of robots pushed together within :data:`MAX_OVERLAP`
 COLLISION_BIAS = (1.0 - 0.3) ** 60
@@ -438,8 +441,9 @@ def step_worlds(worlds: Sequence[World], linear: np.ndarray, angular: np.ndarray
     each world's numbers are those it would get alone); each space then takes one ``pymunk.batch`` write,
     its sub-steps, and one read. Updates each world's state arrays and bump flags.
 
-    The spaces are stepped on ``threads`` threads (default :func:`physics_threads`), each a contiguous share
-    of the worlds, their sub-steps by :func:`swarm_envs.sim.substep_kernel.substep_spaces` (compiled, without
+    The spaces are stepped on ``threads`` threads (default :func:`physics_threads`) in contiguous shares of
+    the worlds (up to :data:`SHARES_PER_THREAD` per thread, each thread taking the next share when it
+    finishes one), their sub-steps by :func:`swarm_envs.sim.substep_kernel.substep_spaces` (compiled, without
     the GIL; a space is touched by one thread only): the result is the same bit for bit for any thread count.
     """
     if not worlds:
@@ -559,8 +563,8 @@ def _substep_native(worlds: Sequence[World], batch: _NativeBatch, ready: list[in
     """:func:`step_worlds`'s contacts emptied, sub-steps and read of the worlds ``ready`` of ``worlds`` (each
     with a space :func:`_plain_space` allows; ``batch`` their :class:`_NativeBatch`; world ``i``'s robots are
     rows ``bounds[i]:bounds[i + 1]`` of ``control`` and ``read``), by
-    :func:`swarm_envs.sim.substep_kernel.substep_spaces` (no GIL), ``chunks`` contiguous shares of the worlds
-    on threads."""
+    :func:`swarm_envs.sim.substep_kernel.substep_spaces` (no GIL), contiguous shares of the worlds on
+    ``chunks`` threads (up to :data:`SHARES_PER_THREAD` shares per thread, taken as threads free up)."""
     idx = np.asarray(ready, dtype=np.int64)
     every = idx.shape[0] == len(worlds)
     pick = (lambda a: a) if every else (lambda a: a[idx])
@@ -570,17 +574,18 @@ def _substep_native(worlds: Sequence[World], batch: _NativeBatch, ready: list[in
     mass, moment = batch.inertia
     control = np.ascontiguousarray(control)
     n = idx.shape[0]
-    chunks = max(1, min(chunks, n))
+    threads = max(1, min(chunks, n))
+    shares = threads if threads == 1 else max(threads, min(n // THREADED_MIN_WORLDS, threads * SHARES_PER_THREAD))
 
     def share(k: int) -> None:
         substep_spaces(*CHIPMUNK, spaces, readers, motors, reads, contacts, row_bounds, control, read, first_force, push, torque, mass, moment, h,
-                       substeps, n * k // chunks, n * (k + 1) // chunks)
+                       substeps, n * k // shares, n * (k + 1) // shares)
 
     stepping = worlds if every else [worlds[i] for i in ready]
     for w in stepping:  # as Space.step: no pymunk call may change a space while it steps
         w.space._locked = True
     try:
-        run_chunks(share, chunks)
+        run_chunks(share, shares, threads)
     finally:
         for w in stepping:
             w.space._locked = False

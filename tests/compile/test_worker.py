@@ -54,3 +54,36 @@ def test_helpers_are_not_the_worker():
     finally:
         gate.set()
         busy.result()
+
+
+def test_run_chunks_on_fewer_threads_runs_every_chunk_once_in_chunk_order():
+    """With fewer threads than chunks the threads take chunks as they free up: every chunk runs once, on at
+    most ``threads`` threads (the calling one among them), and the results come in chunk order."""
+    runs, names = [], set()
+
+    def chunk(k):
+        runs.append(k)
+        names.add(threading.current_thread().name)
+        time.sleep(0.002 * (k % 3))
+        return 10 * k
+
+    assert run_chunks(chunk, 9, threads=2) == [10 * k for k in range(9)]
+    assert sorted(runs) == list(range(9))
+    assert len(names) <= 2 and threading.current_thread().name in names
+    runs.clear()
+    assert run_chunks(chunk, 4, threads=1) == [0, 10, 20, 30] and runs == [0, 1, 2, 3]  # in order, here
+    assert run_chunks(chunk, 0, threads=2) == []
+
+
+def test_run_chunks_on_fewer_threads_raises_the_first_failed_chunk_after_all_ran():
+    runs = []
+
+    def chunk(k):
+        runs.append(k)
+        if k in (2, 5):
+            raise ValueError(f"chunk {k} failed")
+        return k
+
+    with pytest.raises(ValueError, match="chunk 2 failed"):
+        run_chunks(chunk, 7, threads=2)
+    assert sorted(runs) == list(range(7))
