@@ -17,6 +17,14 @@ os.environ.setdefault("SWARM_ENVS_BACKGROUND_COMPILE", "0")
 
 
 @pytest.fixture(scope="session", autouse=True)
+def _sb3_logs_in_the_test_tmp(tmp_path_factory):
+    """SB3 models made without a logger (``model.learn`` in tests and doc blocks) log to ``SB3_LOGDIR``,
+    by default a new folder in the system's temporary directory per call: here pytest's temporary tree."""
+    if "SB3_LOGDIR" not in os.environ:
+        os.environ["SB3_LOGDIR"] = str(tmp_path_factory.mktemp("sb3_logs"))
+
+
+@pytest.fixture(scope="session", autouse=True)
 def _share_the_kernel_compile():
     """Under pytest-xdist, each worker first compiles its share of the recorded numba kernels of every
     scenario (:func:`swarm_envs._compile._first_run.compile_share`: the workers claim kernels longest first, so none
