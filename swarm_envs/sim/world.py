@@ -55,7 +55,8 @@ arithmetic runs as one numpy program over all their robots, and each space is wr
 ``pymunk.batch`` call (no Python loop over bodies), and its contacts are read with one C call per sub-step
 (no Python work per contact). The sub-steps themselves (chipmunk's calls) run in compiled code without the
 GIL (:mod:`swarm_envs.sim.substep_kernel`), so the spaces step on threads, in contiguous shares of the
-worlds that each thread takes as it frees up, with the same result bit for bit; :meth:`World.step` is the same function for one world.
+worlds that each thread takes as it frees up, with the same result bit for bit; :meth:`World.step` is the
+same function for one world.
 """
 
 from __future__ import annotations
