@@ -6,12 +6,15 @@
     python train.py --list-partial DIR | --clean-partial DIR
 """
 
-import sys
+import signal
+import threading
 
 if __name__ == "__main__":
-    try:  # Ctrl-C while the package loads is one line too
-        from swarm_envs.agents.launch import train
-    except KeyboardInterrupt:
-        print("interrupted by Ctrl-C while starting; nothing was written", file=sys.stderr)
-        raise SystemExit(130) from None
-    raise SystemExit(train())
+    # Ctrl-C while the package loads is noted, not raised, and is one line too (swarm_envs.agents.launch)
+    pressed: list = []
+    previous = None
+    if threading.current_thread() is threading.main_thread() and signal.getsignal(signal.SIGINT) is signal.default_int_handler:
+        previous = signal.signal(signal.SIGINT, lambda signum, frame: pressed.append(signum))
+    from swarm_envs.agents.launch import train
+
+    raise SystemExit(train(noted=(pressed, previous)))

@@ -320,3 +320,28 @@ def test_ctrl_c_is_honoured_at_the_next_evaluation_step(tmp_path, monkeypatch, c
         assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
     finally:
         signal.signal(signal.SIGINT, before)
+
+
+@pytest.mark.skipif(sys.platform == "win32", reason="SIGINT to the own process is POSIX")
+def test_ctrl_c_is_noted_not_raised_while_the_modules_load():
+    """note_ctrl_c (swarm_envs.agents.launch): Ctrl-C is noted instead of raised (a KeyboardInterrupt inside a
+    compiled module's initialisation can abort the interpreter), until the returned handler is set again;
+    an ignored Ctrl-C stays ignored."""
+    from swarm_envs.agents.launch import note_ctrl_c
+
+    pressed, previous = note_ctrl_c()
+    try:
+        assert previous is signal.default_int_handler
+        os.kill(os.getpid(), signal.SIGINT)
+        time.sleep(0.01)  # the handler runs between bytecodes
+        assert pressed == [signal.SIGINT]
+    finally:
+        signal.signal(signal.SIGINT, previous)
+    with pytest.raises(KeyboardInterrupt):  # restored: Ctrl-C raises again
+        os.kill(os.getpid(), signal.SIGINT)
+        time.sleep(0.01)
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        assert note_ctrl_c() == ([], None) and signal.getsignal(signal.SIGINT) is signal.SIG_IGN
+    finally:
+        signal.signal(signal.SIGINT, signal.default_int_handler)
