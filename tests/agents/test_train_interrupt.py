@@ -329,19 +329,20 @@ def test_ctrl_c_is_noted_not_raised_while_the_modules_load():
     an ignored Ctrl-C stays ignored."""
     from swarm_envs.agents.launch import note_ctrl_c
 
-    pressed, previous = note_ctrl_c()
+    original = signal.signal(signal.SIGINT, signal.default_int_handler)  # as in a terminal (the suite may run with it ignored)
     try:
-        assert previous is signal.default_int_handler
-        os.kill(os.getpid(), signal.SIGINT)
-        time.sleep(0.01)  # the handler runs between bytecodes
-        assert pressed == [signal.SIGINT]
-    finally:
-        signal.signal(signal.SIGINT, previous)
-    with pytest.raises(KeyboardInterrupt):  # restored: Ctrl-C raises again
-        os.kill(os.getpid(), signal.SIGINT)
-        time.sleep(0.01)
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-    try:
+        pressed, previous = note_ctrl_c()
+        try:
+            assert previous is signal.default_int_handler
+            os.kill(os.getpid(), signal.SIGINT)
+            time.sleep(0.01)  # the handler runs between bytecodes
+            assert pressed == [signal.SIGINT]
+        finally:
+            signal.signal(signal.SIGINT, signal.default_int_handler)
+        with pytest.raises(KeyboardInterrupt):  # restored: Ctrl-C raises again
+            os.kill(os.getpid(), signal.SIGINT)
+            time.sleep(0.01)
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
         assert note_ctrl_c() == ([], None) and signal.getsignal(signal.SIGINT) is signal.SIG_IGN
     finally:
-        signal.signal(signal.SIGINT, signal.default_int_handler)
+        signal.signal(signal.SIGINT, original)
