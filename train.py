@@ -10,7 +10,8 @@ import signal
 import threading
 
 if __name__ == "__main__":
-    # Ctrl-C while the package loads is noted, not raised, and is one line too (swarm_envs.agents.launch)
+    # Ctrl-C while the package loads is noted, not raised, and is one line too: swarm_envs.agents.launch.note_ctrl_c,
+    # which cannot be imported before the package has loaded
     pressed: list = []
     previous = None
     if threading.current_thread() is threading.main_thread() and signal.getsignal(signal.SIGINT) is signal.default_int_handler:

@@ -560,12 +560,12 @@ def _native_batch(worlds: Sequence[World]) -> _NativeBatch | None:
 
 
 def _substep_native(worlds: Sequence[World], batch: _NativeBatch, ready: list[int], bounds: np.ndarray, control: np.ndarray, read: np.ndarray,
-                    h: float, substeps: int, chunks: int) -> None:
+                    h: float, substeps: int, threads: int) -> None:
     """:func:`step_worlds`'s contacts emptied, sub-steps and read of the worlds ``ready`` of ``worlds`` (each
     with a space :func:`_plain_space` allows; ``batch`` their :class:`_NativeBatch`; world ``i``'s robots are
     rows ``bounds[i]:bounds[i + 1]`` of ``control`` and ``read``), by
     :func:`swarm_envs.sim.substep_kernel.substep_spaces` (no GIL), contiguous shares of the worlds on
-    ``chunks`` threads (up to :data:`SHARES_PER_THREAD` shares per thread, taken as threads free up)."""
+    ``threads`` threads (up to :data:`SHARES_PER_THREAD` shares per thread, taken as threads free up)."""
     idx = np.asarray(ready, dtype=np.int64)
     every = idx.shape[0] == len(worlds)
     pick = (lambda a: a) if every else (lambda a: a[idx])
@@ -575,7 +575,7 @@ def _substep_native(worlds: Sequence[World], batch: _NativeBatch, ready: list[in
     mass, moment = batch.inertia
     control = np.ascontiguousarray(control)
     n = idx.shape[0]
-    threads = max(1, min(chunks, n))
+    threads = max(1, min(threads, n))
     shares = threads if threads == 1 else max(threads, min(n // THREADED_MIN_WORLDS, threads * SHARES_PER_THREAD))
 
     def share(k: int) -> None:
