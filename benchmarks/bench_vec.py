@@ -3,7 +3,9 @@
 Prints agent-steps/s (robots x env copies x steps per second) with random actions, flocking, e-puck at the
 default density, for N in {10, 100} x B in {1, 16, 64, 256} and N = 1000 x B = 1, sensing full and ideal;
 each figure is the median over timed steps after warm-up (the machine is shared: medians, and same-run
-ratios; the process CPU time per step is printed too, as it depends less on other load). When ``vmas`` is importable, VMAS's flocking scenario with N = 10 and 1024 envs on the CPU
+ratios; the process CPU time per step is printed too, as it depends less on other load), with the mean
+number of neighbours in IR range per robot and the time per robot-step and per neighbour, which compares
+swarm sizes at equal work (a larger swarm has more neighbours in range per robot). When ``vmas`` is importable, VMAS's flocking scenario with N = 10 and 1024 envs on the CPU
 (torch with 1 thread, or ``--threads``) is timed in the same run and printed beside, as a ratio.
 
     python benchmarks/bench_vec.py                     # the full table (several minutes)
@@ -29,6 +31,7 @@ import sys
 import time
 
 import numpy as np
+from scipy.spatial import cKDTree
 
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 
@@ -54,8 +57,21 @@ import swarm_envs  # noqa: E402
 GRID = [(10, 1), (10, 16), (10, 64), (10, 256), (100, 1), (100, 16), (100, 64), (100, 256), (1000, 1)]
 
 
-def time_swarm(n: int, copies: int, sensing: str, min_steps: int, min_seconds: float, env_id: str = "swarm_envs/Flocking-v0") -> tuple[float, float]:
-    """Median (wall-clock, process CPU) seconds per vector step (B copies of N robots of ``env_id``)."""
+def neighbours_in_range(vec: object) -> float:
+    """Mean number of robots of the same copy within the platform's IR range of a robot (directed pairs in
+    range / robots): the pairs the IR layer and every sensing stage after it work on."""
+    core = vec.core
+    positions = np.asarray(core.positions, dtype=float).reshape(-1, 2)
+    reach = float(core.platform.ir_range)
+    extent = float(np.ptp(positions, axis=0).max()) + 2.0 * reach  # copies stacked this far apart never meet
+    lifted = np.column_stack([positions, np.asarray(core.copy_of_robot, dtype=float) * extent])
+    return 2.0 * len(cKDTree(lifted).query_pairs(reach)) / positions.shape[0]
+
+
+def time_swarm(n: int, copies: int, sensing: str, min_steps: int, min_seconds: float,
+               env_id: str = "swarm_envs/Flocking-v0") -> tuple[float, float, float]:
+    """Median (wall-clock, process CPU) seconds per vector step (B copies of N robots of ``env_id``), and the
+    mean number of neighbours in IR range per robot over the timed steps (:func:`neighbours_in_range`)."""
     # episodes longer than the at most 203 steps run here (no copy resets while timed), short enough for
     # make_vec's memory check (a copy's command log grows with max_cycles)
     vec = swarm_envs.make_vec(env_id, copies, n_robots=n, sensing=sensing, max_cycles=1_000)
@@ -66,6 +82,7 @@ def time_swarm(n: int, copies: int, sensing: str, min_steps: int, min_seconds: f
         vec.step(rng.uniform(-1, 1, shape))
     times: list[float] = []
     cpu: list[float] = []
+    neighbours: list[float] = []
     start = time.perf_counter()
     while len(times) < min_steps or time.perf_counter() - start < min_seconds:
         action = rng.uniform(-1, 1, shape)
@@ -73,9 +90,10 @@ def time_swarm(n: int, copies: int, sensing: str, min_steps: int, min_seconds: f
         vec.step(action)
         times.append(time.perf_counter() - t0)
         cpu.append(time.process_time() - c0)
+        neighbours.append(neighbours_in_range(vec))  # outside the timed interval
         if len(times) >= 200:
             break
-    return statistics.median(times), statistics.median(cpu)
+    return statistics.median(times), statistics.median(cpu), statistics.fmean(neighbours)
 
 
 def make_vmas(n: int, num_envs: int, threads: int = 1):
@@ -204,14 +222,17 @@ def main() -> None:
             vmas_rate = 10 * 1024 / t
             print(f"VMAS 1024 envs x 10 agents flocking (cpu, {vmas_threads} torch threads): {t * 1e3:.1f} ms/step, {vmas_rate:,.0f} agent-steps/s")
     print()
-    print("| N | B | sensing | ms / vector step | CPU ms / step | agent-steps/s | env steps/s (per copy) | vs VMAS N=10 x 1024 |")
-    print("|---|---|---|---|---|---|---|---|")
+    print("| N | B | sensing | ms / vector step | CPU ms / step | agent-steps/s | env steps/s (per copy) | vs VMAS N=10 x 1024 "
+          "| neighbours in IR range | us per robot-step per neighbour |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
     for sensing in modes:
         for n, b in grid:
-            t, cpu = time_swarm(n, b, sensing, args.min_steps, args.min_seconds, args.env)
+            t, cpu, near = time_swarm(n, b, sensing, args.min_steps, args.min_seconds, args.env)
             rate = n * b / t
             ratio = f"{rate / vmas_rate:.2f}x" if vmas_rate else "-"
-            print(f"| {n} | {b} | {sensing} | {t * 1e3:.1f} | {cpu * 1e3:.1f} | {rate:,.0f} | {1 / t:,.1f} | {ratio} |", flush=True)
+            per_pair = f"{1e6 / (rate * near):.2f}" if near > 0 else "-"
+            print(f"| {n} | {b} | {sensing} | {t * 1e3:.1f} | {cpu * 1e3:.1f} | {rate:,.0f} | {1 / t:,.1f} | {ratio} | {near:.1f} | {per_pair} |",
+                  flush=True)
     print(f"\nload average at end: {os.getloadavg()[0]:.2f}")
 
 
@@ -228,9 +249,9 @@ def _measure_json(grid: list[tuple[int, int]], modes: list[str], args: argparse.
                               "agent_steps_per_s": 10 * 1024 / t, "torch_threads": threads}
     for sensing in modes:
         for n, b in grid:
-            t, cpu = time_swarm(n, b, sensing, args.min_steps, args.min_seconds, args.env)
+            t, cpu, near = time_swarm(n, b, sensing, args.min_steps, args.min_seconds, args.env)
             result["rows"].append({"n": n, "copies": b, "sensing": sensing, "s_per_step": t, "cpu_s_per_step": cpu,
-                                   "agent_steps_per_s": n * b / t, "env_steps_per_s": 1 / t})
+                                   "agent_steps_per_s": n * b / t, "env_steps_per_s": 1 / t, "neighbours_in_range": near})
     result["load_end"] = os.getloadavg()[0]
     return result
 

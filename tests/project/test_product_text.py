@@ -195,7 +195,7 @@ def test_performance_page_is_rendered_from_the_measurements():
 
     run_all = _run_all()
     rows = [{"n": 10, "copies": 256, "sensing": s, "s_per_step": t, "cpu_s_per_step": t, "agent_steps_per_s": 2560 / t,
-             "env_steps_per_s": 1 / t} for s, t in (("full", 0.08), ("ideal", 0.04))]
+             "env_steps_per_s": 1 / t, "neighbours_in_range": 9.0} for s, t in (("full", 0.08), ("ideal", 0.04))]
     rows2 = [dict(row, s_per_step=0.05, cpu_s_per_step=0.09, agent_steps_per_s=51200.0, env_steps_per_s=20.0) for row in rows[:1]]
     runs = [{"numba_threads": 1, "vmas": {"version": "1.5.2", "n_agents": 10, "num_envs": 1024, "s_per_step": 0.2,
                                           "agent_steps_per_s": 51200.0}, "rows": rows},
@@ -217,9 +217,9 @@ def test_performance_page_is_rendered_from_the_measurements():
     assert "20,711 against 25,686 agent-steps/s, **ratio 0.78**" in page and "(ratio 0.028)" in page
     assert "**11.9 s** (median of 3 runs: 11.2, 12.4, 11.9 s)" in page and "filled cache: 2.1 s" in page
     assert "it ran in\n2 of these 3 runs" in page
-    assert "| 10 | 256 | full | 1 | 80.0 | 80.0 | 12.5 | 32,000 | 0.62x |" in page
-    assert "| 10 | 256 | full | 2 | 50.0 | 90.0 | 20.0 | 51,200 | 0.50x |" in page  # to VMAS on 2 threads
-    assert "| 10 | 256 | ideal | 1 | 40.0 | 40.0 | 25.0 | 64,000 | 1.25x |" in page
+    assert "| 10 | 256 | full | 1 | 80.0 | 80.0 | 12.5 | 32,000 | 0.62x | 9.0 | 3.47 |" in page  # 80 ms / 2560 robots / 9
+    assert "| 10 | 256 | full | 2 | 50.0 | 90.0 | 20.0 | 51,200 | 0.50x | 9.0 | 2.17 |" in page  # to VMAS on 2 threads
+    assert "| 10 | 256 | ideal | 1 | 40.0 | 40.0 | 25.0 | 64,000 | 1.25x | 9.0 | 1.74 |" in page
     assert "51,200 agent-steps/s (200.0 ms per step) on 1 torch thread; 102,400" in page and "6,741 robot-steps/s" in page and "Test CPU, 2 cores" in page
     assert "Reduced run: only N = 10" in page
     assert "| env step | 2.50 | 45.1 % |\n| PPO update | 2.40 | 43.2 % |" in page
