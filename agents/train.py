@@ -432,6 +432,16 @@ def _error_text(err: BaseException) -> str:
 
 
 def _run(args: argparse.Namespace, state: dict[str, Any]) -> int:
+    # Ctrl-C from the start is handled by a CtrlC, which notes the first press: raised at once, a press during
+    # the checks could land in a finalizer (pymunk frees its bodies in cffi finalizers) and be dropped there
+    ctrl_c = CtrlC()
+    with ctrl_c.installed():
+        return _checked_run(args, state, ctrl_c)
+
+
+def _checked_run(args: argparse.Namespace, state: dict[str, Any], ctrl_c: CtrlC) -> int:
+    """Check the config, the output directory and the checkpoint, then :func:`_staged_run`; a Ctrl-C noted
+    by ``ctrl_c`` during the checks stops the command before anything is written."""
     try:
         cfg = resolve(load_config(args.config, args.overrides))
     except ConfigError as err:
@@ -457,11 +467,10 @@ def _run(args: argparse.Namespace, state: dict[str, Any]) -> int:
     import torch
 
     torch.set_num_threads(cfg["train"]["torch_threads"])
+    ctrl_c.check()  # Ctrl-C during the checks: nothing written
     # everything is checked: from here on files are written, into the staging directory
     stage = state["stage"] = Staging(out)
-    ctrl_c = CtrlC()
-    with ctrl_c.installed():
-        return _staged_run(args, cfg, eval_kwargs, stage, checkpoint, model, state, ctrl_c)
+    return _staged_run(args, cfg, eval_kwargs, stage, checkpoint, model, state, ctrl_c)
 
 
 def _staged_run(args: argparse.Namespace, cfg: dict[str, Any], eval_kwargs: dict[str, Any], stage: Staging,

@@ -322,6 +322,36 @@ def test_ctrl_c_is_honoured_at_the_next_evaluation_step(tmp_path, monkeypatch, c
         signal.signal(signal.SIGINT, before)
 
 
+@pytest.mark.skipif(sys.platform == "win32", reason="SIGINT to this process is POSIX")
+def test_ctrl_c_during_the_checks_is_never_dropped(tmp_path, monkeypatch, capsys):
+    """Ctrl-C while the command checks its config and output, landing in a finalizer (where a raised
+    KeyboardInterrupt is printed and dropped; pymunk frees its bodies in cffi finalizers): the command stops
+    before writing anything, with one line and exit code 130, and Ctrl-C is restored to its handler."""
+    from swarm_envs.agents import train
+
+    class SignalInFinalizer:
+        def __del__(self) -> None:
+            os.kill(os.getpid(), signal.SIGINT)
+            for _ in range(10_000):  # Python runs the handler between these bytecodes, inside __del__
+                pass
+
+    real = train.report_staging_dirs
+
+    def checks_with_a_finalizer(*args, **kwargs):
+        SignalInFinalizer()  # dropped at once: the signal arrives in its finalizer
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(train, "report_staging_dirs", checks_with_a_finalizer)
+    before = signal.signal(signal.SIGINT, signal.default_int_handler)  # Python's own handler, as in a terminal
+    try:
+        assert train.main(_quick_args(tmp_path / "run")) == 130
+        assert capsys.readouterr().err == "interrupted by Ctrl-C before training started; nothing saved\n"
+        assert list(tmp_path.iterdir()) == []
+        assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+    finally:
+        signal.signal(signal.SIGINT, before)
+
+
 @pytest.mark.skipif(sys.platform == "win32", reason="SIGINT to the own process is POSIX")
 def test_ctrl_c_is_noted_not_raised_while_the_modules_load():
     """note_ctrl_c (swarm_envs.agents.launch): Ctrl-C is noted instead of raised (a KeyboardInterrupt inside a
