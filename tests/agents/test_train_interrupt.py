@@ -168,6 +168,16 @@ def test_ctrl_c_surfacing_as_a_systemerror_is_an_interrupt(monkeypatch, capsys):
     assert len(err.strip().splitlines()) == 1 and "unexpected SystemError during setup: a real bug" in err
 
 
+class SignalInFinalizer:
+    """An object whose finalizer sends this process SIGINT: the handler runs inside ``__del__``, where a
+    raised KeyboardInterrupt is printed and dropped (as in pymunk's cffi finalizers)."""
+
+    def __del__(self) -> None:
+        os.kill(os.getpid(), signal.SIGINT)
+        for _ in range(10_000):  # Python runs the handler between these bytecodes, inside __del__
+            pass
+
+
 @pytest.mark.skipif(sys.platform == "win32", reason="SIGINT to this process is POSIX")
 def test_the_first_ctrl_c_stops_training_and_is_never_dropped():
     """The first Ctrl-C only asks training to stop (the callback then ends SB3's learn), so it is not lost
@@ -175,12 +185,6 @@ def test_the_first_ctrl_c_stops_training_and_is_never_dropped():
     in cffi finalizers); a second Ctrl-C raises; afterwards Ctrl-C is ignored until the save is done."""
     pytest.importorskip("stable_baselines3")
     from swarm_envs.agents.signals import CtrlC
-
-    class SignalInFinalizer:
-        def __del__(self) -> None:
-            os.kill(os.getpid(), signal.SIGINT)
-            for _ in range(10_000):  # Python runs the handler between these bytecodes, inside __del__
-                pass
 
     ctrl_c = CtrlC()
     stop = ctrl_c.callback()
@@ -328,12 +332,6 @@ def test_ctrl_c_during_the_checks_is_never_dropped(tmp_path, monkeypatch, capsys
     KeyboardInterrupt is printed and dropped; pymunk frees its bodies in cffi finalizers): the command stops
     before writing anything, with one line and exit code 130, and Ctrl-C is restored to its handler."""
     from swarm_envs.agents import train
-
-    class SignalInFinalizer:
-        def __del__(self) -> None:
-            os.kill(os.getpid(), signal.SIGINT)
-            for _ in range(10_000):  # Python runs the handler between these bytecodes, inside __del__
-                pass
 
     real = train.report_staging_dirs
 
